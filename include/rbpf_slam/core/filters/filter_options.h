@@ -1,0 +1,45 @@
+#pragma once
+// Options shared by the filter variants; each variant reads the fields it needs.
+
+#include <string>
+
+#include "rbpf_slam/core/motion/motion_model.h"
+
+namespace rbpf_slam {
+namespace core {
+
+/// Per-particle data association of features to landmarks.
+struct AssociationOptions {
+  double gate_chi2 = 9.21;          // Mahalanobis^2 gate (99% for 2 dof)
+  double new_landmark_chi2 = 13.8;  // beyond every gate by this much: a new landmark
+  double line_overlap_margin_m = 1.0;  // a line matches only if the segments come this close
+  int min_observations_to_keep = 1;    // (reserved for pruning)
+};
+
+/// Measurement noise assumed by the filter when a feature carries no covariance of its own.
+struct MeasurementOptions {
+  bool use_feature_covariance = true;
+  double sigma_range_m = 0.2;
+  double sigma_bearing_rad = 0.035;
+  double sigma_rho_m = 0.05;
+  double sigma_theta_rad = 0.03;
+  double covariance_inflation = 1.0;  // multiplies every feature covariance
+};
+
+struct FilterOptions {
+  std::string variant = "fastslam2";
+  int particles = 100;
+  unsigned long seed = 42;
+  double resample_threshold = 0.5;  // resample when Neff < threshold * particles
+  MotionOptions motion;
+  AssociationOptions association;
+  MeasurementOptions measurement;
+  bool use_points = true;
+  bool use_lines = true;
+};
+
+/// Throws std::invalid_argument naming the first out-of-range field and its allowed range.
+void validate(const FilterOptions& options);
+
+}  // namespace core
+}  // namespace rbpf_slam

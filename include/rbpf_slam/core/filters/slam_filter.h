@@ -1,0 +1,90 @@
+#pragma once
+// The one interface every SLAM variant implements (FastSLAM 2.0, robust, H-infinity,
+// multi-filter SMC, EKF, grid, distributed); the node and the offline runner use only this.
+
+#include <Eigen/Core>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "rbpf_slam/core/features/feature_types.h"
+#include "rbpf_slam/core/filters/filter_options.h"
+#include "rbpf_slam/core/geometry.h"
+#include "rbpf_slam/core/motion/motion_model.h"
+
+namespace rbpf_slam {
+namespace core {
+
+enum class LandmarkType { kPoint, kLine };
+
+/// A landmark of the best particle's map, in the map frame.
+struct LandmarkEstimate {
+  int id = -1;  // stable over the run
+  LandmarkType type = LandmarkType::kPoint;
+  Eigen::Vector2d mean = Eigen::Vector2d::Zero();  // point: (x, y); line: (rho, theta)
+  Eigen::Matrix2d covariance = Eigen::Matrix2d::Identity();
+  Eigen::Vector2d start = Eigen::Vector2d::Zero();  // line extent seen so far (map frame)
+  Eigen::Vector2d end = Eigen::Vector2d::Zero();
+  int observations = 0;
+};
+
+struct PoseEstimate {
+  Pose2 mean = Pose2::Zero();
+  Eigen::Matrix3d covariance = Eigen::Matrix3d::Identity();
+};
+
+struct WeightedPose {
+  Pose2 pose = Pose2::Zero();
+  double weight = 0.0;  // normalised
+};
+
+/// What one update did (returned, never logged by the core).
+struct UpdateStats {
+  double neff = 0.0;             // effective sample size after weighting, before resampling
+  bool resampled = false;
+  int features_in = 0;           // features offered
+  int features_rejected = 0;     // non-finite or degenerate features skipped
+  int associated = 0;            // best particle: features matched to existing landmarks
+  int new_landmarks = 0;         // best particle: landmarks created
+  int weight_resets = 0;         // all-zero or NaN weights reset to uniform
+  int fallbacks = 0;             // variant-specific numeric fallbacks (e.g. H-inf -> EKF)
+};
+
+/// Running totals since construction or reset.
+struct FilterStats {
+  long updates = 0;
+  long predictions = 0;
+  long resamples = 0;
+  long weight_resets = 0;
+  long fallbacks = 0;
+  double last_neff = 0.0;
+  int landmarks = 0;  // in the best particle
+};
+
+/// A SLAM filter. Not thread-safe; time is always an argument (the core reads no clock).
+class SlamFilter {
+ public:
+  virtual ~SlamFilter() = default;
+  virtual std::string variant() const = 0;
+  /// Forgets everything and restarts at pose (the map frame's origin by default).
+  virtual void reset(const Pose2& initial_pose = Pose2::Zero()) = 0;
+  /// Moves every hypothesis by the odometry increment.
+  virtual void predict(const MotionInput& motion) = 0;
+  /// Incorporates the observations taken at the current pose.
+  virtual UpdateStats update(const FeatureSet& features) = 0;
+  virtual PoseEstimate estimate() const = 0;
+  /// Landmarks of the best hypothesis.
+  virtual std::vector<LandmarkEstimate> landmarks() const = 0;
+  virtual std::vector<WeightedPose> particles() const = 0;
+  virtual FilterStats stats() const = 0;
+};
+
+/// Builds the variant named by options.variant; throws std::invalid_argument if unknown or
+/// if the options do not validate.
+std::unique_ptr<SlamFilter> createFilter(const FilterOptions& options);
+
+/// The variant names createFilter accepts.
+std::vector<std::string> availableVariants();
+
+}  // namespace core
+}  // namespace rbpf_slam

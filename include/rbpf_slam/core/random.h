@@ -1,0 +1,30 @@
+#pragma once
+// Seeded randomness owned by each filter; no global generator anywhere in the package.
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <random>
+
+namespace rbpf_slam {
+namespace core {
+
+using Rng = std::mt19937_64;
+
+/// One N(0, sigma^2) draw.
+inline double sampleGaussian(Rng& rng, double sigma) {
+  if (sigma <= 0.0) return 0.0;
+  return std::normal_distribution<double>(0.0, sigma)(rng);
+}
+
+/// One U[0, 1) draw.
+inline double sampleUniform(Rng& rng) {
+  return std::uniform_real_distribution<double>(0.0, 1.0)(rng);
+}
+
+/// One draw from N(mean, cov) for a 2x2 or 3x3 covariance (Cholesky; jitter when semidefinite).
+template <int N>
+Eigen::Matrix<double, N, 1> sampleMultivariate(Rng& rng, const Eigen::Matrix<double, N, 1>& mean,
+                                               const Eigen::Matrix<double, N, N>& cov);
+
+}  // namespace core
+}  // namespace rbpf_slam

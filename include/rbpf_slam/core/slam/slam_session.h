@@ -1,0 +1,65 @@
+#pragma once
+// Drives one SlamFilter from odometry poses and feature sets: decides when to update,
+// rejects out-of-order input, keeps the trajectory and the map -> odom correction.
+// Shared by rbpf_slam_node and offline_slam so both run the same code path.
+
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "rbpf_slam/core/filters/slam_filter.h"
+
+namespace rbpf_slam {
+namespace core {
+
+struct SessionOptions {
+  double linear_update_m = 0.0;     // update only after moving this far (0: every frame)
+  double angular_update_rad = 0.0;  // ... or turning this much
+  double max_time_gap_s = 30.0;     // a larger gap between frames inflates the motion
+  double reset_on_time_jump_back_s = 1.0;  // stamps going back more than this: reset
+};
+
+void validate(const SessionOptions& options);
+
+/// Why a frame was not used.
+enum class FrameResult { kUpdated, kSkippedNoMotion, kFirstFrame, kRejectedStamp,
+                         kRejectedPose, kReset };
+
+struct TrajectoryPoint {
+  double stamp = 0.0;
+  Pose2 pose = Pose2::Zero();  // base in map
+};
+
+class SlamSession {
+ public:
+  SlamSession(std::unique_ptr<SlamFilter> filter, const SessionOptions& options);
+
+  /// Offers one observation frame taken at stamp with the robot at odom_pose (odom frame).
+  FrameResult process(double stamp, const Pose2& odom_pose, const FeatureSet& features);
+  /// Clears the filter and the history (e.g. after the clock jumped backwards).
+  void reset();
+
+  /// map -> odom so that map -> base equals the filter's estimate at the last update.
+  Pose2 mapToOdom() const { return map_to_odom_; }
+  const std::vector<TrajectoryPoint>& trajectory() const { return trajectory_; }
+  const UpdateStats& lastStats() const { return last_stats_; }
+  const SlamFilter& filter() const { return *filter_; }
+  SlamFilter& filter() { return *filter_; }
+  double lastStamp() const { return last_stamp_; }
+  long resets() const { return resets_; }
+
+ private:
+  std::unique_ptr<SlamFilter> filter_;
+  const SessionOptions options_;
+  bool has_previous_ = false;
+  double last_stamp_ = 0.0;
+  Pose2 last_odom_ = Pose2::Zero();
+  Pose2 map_to_odom_ = Pose2::Zero();
+  std::vector<TrajectoryPoint> trajectory_;
+  UpdateStats last_stats_;
+  long resets_ = 0;
+};
+
+}  // namespace core
+}  // namespace rbpf_slam

@@ -1,0 +1,171 @@
+#include "rbpf_slam/core/motion/motion_model.h"
+
+#include <cmath>
+#include <stdexcept>
+
+namespace rbpf_slam {
+namespace core {
+namespace {
+
+void requireNonNegative(const char* name, double value) {
+  if (!(value >= 0.0) || !std::isfinite(value)) {
+    throw std::invalid_argument(std::string("motion.") + name + " = " + std::to_string(value) +
+                                " is out of range [0, inf)");
+  }
+}
+
+/// Odometry model of Thrun, Burgard & Fox (rot1, trans, rot2 with alpha noise).
+class OdometryMotionModel : public MotionModel {
+ public:
+  explicit OdometryMotionModel(const MotionOptions& options) : options_(options) {}
+
+  Pose2 sample(const Pose2& previous, const MotionInput& motion, Rng& rng) const override {
+    double rot1, trans, rot2;
+    decompose(motion.delta, &rot1, &trans, &rot2);
+    const double rot1_hat =
+        rot1 - sampleGaussian(rng, std::sqrt(options_.alpha1 * rot1 * rot1 +
+                                             options_.alpha2 * trans * trans));
+    const double trans_hat =
+        trans - sampleGaussian(rng, std::sqrt(options_.alpha3 * trans * trans +
+                                              options_.alpha4 * (rot1 * rot1 + rot2 * rot2)));
+    const double rot2_hat =
+        rot2 - sampleGaussian(rng, std::sqrt(options_.alpha1 * rot2 * rot2 +
+                                             options_.alpha2 * trans * trans));
+    const double heading = previous.z() + rot1_hat;
+    Pose2 next(previous.x() + trans_hat * std::cos(heading),
+               previous.y() + trans_hat * std::sin(heading),
+               wrapAngle(previous.z() + rot1_hat + rot2_hat));
+    next.x() += sampleGaussian(rng, options_.min_sigma_xy_m);
+    next.y() += sampleGaussian(rng, options_.min_sigma_xy_m);
+    next.z() = wrapAngle(next.z() + sampleGaussian(rng, options_.min_sigma_theta_rad));
+    return next;
+  }
+
+  Eigen::Matrix3d covariance(const Pose2& previous, const MotionInput& motion) const override {
+    double rot1, trans, rot2;
+    decompose(motion.delta, &rot1, &trans, &rot2);
+    const Eigen::Vector3d variances(
+        options_.alpha1 * rot1 * rot1 + options_.alpha2 * trans * trans,
+        options_.alpha3 * trans * trans + options_.alpha4 * (rot1 * rot1 + rot2 * rot2),
+        options_.alpha1 * rot2 * rot2 + options_.alpha2 * trans * trans);
+    const double heading = previous.z() + rot1;
+    // Jacobian of the new pose with respect to (rot1, trans, rot2).
+    Eigen::Matrix3d v;
+    v << -trans * std::sin(heading), std::cos(heading), 0.0,
+        trans * std::cos(heading), std::sin(heading), 0.0,
+        1.0, 0.0, 1.0;
+    Eigen::Matrix3d cov = v * variances.asDiagonal() * v.transpose();
+    cov(0, 0) += options_.min_sigma_xy_m * options_.min_sigma_xy_m;
+    cov(1, 1) += options_.min_sigma_xy_m * options_.min_sigma_xy_m;
+    cov(2, 2) += options_.min_sigma_theta_rad * options_.min_sigma_theta_rad;
+    return cov;
+  }
+
+ private:
+  static void decompose(const Pose2& delta, double* rot1, double* trans, double* rot2) {
+    *trans = std::hypot(delta.x(), delta.y());
+    // Below a millimetre the direction of travel is noise: treat it as a pure rotation.
+    *rot1 = *trans < 1e-3 ? 0.0 : std::atan2(delta.y(), delta.x());
+    // Driving backwards: keep rot1 small and make trans negative.
+    if (std::fabs(*rot1) > M_PI / 2.0) {
+      *rot1 = wrapAngle(*rot1 + M_PI);
+      *trans = -*trans;
+    }
+    *rot2 = wrapAngle(delta.z() - *rot1);
+  }
+
+  const MotionOptions options_;
+};
+
+/// Differential-drive wheel model (Yatim & Buniyamin eqs. 11, 12): left and right wheel
+/// travel recovered from the increment and perturbed with
+/// sigma^2 = (alpha1 * d)^2 + (alpha2 * (l - r))^2.
+class DiffDriveMotionModel : public MotionModel {
+ public:
+  explicit DiffDriveMotionModel(const MotionOptions& options) : options_(options) {}
+
+  Pose2 sample(const Pose2& previous, const MotionInput& motion, Rng& rng) const override {
+    double left, right;
+    wheels(motion.delta, &left, &right);
+    const double sigma = wheelSigma(left, right);
+    const double l = left + sampleGaussian(rng, sigma);
+    const double r = right + sampleGaussian(rng, sigma);
+    Pose2 next = integrate(previous, l, r);
+    next.x() += sampleGaussian(rng, options_.min_sigma_xy_m);
+    next.y() += sampleGaussian(rng, options_.min_sigma_xy_m);
+    next.z() = wrapAngle(next.z() + sampleGaussian(rng, options_.min_sigma_theta_rad));
+    return next;
+  }
+
+  Eigen::Matrix3d covariance(const Pose2& previous, const MotionInput& motion) const override {
+    double left, right;
+    wheels(motion.delta, &left, &right);
+    const double sigma = wheelSigma(left, right);
+    // Numerical Jacobian of the pose with respect to (l, r).
+    Eigen::Matrix<double, 3, 2> j;
+    const double h = 1e-6;
+    const Pose2 base = integrate(previous, left, right);
+    const Pose2 dl = integrate(previous, left + h, right);
+    const Pose2 dr = integrate(previous, left, right + h);
+    j.col(0) = (dl - base) / h;
+    j.col(1) = (dr - base) / h;
+    j(2, 0) = wrapAngle(dl.z() - base.z()) / h;
+    j(2, 1) = wrapAngle(dr.z() - base.z()) / h;
+    Eigen::Matrix3d cov = j * (sigma * sigma) * j.transpose();
+    cov(0, 0) += options_.min_sigma_xy_m * options_.min_sigma_xy_m;
+    cov(1, 1) += options_.min_sigma_xy_m * options_.min_sigma_xy_m;
+    cov(2, 2) += options_.min_sigma_theta_rad * options_.min_sigma_theta_rad;
+    return cov;
+  }
+
+ private:
+  void wheels(const Pose2& delta, double* left, double* right) const {
+    const double d = std::hypot(delta.x(), delta.y()) * (delta.x() < 0.0 ? -1.0 : 1.0);
+    const double half = 0.5 * options_.wheel_base_m * delta.z();
+    *left = d - half;
+    *right = d + half;
+  }
+  double wheelSigma(double left, double right) const {
+    const double d = 0.5 * (std::fabs(left) + std::fabs(right));
+    const double a = options_.wheel_alpha1 * d, b = options_.wheel_alpha2 * (left - right);
+    return std::sqrt(a * a + b * b);
+  }
+  Pose2 integrate(const Pose2& previous, double l, double r) const {
+    const double d = 0.5 * (l + r), dtheta = (r - l) / options_.wheel_base_m;
+    const double heading = previous.z() + 0.5 * dtheta;
+    return Pose2(previous.x() + d * std::cos(heading), previous.y() + d * std::sin(heading),
+                 wrapAngle(previous.z() + dtheta));
+  }
+
+  const MotionOptions options_;
+};
+
+}  // namespace
+
+void validate(const MotionOptions& options) {
+  if (options.model != "odometry" && options.model != "diff_drive") {
+    throw std::invalid_argument("motion.model = '" + options.model +
+                                "' is unknown (allowed: odometry, diff_drive)");
+  }
+  requireNonNegative("alpha1", options.alpha1);
+  requireNonNegative("alpha2", options.alpha2);
+  requireNonNegative("alpha3", options.alpha3);
+  requireNonNegative("alpha4", options.alpha4);
+  requireNonNegative("wheel_alpha1", options.wheel_alpha1);
+  requireNonNegative("wheel_alpha2", options.wheel_alpha2);
+  requireNonNegative("min_sigma_xy_m", options.min_sigma_xy_m);
+  requireNonNegative("min_sigma_theta_rad", options.min_sigma_theta_rad);
+  if (!(options.wheel_base_m > 0.0)) {
+    throw std::invalid_argument("motion.wheel_base_m = " + std::to_string(options.wheel_base_m) +
+                                " is out of range (0, inf)");
+  }
+}
+
+std::unique_ptr<MotionModel> createMotionModel(const MotionOptions& options) {
+  validate(options);
+  if (options.model == "diff_drive") return std::make_unique<DiffDriveMotionModel>(options);
+  return std::make_unique<OdometryMotionModel>(options);
+}
+
+}  // namespace core
+}  // namespace rbpf_slam

@@ -1,0 +1,1 @@
+namespace rbpf_slam { namespace io { int placeholder_io = 0; } }
