@@ -1,0 +1,92 @@
+#pragma once
+// FastSLAM 2.0 (Montemerlo et al. 2003) over point and line landmarks: the pose proposal
+// is refined by each associated observation, each landmark is a 2D EKF, association is
+// per-particle maximum likelihood with a Mahalanobis gate.
+
+#include <memory>
+#include <vector>
+
+#include "rbpf_slam/core/filters/landmark_map.h"
+#include "rbpf_slam/core/filters/measurement_models.h"
+#include "rbpf_slam/core/filters/slam_filter.h"
+#include "rbpf_slam/core/motion/motion_model.h"
+#include "rbpf_slam/core/random.h"
+
+namespace rbpf_slam {
+namespace core {
+
+/// One hypothesis: a pose and its own map.
+struct Particle {
+  Pose2 pose = Pose2::Zero();
+  double log_weight = 0.0;
+  std::shared_ptr<LandmarkMap> map = std::make_shared<LandmarkMap>();
+};
+
+/// One observation prepared for the filter: value, noise, type, and extent if a line.
+struct Observation {
+  LandmarkType type = LandmarkType::kPoint;
+  Eigen::Vector2d z = Eigen::Vector2d::Zero();  // (range, bearing) or (rho, theta)
+  Eigen::Matrix2d noise = Eigen::Matrix2d::Identity();
+  Eigen::Vector2d start = Eigen::Vector2d::Zero();  // line extent, base frame
+  Eigen::Vector2d end = Eigen::Vector2d::Zero();
+  int known_id = -1;
+};
+
+class FastSlam2 : public SlamFilter {
+ public:
+  explicit FastSlam2(const FilterOptions& options);
+
+  std::string variant() const override { return "fastslam2"; }
+  void reset(const Pose2& initial_pose) override;
+  void predict(const MotionInput& motion) override;
+  UpdateStats update(const FeatureSet& features) override;
+  PoseEstimate estimate() const override;
+  std::vector<LandmarkEstimate> landmarks() const override;
+  std::vector<WeightedPose> particles() const override;
+  FilterStats stats() const override;
+
+  /// Feature set -> observations with the configured noise; counts rejected features.
+  std::vector<Observation> prepare(const FeatureSet& features, int* rejected) const;
+  const std::vector<Particle>& particleSet() const { return particles_; }
+  int bestParticle() const;
+
+ protected:
+  /// Outcome of incorporating all observations into one particle.
+  struct ParticleUpdate {
+    int associated = 0;
+    int created = 0;
+  };
+  /// FastSLAM 2.0 step for one particle from its predicted pose and motion covariance.
+  ParticleUpdate updateParticle(Particle* particle, const Pose2& predicted_mean,
+                                const Eigen::Matrix3d& motion_cov,
+                                const std::vector<Observation>& observations);
+  /// Normalises weights, resamples when Neff is low; fills stats.
+  void weighAndResample(UpdateStats* stats);
+
+  /// Association result for one observation against one particle's map.
+  struct Match {
+    int index = -1;           // landmark index, -1 when none within the gate
+    double distance2 = 1e300;  // smallest Mahalanobis^2
+    Prediction prediction;
+    Eigen::Matrix2d landmark_innovation_cov = Eigen::Matrix2d::Identity();
+  };
+  Match associate(const LandmarkMap& map, const Pose2& pose, const Eigen::Matrix3d& pose_cov,
+                  const Observation& observation) const;
+  void addLandmark(LandmarkMap* map, const Pose2& pose, const Observation& observation);
+  void updateLandmark(LandmarkMap* map, const Match& match, const Pose2& pose,
+                      const Observation& observation, double* log_likelihood);
+
+  const FilterOptions options_;
+  std::unique_ptr<MotionModel> motion_model_;
+  Rng rng_;
+  std::vector<Particle> particles_;
+  std::vector<double> weights_;  // normalised, same order as particles_
+  MotionInput pending_motion_;
+  bool has_pending_motion_ = false;
+  int next_landmark_id_ = 0;
+  int step_ = 0;
+  FilterStats stats_;
+};
+
+}  // namespace core
+}  // namespace rbpf_slam

@@ -1,0 +1,48 @@
+#pragma once
+// The one loader that turns a config YAML (a file from config/, the ROS parameter tree of
+// the node, plus --set overrides) into the options of every part of the pipeline.
+
+#include <yaml-cpp/yaml.h>
+
+#include <string>
+#include <vector>
+
+#include "rbpf_slam/core/features/laser_line_extractor.h"
+#include "rbpf_slam/core/filters/filter_options.h"
+#include "rbpf_slam/core/slam/slam_session.h"
+#include "rbpf_slam/io/yaml_section.h"
+
+namespace rbpf_slam {
+namespace io {
+
+/// Names and periods used by the ROS node and the bag reader (no ROS types here).
+struct RosOptions {
+  std::string map_frame = "map";
+  std::string odom_frame = "odom";
+  std::string base_frame = "base_link";
+  std::string scan_topic = "scan";
+  std::string features_topic = "features";
+  double transform_publish_period = 0.05;  // s; 0 disables tf publishing
+  double transform_tolerance = 0.1;        // s, how far map -> odom is post-dated
+  double tf_wait_timeout = 0.2;            // s the offline runner and node wait for tf
+  int queue_size = 20;
+  bool publish_particles = true;
+};
+
+/// Everything a config file configures.
+struct SlamConfig {
+  std::string frontend = "laser";  // laser | features (range-bearing landmark data)
+  core::FilterOptions filter;
+  core::SessionOptions session;
+  core::LaserExtractorOptions laser;
+  RosOptions ros;
+};
+
+/// Parses a whole config tree; `source` names it in errors (a file name or "~ parameters").
+/// Throws ConfigError naming the key, the value and the allowed range.
+SlamConfig parseSlamConfig(const YAML::Node& root, const std::string& source);
+/// Loads a YAML file and applies "key=value" overrides before parsing.
+SlamConfig loadSlamConfig(const std::string& path, const std::vector<std::string>& overrides = {});
+
+}  // namespace io
+}  // namespace rbpf_slam

@@ -1,0 +1,394 @@
+#include "rbpf_slam/core/filters/fastslam2.h"
+
+#include <Eigen/Dense>
+#include <cmath>
+
+#include "rbpf_slam/core/filters/measurement_models.h"
+#include "rbpf_slam/core/filters/resampling.h"
+
+namespace rbpf_slam {
+namespace core {
+namespace {
+
+constexpr double kLog2Pi = 1.8378770664093453;
+
+/// log N(v; 0, s) for a 2-vector; -inf when s is not positive definite.
+double logGaussian2(const Eigen::Vector2d& v, const Eigen::Matrix2d& s, Eigen::Matrix2d* s_inv) {
+  const double det = s.determinant();
+  if (!(det > 0.0) || !std::isfinite(det)) return -INFINITY;
+  *s_inv = s.inverse();
+  return -0.5 * v.dot(*s_inv * v) - 0.5 * std::log(det) - kLog2Pi;
+}
+
+Eigen::Matrix2d symmetrize(const Eigen::Matrix2d& m) { return 0.5 * (m + m.transpose()); }
+
+bool finiteCovariance(const Eigen::Matrix2d& c) {
+  return c.allFinite() && c(0, 0) > 0.0 && c(1, 1) > 0.0 && c.determinant() > 0.0;
+}
+
+}  // namespace
+
+LandmarkEstimate toEstimate(const Landmark& landmark) {
+  LandmarkEstimate e;
+  e.id = landmark.id;
+  e.type = landmark.type;
+  e.mean = landmark.mean;
+  e.covariance = landmark.covariance;
+  e.observations = landmark.observations;
+  if (landmark.type == LandmarkType::kLine) {
+    e.start = pointOnLine(landmark.mean, landmark.extent_min);
+    e.end = pointOnLine(landmark.mean, landmark.extent_max);
+  } else {
+    e.start = e.end = landmark.mean;
+  }
+  return e;
+}
+
+FastSlam2::FastSlam2(const FilterOptions& options)
+    : options_(options), motion_model_(createMotionModel(options.motion)), rng_(options.seed) {
+  reset(Pose2::Zero());
+}
+
+void FastSlam2::reset(const Pose2& initial_pose) {
+  particles_.assign(options_.particles, Particle());
+  for (auto& p : particles_) {
+    p.pose = initial_pose;
+    p.map = std::make_shared<LandmarkMap>();
+  }
+  weights_.assign(particles_.size(), 1.0 / particles_.size());
+  has_pending_motion_ = false;
+  pending_motion_ = MotionInput();
+  next_landmark_id_ = 0;
+  step_ = 0;
+  stats_ = FilterStats();
+}
+
+void FastSlam2::predict(const MotionInput& motion) {
+  ++stats_.predictions;
+  if (!has_pending_motion_) {
+    pending_motion_ = motion;
+    has_pending_motion_ = true;
+    return;
+  }
+  // Several odometry steps between two updates: compose them into one increment.
+  pending_motion_.delta = compose(pending_motion_.delta, motion.delta);
+  pending_motion_.dt += motion.dt;
+  pending_motion_.stamp = motion.stamp;
+}
+
+std::vector<Observation> FastSlam2::prepare(const FeatureSet& features, int* rejected) const {
+  std::vector<Observation> out;
+  const MeasurementOptions& m = options_.measurement;
+  *rejected = 0;
+  auto noiseOf = [&](const Eigen::Matrix2d& given, double sigma_a, double sigma_b) {
+    Eigen::Matrix2d floor = Eigen::Vector2d(sigma_a * sigma_a, sigma_b * sigma_b).asDiagonal();
+    if (m.use_feature_covariance && finiteCovariance(symmetrize(given))) {
+      return Eigen::Matrix2d(symmetrize(given) * m.covariance_inflation + floor);
+    }
+    return floor;
+  };
+  if (options_.use_lines) {
+    for (const auto& line : features.lines) {
+      Observation o;
+      o.type = LandmarkType::kLine;
+      double rho = line.rho, theta = line.theta;
+      if (!std::isfinite(rho) || !std::isfinite(theta) || !line.start.allFinite() ||
+          !line.end.allFinite()) {
+        ++*rejected;
+        continue;
+      }
+      normalizeLine(rho, theta);
+      o.z << rho, theta;
+      o.noise = noiseOf(line.covariance, m.sigma_rho_m, m.sigma_theta_rad);
+      o.start = line.start;
+      o.end = line.end;
+      out.push_back(o);
+    }
+  }
+  if (options_.use_points) {
+    for (const auto& point : features.points) {
+      if (!std::isfinite(point.range) || !std::isfinite(point.bearing) || point.range <= 0.0) {
+        ++*rejected;
+        continue;
+      }
+      Observation o;
+      o.type = LandmarkType::kPoint;
+      o.z << point.range, wrapAngle(point.bearing);
+      o.noise = noiseOf(point.covariance, m.sigma_range_m, m.sigma_bearing_rad);
+      o.known_id = point.id;
+      out.push_back(o);
+    }
+  }
+  return out;
+}
+
+FastSlam2::Match FastSlam2::associate(const LandmarkMap& map, const Pose2& pose,
+                                      const Eigen::Matrix3d& pose_cov,
+                                      const Observation& observation) const {
+  Match best;
+  const bool is_line = observation.type == LandmarkType::kLine;
+  // The observation in the map frame at the current pose estimate, for a cheap pre-gate.
+  const Eigen::Vector2d in_map = is_line ? lineFromObservation(pose, observation.z, nullptr)
+                                         : pointFromObservation(pose, observation.z, nullptr);
+  const double point_pregate = 1.5 + 0.2 * observation.z.x();
+  Eigen::Vector2d seg_a, seg_b;
+  if (is_line) {
+    seg_a = transformPoint(pose, observation.start);
+    seg_b = transformPoint(pose, observation.end);
+  }
+  for (int i = 0; i < map.size(); ++i) {
+    const Landmark& lm = map[i];
+    if (lm.type != observation.type) continue;
+    if (observation.known_id >= 0) {
+      if (lm.id != observation.known_id) continue;
+    } else if (is_line) {
+      const Eigen::Vector2d d = lineDifference(in_map, lm.mean);
+      if (std::fabs(d.y()) > 0.5 || std::fabs(d.x()) > 1.5) continue;
+      // Collinear walls of different rooms share (rho, alpha): require the segments to meet.
+      const double a = alongLine(lm.mean, seg_a), b = alongLine(lm.mean, seg_b);
+      const double gap = std::max({std::min(a, b) - lm.extent_max, lm.extent_min - std::max(a, b), 0.0});
+      if (gap > options_.association.line_overlap_margin_m) continue;
+    } else if ((in_map - lm.mean).norm() > point_pregate) {
+      continue;
+    }
+    const Prediction p = is_line ? predictLine(pose, lm.mean, observation.z.y())
+                                 : predictPoint(pose, lm.mean);
+    const Eigen::Matrix2d z_cov =
+        p.h_landmark * lm.covariance * p.h_landmark.transpose() + observation.noise;
+    const Eigen::Matrix2d s = z_cov + p.h_pose * pose_cov * p.h_pose.transpose();
+    const Eigen::Vector2d v = innovation(observation.z, p.z);
+    const double d2 = v.dot(s.inverse() * v);
+    if (std::isfinite(d2) && d2 < best.distance2) {
+      best.distance2 = d2;
+      best.index = i;
+      best.prediction = p;
+      best.landmark_innovation_cov = z_cov;
+    }
+  }
+  if (observation.known_id >= 0 && best.index >= 0) best.distance2 = 0.0;  // identity known
+  return best;
+}
+
+void FastSlam2::addLandmark(LandmarkMap* map, const Pose2& pose, const Observation& observation) {
+  Landmark lm;
+  lm.id = observation.known_id >= 0 ? observation.known_id : next_landmark_id_++;
+  lm.type = observation.type;
+  Eigen::Matrix2d g;
+  if (observation.type == LandmarkType::kLine) {
+    lm.mean = lineFromObservation(pose, observation.z, &g);
+    const double a = alongLine(lm.mean, transformPoint(pose, observation.start));
+    const double b = alongLine(lm.mean, transformPoint(pose, observation.end));
+    lm.extent_min = std::min(a, b);
+    lm.extent_max = std::max(a, b);
+  } else {
+    lm.mean = pointFromObservation(pose, observation.z, &g);
+  }
+  lm.covariance = symmetrize(g * observation.noise * g.transpose());
+  lm.last_seen_step = step_;
+  map->add(lm);
+}
+
+void FastSlam2::updateLandmark(LandmarkMap* map, const Match& match, const Pose2& pose,
+                               const Observation& observation, double* log_likelihood) {
+  Landmark lm = (*map)[match.index];
+  const bool is_line = lm.type == LandmarkType::kLine;
+  const Prediction p = is_line ? predictLine(pose, lm.mean, observation.z.y())
+                               : predictPoint(pose, lm.mean);
+  const Eigen::Matrix2d s =
+      p.h_landmark * lm.covariance * p.h_landmark.transpose() + observation.noise;
+  Eigen::Matrix2d s_inv;
+  const Eigen::Vector2d v = innovation(observation.z, p.z);
+  const double ll = logGaussian2(v, s, &s_inv);
+  if (!std::isfinite(ll)) return;
+  if (log_likelihood) *log_likelihood += ll;
+  const Eigen::Matrix<double, 2, 2> k = lm.covariance * p.h_landmark.transpose() * s_inv;
+  lm.mean += k * v;
+  lm.covariance = symmetrize((Eigen::Matrix2d::Identity() - k * p.h_landmark) * lm.covariance);
+  if (is_line) {
+    lm.mean.y() = wrapAngle(lm.mean.y());
+    if (lm.mean.x() < 0.0) {  // keep rho >= 0: flip the normal and the extent's direction
+      lm.mean << -lm.mean.x(), wrapAngle(lm.mean.y() + M_PI);
+      lm.covariance(0, 1) = lm.covariance(1, 0) = -lm.covariance(0, 1);
+      const double lo = -lm.extent_max, hi = -lm.extent_min;
+      lm.extent_min = lo;
+      lm.extent_max = hi;
+    }
+    const double a = alongLine(lm.mean, transformPoint(pose, observation.start));
+    const double b = alongLine(lm.mean, transformPoint(pose, observation.end));
+    lm.extent_min = std::min({lm.extent_min, a, b});
+    lm.extent_max = std::max({lm.extent_max, a, b});
+  }
+  ++lm.observations;
+  lm.last_seen_step = step_;
+  if (lm.mean.allFinite() && lm.covariance.allFinite()) map->set(match.index, lm);
+}
+
+FastSlam2::ParticleUpdate FastSlam2::updateParticle(Particle* particle,
+                                                    const Pose2& predicted_mean,
+                                                    const Eigen::Matrix3d& motion_cov,
+                                                    const std::vector<Observation>& observations) {
+  ParticleUpdate result;
+  Pose2 mean = predicted_mean;
+  Eigen::Matrix3d cov = motion_cov;
+  double log_likelihood = 0.0;
+  std::vector<std::pair<int, int>> matched;  // (observation, landmark index)
+  std::vector<int> fresh;
+  const LandmarkMap& map = *particle->map;
+  const AssociationOptions& a = options_.association;
+  for (size_t k = 0; k < observations.size(); ++k) {
+    const Observation& o = observations[k];
+    const Match m = associate(map, mean, cov, o);
+    if (m.index >= 0 && m.distance2 < a.gate_chi2) {
+      // Proposal: refine the pose Gaussian with this observation (Montemerlo 2003, eq. 3.7).
+      const Eigen::Matrix<double, 2, 3>& h = m.prediction.h_pose;
+      const Eigen::Matrix2d s = h * cov * h.transpose() + m.landmark_innovation_cov;
+      Eigen::Matrix2d s_inv;
+      const Eigen::Vector2d v = innovation(o.z, m.prediction.z);
+      const double ll = logGaussian2(v, s, &s_inv);
+      if (!std::isfinite(ll)) continue;
+      log_likelihood += ll;
+      const Eigen::Matrix<double, 3, 2> gain = cov * h.transpose() * s_inv;
+      mean += gain * v;
+      mean.z() = wrapAngle(mean.z());
+      cov = (Eigen::Matrix3d::Identity() - gain * h) * cov;
+      cov = 0.5 * (cov + cov.transpose());
+      matched.emplace_back(static_cast<int>(k), m.index);
+    } else if (m.index < 0 || m.distance2 > a.new_landmark_chi2) {
+      // Likelihood of a new landmark: as if observed at the new-landmark threshold.
+      log_likelihood += -0.5 * a.new_landmark_chi2 - 0.5 * std::log(o.noise.determinant()) - kLog2Pi;
+      fresh.push_back(static_cast<int>(k));
+    }
+    // Between the gate and the new-landmark threshold: ambiguous, left out.
+  }
+  particle->pose = sampleMultivariate<3>(rng_, mean, cov);
+  particle->pose.z() = wrapAngle(particle->pose.z());
+  particle->log_weight += log_likelihood;
+  if (matched.empty() && fresh.empty()) return result;
+  LandmarkMap& writable = mutableMap(&particle->map);
+  for (const auto& [k, index] : matched) {
+    Match m;
+    m.index = index;
+    updateLandmark(&writable, m, particle->pose, observations[k], nullptr);
+    ++result.associated;
+  }
+  for (int k : fresh) {
+    addLandmark(&writable, particle->pose, observations[k]);
+    ++result.created;
+  }
+  return result;
+}
+
+UpdateStats FastSlam2::update(const FeatureSet& features) {
+  UpdateStats stats;
+  ++step_;
+  const std::vector<Observation> observations = prepare(features, &stats.features_rejected);
+  stats.features_in = static_cast<int>(features.lines.size() + features.points.size());
+  const MotionInput motion = has_pending_motion_ ? pending_motion_ : MotionInput();
+  has_pending_motion_ = false;
+  std::vector<ParticleUpdate> results(particles_.size());
+  for (size_t i = 0; i < particles_.size(); ++i) {
+    Particle& p = particles_[i];
+    if (observations.empty()) {
+      p.pose = motion_model_->sample(p.pose, motion, rng_);
+      continue;
+    }
+    const Pose2 predicted = motion_model_->mean(p.pose, motion);
+    const Eigen::Matrix3d motion_cov = motion_model_->covariance(p.pose, motion);
+    results[i] = updateParticle(&p, predicted, motion_cov, observations);
+  }
+  weighAndResample(&stats);
+  // Report the association of the particle that now carries the most weight.
+  const int best = bestParticle();
+  if (best >= 0 && best < static_cast<int>(results.size())) {
+    stats.associated = results[best].associated;
+    stats.new_landmarks = results[best].created;
+  }
+  ++stats_.updates;
+  stats_.last_neff = stats.neff;
+  stats_.landmarks = best >= 0 ? particles_[best].map->size() : 0;
+  return stats;
+}
+
+void FastSlam2::weighAndResample(UpdateStats* stats) {
+  std::vector<double> log_weights(particles_.size());
+  for (size_t i = 0; i < particles_.size(); ++i) log_weights[i] = particles_[i].log_weight;
+  if (!normalizeLogWeights(log_weights, &weights_)) {
+    ++stats->weight_resets;
+    ++stats_.weight_resets;
+  }
+  stats->neff = effectiveSampleSize(weights_);
+  if (stats->neff < options_.resample_threshold * particles_.size()) {
+    const std::vector<int> indices =
+        resampleLowVariance(weights_, static_cast<int>(particles_.size()), rng_);
+    std::vector<Particle> next;
+    next.reserve(indices.size());
+    for (int index : indices) next.push_back(particles_[index]);  // maps shared, not copied
+    particles_.swap(next);
+    for (auto& p : particles_) p.log_weight = 0.0;
+    weights_.assign(particles_.size(), 1.0 / particles_.size());
+    stats->resampled = true;
+    ++stats_.resamples;
+  } else {
+    for (size_t i = 0; i < particles_.size(); ++i) {
+      particles_[i].log_weight = weights_[i] > 0.0 ? std::log(weights_[i]) : -745.0;
+    }
+  }
+}
+
+int FastSlam2::bestParticle() const {
+  int best = -1;
+  double best_weight = -1.0;
+  for (size_t i = 0; i < weights_.size(); ++i) {
+    if (weights_[i] > best_weight) {
+      best_weight = weights_[i];
+      best = static_cast<int>(i);
+    }
+  }
+  return best;
+}
+
+PoseEstimate FastSlam2::estimate() const {
+  PoseEstimate e;
+  double sin_sum = 0.0, cos_sum = 0.0;
+  Eigen::Vector2d xy = Eigen::Vector2d::Zero();
+  std::vector<Pose2> poses(particles_.size());
+  for (size_t i = 0; i < particles_.size(); ++i) {
+    poses[i] = has_pending_motion_ ? compose(particles_[i].pose, pending_motion_.delta)
+                                   : particles_[i].pose;
+    xy += weights_[i] * poses[i].head<2>();
+    sin_sum += weights_[i] * std::sin(poses[i].z());
+    cos_sum += weights_[i] * std::cos(poses[i].z());
+  }
+  e.mean << xy, std::atan2(sin_sum, cos_sum);
+  e.covariance.setZero();
+  for (size_t i = 0; i < particles_.size(); ++i) {
+    Eigen::Vector3d d = poses[i] - e.mean;
+    d.z() = wrapAngle(d.z());
+    e.covariance += weights_[i] * d * d.transpose();
+  }
+  return e;
+}
+
+std::vector<LandmarkEstimate> FastSlam2::landmarks() const {
+  std::vector<LandmarkEstimate> out;
+  const int best = bestParticle();
+  if (best < 0) return out;
+  const LandmarkMap& map = *particles_[best].map;
+  out.reserve(map.size());
+  for (int i = 0; i < map.size(); ++i) out.push_back(toEstimate(map[i]));
+  return out;
+}
+
+std::vector<WeightedPose> FastSlam2::particles() const {
+  std::vector<WeightedPose> out(particles_.size());
+  for (size_t i = 0; i < particles_.size(); ++i) {
+    out[i].pose = particles_[i].pose;
+    out[i].weight = weights_[i];
+  }
+  return out;
+}
+
+FilterStats FastSlam2::stats() const { return stats_; }
+
+}  // namespace core
+}  // namespace rbpf_slam

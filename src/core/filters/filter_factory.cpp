@@ -1,0 +1,51 @@
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include "rbpf_slam/core/filters/fastslam2.h"
+#include "rbpf_slam/core/filters/slam_filter.h"
+
+namespace rbpf_slam {
+namespace core {
+namespace {
+
+void requireRange(const std::string& name, double value, double min, double max) {
+  if (!(value >= min && value <= max)) {
+    throw std::invalid_argument(name + " = " + std::to_string(value) + " is out of range [" +
+                                std::to_string(min) + ", " + std::to_string(max) + "]");
+  }
+}
+
+}  // namespace
+
+std::vector<std::string> availableVariants() { return {"fastslam2"}; }
+
+void validate(const FilterOptions& o) {
+  bool known = false;
+  for (const auto& v : availableVariants()) known = known || v == o.variant;
+  if (!known) throw std::invalid_argument("variant = '" + o.variant + "' is not implemented");
+  requireRange("particles", o.particles, 1, 100000);
+  requireRange("resample_threshold", o.resample_threshold, 0.0, 1.0);
+  requireRange("association.gate_chi2", o.association.gate_chi2, 0.1, 1000.0);
+  requireRange("association.new_landmark_chi2", o.association.new_landmark_chi2,
+               o.association.gate_chi2, 1000.0);
+  requireRange("association.line_overlap_margin_m", o.association.line_overlap_margin_m, 0.0, 100.0);
+  requireRange("measurement.sigma_range_m", o.measurement.sigma_range_m, 1e-6, 100.0);
+  requireRange("measurement.sigma_bearing_rad", o.measurement.sigma_bearing_rad, 1e-6, M_PI);
+  requireRange("measurement.sigma_rho_m", o.measurement.sigma_rho_m, 1e-6, 100.0);
+  requireRange("measurement.sigma_theta_rad", o.measurement.sigma_theta_rad, 1e-6, M_PI);
+  requireRange("measurement.covariance_inflation", o.measurement.covariance_inflation, 1e-3, 1e3);
+  if (!o.use_points && !o.use_lines) {
+    throw std::invalid_argument("use_points and use_lines are both false: nothing to map");
+  }
+  validate(o.motion);
+}
+
+std::unique_ptr<SlamFilter> createFilter(const FilterOptions& options) {
+  validate(options);
+  if (options.variant == "fastslam2") return std::make_unique<FastSlam2>(options);
+  throw std::invalid_argument("variant = '" + options.variant + "' is not implemented");
+}
+
+}  // namespace core
+}  // namespace rbpf_slam

@@ -1,0 +1,50 @@
+#include "rbpf_slam/core/filters/resampling.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace rbpf_slam {
+namespace core {
+
+bool normalizeLogWeights(const std::vector<double>& log_weights, std::vector<double>* weights) {
+  weights->assign(log_weights.size(), log_weights.empty() ? 0.0 : 1.0 / log_weights.size());
+  double max_log = -std::numeric_limits<double>::infinity();
+  for (double lw : log_weights) {
+    if (std::isnan(lw)) return false;
+    max_log = std::max(max_log, lw);
+  }
+  if (!std::isfinite(max_log)) return log_weights.empty();
+  double sum = 0.0;
+  for (size_t i = 0; i < log_weights.size(); ++i) {
+    (*weights)[i] = std::exp(log_weights[i] - max_log);
+    sum += (*weights)[i];
+  }
+  for (double& w : *weights) w /= sum;
+  return true;
+}
+
+double effectiveSampleSize(const std::vector<double>& weights) {
+  double sum_sq = 0.0;
+  for (double w : weights) sum_sq += w * w;
+  return sum_sq > 0.0 ? 1.0 / sum_sq : 0.0;
+}
+
+std::vector<int> resampleLowVariance(const std::vector<double>& weights, int count, Rng& rng) {
+  std::vector<int> indices;
+  if (weights.empty() || count <= 0) return indices;
+  indices.reserve(count);
+  const double step = 1.0 / count;
+  const double start = sampleUniform(rng) * step;
+  double cumulative = weights[0];
+  size_t i = 0;
+  for (int m = 0; m < count; ++m) {
+    const double target = start + m * step;
+    while (target > cumulative && i + 1 < weights.size()) cumulative += weights[++i];
+    indices.push_back(static_cast<int>(i));
+  }
+  return indices;
+}
+
+}  // namespace core
+}  // namespace rbpf_slam

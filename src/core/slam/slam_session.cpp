@@ -1,0 +1,83 @@
+#include "rbpf_slam/core/slam/slam_session.h"
+
+#include <cmath>
+#include <stdexcept>
+
+namespace rbpf_slam {
+namespace core {
+
+void validate(const SessionOptions& o) {
+  auto check = [](const char* name, double v) {
+    if (!(v >= 0.0) || !std::isfinite(v)) {
+      throw std::invalid_argument(std::string(name) + " = " + std::to_string(v) +
+                                  " is out of range [0, inf)");
+    }
+  };
+  check("linear_update", o.linear_update_m);
+  check("angular_update", o.angular_update_rad);
+  check("max_time_gap", o.max_time_gap_s);
+  check("reset_on_time_jump_back", o.reset_on_time_jump_back_s);
+}
+
+SlamSession::SlamSession(std::unique_ptr<SlamFilter> filter, const SessionOptions& options)
+    : filter_(std::move(filter)), options_(options) {
+  validate(options_);
+  if (!filter_) throw std::invalid_argument("SlamSession needs a filter");
+}
+
+void SlamSession::reset() {
+  filter_->reset(Pose2::Zero());
+  has_previous_ = false;
+  last_stamp_ = 0.0;
+  map_to_odom_ = Pose2::Zero();
+  trajectory_.clear();
+  ++resets_;
+}
+
+FrameResult SlamSession::process(double stamp, const Pose2& odom_pose,
+                                 const FeatureSet& features) {
+  if (!std::isfinite(stamp) || stamp <= 0.0) return FrameResult::kRejectedStamp;
+  if (!odom_pose.allFinite()) return FrameResult::kRejectedPose;
+  if (has_previous_ && stamp <= last_stamp_) {
+    // A large jump back is a restarted clock (a looping bag): start a new map.
+    if (last_stamp_ - stamp > options_.reset_on_time_jump_back_s &&
+        options_.reset_on_time_jump_back_s > 0.0) {
+      reset();
+      // fall through: this frame becomes the first of the new run
+    } else {
+      return FrameResult::kRejectedStamp;
+    }
+  }
+  if (!has_previous_) {
+    has_previous_ = true;
+    last_stamp_ = stamp;
+    last_odom_ = odom_pose;
+    // Anchor the map at the first pose: map == odom at start.
+    filter_->reset(odom_pose);
+    last_stats_ = filter_->update(features);
+    map_to_odom_ = Pose2::Zero();
+    trajectory_.push_back({stamp, filter_->estimate().mean});
+    return FrameResult::kFirstFrame;
+  }
+  const Pose2 delta = between(last_odom_, odom_pose);
+  const bool moved = std::hypot(delta.x(), delta.y()) >= options_.linear_update_m ||
+                     std::fabs(delta.z()) >= options_.angular_update_rad;
+  if (!moved) return FrameResult::kSkippedNoMotion;
+  MotionInput motion;
+  motion.stamp = stamp;
+  motion.dt = stamp - last_stamp_;
+  motion.delta = delta;
+  filter_->predict(motion);
+  last_stats_ = filter_->update(features);
+  last_stamp_ = stamp;
+  last_odom_ = odom_pose;
+  const Pose2 map_pose = filter_->estimate().mean;
+  if (map_pose.allFinite()) {
+    map_to_odom_ = compose(map_pose, inverse(odom_pose));
+    trajectory_.push_back({stamp, map_pose});
+  }
+  return FrameResult::kUpdated;
+}
+
+}  // namespace core
+}  // namespace rbpf_slam

@@ -1,1 +1,0 @@
-namespace rbpf_slam { namespace io { int placeholder_io = 0; } }

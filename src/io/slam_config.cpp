@@ -1,0 +1,135 @@
+#include "rbpf_slam/io/slam_config.h"
+
+#include <stdexcept>
+
+namespace rbpf_slam {
+namespace io {
+namespace {
+
+void readMotion(YamlSection section, core::MotionOptions* o) {
+  section.read("model", &o->model, {"odometry", "diff_drive"});
+  section.read("alpha1", &o->alpha1, 0.0, 10.0);
+  section.read("alpha2", &o->alpha2, 0.0, 10.0);
+  section.read("alpha3", &o->alpha3, 0.0, 10.0);
+  section.read("alpha4", &o->alpha4, 0.0, 10.0);
+  section.read("wheel_base_m", &o->wheel_base_m, 1e-3, 10.0);
+  section.read("wheel_alpha1", &o->wheel_alpha1, 0.0, 10.0);
+  section.read("wheel_alpha2", &o->wheel_alpha2, 0.0, 10.0);
+  section.read("min_sigma_xy_m", &o->min_sigma_xy_m, 0.0, 1.0);
+  section.read("min_sigma_theta_rad", &o->min_sigma_theta_rad, 0.0, 1.0);
+  section.finish();
+}
+
+void readAssociation(YamlSection section, core::AssociationOptions* o) {
+  section.read("gate_chi2", &o->gate_chi2, 0.1, 1000.0);
+  section.read("new_landmark_chi2", &o->new_landmark_chi2, 0.1, 1000.0);
+  section.read("line_overlap_margin_m", &o->line_overlap_margin_m, 0.0, 100.0);
+  section.read("min_observations_to_keep", &o->min_observations_to_keep, 1, 1000);
+  section.finish();
+}
+
+void readMeasurement(YamlSection section, core::MeasurementOptions* o) {
+  section.read("use_feature_covariance", &o->use_feature_covariance);
+  section.read("sigma_range_m", &o->sigma_range_m, 1e-6, 100.0);
+  section.read("sigma_bearing_rad", &o->sigma_bearing_rad, 1e-6, 3.2);
+  section.read("sigma_rho_m", &o->sigma_rho_m, 1e-6, 100.0);
+  section.read("sigma_theta_rad", &o->sigma_theta_rad, 1e-6, 3.2);
+  section.read("covariance_inflation", &o->covariance_inflation, 1e-3, 1e3);
+  section.finish();
+}
+
+void readLaser(YamlSection section, core::LaserExtractorOptions* o) {
+  section.read("method", &o->method, {"incremental", "split_and_merge"});
+  section.read("sigma_range_m", &o->sigma_range_m, 1e-6, 1.0);
+  section.read("max_mean_sq_residual_m2", &o->max_mean_sq_residual_m2, 1e-8, 1.0);
+  section.read("split_distance_m", &o->split_distance_m, 1e-4, 10.0);
+  section.read("max_point_gap_m", &o->max_point_gap_m, 1e-3, 100.0);
+  section.read("min_points_per_line", &o->min_points_per_line, 2, 100000);
+  section.read("min_line_length_m", &o->min_line_length_m, 0.0, 100.0);
+  section.read("merge_angle_rad", &o->merge_angle_rad, 0.0, 1.6);
+  section.read("merge_distance_m", &o->merge_distance_m, 0.0, 10.0);
+  section.read("extract_corners", &o->extract_corners);
+  section.read("corner_min_angle_rad", &o->corner_min_angle_rad, 0.0, 1.6);
+  section.read("corner_max_gap_m", &o->corner_max_gap_m, 0.0, 10.0);
+  section.read("extract_clusters", &o->extract_clusters);
+  section.read("cluster_max_width_m", &o->cluster_max_width_m, 0.0, 10.0);
+  section.read("cluster_min_points", &o->cluster_min_points, 1, 1000);
+  section.read("cluster_isolation_m", &o->cluster_isolation_m, 0.0, 100.0);
+  section.read("sigma_point_range_m", &o->sigma_point_range_m, 1e-6, 10.0);
+  section.read("sigma_point_bearing_rad", &o->sigma_point_bearing_rad, 1e-6, 3.2);
+  section.read("max_range_m", &o->max_range_m, 0.0, 1000.0);
+  section.finish();
+}
+
+void readRos(YamlSection& top, RosOptions* o) {
+  top.read("map_frame", &o->map_frame);
+  top.read("odom_frame", &o->odom_frame);
+  top.read("base_frame", &o->base_frame);
+  top.read("scan_topic", &o->scan_topic);
+  top.read("features_topic", &o->features_topic);
+  top.read("transform_publish_period", &o->transform_publish_period, 0.0, 10.0);
+  top.read("transform_tolerance", &o->transform_tolerance, 0.0, 10.0);
+  top.read("tf_wait_timeout", &o->tf_wait_timeout, 0.0, 10.0);
+  top.read("queue_size", &o->queue_size, 1, 10000);
+  top.read("publish_particles", &o->publish_particles);
+  for (const std::string* frame : {&o->map_frame, &o->odom_frame, &o->base_frame}) {
+    if (frame->empty()) throw ConfigError(top.source() + ": frame names must not be empty");
+  }
+}
+
+/// Runs a core validate() and turns its message into a ConfigError naming the source.
+template <typename Options>
+void validateAs(const Options& options, const std::string& source) {
+  try {
+    core::validate(options);
+  } catch (const std::invalid_argument& e) {
+    throw ConfigError(source + ": " + e.what());
+  }
+}
+
+}  // namespace
+
+SlamConfig parseSlamConfig(const YAML::Node& root, const std::string& source) {
+  SlamConfig config;
+  YamlSection top(root, source);
+  top.read("frontend", &config.frontend, {"laser", "features"});
+  core::FilterOptions& f = config.filter;
+  top.read("variant", &f.variant, core::availableVariants());
+  top.read("particles", &f.particles, 1, 100000);
+  top.read("seed", &f.seed);
+  top.read("resample_threshold", &f.resample_threshold, 0.0, 1.0);
+  top.read("use_points", &f.use_points);
+  top.read("use_lines", &f.use_lines);
+  readMotion(top.section("motion"), &f.motion);
+  readAssociation(top.section("association"), &f.association);
+  readMeasurement(top.section("measurement"), &f.measurement);
+  readLaser(top.section("laser_features"), &config.laser);
+  core::SessionOptions& s = config.session;
+  top.read("linear_update", &s.linear_update_m, 0.0, 100.0);
+  top.read("angular_update", &s.angular_update_rad, 0.0, 10.0);
+  top.read("max_time_gap", &s.max_time_gap_s, 0.0, 1e6);
+  top.read("reset_on_time_jump_back", &s.reset_on_time_jump_back_s, 0.0, 1e6);
+  readRos(top, &config.ros);
+  top.finish();
+  validateAs(config.filter, source);
+  validateAs(config.session, source);
+  validateAs(config.laser, source);
+  return config;
+}
+
+SlamConfig loadSlamConfig(const std::string& path, const std::vector<std::string>& overrides) {
+  YAML::Node root;
+  try {
+    root = YAML::LoadFile(path);
+  } catch (const YAML::BadFile&) {
+    throw ConfigError(path + ": cannot open the config file");
+  } catch (const YAML::Exception& e) {
+    throw ConfigError(path + ": not valid YAML: " + e.what());
+  }
+  if (root.IsNull()) root = YAML::Node(YAML::NodeType::Map);
+  for (const auto& assignment : overrides) applyOverride(&root, assignment);
+  return parseSlamConfig(root, path);
+}
+
+}  // namespace io
+}  // namespace rbpf_slam

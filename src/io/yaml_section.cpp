@@ -1,0 +1,177 @@
+#include "rbpf_slam/io/yaml_section.h"
+
+#include <cmath>
+#include <sstream>
+
+namespace rbpf_slam {
+namespace io {
+namespace {
+
+std::string describe(const YAML::Node& node) {
+  if (node.IsScalar()) return node.Scalar();
+  std::ostringstream out;
+  out << node;
+  return out.str();
+}
+
+std::string rangeText(double min, double max) {
+  std::ostringstream out;
+  out << "[" << min << ", " << max << "]";
+  return out.str();
+}
+
+}  // namespace
+
+YamlSection::YamlSection(const YAML::Node& node, std::string source, std::string path)
+    : node_(node), source_(std::move(source)), path_(std::move(path)) {
+  if (node_ && !node_.IsNull() && !node_.IsMap()) {
+    throw ConfigError(source_ + ": " + (path_.empty() ? "the top level" : path_) +
+                      " must be a map of key: value");
+  }
+}
+
+std::string YamlSection::where(const std::string& key) const {
+  return source_ + ": " + (path_.empty() ? key : path_ + "." + key);
+}
+
+bool YamlSection::has(const std::string& key) const { return node_ && node_.IsMap() && node_[key]; }
+
+YAML::Node YamlSection::child(const std::string& key) {
+  read_.insert(key);
+  if (!node_ || !node_.IsMap()) return YAML::Node();
+  return node_[key];
+}
+
+void YamlSection::read(const std::string& key, double* value, double min, double max) {
+  const YAML::Node n = child(key);
+  if (!n) return;
+  double parsed;
+  try {
+    parsed = n.as<double>();
+  } catch (const YAML::Exception&) {
+    throw ConfigError(where(key) + " = " + describe(n) + " is not a number");
+  }
+  if (!std::isfinite(parsed) || parsed < min || parsed > max) {
+    throw ConfigError(where(key) + " = " + describe(n) + " is out of range " +
+                      rangeText(min, max));
+  }
+  *value = parsed;
+}
+
+void YamlSection::read(const std::string& key, int* value, int min, int max) {
+  const YAML::Node n = child(key);
+  if (!n) return;
+  long long parsed;
+  try {
+    parsed = n.as<long long>();
+  } catch (const YAML::Exception&) {
+    throw ConfigError(where(key) + " = " + describe(n) + " is not an integer");
+  }
+  if (parsed < min || parsed > max) {
+    throw ConfigError(where(key) + " = " + describe(n) + " is out of range " +
+                      rangeText(min, max));
+  }
+  *value = static_cast<int>(parsed);
+}
+
+void YamlSection::read(const std::string& key, unsigned long* value) {
+  const YAML::Node n = child(key);
+  if (!n) return;
+  try {
+    const long long parsed = n.as<long long>();
+    if (parsed < 0) throw ConfigError(where(key) + " = " + describe(n) + " must be >= 0");
+    *value = static_cast<unsigned long>(parsed);
+  } catch (const YAML::Exception&) {
+    throw ConfigError(where(key) + " = " + describe(n) + " is not a non-negative integer");
+  }
+}
+
+void YamlSection::read(const std::string& key, bool* value) {
+  const YAML::Node n = child(key);
+  if (!n) return;
+  try {
+    *value = n.as<bool>();
+  } catch (const YAML::Exception&) {
+    throw ConfigError(where(key) + " = " + describe(n) + " is not true or false");
+  }
+}
+
+void YamlSection::read(const std::string& key, std::string* value,
+                       const std::vector<std::string>& allowed) {
+  const YAML::Node n = child(key);
+  if (!n) return;
+  if (!n.IsScalar()) throw ConfigError(where(key) + " must be a string");
+  const std::string parsed = n.Scalar();
+  if (!allowed.empty()) {
+    bool ok = false;
+    std::string list;
+    for (const auto& a : allowed) {
+      ok = ok || a == parsed;
+      list += (list.empty() ? "" : ", ") + a;
+    }
+    if (!ok) throw ConfigError(where(key) + " = '" + parsed + "' is not one of: " + list);
+  }
+  *value = parsed;
+}
+
+void YamlSection::read(const std::string& key, std::vector<double>* value) {
+  const YAML::Node n = child(key);
+  if (!n) return;
+  if (!n.IsSequence()) throw ConfigError(where(key) + " must be a list of numbers");
+  std::vector<double> parsed;
+  for (const auto& item : n) {
+    try {
+      parsed.push_back(item.as<double>());
+    } catch (const YAML::Exception&) {
+      throw ConfigError(where(key) + " contains " + describe(item) + ", not a number");
+    }
+    if (!std::isfinite(parsed.back())) throw ConfigError(where(key) + " contains a non-finite value");
+  }
+  *value = parsed;
+}
+
+YamlSection YamlSection::section(const std::string& key) {
+  const YAML::Node n = child(key);
+  if (n && !n.IsMap() && !n.IsNull()) throw ConfigError(where(key) + " must be a map");
+  return YamlSection(n ? n : YAML::Node(), source_, path_.empty() ? key : path_ + "." + key);
+}
+
+void YamlSection::finish() const {
+  if (!node_ || !node_.IsMap()) return;
+  std::string unknown;
+  for (const auto& item : node_) {
+    const std::string key = item.first.as<std::string>();
+    if (!read_.count(key)) unknown += (unknown.empty() ? "" : ", ") + key;
+  }
+  if (!unknown.empty()) {
+    throw ConfigError(source_ + ": unknown key(s) " +
+                      (path_.empty() ? std::string("at the top level") : "in " + path_) + ": " +
+                      unknown);
+  }
+}
+
+void applyOverride(YAML::Node* root, const std::string& assignment) {
+  const auto eq = assignment.find('=');
+  if (eq == std::string::npos || eq == 0) {
+    throw ConfigError("--set '" + assignment + "' must look like key=value or a.b=value");
+  }
+  const std::string path = assignment.substr(0, eq);
+  const std::string value = assignment.substr(eq + 1);
+  std::vector<std::string> keys;
+  std::stringstream stream(path);
+  for (std::string key; std::getline(stream, key, '.');) keys.push_back(key);
+  // yaml-cpp node assignment rebinds handles, so walk with explicit copies of children.
+  std::vector<YAML::Node> chain{*root};
+  for (size_t i = 0; i + 1 < keys.size(); ++i) {
+    YAML::Node next = chain.back()[keys[i]];
+    if (!next || next.IsNull()) {
+      chain.back()[keys[i]] = YAML::Node(YAML::NodeType::Map);
+      next = chain.back()[keys[i]];
+    }
+    chain.push_back(next);
+  }
+  chain.back()[keys.back()] = YAML::Load(value);
+}
+
+}  // namespace io
+}  // namespace rbpf_slam
