@@ -1,0 +1,160 @@
+#include "rbpf_slam/ros/conversions.h"
+
+#include <tf2/LinearMath/Quaternion.h>
+#include <tf2/utils.h>
+
+#include <cmath>
+
+namespace rbpf_slam {
+namespace rosbridge {
+namespace {
+
+Eigen::Matrix2d toMatrix(const boost::array<double, 4>& c) {
+  Eigen::Matrix2d m;
+  m << c[0], c[1], c[2], c[3];
+  return m;
+}
+
+void fromMatrix(const Eigen::Matrix2d& m, boost::array<double, 4>* c) {
+  (*c)[0] = m(0, 0);
+  (*c)[1] = m(0, 1);
+  (*c)[2] = m(1, 0);
+  (*c)[3] = m(1, 1);
+}
+
+}  // namespace
+
+core::Pose2 toPose2(const geometry_msgs::Transform& t) {
+  return core::Pose2(t.translation.x, t.translation.y, tf2::getYaw(t.rotation));
+}
+
+core::Pose2 toPose2(const geometry_msgs::Pose& p) {
+  return core::Pose2(p.position.x, p.position.y, tf2::getYaw(p.orientation));
+}
+
+geometry_msgs::Transform toTransform(const core::Pose2& pose) {
+  geometry_msgs::Transform t;
+  t.translation.x = pose.x();
+  t.translation.y = pose.y();
+  tf2::Quaternion q;
+  q.setRPY(0.0, 0.0, pose.z());
+  t.rotation.x = q.x();
+  t.rotation.y = q.y();
+  t.rotation.z = q.z();
+  t.rotation.w = q.w();
+  return t;
+}
+
+geometry_msgs::Pose toPoseMsg(const core::Pose2& pose) {
+  const geometry_msgs::Transform t = toTransform(pose);
+  geometry_msgs::Pose p;
+  p.position.x = t.translation.x;
+  p.position.y = t.translation.y;
+  p.orientation = t.rotation;
+  return p;
+}
+
+bool toRangeScan(const sensor_msgs::LaserScan& msg, const core::Pose2& sensor_in_base,
+                 core::RangeScan* scan, std::string* error) {
+  if (!std::isfinite(msg.angle_min) || !std::isfinite(msg.angle_increment) ||
+      msg.angle_increment == 0.0f) {
+    *error = "angle_min/angle_increment not finite or increment zero";
+    return false;
+  }
+  if (msg.ranges.size() > 1 && std::isfinite(msg.angle_max)) {
+    const double expected = msg.angle_min + msg.angle_increment * (msg.ranges.size() - 1);
+    // Tolerate rounding and drivers that count one beam more or less than they send.
+    if (std::fabs(expected - msg.angle_max) > 2.0 * std::fabs(msg.angle_increment) + 1e-3) {
+      *error = "angle_increment * (beams - 1) does not span angle_min..angle_max; bearings are "
+               "taken from angle_min + i * angle_increment";
+    }
+  }
+  scan->stamp = msg.header.stamp.toSec();
+  scan->angle_min = msg.angle_min;
+  scan->angle_increment = msg.angle_increment;
+  scan->range_min = std::isfinite(msg.range_min) && msg.range_min > 0.0f ? msg.range_min : 0.0;
+  scan->range_max = std::isfinite(msg.range_max) && msg.range_max > 0.0f
+                        ? msg.range_max
+                        : std::numeric_limits<double>::infinity();
+  scan->ranges = msg.ranges;
+  scan->sensor_pose = sensor_in_base;
+  return true;
+}
+
+core::FeatureSet toFeatureSet(const FeatureArray& msg, const core::Pose2& frame_in_base,
+                              int* dropped) {
+  core::FeatureSet set;
+  set.stamp = msg.header.stamp.toSec();
+  *dropped = 0;
+  const bool identity = frame_in_base.isZero(0.0);
+  for (const auto& p : msg.points) {
+    core::PointFeature f;
+    f.range = p.range;
+    f.bearing = p.bearing;
+    f.covariance = toMatrix(p.covariance);
+    f.id = p.id;
+    if (!std::isfinite(f.range) || !std::isfinite(f.bearing) || f.range < 0.0 ||
+        !f.covariance.allFinite()) {
+      ++*dropped;
+      continue;
+    }
+    if (!identity) {  // re-express in the base frame (covariance kept: a small offset)
+      const Eigen::Vector2d in_frame(f.range * std::cos(f.bearing), f.range * std::sin(f.bearing));
+      const Eigen::Vector2d in_base = core::transformPoint(frame_in_base, in_frame);
+      f.range = in_base.norm();
+      f.bearing = std::atan2(in_base.y(), in_base.x());
+    }
+    set.points.push_back(f);
+  }
+  for (const auto& l : msg.lines) {
+    core::LineFeature f;
+    f.rho = l.rho;
+    f.theta = l.theta;
+    f.covariance = toMatrix(l.covariance);
+    f.start << l.start.x, l.start.y;
+    f.end << l.end.x, l.end.y;
+    if (!std::isfinite(f.rho) || !std::isfinite(f.theta) || !f.covariance.allFinite() ||
+        !f.start.allFinite() || !f.end.allFinite()) {
+      ++*dropped;
+      continue;
+    }
+    if (!identity) {
+      const double theta = f.theta + frame_in_base.z();
+      f.rho += frame_in_base.x() * std::cos(theta) + frame_in_base.y() * std::sin(theta);
+      f.theta = theta;
+      f.start = core::transformPoint(frame_in_base, f.start);
+      f.end = core::transformPoint(frame_in_base, f.end);
+    }
+    core::normalizeLine(f.rho, f.theta);
+    set.lines.push_back(f);
+  }
+  return set;
+}
+
+FeatureArray toMsg(const core::FeatureSet& features, const std_msgs::Header& header) {
+  FeatureArray msg;
+  msg.header = header;
+  for (const auto& p : features.points) {
+    PointFeature out;
+    out.range = p.range;
+    out.bearing = p.bearing;
+    fromMatrix(p.covariance, &out.covariance);
+    out.id = p.id;
+    msg.points.push_back(out);
+  }
+  for (const auto& l : features.lines) {
+    LineFeature out;
+    out.rho = l.rho;
+    out.theta = l.theta;
+    fromMatrix(l.covariance, &out.covariance);
+    out.start.x = l.start.x();
+    out.start.y = l.start.y();
+    out.end.x = l.end.x();
+    out.end.y = l.end.y();
+    msg.lines.push_back(out);
+  }
+  return msg;
+}
+
+}  // namespace rosbridge
+}  // namespace rbpf_slam
