@@ -9,7 +9,7 @@
 
 #include "rbpf_slam/core/features/laser_line_extractor.h"
 #include "rbpf_slam/core/filters/filter_options.h"
-#include "rbpf_slam/core/slam/slam_session.h"
+#include "rbpf_slam/core/slam/slam_pipeline.h"
 #include "rbpf_slam/io/yaml_section.h"
 
 namespace rbpf_slam {
@@ -36,6 +36,8 @@ struct SlamConfig {
   core::SessionOptions session;
   core::LaserExtractorOptions laser;
   RosOptions ros;
+
+  core::PipelineOptions pipeline() const { return {filter, session, laser}; }
 };
 
 /// Parses a whole config tree; `source` names it in errors (a file name or "~ parameters").
