@@ -38,6 +38,7 @@ void validate(const LaserExtractorOptions& options);
 /// Extracts line and point features from laser scans; stateless between scans.
 class LaserLineExtractor {
  public:
+  /// Throws std::invalid_argument (see validate) for out-of-range options.
   explicit LaserLineExtractor(const LaserExtractorOptions& options);
   /// Features in the base frame (the scan's sensor_pose applied); invalid beams skipped.
   FeatureSet extract(const RangeScan& scan) const;
@@ -50,6 +51,58 @@ class LaserLineExtractor {
 /// Total-least-squares line through points, with the (rho, theta) covariance propagated
 /// from isotropic point noise sigma_m. Returns false for fewer than two distinct points.
 bool fitLine(const std::vector<Eigen::Vector2d>& points, double sigma_m, LineFeature* line);
+
+/// Running point sums giving an O(1) total-least-squares line fit after each add or remove.
+struct LineMoments {
+  double n = 0.0;
+  double sx = 0.0, sy = 0.0;
+  double sxx = 0.0, sxy = 0.0, syy = 0.0;
+
+  void add(const Eigen::Vector2d& p) {
+    n += 1.0;
+    sx += p.x();
+    sy += p.y();
+    sxx += p.x() * p.x();
+    sxy += p.x() * p.y();
+    syy += p.y() * p.y();
+  }
+  void remove(const Eigen::Vector2d& p) {
+    n -= 1.0;
+    sx -= p.x();
+    sy -= p.y();
+    sxx -= p.x() * p.x();
+    sxy -= p.x() * p.y();
+    syy -= p.y() * p.y();
+  }
+  LineMoments& operator+=(const LineMoments& o) {
+    n += o.n;
+    sx += o.sx;
+    sy += o.sy;
+    sxx += o.sxx;
+    sxy += o.sxy;
+    syy += o.syy;
+    return *this;
+  }
+  /// Sum of squared orthogonal residuals of the TLS line (the smaller scatter eigenvalue).
+  double residualSum() const;
+  /// Sum of squared point offsets along the TLS line (the larger scatter eigenvalue).
+  double spread() const;
+  /// Mean squared orthogonal residual of the TLS line; 0 for fewer than three points.
+  double meanSquaredResidual() const { return n > 2.0 ? residualSum() / n : 0.0; }
+  /// Unit normal and signed offset (p . normal = offset on the line), without trigonometry;
+  /// false when the points do not define a direction.
+  bool normal(Eigen::Vector2d* unit_normal, double* offset) const;
+  /// Normal-form line with covariance for isotropic point noise sigma_m (start/end untouched).
+  bool fit(double sigma_m, LineFeature* line) const;
+};
+
+/// A line feature expressed in the parent frame of pose (e.g. sensor to base), with its
+/// (rho, theta) covariance mapped by the Jacobian and rho kept >= 0.
+LineFeature transformLineFeature(const Pose2& pose, const LineFeature& line);
+
+/// A point feature expressed in the parent frame of pose, as range/bearing from the parent
+/// origin, with its covariance mapped by the Jacobian.
+PointFeature transformPointFeature(const Pose2& pose, const PointFeature& point);
 
 }  // namespace core
 }  // namespace rbpf_slam
