@@ -1,0 +1,24 @@
+#pragma once
+// Turns the node's private ROS parameters into the same SlamConfig a YAML file gives, through
+// the same loader, so unknown keys and out-of-range values are errors here too.
+
+#include <ros/node_handle.h>
+#include <xmlrpcpp/XmlRpcValue.h>
+#include <yaml-cpp/yaml.h>
+
+#include "rbpf_slam/io/slam_config.h"
+
+namespace rbpf_slam {
+namespace rosbridge {
+
+/// The YAML equivalent of a parameter value (struct -> map, array -> sequence, scalars as
+/// their text; non-finite doubles as .inf / .nan so the range checks reject them).
+YAML::Node paramsToYaml(const XmlRpc::XmlRpcValue& value);
+
+/// Parses the whole private parameter tree of private_nh with io::parseSlamConfig. Parameters
+/// that ROS tools add to a private namespace are skipped. Throws io::ConfigError naming the
+/// namespace and the key.
+io::SlamConfig loadConfigFromParams(const ros::NodeHandle& private_nh);
+
+}  // namespace rosbridge
+}  // namespace rbpf_slam

@@ -1,0 +1,83 @@
+#pragma once
+// Wires ROS topics and tf to one SlamPipeline: scans and features in, map -> odom, pose,
+// trajectory, landmarks and particles out.
+
+#include <message_filters/subscriber.h>
+#include <rbpf_slam/FeatureArray.h>
+#include <ros/ros.h>
+#include <sensor_msgs/LaserScan.h>
+#include <std_srvs/Empty.h>
+#include <tf2_ros/buffer.h>
+#include <tf2_ros/message_filter.h>
+#include <tf2_ros/transform_broadcaster.h>
+#include <tf2_ros/transform_listener.h>
+
+#include <map>
+#include <memory>
+#include <string>
+
+#include "rbpf_slam/core/slam/slam_pipeline.h"
+#include "rbpf_slam/io/slam_config.h"
+#include "rbpf_slam/ros/markers.h"
+
+namespace rbpf_slam {
+namespace rosbridge {
+
+/// The rbpf_slam_node: converts incoming messages, hands them to the core, publishes results.
+class SlamNode {
+ public:
+  /// Reads the config from private_nh's parameters; throws io::ConfigError (bad parameters) or
+  /// std::invalid_argument (options the core rejects).
+  SlamNode(ros::NodeHandle nh, ros::NodeHandle private_nh);
+
+  const io::SlamConfig& config() const { return config_; }
+
+ private:
+  void scanCallback(const sensor_msgs::LaserScan::ConstPtr& msg);
+  void featuresCallback(const FeatureArray::ConstPtr& msg);
+  void messageDropped(const std_msgs::Header& header, tf2_ros::FilterFailureReason reason);
+  /// The odometry pose of the base and the pose of the message frame in the base frame at
+  /// the header's stamp; false (with a throttled warning) if tf cannot give them.
+  bool lookupPoses(const std_msgs::Header& header, core::Pose2* odom_pose,
+                   core::Pose2* frame_in_base);
+  void handleResult(core::FrameResult result, const ros::Time& stamp);
+  void publishState(const ros::Time& stamp);
+  void publishLandmarks(const ros::Time& stamp);
+  void publishTransform(const ros::TimerEvent& event);
+  bool resetService(std_srvs::Empty::Request& request, std_srvs::Empty::Response& response);
+  /// Resets everything when ros::Time::now() went backwards (a bag played again); returns
+  /// false while there is no clock yet.
+  bool checkClock();
+  void resetAll(const std::string& why);
+  /// Warns about cause at most once every few seconds.
+  void warnThrottled(const std::string& cause, const std::string& message);
+
+  ros::NodeHandle nh_;
+  ros::NodeHandle private_nh_;
+  const io::SlamConfig config_;
+  core::SlamPipeline pipeline_;
+
+  tf2_ros::Buffer tf_buffer_;
+  tf2_ros::TransformListener tf_listener_;
+  tf2_ros::TransformBroadcaster tf_broadcaster_;
+  message_filters::Subscriber<sensor_msgs::LaserScan> scan_subscriber_;
+  std::unique_ptr<tf2_ros::MessageFilter<sensor_msgs::LaserScan>> scan_filter_;
+  message_filters::Subscriber<FeatureArray> features_subscriber_;
+  std::unique_ptr<tf2_ros::MessageFilter<FeatureArray>> features_filter_;
+
+  ros::Publisher pose_publisher_;
+  ros::Publisher trajectory_publisher_;
+  ros::Publisher landmarks_publisher_;
+  ros::Publisher particles_publisher_;
+  ros::ServiceServer reset_server_;
+  ros::Timer transform_timer_;
+
+  LandmarkMarkers landmark_markers_;
+  ros::Time last_transform_stamp_;
+  ros::Time last_now_;
+  std::map<std::string, ros::WallTime> last_warning_;
+  long updates_ = 0;
+};
+
+}  // namespace rosbridge
+}  // namespace rbpf_slam

@@ -1,0 +1,18 @@
+// laser_features: scan -> features; see include/rbpf_slam/ros/laser_features_node.h.
+#include <ros/ros.h>
+
+#include <exception>
+
+#include "rbpf_slam/ros/laser_features_node.h"
+
+int main(int argc, char** argv) {
+  ros::init(argc, argv, "laser_features");
+  try {
+    rbpf_slam::rosbridge::LaserFeaturesNode node(ros::NodeHandle(), ros::NodeHandle("~"));
+    ros::spin();
+  } catch (const std::exception& e) {  // io::ConfigError or options the core rejects
+    ROS_FATAL_STREAM("laser_features: " << e.what());
+    return 1;
+  }
+  return 0;
+}

@@ -1,0 +1,271 @@
+#include "rbpf_slam/ros/slam_node.h"
+
+#include <geometry_msgs/PoseArray.h>
+#include <geometry_msgs/PoseWithCovarianceStamped.h>
+#include <geometry_msgs/TransformStamped.h>
+#include <nav_msgs/Path.h>
+#include <visualization_msgs/MarkerArray.h>
+
+#include <cmath>
+#include <sstream>
+
+#include "rbpf_slam/ros/conversions.h"
+#include "rbpf_slam/ros/param_loader.h"
+
+namespace rbpf_slam {
+namespace rosbridge {
+namespace {
+
+constexpr double kWarningPeriodS = 10.0;
+constexpr double kTfCacheS = 30.0;
+constexpr double kSummaryPeriodS = 30.0;
+
+const char* describe(core::FrameResult result) {
+  switch (result) {
+    case core::FrameResult::kUpdated: return "updated";
+    case core::FrameResult::kSkippedNoMotion: return "skipped (no motion)";
+    case core::FrameResult::kFirstFrame: return "first frame";
+    case core::FrameResult::kRejectedStamp: return "rejected (stamp not after the last)";
+    case core::FrameResult::kRejectedPose: return "rejected (odometry pose not finite)";
+    case core::FrameResult::kReset: return "reset";
+  }
+  return "unknown";
+}
+
+/// (x, y, yaw) covariance into the 6x6 row-major (x, y, z, roll, pitch, yaw) of a ROS pose.
+boost::array<double, 36> toPoseCovariance(const Eigen::Matrix3d& c) {
+  boost::array<double, 36> out{};
+  const int index[3] = {0, 1, 5};
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) out[index[i] * 6 + index[j]] = c(i, j);
+  }
+  return out;
+}
+
+}  // namespace
+
+SlamNode::SlamNode(ros::NodeHandle nh, ros::NodeHandle private_nh)
+    : nh_(nh),
+      private_nh_(private_nh),
+      config_(loadConfigFromParams(private_nh)),
+      pipeline_(config_.pipeline()),
+      tf_buffer_(ros::Duration(kTfCacheS)),
+      tf_listener_(tf_buffer_, nh) {
+  const io::RosOptions& ros_options = config_.ros;
+  const uint32_t queue = static_cast<uint32_t>(ros_options.queue_size);
+  if (config_.frontend == "laser") {
+    scan_subscriber_.subscribe(nh_, ros_options.scan_topic, queue);
+    scan_filter_ = std::make_unique<tf2_ros::MessageFilter<sensor_msgs::LaserScan>>(
+        scan_subscriber_, tf_buffer_, ros_options.odom_frame, queue, nh_);
+    scan_filter_->registerCallback(&SlamNode::scanCallback, this);
+    scan_filter_->registerFailureCallback(
+        [this](const sensor_msgs::LaserScan::ConstPtr& msg, tf2_ros::FilterFailureReason r) {
+          messageDropped(msg->header, r);
+        });
+  }
+  features_subscriber_.subscribe(nh_, ros_options.features_topic, queue);
+  features_filter_ = std::make_unique<tf2_ros::MessageFilter<FeatureArray>>(
+      features_subscriber_, tf_buffer_, ros_options.odom_frame, queue, nh_);
+  features_filter_->registerCallback(&SlamNode::featuresCallback, this);
+  features_filter_->registerFailureCallback(
+      [this](const FeatureArray::ConstPtr& msg, tf2_ros::FilterFailureReason r) {
+        messageDropped(msg->header, r);
+      });
+
+  pose_publisher_ = private_nh_.advertise<geometry_msgs::PoseWithCovarianceStamped>("pose", 10);
+  trajectory_publisher_ = private_nh_.advertise<nav_msgs::Path>("trajectory", 1, true);
+  landmarks_publisher_ = private_nh_.advertise<visualization_msgs::MarkerArray>("landmarks", 1,
+                                                                                true);
+  particles_publisher_ = private_nh_.advertise<geometry_msgs::PoseArray>("particles", 1);
+  reset_server_ = private_nh_.advertiseService("reset", &SlamNode::resetService, this);
+  if (ros_options.transform_publish_period > 0.0) {
+    transform_timer_ = nh_.createTimer(ros::Duration(ros_options.transform_publish_period),
+                                       &SlamNode::publishTransform, this);
+  }
+  ROS_INFO_STREAM("rbpf_slam_node: " << config_.filter.variant << " with "
+                                     << config_.filter.particles << " particles, frontend "
+                                     << config_.frontend << ", frames " << ros_options.map_frame
+                                     << " -> " << ros_options.odom_frame << " -> "
+                                     << ros_options.base_frame);
+}
+
+void SlamNode::scanCallback(const sensor_msgs::LaserScan::ConstPtr& msg) {
+  if (!checkClock()) return;
+  core::Pose2 odom_pose, sensor_in_base;
+  if (!lookupPoses(msg->header, &odom_pose, &sensor_in_base)) return;
+  core::RangeScan scan;
+  std::string error;
+  const bool ok = toRangeScan(*msg, sensor_in_base, &scan, &error);
+  if (!error.empty()) warnThrottled("scan header " + msg->header.frame_id, "Scan: " + error);
+  if (!ok) return;
+  handleResult(pipeline_.processScan(scan, odom_pose), msg->header.stamp);
+}
+
+void SlamNode::featuresCallback(const FeatureArray::ConstPtr& msg) {
+  if (!checkClock()) return;
+  core::Pose2 odom_pose, frame_in_base;
+  if (!lookupPoses(msg->header, &odom_pose, &frame_in_base)) return;
+  int dropped = 0;
+  const core::FeatureSet features = toFeatureSet(*msg, frame_in_base, &dropped);
+  if (dropped > 0) {
+    warnThrottled("non-finite features", "Dropped " + std::to_string(dropped) +
+                                             " feature(s) with non-finite values from " +
+                                             features_subscriber_.getTopic());
+  }
+  handleResult(pipeline_.processFeatures(features, odom_pose), msg->header.stamp);
+}
+
+void SlamNode::messageDropped(const std_msgs::Header& header,
+                              tf2_ros::FilterFailureReason reason) {
+  const std::string& odom = config_.ros.odom_frame;
+  switch (reason) {
+    case tf2_ros::filter_failure_reasons::EmptyFrameID:
+      warnThrottled("empty frame_id", "Dropping a message with an empty header.frame_id");
+      break;
+    case tf2_ros::filter_failure_reasons::OutTheBack:
+      warnThrottled("too old " + header.frame_id,
+                    "Dropping a message in " + header.frame_id + " stamped " +
+                        std::to_string(header.stamp.toSec()) +
+                        ": older than the tf cache (is the node too slow, or the clock wrong?)");
+      break;
+    default:
+      warnThrottled("no tf " + header.frame_id,
+                    "Dropping a message: no transform " + odom + " -> " + header.frame_id +
+                        " at its stamp " + std::to_string(header.stamp.toSec()) +
+                        " arrived before the queue (" + std::to_string(config_.ros.queue_size) +
+                        ") overflowed; is " + odom + " -> " + config_.ros.base_frame + " -> " +
+                        header.frame_id + " published?");
+      break;
+  }
+}
+
+bool SlamNode::lookupPoses(const std_msgs::Header& header, core::Pose2* odom_pose,
+                           core::Pose2* frame_in_base) {
+  const io::RosOptions& o = config_.ros;
+  const std::string* from = &o.odom_frame;
+  const std::string* to = &o.base_frame;
+  try {
+    *odom_pose = toPose2(tf_buffer_.lookupTransform(o.odom_frame, o.base_frame, header.stamp)
+                             .transform);
+    from = &o.base_frame;
+    to = &header.frame_id;
+    *frame_in_base = toPose2(tf_buffer_.lookupTransform(o.base_frame, header.frame_id,
+                                                        header.stamp).transform);
+  } catch (const tf2::TransformException& e) {
+    warnThrottled("tf " + *from + " -> " + *to,
+                  "No transform " + *from + " -> " + *to + " at " +
+                      std::to_string(header.stamp.toSec()) + ": " + e.what());
+    return false;
+  }
+  if (!odom_pose->allFinite() || !frame_in_base->allFinite()) {
+    warnThrottled("non-finite tf", "tf gave a non-finite pose for " + o.odom_frame + " -> " +
+                                       o.base_frame + " -> " + header.frame_id);
+    return false;
+  }
+  return true;
+}
+
+void SlamNode::handleResult(core::FrameResult result, const ros::Time& stamp) {
+  ROS_DEBUG_STREAM("Frame at " << stamp << ": " << describe(result));
+  if (result != core::FrameResult::kUpdated && result != core::FrameResult::kFirstFrame) {
+    if (result == core::FrameResult::kRejectedStamp || result == core::FrameResult::kRejectedPose) {
+      warnThrottled(describe(result), std::string("Frame ") + describe(result));
+    }
+    return;
+  }
+  ++updates_;
+  const core::FilterStats stats = pipeline_.session().filter().stats();
+  ROS_INFO_STREAM_THROTTLE(kSummaryPeriodS, "rbpf_slam_node: " << updates_ << " updates, "
+                                                << stats.landmarks << " landmarks, Neff "
+                                                << stats.last_neff << ", " << stats.resamples
+                                                << " resamples");
+  publishState(stamp);
+}
+
+void SlamNode::publishState(const ros::Time& stamp) {
+  const core::SlamSession& session = pipeline_.session();
+  const core::PoseEstimate estimate = session.filter().estimate();
+  std_msgs::Header header;
+  header.stamp = stamp;
+  header.frame_id = config_.ros.map_frame;
+  if (estimate.mean.allFinite() && estimate.covariance.allFinite()) {
+    geometry_msgs::PoseWithCovarianceStamped pose;
+    pose.header = header;
+    pose.pose.pose = toPoseMsg(estimate.mean);
+    pose.pose.covariance = toPoseCovariance(estimate.covariance);
+    pose_publisher_.publish(pose);
+  } else {
+    warnThrottled("non-finite estimate", "The filter's estimate is not finite; not published");
+  }
+  trajectory_publisher_.publish(toPath(session.trajectory(), config_.ros.map_frame));
+  publishLandmarks(stamp);
+  if (config_.ros.publish_particles && particles_publisher_.getNumSubscribers() > 0) {
+    particles_publisher_.publish(toPoseArray(session.filter().particles(), header));
+  }
+}
+
+void SlamNode::publishLandmarks(const ros::Time& stamp) {
+  std_msgs::Header header;
+  header.stamp = stamp;
+  header.frame_id = config_.ros.map_frame;
+  landmarks_publisher_.publish(
+      landmark_markers_.update(pipeline_.session().filter().landmarks(), header));
+}
+
+void SlamNode::publishTransform(const ros::TimerEvent&) {
+  if (!checkClock()) return;
+  const ros::Time stamp = ros::Time::now() + ros::Duration(config_.ros.transform_tolerance);
+  if (stamp <= last_transform_stamp_) return;  // the clock has not moved (paused bag)
+  const core::Pose2 map_to_odom = pipeline_.session().mapToOdom();
+  if (!map_to_odom.allFinite()) {
+    warnThrottled("non-finite map->odom", "map -> odom is not finite; not published");
+    return;
+  }
+  geometry_msgs::TransformStamped transform;
+  transform.header.stamp = stamp;
+  transform.header.frame_id = config_.ros.map_frame;
+  transform.child_frame_id = config_.ros.odom_frame;
+  transform.transform = toTransform(map_to_odom);
+  tf_broadcaster_.sendTransform(transform);
+  last_transform_stamp_ = stamp;
+}
+
+bool SlamNode::resetService(std_srvs::Empty::Request&, std_srvs::Empty::Response&) {
+  resetAll("reset requested through " + reset_server_.getService());
+  return true;
+}
+
+bool SlamNode::checkClock() {
+  const ros::Time now = ros::Time::now();
+  if (now.isZero()) return false;  // simulated time before the first /clock
+  if (!last_now_.isZero() && now < last_now_) {
+    std::ostringstream why;
+    why << "time jumped back by " << (last_now_ - now).toSec() << " s (bag restarted?)";
+    resetAll(why.str());
+  }
+  last_now_ = now;
+  return true;
+}
+
+void SlamNode::resetAll(const std::string& why) {
+  ROS_WARN_STREAM("rbpf_slam_node: " << why << ": clearing the map, the trajectory and tf");
+  pipeline_.session().reset();
+  tf_buffer_.clear();
+  if (scan_filter_) scan_filter_->clear();
+  features_filter_->clear();
+  last_transform_stamp_ = ros::Time();
+  updates_ = 0;
+  publishLandmarks(ros::Time::now());  // DELETE for every landmark shown
+  trajectory_publisher_.publish(toPath(pipeline_.session().trajectory(), config_.ros.map_frame));
+}
+
+void SlamNode::warnThrottled(const std::string& cause, const std::string& message) {
+  const ros::WallTime now = ros::WallTime::now();
+  auto it = last_warning_.find(cause);
+  if (it != last_warning_.end() && (now - it->second).toSec() < kWarningPeriodS) return;
+  last_warning_[cause] = now;
+  ROS_WARN_STREAM("rbpf_slam_node: " << message);
+}
+
+}  // namespace rosbridge
+}  // namespace rbpf_slam
