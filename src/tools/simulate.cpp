@@ -1,0 +1,422 @@
+// simulate: drives the robot of a world file (worlds/*.yaml) and writes a bag shaped like the
+// real ones (/tf, /tf_static, /odom, /ground_truth, /scan, /sonar, /sonar_cloud, /features,
+// /ir), plus OUT.ref.tum (ground truth) and OUT.landmarks.yaml (true landmarks and objects,
+// before and after the world's changes) beside it.
+//
+//   simulate --world WORLD.yaml --output OUT.bag [--seed N] [--duration S]
+
+#include <geometry_msgs/TransformStamped.h>
+#include <nav_msgs/Odometry.h>
+#include <rbpf_slam/FeatureArray.h>
+#include <rosbag/bag.h>
+#include <sensor_msgs/LaserScan.h>
+#include <sensor_msgs/PointCloud.h>
+#include <sensor_msgs/Range.h>
+#include <tf2_msgs/TFMessage.h>
+#include <yaml-cpp/yaml.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <memory>
+#include <iostream>
+#include <map>
+#include <stdexcept>
+#include <string>
+
+#include "rbpf_slam/core/sim/simulator.h"
+#include "rbpf_slam/io/world_yaml.h"
+
+namespace {
+
+namespace sim = rbpf_slam::core::sim;
+using rbpf_slam::core::Pose2;
+
+constexpr std::uint32_t kStartStampS = 1262304000;  // 2010-01-01, as the converted real logs
+
+const char kUsage[] =
+    "usage: simulate --world WORLD.yaml --output OUT.bag [--seed N] [--duration S]\n"
+    "  writes OUT.bag, OUT.ref.tum (ground truth) and OUT.landmarks.yaml (true landmarks)\n";
+
+/// A command line that cannot be understood.
+struct UsageError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+struct Arguments {
+  std::string world;
+  std::string output;
+  std::uint64_t seed = 0;
+  double duration_s = 0.0;  // 0: until the route is driven
+};
+
+Arguments parseArguments(int argc, char** argv) {
+  Arguments arguments;
+  for (int i = 1; i < argc; ++i) {
+    const std::string flag = argv[i];
+    if (flag == "-h" || flag == "--help") {
+      std::cout << kUsage;
+      std::exit(0);
+    }
+    if (i + 1 >= argc) throw UsageError(flag + " needs a value");
+    const std::string value = argv[++i];
+    size_t used = 0;
+    try {
+      if (flag == "--world") {
+        arguments.world = value;
+      } else if (flag == "--output") {
+        arguments.output = value;
+      } else if (flag == "--seed") {
+        arguments.seed = std::stoull(value, &used);
+      } else if (flag == "--duration") {
+        arguments.duration_s = std::stod(value, &used);
+      } else {
+        throw UsageError("unknown option " + flag);
+      }
+    } catch (const std::logic_error&) {
+      used = 0;
+    }
+    const bool numeric = flag == "--seed" || flag == "--duration";
+    if (numeric && (used != value.size() || value.empty() || value[0] == '-')) {
+      throw UsageError(flag + " " + value + " is not a non-negative number");
+    }
+  }
+  if (arguments.world.empty() || arguments.output.empty()) {
+    throw UsageError("--world and --output are required");
+  }
+  return arguments;
+}
+
+/// OUT.bag -> OUT.suffix (the bag's name without ".bag").
+std::string besideBag(const std::string& bag, const std::string& suffix) {
+  const std::string ext = ".bag";
+  const bool has_ext = bag.size() > ext.size() && bag.compare(bag.size() - 4, 4, ext) == 0;
+  return (has_ext ? bag.substr(0, bag.size() - 4) : bag) + suffix;
+}
+
+ros::Time stampAt(double t) { return ros::Time(kStartStampS, 0) + ros::Duration(t); }
+
+double absoluteStamp(double t) { return static_cast<double>(kStartStampS) + t; }
+
+geometry_msgs::Quaternion yawQuaternion(double yaw) {
+  geometry_msgs::Quaternion q;
+  q.z = std::sin(0.5 * yaw);
+  q.w = std::cos(0.5 * yaw);
+  return q;
+}
+
+geometry_msgs::TransformStamped transformMessage(const std::string& parent,
+                                                 const std::string& child, const Pose2& pose,
+                                                 const ros::Time& stamp) {
+  geometry_msgs::TransformStamped t;
+  t.header.stamp = stamp;
+  t.header.frame_id = parent;
+  t.child_frame_id = child;
+  t.transform.translation.x = pose.x();
+  t.transform.translation.y = pose.y();
+  t.transform.rotation = yawQuaternion(pose.z());
+  return t;
+}
+
+nav_msgs::Odometry odometryMessage(const std::string& frame, const Pose2& pose,
+                                   const Eigen::Vector3d& twist, const ros::Time& stamp) {
+  nav_msgs::Odometry odometry;
+  odometry.header.stamp = stamp;
+  odometry.header.frame_id = frame;
+  odometry.child_frame_id = "base_link";
+  odometry.pose.pose.position.x = pose.x();
+  odometry.pose.pose.position.y = pose.y();
+  odometry.pose.pose.orientation = yawQuaternion(pose.z());
+  odometry.twist.twist.linear.x = twist.x();
+  odometry.twist.twist.linear.y = twist.y();
+  odometry.twist.twist.angular.z = twist.z();
+  return odometry;
+}
+
+/// Converts simulator events into the messages and topics of the real bags.
+class BagWriter {
+ public:
+  BagWriter(const std::string& path, const sim::Simulator& simulator, const std::string& ref_path)
+      : simulator_(simulator), reference_(std::fopen(ref_path.c_str(), "w"), &std::fclose) {
+    if (!reference_) throw std::runtime_error(ref_path + ": cannot be written");
+    bag_.open(path, rosbag::bagmode::Write);
+    writeStaticTransforms();
+  }
+
+  void write(const sim::SimEvent& event) {
+    const ros::Time stamp = stampAt(event.stamp);
+    switch (event.type) {
+      case sim::SimEventType::kOdometry:
+        writeOdometry(event, stamp);
+        break;
+      case sim::SimEventType::kLaser:
+        writeScan(*event.scan, stamp);
+        break;
+      case sim::SimEventType::kSonar:
+        writeCones(event, stamp, "/sonar", "sonar_", sensor_msgs::Range::ULTRASOUND);
+        writeSonarCloud(event, stamp);
+        break;
+      case sim::SimEventType::kInfrared:
+        writeCones(event, stamp, "/ir", "ir_", sensor_msgs::Range::INFRARED);
+        break;
+      case sim::SimEventType::kRangeBearing:
+        writeFeatures(event, stamp);
+        break;
+      case sim::SimEventType::kWorldChange:
+        break;  // recorded in OUT.landmarks.yaml
+    }
+  }
+
+  void close() {
+    bag_.close();
+    if (std::fflush(reference_.get()) != 0) throw std::runtime_error("ground truth not written");
+  }
+  const std::map<std::string, long>& counts() const { return counts_; }
+
+ private:
+  template <typename Message>
+  void put(const std::string& topic, const ros::Time& stamp, const Message& message) {
+    bag_.write(topic, stamp, message);
+    ++counts_[topic];
+  }
+
+  void writeStaticTransforms() {
+    const ros::Time stamp = stampAt(0.0);
+    const sim::SensorsConfig& sensors = simulator_.world().sensors;
+    tf2_msgs::TFMessage message;
+    if (sensors.laser.enabled) {
+      message.transforms.push_back(
+          transformMessage("base_link", "base_laser_link", simulator_.laserPose(), stamp));
+    }
+    for (size_t i = 0; sensors.sonar.enabled && i < simulator_.sonarPoses().size(); ++i) {
+      message.transforms.push_back(transformMessage("base_link", "sonar_" + std::to_string(i),
+                                                    simulator_.sonarPoses()[i], stamp));
+    }
+    for (size_t i = 0; sensors.infrared.enabled && i < simulator_.infraredPoses().size(); ++i) {
+      message.transforms.push_back(transformMessage("base_link", "ir_" + std::to_string(i),
+                                                    simulator_.infraredPoses()[i], stamp));
+    }
+    if (!message.transforms.empty()) put("/tf_static", stamp, message);
+  }
+
+  void writeOdometry(const sim::SimEvent& event, const ros::Time& stamp) {
+    tf2_msgs::TFMessage tf;
+    tf.transforms.push_back(transformMessage("odom", "base_link", event.odom_pose, stamp));
+    put("/tf", stamp, tf);
+    put("/odom", stamp, odometryMessage("odom", event.odom_pose, event.odom_twist, stamp));
+    const Eigen::Vector3d true_twist(event.true_speed_mps, 0.0, event.true_turn_rate_radps);
+    put("/ground_truth", stamp, odometryMessage("map", event.true_pose, true_twist, stamp));
+    const Pose2& p = event.true_pose;
+    std::fprintf(reference_.get(), "%.6f %.6f %.6f 0 0.000000000 0.000000000 %.9f %.9f\n",
+                 absoluteStamp(event.stamp), p.x(), p.y(), std::sin(0.5 * p.z()),
+                 std::cos(0.5 * p.z()));
+  }
+
+  void writeScan(const rbpf_slam::core::RangeScan& scan, const ros::Time& stamp) {
+    sensor_msgs::LaserScan message;
+    message.header.stamp = stamp;
+    message.header.frame_id = "base_laser_link";
+    message.angle_min = scan.angle_min;
+    message.angle_increment = scan.angle_increment;
+    message.angle_max = scan.angle_min + (scan.ranges.size() - 1) * scan.angle_increment;
+    message.scan_time = 1.0 / simulator_.world().sensors.laser.rate_hz;
+    message.range_min = scan.range_min;
+    message.range_max = scan.range_max;
+    message.ranges = scan.ranges;
+    put("/scan", stamp, message);
+  }
+
+  void writeCones(const sim::SimEvent& event, const ros::Time& stamp, const std::string& topic,
+                  const std::string& frame_prefix, std::uint8_t radiation) {
+    for (const sim::TransducerReading& cone : event.cones) {
+      sensor_msgs::Range message;
+      message.header.stamp = stamp;
+      message.header.frame_id = frame_prefix + std::to_string(cone.index);
+      message.radiation_type = radiation;
+      message.field_of_view = cone.reading.field_of_view;
+      message.min_range = cone.reading.min_range;
+      message.max_range = cone.reading.max_range;
+      message.range = cone.reading.range;
+      put(topic, stamp, message);
+    }
+  }
+
+  /// Echoes (readings below max range) as points in base_link, as RosAria publishes them.
+  void writeSonarCloud(const sim::SimEvent& event, const ros::Time& stamp) {
+    sensor_msgs::PointCloud cloud;
+    cloud.header.stamp = stamp;
+    cloud.header.frame_id = "base_link";
+    for (const sim::TransducerReading& cone : event.cones) {
+      if (cone.reading.range >= cone.reading.max_range) continue;
+      const Pose2& mount = cone.reading.sensor_pose;
+      geometry_msgs::Point32 point;
+      point.x = mount.x() + cone.reading.range * std::cos(mount.z());
+      point.y = mount.y() + cone.reading.range * std::sin(mount.z());
+      cloud.points.push_back(point);
+    }
+    put("/sonar_cloud", stamp, cloud);
+  }
+
+  void writeFeatures(const sim::SimEvent& event, const ros::Time& stamp) {
+    rbpf_slam::FeatureArray message;
+    message.header.stamp = stamp;
+    message.header.frame_id = "base_link";
+    for (const auto& feature : event.features.points) {
+      rbpf_slam::PointFeature point;
+      point.range = feature.range;
+      point.bearing = feature.bearing;
+      for (int k = 0; k < 4; ++k) point.covariance[k] = feature.covariance(k / 2, k % 2);
+      point.id = feature.id;
+      message.points.push_back(point);
+    }
+    put("/features", stamp, message);
+  }
+
+  const sim::Simulator& simulator_;
+  rosbag::Bag bag_;
+  std::unique_ptr<FILE, int (*)(FILE*)> reference_;  // TUM ground truth, one line per odometry
+  std::map<std::string, long> counts_;
+};
+
+/// A number as a YAML scalar with format's precision (yaml-cpp would print 17 digits).
+YAML::Node number(double value, const char* format = "%.9g") {
+  char text[64];
+  std::snprintf(text, sizeof(text), format, value);
+  return YAML::Node(std::string(text));
+}
+
+YAML::Node pointList(const std::vector<Eigen::Vector2d>& points) {
+  YAML::Node list(YAML::NodeType::Sequence);
+  for (const Eigen::Vector2d& p : points) {
+    YAML::Node point(YAML::NodeType::Sequence);
+    point.SetStyle(YAML::EmitterStyle::Flow);
+    point.push_back(number(p.x()));
+    point.push_back(number(p.y()));
+    list.push_back(point);
+  }
+  list.SetStyle(YAML::EmitterStyle::Flow);
+  return list;
+}
+
+/// The true landmarks and objects, before and after the changes that were applied.
+void writeTruth(const std::string& path, const Arguments& arguments,
+                const sim::Simulator& simulator) {
+  YAML::Node root;
+  root["world"] = arguments.world;
+  root["seed"] = arguments.seed;
+  root["frame"] = "map";
+  root["start_stamp"] = kStartStampS;
+  std::map<int, const sim::Landmark*> final_landmarks;
+  for (const sim::Landmark& l : simulator.landmarks()) final_landmarks[l.id] = &l;
+  for (const sim::Landmark& l : simulator.world().landmarks) {
+    YAML::Node node;
+    node.SetStyle(YAML::EmitterStyle::Flow);
+    node["id"] = l.id;
+    node["x_m"] = number(l.position.x());
+    node["y_m"] = number(l.position.y());
+    node["radius_m"] = number(l.radius_m);
+    const auto final_landmark = final_landmarks.find(l.id);
+    if (final_landmark == final_landmarks.end()) {
+      node["removed"] = true;
+    } else if (final_landmark->second->position != l.position) {
+      node["after_x_m"] = number(final_landmark->second->position.x());
+      node["after_y_m"] = number(final_landmark->second->position.y());
+    }
+    root["landmarks"].push_back(node);
+  }
+  for (const sim::WorldObject& object : simulator.world().objects) {
+    YAML::Node node;
+    node["name"] = object.name;
+    node["shape"] = object.shape == sim::ShapeType::kPolygon ? "polygon" : "polyline";
+    node["closed"] = sim::isClosed(object);
+    node["points"] = pointList(object.points);
+    bool present = false;
+    for (const sim::WorldObject& now : simulator.objects()) {
+      if (now.name != object.name) continue;
+      present = true;
+      if (now.points != object.points) node["after_points"] = pointList(now.points);
+    }
+    if (!present) node["removed"] = true;
+    root["objects"].push_back(node);
+  }
+  for (const sim::AppliedChange& change : simulator.appliedChanges()) {
+    YAML::Node node;
+    node["change"] = change.change_index;
+    node["stamp"] = number(absoluteStamp(change.stamp), "%.6f");
+    node["laps_completed"] = change.laps_completed;
+    for (const sim::LandmarkChange& l : change.landmarks) {
+      YAML::Node moved;
+      moved.SetStyle(YAML::EmitterStyle::Flow);
+      moved["id"] = l.id;
+      moved["before"] = pointList({l.before})[0];
+      if (l.removed) {
+        moved["removed"] = true;
+      } else {
+        moved["after"] = pointList({l.after})[0];
+      }
+      node["landmarks"].push_back(moved);
+    }
+    for (const sim::ObjectChange& o : change.objects) {
+      YAML::Node moved;
+      moved["name"] = o.name;
+      moved["before"] = pointList(o.before);
+      if (o.removed) {
+        moved["removed"] = true;
+      } else {
+        moved["after"] = pointList(o.after);
+      }
+      node["objects"].push_back(moved);
+    }
+    root["changes"].push_back(node);
+  }
+  YAML::Emitter out;
+  out << YAML::Comment("True world written by simulate: landmarks and objects in the map frame, "
+                       "before and after the changes")
+      << YAML::Newline << root;
+  std::ofstream file(path);
+  file << out.c_str() << "\n";
+  if (!file) throw std::runtime_error(path + ": cannot be written");
+}
+
+int run(const Arguments& arguments) {
+  const auto wall_start = std::chrono::steady_clock::now();
+  sim::SimulatorOptions options;
+  options.seed = arguments.seed;
+  options.max_duration_s = arguments.duration_s;
+  sim::Simulator simulator(rbpf_slam::io::loadWorld(arguments.world), options);
+
+  const std::string reference_path = besideBag(arguments.output, ".ref.tum");
+  const std::string truth_path = besideBag(arguments.output, ".landmarks.yaml");
+  BagWriter writer(arguments.output, simulator, reference_path);
+  sim::SimEvent event;
+  while (simulator.next(&event)) writer.write(event);
+  writer.close();
+  writeTruth(truth_path, arguments, simulator);
+
+  const double wall_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
+  std::printf("simulated %.1f s (%d of %d laps%s) in %.2f s wall time\n", simulator.time(),
+              simulator.lapsCompleted(), simulator.world().laps,
+              simulator.routeCompleted() ? "" : ", stopped by the time limit", wall_s);
+  for (const auto& [topic, count] : writer.counts()) {
+    std::printf("  %-14s %ld messages\n", topic.c_str(), count);
+  }
+  std::printf("wrote %s\n      %s\n      %s\n", arguments.output.c_str(), reference_path.c_str(),
+              truth_path.c_str());
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    return run(parseArguments(argc, argv));
+  } catch (const UsageError& error) {
+    std::cerr << "simulate: " << error.what() << "\n" << kUsage;
+    return 2;
+  } catch (const std::exception& error) {
+    std::cerr << "simulate: error: " << error.what() << "\n";
+    return 1;
+  }
+}
