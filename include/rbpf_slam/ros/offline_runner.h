@@ -1,0 +1,60 @@
+#pragma once
+// Runs the SLAM pipeline over a bag file without a roscore: reads tf, scans and features
+// straight from the bag, feeds the same SlamPipeline as rbpf_slam_node, writes the results.
+
+#include <string>
+#include <vector>
+
+#include "rbpf_slam/core/slam/slam_pipeline.h"
+#include "rbpf_slam/io/slam_config.h"
+
+namespace rbpf_slam {
+namespace rosbridge {
+
+struct OfflineOptions {
+  std::string bag_path;
+  std::string output_dir;
+  std::string reference_path;  // optional TUM reference for the summary's ATE
+  bool progress = true;        // a progress bar on stderr when it is a terminal
+  bool verbose = false;        // one line per update on stderr
+};
+
+/// Counts and timings of one offline run.
+struct OfflineSummary {
+  double wall_s = 0.0;
+  double bag_duration_s = 0.0;
+  long frames = 0;
+  long updates = 0;
+  long skipped = 0;
+  long rejected = 0;
+  long resets = 0;
+  long dropped_no_tf = 0;
+  long dropped_bad_message = 0;
+  long skipped_transforms = 0;  // repeated or malformed tf in the bag
+  int landmarks = 0;
+  int particles = 0;
+  double update_ms_mean = 0.0;
+  double update_ms_p99 = 0.0;
+  double update_ms_max = 0.0;
+  bool has_reference = false;
+  double ate_rmse_m = 0.0;
+  double final_position_error_m = 0.0;
+};
+
+class OfflineRunner {
+ public:
+  OfflineRunner(const io::SlamConfig& config, const OfflineOptions& options);
+  /// Processes the whole bag and writes trajectory.tum, landmarks.yaml, summary.json and
+  /// map.png into the output directory. Throws std::runtime_error with a clear message.
+  OfflineSummary run();
+  const core::SlamPipeline& pipeline() const { return pipeline_; }
+
+ private:
+  OfflineSummary writeOutputs(const OfflineSummary& summary) const;
+  const io::SlamConfig config_;
+  const OfflineOptions options_;
+  core::SlamPipeline pipeline_;
+};
+
+}  // namespace rosbridge
+}  // namespace rbpf_slam

@@ -1,0 +1,293 @@
+#include "rbpf_slam/ros/offline_runner.h"
+
+#include <rosbag/bag.h>
+#include <rosbag/view.h>
+#include <sys/stat.h>
+#include <tf2/buffer_core.h>
+#include <tf2/exceptions.h>
+#include <tf2_msgs/TFMessage.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <fstream>
+#include <iomanip>
+#include <map>
+#include <sstream>
+
+#include "rbpf_slam/io/evaluation.h"
+#include "rbpf_slam/io/map_image.h"
+#include "rbpf_slam/io/trajectory.h"
+#include "rbpf_slam/ros/conversions.h"
+
+namespace rbpf_slam {
+namespace rosbridge {
+namespace {
+
+std::string stripSlash(const std::string& s) {
+  return !s.empty() && s[0] == '/' ? s.substr(1) : s;
+}
+
+bool topicIs(const std::string& topic, const std::string& name) {
+  return stripSlash(topic) == stripSlash(name);
+}
+
+/// A terminal progress bar: percentage, rate and time left.
+class ProgressBar {
+ public:
+  explicit ProgressBar(bool enabled) : enabled_(enabled && isatty(STDERR_FILENO)) {}
+  void show(double fraction, double wall_s, double bag_s) {
+    if (!enabled_ || fraction - last_ < 0.005) return;
+    last_ = fraction;
+    const int width = 30, filled = static_cast<int>(fraction * width);
+    const double left = fraction > 0.0 ? wall_s * (1.0 - fraction) / fraction : 0.0;
+    std::fprintf(stderr, "\r[%s%s] %5.1f%%  %.0fx real time  %.0f s left ",
+                 std::string(filled, '#').c_str(), std::string(width - filled, ' ').c_str(),
+                 100.0 * fraction, wall_s > 0.0 ? bag_s / wall_s : 0.0, left);
+  }
+  void done() {
+    if (enabled_) std::fprintf(stderr, "\n");
+  }
+
+ private:
+  bool enabled_;
+  double last_ = -1.0;
+};
+
+/// Loads every transform of the bag; repeated stamps of a child frame (common in converted
+/// logs) are skipped here instead of letting tf2 warn for each. Returns how many were skipped.
+long loadTransforms(const rosbag::Bag& bag, tf2::BufferCore* buffer) {
+  std::map<std::string, ros::Time> last_stamp;
+  long skipped = 0;
+  rosbag::View view(bag, rosbag::TopicQuery(std::vector<std::string>{"/tf", "/tf_static", "tf",
+                                                                     "tf_static"}));
+  for (const rosbag::MessageInstance& m : view) {
+    const auto msg = m.instantiate<tf2_msgs::TFMessage>();
+    if (!msg) continue;
+    const bool is_static = topicIs(m.getTopic(), "tf_static");
+    for (const auto& t : msg->transforms) {
+      const std::string key = t.header.frame_id + ">" + t.child_frame_id;
+      if (!is_static) {
+        auto it = last_stamp.find(key);
+        if (it != last_stamp.end() && t.header.stamp <= it->second) {
+          ++skipped;
+          continue;
+        }
+        last_stamp[key] = t.header.stamp;
+      }
+      try {
+        buffer->setTransform(t, "bag", is_static);
+      } catch (const std::exception&) {
+        // malformed transform (NaN, empty frame): tf2 rejects it; nothing to keep
+        ++skipped;
+      }
+    }
+  }
+  return skipped;
+}
+
+}  // namespace
+
+OfflineRunner::OfflineRunner(const io::SlamConfig& config, const OfflineOptions& options)
+    : config_(config), options_(options), pipeline_(config.pipeline()) {}
+
+OfflineSummary OfflineRunner::run() {
+  OfflineSummary summary;
+  rosbag::Bag bag;
+  try {
+    bag.open(options_.bag_path, rosbag::bagmode::Read);
+  } catch (const rosbag::BagException& e) {
+    throw std::runtime_error(options_.bag_path + ": cannot open bag: " + e.what());
+  }
+  const auto wall_start = std::chrono::steady_clock::now();
+  rosbag::View full(bag);
+  const ros::Time bag_begin = full.getBeginTime(), bag_end = full.getEndTime();
+  summary.bag_duration_s = (bag_end - bag_begin).toSec();
+  // The whole bag's tf fits in memory for the bags this runner is meant for (hours of 2D data).
+  tf2::BufferCore tf(ros::Duration(std::max(summary.bag_duration_s + 60.0, 10.0)));
+  summary.skipped_transforms = loadTransforms(bag, &tf);
+
+  const io::RosOptions& ros_options = config_.ros;
+  const bool use_scans = config_.frontend == "laser";
+  std::vector<std::string> topics{"/" + stripSlash(ros_options.features_topic),
+                                  stripSlash(ros_options.features_topic)};
+  if (use_scans) {
+    topics.push_back("/" + stripSlash(ros_options.scan_topic));
+    topics.push_back(stripSlash(ros_options.scan_topic));
+  }
+  rosbag::View view(bag, rosbag::TopicQuery(topics));
+  if (view.size() == 0) {
+    throw std::runtime_error(options_.bag_path + ": no messages on " +
+                             (use_scans ? "'" + ros_options.scan_topic + "' or " : "") + "'" +
+                             ros_options.features_topic + "'");
+  }
+  std::vector<double> update_ms;
+  ProgressBar progress(options_.progress);
+  for (const rosbag::MessageInstance& m : view) {
+    ++summary.frames;
+    std::string frame;
+    ros::Time stamp;
+    sensor_msgs::LaserScan::ConstPtr scan;
+    FeatureArray::ConstPtr features;
+    if ((scan = m.instantiate<sensor_msgs::LaserScan>())) {
+      frame = scan->header.frame_id;
+      stamp = scan->header.stamp;
+    } else if ((features = m.instantiate<FeatureArray>())) {
+      frame = features->header.frame_id;
+      stamp = features->header.stamp;
+    } else {
+      ++summary.dropped_bad_message;
+      continue;
+    }
+    if (frame.empty() || stamp.isZero()) {
+      ++summary.dropped_bad_message;
+      continue;
+    }
+    core::Pose2 odom_pose, sensor_in_base;
+    try {
+      odom_pose = toPose2(tf.lookupTransform(ros_options.odom_frame, ros_options.base_frame,
+                                             stamp).transform);
+      sensor_in_base =
+          toPose2(tf.lookupTransform(ros_options.base_frame, stripSlash(frame), stamp).transform);
+    } catch (const tf2::TransformException&) {
+      ++summary.dropped_no_tf;
+      continue;
+    }
+    const auto t0 = std::chrono::steady_clock::now();
+    core::FrameResult result;
+    if (scan) {
+      core::RangeScan range_scan;
+      std::string error;
+      if (!toRangeScan(*scan, sensor_in_base, &range_scan, &error)) {
+        ++summary.dropped_bad_message;
+        continue;
+      }
+      result = pipeline_.processScan(range_scan, odom_pose);
+    } else {
+      int dropped = 0;
+      result = pipeline_.processFeatures(toFeatureSet(*features, sensor_in_base, &dropped),
+                                         odom_pose);
+    }
+    const double ms =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    switch (result) {
+      case core::FrameResult::kUpdated:
+      case core::FrameResult::kFirstFrame:
+        update_ms.push_back(ms);
+        break;
+      case core::FrameResult::kSkippedNoMotion:
+        ++summary.skipped;
+        break;
+      default:
+        ++summary.rejected;
+    }
+    if (options_.verbose && (result == core::FrameResult::kUpdated)) {
+      const core::UpdateStats& u = pipeline_.session().lastStats();
+      const core::Pose2 p = pipeline_.session().trajectory().back().pose;
+      std::fprintf(stderr,
+                   "t=%.2f lines=%zu points=%zu assoc=%d new=%d neff=%.1f resampled=%d "
+                   "pose=(%.2f %.2f %.1fdeg) %.2fms\n",
+                   stamp.toSec(), pipeline_.lastFeatures().lines.size(),
+                   pipeline_.lastFeatures().points.size(), u.associated, u.new_landmarks, u.neff,
+                   u.resampled ? 1 : 0, p.x(), p.y(), p.z() * 180 / M_PI, ms);
+    }
+    const double wall =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
+    progress.show((m.getTime() - bag_begin).toSec() / std::max(summary.bag_duration_s, 1e-9),
+                  wall, (m.getTime() - bag_begin).toSec());
+  }
+  progress.done();
+  summary.wall_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
+  summary.updates = static_cast<long>(update_ms.size());
+  summary.resets = pipeline_.session().resets();
+  if (!update_ms.empty()) {
+    double sum = 0.0;
+    for (double v : update_ms) sum += v;
+    summary.update_ms_mean = sum / update_ms.size();
+    std::vector<double> sorted = update_ms;
+    std::sort(sorted.begin(), sorted.end());
+    summary.update_ms_p99 = sorted[std::min(sorted.size() - 1,
+                                            static_cast<size_t>(0.99 * sorted.size()))];
+    summary.update_ms_max = sorted.back();
+  }
+  summary.landmarks = static_cast<int>(pipeline_.session().filter().landmarks().size());
+  summary.particles = config_.filter.particles;
+  return writeOutputs(summary);
+}
+
+OfflineSummary OfflineRunner::writeOutputs(const OfflineSummary& in) const {
+  OfflineSummary summary = in;
+  const std::string& dir = options_.output_dir;
+  mkdir(dir.c_str(), 0755);
+  std::vector<io::StampedPose> estimate;
+  std::vector<core::Pose2> path;
+  for (const auto& p : pipeline_.session().trajectory()) {
+    estimate.push_back({p.stamp, p.pose});
+    path.push_back(p.pose);
+  }
+  io::writeTum(dir + "/trajectory.tum", estimate);
+
+  std::vector<core::Pose2> reference_path;
+  if (!options_.reference_path.empty()) {
+    const std::vector<io::StampedPose> reference = io::readTum(options_.reference_path);
+    io::EvaluationOptions eval;
+    eval.max_dt_s = 0.05;
+    const io::EvaluationResult r = io::evaluateTrajectory(estimate, reference, eval);
+    summary.has_reference = r.matched_poses > 0;
+    summary.ate_rmse_m = r.ate_rmse_m;
+    summary.final_position_error_m = r.final_position_error_m;
+    // Draw the reference in the estimate's frame.
+    const core::Pose2 to_estimate = core::inverse(r.alignment);
+    for (const auto& p : reference) reference_path.push_back(core::compose(to_estimate, p.pose));
+  }
+
+  const std::vector<core::LandmarkEstimate> landmarks = pipeline_.session().filter().landmarks();
+  std::ofstream yaml(dir + "/landmarks.yaml");
+  yaml << std::setprecision(9) << "# landmarks of the best particle, map frame\nlandmarks:\n";
+  for (const auto& l : landmarks) {
+    const bool line = l.type == core::LandmarkType::kLine;
+    yaml << "  - {id: " << l.id << ", type: " << (line ? "line" : "point") << ", "
+         << (line ? "rho: " : "x: ") << l.mean.x() << ", " << (line ? "theta: " : "y: ")
+         << l.mean.y() << ", covariance: [" << l.covariance(0, 0) << ", " << l.covariance(0, 1)
+         << ", " << l.covariance(1, 0) << ", " << l.covariance(1, 1) << "]";
+    if (line) {
+      yaml << ", start: [" << l.start.x() << ", " << l.start.y() << "], end: [" << l.end.x()
+           << ", " << l.end.y() << "]";
+    }
+    yaml << ", observations: " << l.observations << "}\n";
+  }
+
+  std::ofstream json(dir + "/summary.json");
+  json << std::setprecision(6) << "{\n"
+       << "  \"variant\": \"" << config_.filter.variant << "\",\n"
+       << "  \"seed\": " << config_.filter.seed << ",\n"
+       << "  \"wall_s\": " << summary.wall_s << ",\n"
+       << "  \"bag_duration_s\": " << summary.bag_duration_s << ",\n"
+       << "  \"realtime_factor\": "
+       << (summary.wall_s > 0.0 ? summary.bag_duration_s / summary.wall_s : 0.0) << ",\n"
+       << "  \"frames\": " << summary.frames << ",\n"
+       << "  \"updates\": " << summary.updates << ",\n"
+       << "  \"skipped_no_motion\": " << summary.skipped << ",\n"
+       << "  \"rejected\": " << summary.rejected << ",\n"
+       << "  \"resets\": " << summary.resets << ",\n"
+       << "  \"dropped_no_tf\": " << summary.dropped_no_tf << ",\n"
+       << "  \"dropped_bad_message\": " << summary.dropped_bad_message << ",\n"
+       << "  \"skipped_transforms\": " << summary.skipped_transforms << ",\n"
+       << "  \"landmarks\": " << summary.landmarks << ",\n"
+       << "  \"particles\": " << summary.particles << ",\n"
+       << "  \"update_ms_mean\": " << summary.update_ms_mean << ",\n"
+       << "  \"update_ms_p99\": " << summary.update_ms_p99 << ",\n"
+       << "  \"update_ms_max\": " << summary.update_ms_max;
+  if (summary.has_reference) {
+    json << ",\n  \"ate_rmse_m\": " << summary.ate_rmse_m
+         << ",\n  \"final_position_error_m\": " << summary.final_position_error_m;
+  }
+  json << "\n}\n";
+  io::drawRunMap(dir + "/map.png", path, reference_path, landmarks);
+  return summary;
+}
+
+}  // namespace rosbridge
+}  // namespace rbpf_slam
