@@ -1,0 +1,50 @@
+#!/usr/bin/env bash
+# Shared set-up for scripts/*.sh: installs what is missing (Debian's ROS 1 packages), puts the
+# system python first (a pyenv python3 lacks catkin_pkg) and configures + builds into build/.
+set -euo pipefail
+
+ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+BUILD="$ROOT/build"
+export PATH=/usr/bin:/bin:/usr/sbin:/sbin:$PATH
+
+APT_PACKAGES=(ros-base-dev libtf2-ros-dev libtf2-geometry-msgs-dev libsensor-msgs-dev
+  libnav-msgs-dev libvisualization-msgs-dev libdiagnostic-msgs-dev libstd-srvs-dev librosbag-dev
+  librostest-dev python3-rostest ros-message-generation libeigen3-dev libgtest-dev
+  python3-roslaunch python3-rosmaster rosbash python3-rostopic python3-rosbag libyaml-cpp-dev
+  libbenchmark-dev zlib1g-dev cmake g++ make python3-numpy)
+
+install_missing() {
+  local missing=()
+  for p in "${APT_PACKAGES[@]}"; do
+    dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+  done
+  if [ ${#missing[@]} -gt 0 ]; then
+    echo "Installing: ${missing[*]}"
+    local sudo=""
+    [ "$(id -u)" -ne 0 ] && sudo="sudo"
+    $sudo apt-get update -qq
+    DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}"
+  fi
+}
+
+build_package() {
+  local build_type=${1:-Release}
+  mkdir -p "$BUILD"
+  echo "Building ($build_type) in $BUILD ..."
+  cmake -S "$ROOT" -B "$BUILD" -DCMAKE_BUILD_TYPE="$build_type" \
+    -DPYTHON_EXECUTABLE=/usr/bin/python3 -DCATKIN_DEVEL_PREFIX="$BUILD/devel" >"$BUILD/cmake.log" 2>&1 \
+    || { tail -n 40 "$BUILD/cmake.log"; echo "cmake failed (log: $BUILD/cmake.log)" >&2; return 1; }
+  make -C "$BUILD" -j"$(nproc)" >"$BUILD/make.log" 2>&1 \
+    || { grep -E "error|Error" "$BUILD/make.log" | head -n 40; echo "build failed (log: $BUILD/make.log)" >&2; return 1; }
+}
+
+ros_env() {
+  set +u
+  # shellcheck disable=SC1091
+  source "$BUILD/devel/setup.bash"
+  set -u
+  export ROS_PACKAGE_PATH="$ROOT:${ROS_PACKAGE_PATH:-}"
+  export ROS_HOME="${ROS_HOME:-$BUILD/ros_home}"
+  export ROS_LOG_DIR="$ROS_HOME/log"
+  mkdir -p "$ROS_LOG_DIR"
+}
