@@ -1,0 +1,213 @@
+// Tests of the world YAML loader: every shipped world loads, and each kind of mistake is
+// rejected with a message naming the file and the field.
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "rbpf_slam/core/sim/simulator.h"
+#include "rbpf_slam/io/world_yaml.h"
+
+namespace rbpf_slam {
+namespace io {
+namespace {
+
+namespace fs = std::filesystem;
+using core::sim::World;
+
+const char kMinimalWorld[] = R"(name: minimal
+laps: 1
+robot:
+  radius_m: 0.2
+objects:
+  - name: walls
+    polyline: [[0, 0], [6, 0], [6, 4], [0, 4], [0, 0]]
+  - name: crate
+    polygon: [[2.5, 1.5], [3.5, 1.5], [3.5, 2.5], [2.5, 2.5], [2.5, 1.5]]
+waypoints: [[1, 1], [5, 1], [5, 3], [1, 3]]
+sensors:
+  laser:
+    range_noise_m: 0.01
+)";
+
+/// Writes text to a fresh file in the test's temporary directory and returns its path.
+std::string writeWorld(const std::string& name, const std::string& text) {
+  const fs::path dir = fs::temp_directory_path() / "rbpf_slam_test_world_yaml";
+  fs::create_directories(dir);
+  const fs::path path = dir / name;
+  std::ofstream(path) << text;
+  return path.string();
+}
+
+std::string replaced(std::string text, const std::string& from, const std::string& to) {
+  const size_t at = text.find(from);
+  EXPECT_NE(at, std::string::npos) << from;
+  if (at != std::string::npos) text.replace(at, from.size(), to);
+  return text;
+}
+
+/// The message of the WorldFileError that loading path throws ("" if it loads).
+std::string loadError(const std::string& path) {
+  try {
+    loadWorld(path);
+  } catch (const WorldFileError& error) {
+    return error.what();
+  }
+  return "";
+}
+
+void expectContains(const std::string& message, const std::string& part) {
+  EXPECT_NE(message.find(part), std::string::npos) << "'" << message << "' lacks '" << part << "'";
+}
+
+TEST(WorldYaml, EveryShippedWorldLoadsAndValidates) {
+  std::vector<std::string> names;
+  for (const auto& entry : fs::directory_iterator(fs::path(RBPF_SOURCE_DIR) / "worlds")) {
+    if (entry.path().extension() != ".yaml") continue;
+    SCOPED_TRACE(entry.path().string());
+    const World world = loadWorld(entry.path().string());
+    EXPECT_EQ(world.name, entry.path().stem().string());
+    EXPECT_NO_THROW(core::sim::validate(world));
+    names.push_back(world.name);
+  }
+  for (const char* expected : {"lee_sim_a", "lee_sim_b", "lee_sim_b_static", "lee_sonar_room",
+                               "havangi_car", "yatim_epuck", "laser_office", "test_small"}) {
+    EXPECT_NE(std::find(names.begin(), names.end(), expected), names.end()) << expected;
+  }
+}
+
+TEST(WorldYaml, ShippedWorldsHaveThePapersParameters) {
+  const std::string dir = std::string(RBPF_SOURCE_DIR) + "/worlds/";
+  const World a = loadWorld(dir + "lee_sim_a.yaml");
+  EXPECT_EQ(a.landmarks.size(), 19u);
+  EXPECT_EQ(a.laps, 3);
+  EXPECT_DOUBLE_EQ(a.odometry.translation_noise_m_per_m, 0.03);
+  EXPECT_TRUE(a.sensors.range_bearing.enabled);
+  EXPECT_DOUBLE_EQ(a.sensors.range_bearing.max_range_m, 20.0);
+  EXPECT_DOUBLE_EQ(a.sensors.range_bearing.range_noise_m, 0.2);
+  EXPECT_DOUBLE_EQ(a.sensors.range_bearing.bearing_noise_deg, 2.0);
+  ASSERT_EQ(a.changes.size(), 1u);
+  EXPECT_EQ(a.changes[0].after_lap, 1);
+  EXPECT_EQ(a.changes[0].landmarks.size(), 3u);
+
+  const World b = loadWorld(dir + "lee_sim_b.yaml");
+  EXPECT_EQ(b.landmarks.size(), 25u);
+  ASSERT_EQ(b.changes.size(), 1u);
+  EXPECT_EQ(b.changes[0].random_landmarks.count_min, 7);
+  EXPECT_EQ(b.changes[0].random_landmarks.count_max, 18);
+  EXPECT_DOUBLE_EQ(b.changes[0].random_landmarks.sigma_m, 0.2);
+  EXPECT_TRUE(loadWorld(dir + "lee_sim_b_static.yaml").changes.empty());
+
+  const World room = loadWorld(dir + "lee_sonar_room.yaml");
+  EXPECT_TRUE(room.sensors.sonar.enabled);
+  EXPECT_EQ(core::sim::ringPoses(room.sensors.sonar).size(), 12u);
+  EXPECT_DOUBLE_EQ(room.sensors.sonar.rate_hz, 4.0);
+  EXPECT_DOUBLE_EQ(room.robot.speed_mps, 0.1);
+  EXPECT_EQ(room.laps, 2);
+
+  const World car = loadWorld(dir + "havangi_car.yaml");
+  EXPECT_EQ(car.robot.drive, core::sim::DriveType::kBicycle);
+  EXPECT_DOUBLE_EQ(car.robot.wheelbase_m, 4.0);
+  EXPECT_DOUBLE_EQ(car.robot.control_rate_hz, 40.0);
+  EXPECT_DOUBLE_EQ(car.sensors.range_bearing.rate_hz, 5.0);
+  EXPECT_DOUBLE_EQ(car.sensors.range_bearing.bearing_noise_deg, 0.1);
+
+  const World epuck = loadWorld(dir + "yatim_epuck.yaml");
+  EXPECT_TRUE(epuck.sensors.infrared.enabled);
+  EXPECT_EQ(core::sim::ringPoses(epuck.sensors.infrared).size(), 8u);
+  EXPECT_FALSE(epuck.sensors.sonar.enabled);
+}
+
+TEST(WorldYaml, ShippedLeeSimulationARelocatesItsRightmostLandmarksAfterLapOne) {
+  core::sim::Simulator simulator(
+      loadWorld(std::string(RBPF_SOURCE_DIR) + "/worlds/lee_sim_a.yaml"),
+      core::sim::SimulatorOptions());
+  simulator.run();
+  EXPECT_TRUE(simulator.routeCompleted());
+  ASSERT_EQ(simulator.appliedChanges().size(), 1u);
+  const auto& change = simulator.appliedChanges()[0];
+  EXPECT_EQ(change.laps_completed, 1);
+  ASSERT_EQ(change.landmarks.size(), 3u);
+  double rightmost_untouched = 0.0;
+  for (const auto& landmark : simulator.world().landmarks) {
+    bool moved = false;
+    for (const auto& m : change.landmarks) moved = moved || m.id == landmark.id;
+    if (!moved) rightmost_untouched = std::max(rightmost_untouched, landmark.position.x());
+  }
+  for (const auto& m : change.landmarks) EXPECT_GT(m.before.x(), rightmost_untouched);
+}
+
+TEST(WorldYaml, MinimalWorldLoadsWithDefaults) {
+  const World world = loadWorld(writeWorld("minimal.yaml", kMinimalWorld));
+  EXPECT_EQ(world.objects.size(), 2u);
+  EXPECT_EQ(world.objects[1].shape, core::sim::ShapeType::kPolygon);
+  EXPECT_TRUE(world.sensors.laser.enabled);  // its section is present
+  EXPECT_FALSE(world.sensors.sonar.enabled);
+  EXPECT_DOUBLE_EQ(world.sensors.laser.range_noise_m, 0.01);
+  EXPECT_DOUBLE_EQ(world.sensors.laser.fov_deg, 180.0);
+}
+
+TEST(WorldYaml, RejectsAnUnknownKeyNamingFileAndField) {
+  const std::string top = writeWorld("unknown_top.yaml", std::string(kMinimalWorld) + "lapz: 2\n");
+  expectContains(loadError(top), top + ": lapz is not a known key");
+  const std::string nested = writeWorld(
+      "unknown_nested.yaml", replaced(kMinimalWorld, "range_noise_m", "range_noize_m"));
+  const std::string message = loadError(nested);
+  expectContains(message, nested + ":");
+  expectContains(message, "sensors.laser.range_noize_m is not a known key");
+}
+
+TEST(WorldYaml, RejectsNegativeNoiseNamingFileAndField) {
+  const std::string path = writeWorld(
+      "negative_noise.yaml", replaced(kMinimalWorld, "range_noise_m: 0.01", "range_noise_m: -1"));
+  expectContains(loadError(path),
+                 path + ": sensors.laser.range_noise_m = -1 is out of range [0, inf)");
+}
+
+TEST(WorldYaml, RejectsAnUnclosedPolygonNamingFileAndField) {
+  const std::string path =
+      writeWorld("unclosed.yaml", replaced(kMinimalWorld, ", [2.5, 2.5], [2.5, 1.5]]",
+                                           ", [2.5, 2.5]]"));
+  const std::string message = loadError(path);
+  expectContains(message, path + ": objects[1].polygon ('crate') is not closed");
+  // The same points with closed: true are accepted.
+  const std::string flagged = writeWorld(
+      "flagged.yaml", replaced(replaced(kMinimalWorld, ", [2.5, 2.5], [2.5, 1.5]]", ", [2.5, 2.5]]"),
+                               "waypoints:", "    closed: true\nwaypoints:"));
+  EXPECT_EQ(loadError(flagged), "");
+}
+
+TEST(WorldYaml, RejectsAWaypointInsideAWallNamingFileAndField) {
+  const std::string in_polygon =
+      writeWorld("in_polygon.yaml", replaced(kMinimalWorld, "[5, 3], [1, 3]]", "[3, 2], [1, 3]]"));
+  std::string message = loadError(in_polygon);
+  expectContains(message, in_polygon + ": waypoints[2] = (3, 2) is inside object 'crate'");
+  const std::string near_wall =
+      writeWorld("near_wall.yaml", replaced(kMinimalWorld, "[[1, 1], [5, 1]", "[[1, 1], [5.9, 1]"));
+  message = loadError(near_wall);
+  expectContains(message, near_wall + ": waypoints[1] = (5.9, 1) is inside the wall of object "
+                                      "'walls'");
+}
+
+TEST(WorldYaml, RejectsWrongTypesEnumsSyntaxAndMissingFiles) {
+  const std::string not_number = writeWorld(
+      "not_number.yaml", replaced(kMinimalWorld, "radius_m: 0.2", "radius_m: wide"));
+  expectContains(loadError(not_number), not_number + ": robot.radius_m = wide is not a number");
+  const std::string bad_enum = writeWorld(
+      "bad_enum.yaml", replaced(kMinimalWorld, "radius_m: 0.2", "drive: tank"));
+  expectContains(loadError(bad_enum), bad_enum + ": robot.drive = 'tank' is not one of");
+  const std::string bad_point = writeWorld(
+      "bad_point.yaml", replaced(kMinimalWorld, "[[1, 1], [5, 1]", "[[1, 1], [5, 1, 0]"));
+  expectContains(loadError(bad_point), bad_point + ": waypoints[1] = [5, 1, 0] is not [x, y]");
+  const std::string syntax = writeWorld("syntax.yaml", "laps: [1, 2\n");
+  expectContains(loadError(syntax), syntax + ":");
+  expectContains(loadError(syntax), "YAML syntax error");
+  expectContains(loadError("/nonexistent/world.yaml"), "/nonexistent/world.yaml: cannot be opened");
+}
+
+}  // namespace
+}  // namespace io
+}  // namespace rbpf_slam
