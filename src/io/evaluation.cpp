@@ -1,0 +1,263 @@
+#include "rbpf_slam/io/evaluation.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <sstream>
+#include <stdexcept>
+
+namespace rbpf_slam {
+namespace io {
+namespace {
+
+constexpr double kRadToDeg = 180.0 / M_PI;
+
+std::vector<StampedPose> sortedByStamp(std::vector<StampedPose> poses) {
+  std::stable_sort(poses.begin(), poses.end(),
+                   [](const StampedPose& a, const StampedPose& b) { return a.stamp < b.stamp; });
+  return poses;
+}
+
+bool stampLess(const StampedPose& pose, double stamp) { return pose.stamp < stamp; }
+
+// Index of the pose nearest to stamp in non-empty poses sorted by stamp; on a tie, the later
+// one; among equal stamps, the first.
+std::size_t nearestIndex(const std::vector<StampedPose>& poses, double stamp) {
+  const std::size_t after = static_cast<std::size_t>(
+      std::lower_bound(poses.begin(), poses.end(), stamp, stampLess) - poses.begin());
+  if (after == poses.size()) return poses.size() - 1;
+  if (after > 0 && stamp - poses[after - 1].stamp < poses[after].stamp - stamp) {
+    // Step back to the first of a run of equal stamps.
+    std::size_t before = after - 1;
+    while (before > 0 && poses[before - 1].stamp == poses[before].stamp) --before;
+    return before;
+  }
+  return after;
+}
+
+// The reference pose at `stamp` on the straight segment between `before` and `after`.
+core::Pose2 interpolate(const StampedPose& before, const StampedPose& after, double stamp) {
+  const double fraction = (stamp - before.stamp) / (after.stamp - before.stamp);
+  const Eigen::Vector2d position =
+      before.pose.head<2>() + fraction * (after.pose.head<2>() - before.pose.head<2>());
+  const double heading =
+      before.pose.z() + fraction * core::wrapAngle(after.pose.z() - before.pose.z());
+  return core::Pose2(position.x(), position.y(), core::wrapAngle(heading));
+}
+
+double rootMeanSquare(const std::vector<double>& values) {
+  double sum = 0.0;
+  for (double value : values) sum += value * value;
+  return values.empty() ? 0.0 : std::sqrt(sum / values.size());
+}
+
+double mean(const std::vector<double>& values) {
+  double sum = 0.0;
+  for (double value : values) sum += value;
+  return values.empty() ? 0.0 : sum / values.size();
+}
+
+double median(std::vector<double> values) {
+  if (values.empty()) return 0.0;
+  const size_t middle = values.size() / 2;
+  std::nth_element(values.begin(), values.begin() + middle, values.end());
+  const double upper = values[middle];
+  if (values.size() % 2 == 1) return upper;
+  const double lower = *std::max_element(values.begin(), values.begin() + middle);
+  return 0.5 * (lower + upper);
+}
+
+double maximum(const std::vector<double>& values) {
+  return values.empty() ? 0.0 : *std::max_element(values.begin(), values.end());
+}
+
+}  // namespace
+
+void validate(const EvaluationOptions& options) {
+  if (!(options.max_dt_s >= 0.0)) {
+    throw std::invalid_argument("max_dt_s must be >= 0, got " + std::to_string(options.max_dt_s));
+  }
+  if (!(options.max_interpolation_gap_s > 0.0)) {
+    throw std::invalid_argument("max_interpolation_gap_s must be > 0, got " +
+                                std::to_string(options.max_interpolation_gap_s));
+  }
+}
+
+std::vector<PosePair> associate(const std::vector<StampedPose>& estimate,
+                                const std::vector<StampedPose>& reference,
+                                const EvaluationOptions& options) {
+  validate(options);
+  const std::vector<StampedPose> sorted_estimate = sortedByStamp(estimate);
+  const std::vector<StampedPose> sorted_reference = sortedByStamp(reference);
+  std::vector<PosePair> pairs;
+  if (sorted_reference.empty()) return pairs;
+  for (std::size_t i = 0; i < sorted_estimate.size(); ++i) {
+    const StampedPose& query = sorted_estimate[i];
+    PosePair pair;
+    pair.stamp = query.stamp;
+    pair.estimate = query.pose;
+    if (options.interpolate_reference) {
+      const auto after = std::lower_bound(sorted_reference.begin(), sorted_reference.end(),
+                                          query.stamp, stampLess);
+      if (after != sorted_reference.end() && after != sorted_reference.begin() &&
+          after->stamp != query.stamp &&
+          after->stamp - (after - 1)->stamp <= options.max_interpolation_gap_s) {
+        pair.reference = interpolate(*(after - 1), *after, query.stamp);
+        pairs.push_back(pair);
+        continue;
+      }
+    }
+    // Nearest neighbours, one-to-one: keep the pair only when the estimate is also the
+    // reference pose's nearest, so a dense estimate is not counted many times per reference.
+    const std::size_t j = nearestIndex(sorted_reference, query.stamp);
+    const double dt = sorted_reference[j].stamp - query.stamp;
+    if (std::abs(dt) > options.max_dt_s) continue;
+    if (!options.interpolate_reference &&
+        nearestIndex(sorted_estimate, sorted_reference[j].stamp) != i) {
+      continue;
+    }
+    pair.dt = dt;
+    pair.reference = sorted_reference[j].pose;
+    pairs.push_back(pair);
+  }
+  return pairs;
+}
+
+core::Pose2 alignRigid2D(const std::vector<Eigen::Vector2d>& source,
+                         const std::vector<Eigen::Vector2d>& target) {
+  if (source.size() != target.size() || source.empty()) {
+    throw std::invalid_argument("alignRigid2D needs two equally long, non-empty point sets");
+  }
+  Eigen::Vector2d source_mean = Eigen::Vector2d::Zero();
+  Eigen::Vector2d target_mean = Eigen::Vector2d::Zero();
+  for (size_t i = 0; i < source.size(); ++i) {
+    source_mean += source[i];
+    target_mean += target[i];
+  }
+  source_mean /= static_cast<double>(source.size());
+  target_mean /= static_cast<double>(target.size());
+  // In the plane the optimal rotation maximises sum (c * dot + s * cross) over centred pairs,
+  // so theta = atan2(sum cross, sum dot): the 2D case of the SVD solution.
+  double dot = 0.0, cross = 0.0;
+  for (size_t i = 0; i < source.size(); ++i) {
+    const Eigen::Vector2d p = source[i] - source_mean;
+    const Eigen::Vector2d q = target[i] - target_mean;
+    dot += p.dot(q);
+    cross += p.x() * q.y() - p.y() * q.x();
+  }
+  const double theta = (dot == 0.0 && cross == 0.0) ? 0.0 : std::atan2(cross, dot);
+  const Eigen::Vector2d translation =
+      target_mean - core::transformPoint(core::Pose2(0.0, 0.0, theta), source_mean);
+  return core::Pose2(translation.x(), translation.y(), theta);
+}
+
+EvaluationResult evaluatePairs(const std::vector<PosePair>& pairs, bool align) {
+  if (pairs.empty()) throw std::runtime_error("no matched poses to evaluate");
+  EvaluationResult result;
+  result.matched_poses = pairs.size();
+  result.aligned = align;
+  if (align) {
+    std::vector<Eigen::Vector2d> source, target;
+    source.reserve(pairs.size());
+    target.reserve(pairs.size());
+    for (const PosePair& pair : pairs) {
+      source.push_back(pair.estimate.head<2>());
+      target.push_back(pair.reference.head<2>());
+    }
+    result.alignment = alignRigid2D(source, target);
+  }
+
+  std::vector<double> position_errors, heading_errors;
+  for (const PosePair& pair : pairs) {
+    const core::Pose2 aligned = core::compose(result.alignment, pair.estimate);
+    position_errors.push_back((aligned.head<2>() - pair.reference.head<2>()).norm());
+    heading_errors.push_back(std::abs(core::wrapAngle(aligned.z() - pair.reference.z())) *
+                             kRadToDeg);
+  }
+  result.ate_rmse_m = rootMeanSquare(position_errors);
+  result.ate_mean_m = mean(position_errors);
+  result.ate_median_m = median(position_errors);
+  result.ate_max_m = maximum(position_errors);
+  result.rotation_rmse_deg = rootMeanSquare(heading_errors);
+  result.rotation_mean_deg = mean(heading_errors);
+  result.rotation_max_deg = maximum(heading_errors);
+  result.final_position_error_m = position_errors.back();
+  result.final_heading_error_deg = heading_errors.back();
+
+  std::vector<double> step_translation_errors, step_rotation_errors;
+  for (size_t i = 1; i < pairs.size(); ++i) {
+    const core::Pose2 estimated_step = core::between(pairs[i - 1].estimate, pairs[i].estimate);
+    const core::Pose2 reference_step = core::between(pairs[i - 1].reference, pairs[i].reference);
+    const core::Pose2 error = core::between(reference_step, estimated_step);
+    step_translation_errors.push_back(error.head<2>().norm());
+    step_rotation_errors.push_back(std::abs(error.z()) * kRadToDeg);
+    result.reference_length_m += reference_step.head<2>().norm();
+  }
+  result.rpe_pairs = step_translation_errors.size();
+  result.rpe_translation_mean_m = mean(step_translation_errors);
+  result.rpe_translation_rmse_m = rootMeanSquare(step_translation_errors);
+  result.rpe_rotation_mean_deg = mean(step_rotation_errors);
+  result.rpe_rotation_rmse_deg = rootMeanSquare(step_rotation_errors);
+  result.duration_s = pairs.back().stamp - pairs.front().stamp;
+  return result;
+}
+
+EvaluationResult evaluateTrajectory(const std::vector<StampedPose>& estimate,
+                                    const std::vector<StampedPose>& reference,
+                                    const EvaluationOptions& options) {
+  const std::vector<PosePair> pairs = associate(estimate, reference, options);
+  if (pairs.empty()) {
+    std::ostringstream message;
+    message << "no estimate pose (of " << estimate.size() << ") has a reference pose (of "
+            << reference.size() << ") within " << options.max_dt_s << " s";
+    throw std::runtime_error(message.str());
+  }
+  EvaluationResult result = evaluatePairs(pairs, options.align);
+  result.estimate_poses = estimate.size();
+  result.reference_poses = reference.size();
+  return result;
+}
+
+std::string toJson(const EvaluationResult& result) {
+  std::ostringstream json;
+  bool first = true;
+  const auto number = [](double value) {
+    if (!std::isfinite(value)) return std::string("null");
+    char buffer[64];
+    std::snprintf(buffer, sizeof(buffer), "%.9g", value);
+    return std::string(buffer);
+  };
+  const auto field = [&](const std::string& key, const std::string& value) {
+    json << (first ? "" : ",\n") << "  \"" << key << "\": " << value;
+    first = false;
+  };
+  json << "{\n";
+  field("estimate_poses", std::to_string(result.estimate_poses));
+  field("reference_poses", std::to_string(result.reference_poses));
+  field("matched_poses", std::to_string(result.matched_poses));
+  field("aligned", result.aligned ? "true" : "false");
+  field("alignment", "{\"x_m\": " + number(result.alignment.x()) +
+                         ", \"y_m\": " + number(result.alignment.y()) +
+                         ", \"theta_deg\": " + number(result.alignment.z() * kRadToDeg) + "}");
+  field("duration_s", number(result.duration_s));
+  field("reference_length_m", number(result.reference_length_m));
+  field("ate_rmse_m", number(result.ate_rmse_m));
+  field("ate_mean_m", number(result.ate_mean_m));
+  field("ate_median_m", number(result.ate_median_m));
+  field("ate_max_m", number(result.ate_max_m));
+  field("rotation_rmse_deg", number(result.rotation_rmse_deg));
+  field("rotation_mean_deg", number(result.rotation_mean_deg));
+  field("rotation_max_deg", number(result.rotation_max_deg));
+  field("rpe_pairs", std::to_string(result.rpe_pairs));
+  field("rpe_translation_mean_m", number(result.rpe_translation_mean_m));
+  field("rpe_translation_rmse_m", number(result.rpe_translation_rmse_m));
+  field("rpe_rotation_mean_deg", number(result.rpe_rotation_mean_deg));
+  field("rpe_rotation_rmse_deg", number(result.rpe_rotation_rmse_deg));
+  field("final_position_error_m", number(result.final_position_error_m));
+  field("final_heading_error_deg", number(result.final_heading_error_deg));
+  json << "\n}\n";
+  return json.str();
+}
+
+}  // namespace io
+}  // namespace rbpf_slam

@@ -1,0 +1,302 @@
+// carmen_to_bag LOG[.gz] OUT.bag [--odom-noise F] [--odom-bias F] [--seed N]
+// Converts a corrected CARMEN log into a bag shaped like the shared intel.bag: /scan, /odom,
+// /tf (odom -> base_link) and /tf_static (base_link -> base_laser_link), stamped
+// 1262304000 + log time. The odometry is re-derived from the corrected motion with scale bias
+// and random error; OUT.ref.tum gets the corrected pose at every scan (the reference).
+
+#include <geometry_msgs/TransformStamped.h>
+#include <nav_msgs/Odometry.h>
+#include <ros/time.h>
+#include <rosbag/bag.h>
+#include <sensor_msgs/LaserScan.h>
+#include <tf2_msgs/TFMessage.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <iostream>
+#include <map>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "rbpf_slam/core/geometry.h"
+#include "rbpf_slam/io/carmen.h"
+#include "rbpf_slam/io/trajectory.h"
+
+namespace {
+
+namespace io = rbpf_slam::io;
+namespace core = rbpf_slam::core;
+
+constexpr int kUsageError = 2;
+constexpr double kStampOffsetS = 1262304000.0;  // 2010-01-01, as in the shared bags
+constexpr double kRangeMinM = 0.02;
+constexpr double kRangeMaxM = 50.0;
+constexpr double kSameOffsetTolerance = 1e-6;
+
+const char kUsage[] =
+    "usage: carmen_to_bag LOG[.gz] OUT.bag [--odom-noise F] [--odom-bias F] [--seed N]\n"
+    "  --odom-noise F  odometry sigma per unit of motion (m/m, rad/rad; default 0.03)\n"
+    "  --odom-bias F   systematic odometry scale error (default 0.02 = 2 %)\n"
+    "  --seed N        seed of the odometry noise (default 1)\n"
+    "Writes OUT.bag (/scan, /odom, /tf, /tf_static) and OUT.ref.tum (corrected scan poses).\n";
+
+/// Command-line settings of one conversion.
+struct Arguments {
+  std::string log_path;
+  std::string bag_path;
+  io::OdometryNoiseOptions noise;
+};
+
+double parseNumber(const std::string& flag, const std::string& text) {
+  char* end = nullptr;
+  const double value = std::strtod(text.c_str(), &end);
+  if (text.empty() || end != text.c_str() + text.size() || !std::isfinite(value)) {
+    throw std::invalid_argument(flag + " needs a number, got '" + text + "'");
+  }
+  return value;
+}
+
+Arguments parseArguments(int argc, char** argv) {
+  Arguments arguments;
+  std::vector<std::string> positional;
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    const auto next = [&]() -> std::string {
+      if (i + 1 >= argc) throw std::invalid_argument(arg + " needs a value");
+      return argv[++i];
+    };
+    if (arg == "--odom-noise") {
+      arguments.noise.noise_per_unit = parseNumber(arg, next());
+    } else if (arg == "--odom-bias") {
+      arguments.noise.scale_bias = parseNumber(arg, next());
+    } else if (arg == "--seed") {
+      const std::string text = next();
+      char* end = nullptr;
+      arguments.noise.seed = std::strtoull(text.c_str(), &end, 10);
+      if (text.empty() || text[0] == '-' || end != text.c_str() + text.size()) {
+        throw std::invalid_argument("--seed needs a non-negative integer, got '" + text + "'");
+      }
+    } else if (arg.size() > 1 && arg[0] == '-') {
+      throw std::invalid_argument("unknown option " + arg);
+    } else {
+      positional.push_back(arg);
+    }
+  }
+  if (positional.size() != 2) {
+    throw std::invalid_argument("expected LOG and OUT.bag, got " +
+                                std::to_string(positional.size()) + " file argument(s)");
+  }
+  arguments.log_path = positional[0];
+  arguments.bag_path = positional[1];
+  io::validate(arguments.noise);
+  return arguments;
+}
+
+std::string referencePath(const std::string& bag_path) {
+  const std::string suffix = ".bag";
+  if (bag_path.size() > suffix.size() &&
+      bag_path.compare(bag_path.size() - suffix.size(), suffix.size(), suffix) == 0) {
+    return bag_path.substr(0, bag_path.size() - suffix.size()) + ".ref.tum";
+  }
+  return bag_path + ".ref.tum";
+}
+
+ros::Time toRosTime(double log_stamp) { return ros::Time(kStampOffsetS + log_stamp); }
+
+geometry_msgs::Quaternion yawQuaternion(double yaw) {
+  geometry_msgs::Quaternion q;
+  q.z = std::sin(0.5 * yaw);
+  q.w = std::cos(0.5 * yaw);
+  return q;
+}
+
+geometry_msgs::TransformStamped toTransform(const core::Pose2& pose, const ros::Time& stamp,
+                                            const std::string& parent, const std::string& child) {
+  geometry_msgs::TransformStamped transform;
+  transform.header.stamp = stamp;
+  transform.header.frame_id = parent;
+  transform.child_frame_id = child;
+  transform.transform.translation.x = pose.x();
+  transform.transform.translation.y = pose.y();
+  transform.transform.rotation = yawQuaternion(pose.z());
+  return transform;
+}
+
+// The laser in the robot frame, from the first scan; warns when later scans disagree.
+core::Pose2 laserOffset(const io::CarmenLog& log) {
+  const io::CarmenLaser& first = log.lasers.front();
+  const core::Pose2 offset = core::between(first.robot_pose, first.laser_pose);
+  double worst = 0.0;
+  for (const io::CarmenLaser& laser : log.lasers) {
+    const core::Pose2 difference =
+        core::between(offset, core::between(laser.robot_pose, laser.laser_pose));
+    worst = std::max(worst, std::max(difference.head<2>().norm(), std::abs(difference.z())));
+  }
+  if (worst > kSameOffsetTolerance) {
+    std::cerr << "carmen_to_bag: warning: the laser offset varies between scans by up to " << worst
+              << " (m or rad); using the first scan's\n";
+  }
+  if (offset.head<2>().norm() < kSameOffsetTolerance && std::abs(offset.z()) < 1e-9) {
+    return core::Pose2::Zero();
+  }
+  return offset;
+}
+
+sensor_msgs::LaserScan toScan(const io::CarmenLaser& laser, std::uint32_t seq) {
+  sensor_msgs::LaserScan scan;
+  scan.header.seq = seq;
+  scan.header.stamp = toRosTime(laser.stamp);
+  scan.header.frame_id = "base_laser_link";
+  const io::LaserGeometry geometry = io::flaserGeometry(laser.ranges.size());
+  scan.angle_min = geometry.angle_min_rad;
+  scan.angle_increment = geometry.angle_increment_rad;
+  scan.angle_max = geometry.angle_min_rad +
+                   geometry.angle_increment_rad *
+                       static_cast<double>(std::max<std::size_t>(laser.ranges.size(), 1) - 1);
+  scan.range_min = kRangeMinM;
+  scan.range_max = kRangeMaxM;
+  scan.ranges.reserve(laser.ranges.size());
+  for (double range : laser.ranges) {
+    scan.ranges.push_back(static_cast<float>(io::toRep117Range(range, kRangeMaxM)));
+  }
+  return scan;
+}
+
+nav_msgs::Odometry toOdometry(const io::StampedPose& pose, const io::StampedPose* previous,
+                              std::uint32_t seq) {
+  nav_msgs::Odometry odometry;
+  odometry.header.seq = seq;
+  odometry.header.stamp = toRosTime(pose.stamp);
+  odometry.header.frame_id = "odom";
+  odometry.child_frame_id = "base_link";
+  odometry.pose.pose.position.x = pose.pose.x();
+  odometry.pose.pose.position.y = pose.pose.y();
+  odometry.pose.pose.orientation = yawQuaternion(pose.pose.z());
+  if (previous != nullptr && pose.stamp > previous->stamp) {
+    // Twist in the child frame: the increment since the previous reading over its duration.
+    const core::Pose2 step = core::between(previous->pose, pose.pose);
+    const double dt = pose.stamp - previous->stamp;
+    odometry.twist.twist.linear.x = step.x() / dt;
+    odometry.twist.twist.linear.y = step.y() / dt;
+    odometry.twist.twist.angular.z = step.z() / dt;
+  }
+  return odometry;
+}
+
+/// One message to write: what and when.
+struct Event {
+  double stamp;
+  int kind;  // 0 tf_static, 1 odometry (+ tf), 2 scan: at equal stamps tf comes first
+  std::size_t index;
+};
+
+void reportSkipped(const io::CarmenLog& log, const io::CorrectedMotionStats& motion) {
+  std::size_t unknown = 0;
+  std::string by_type;
+  for (const auto& entry : log.unknown_messages) {
+    unknown += entry.second;
+    by_type += (by_type.empty() ? "" : ", ") + entry.first + ": " + std::to_string(entry.second);
+  }
+  std::cerr << "carmen_to_bag: skipped " << unknown << " line(s) of unknown type"
+            << (by_type.empty() ? "" : " (" + by_type + ")") << " and " << log.malformed_lines
+            << " malformed line(s)\n";
+  for (const std::string& example : log.malformed_examples) {
+    std::cerr << "carmen_to_bag:   malformed " << example << "\n";
+  }
+  std::cerr << "carmen_to_bag: odometry: used " << motion.odometry_used << " ODOM line(s), dropped "
+            << motion.odometry_dropped
+            << " with a stamp outside their scans' window or out of order, "
+            << motion.duplicate_stamps << " duplicate stamp(s)\n";
+}
+
+void writeBag(const Arguments& arguments, const io::CarmenLog& log,
+              const std::vector<io::StampedPose>& odometry) {
+  std::vector<Event> events;
+  for (std::size_t i = 0; i < odometry.size(); ++i) events.push_back({odometry[i].stamp, 1, i});
+  for (std::size_t i = 0; i < log.lasers.size(); ++i) events.push_back({log.lasers[i].stamp, 2, i});
+  std::stable_sort(events.begin(), events.end(), [](const Event& a, const Event& b) {
+    return a.stamp != b.stamp ? a.stamp < b.stamp : a.kind < b.kind;
+  });
+  events.insert(events.begin(), Event{events.front().stamp, 0, 0});
+
+  rosbag::Bag bag(arguments.bag_path, rosbag::bagmode::Write);
+  std::uint32_t odometry_seq = 0, scan_seq = 0;
+  for (const Event& event : events) {
+    const ros::Time stamp = toRosTime(event.stamp);
+    if (event.kind == 0) {
+      tf2_msgs::TFMessage tf_static;
+      tf_static.transforms.push_back(
+          toTransform(laserOffset(log), stamp, "base_link", "base_laser_link"));
+      // A custom connection header replaces rosbag's, so it must carry the type fields too.
+      auto header = boost::make_shared<ros::M_string>();
+      (*header)["type"] = ros::message_traits::datatype(tf_static);
+      (*header)["md5sum"] = ros::message_traits::md5sum(tf_static);
+      (*header)["message_definition"] = ros::message_traits::definition(tf_static);
+      (*header)["callerid"] = "/carmen_to_bag";
+      (*header)["latching"] = "1";  // so that rosbag play latches it like a static broadcaster
+      bag.write("/tf_static", stamp, tf_static, header);
+    } else if (event.kind == 1) {
+      const io::StampedPose* previous = event.index > 0 ? &odometry[event.index - 1] : nullptr;
+      const nav_msgs::Odometry message =
+          toOdometry(odometry[event.index], previous, odometry_seq++);
+      bag.write("/odom", stamp, message);
+      tf2_msgs::TFMessage tf;
+      tf.transforms.push_back(toTransform(odometry[event.index].pose, stamp, "odom", "base_link"));
+      tf.transforms.back().header.seq = message.header.seq;
+      bag.write("/tf", stamp, tf);
+    } else {
+      bag.write("/scan", stamp, toScan(log.lasers[event.index], scan_seq++));
+    }
+  }
+  bag.close();
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Arguments arguments;
+  try {
+    for (int i = 1; i < argc; ++i) {
+      if (std::string(argv[i]) == "-h" || std::string(argv[i]) == "--help") {
+        std::cout << kUsage;
+        return 0;
+      }
+    }
+    arguments = parseArguments(argc, argv);
+  } catch (const std::invalid_argument& error) {
+    std::cerr << "carmen_to_bag: " << error.what() << "\n" << kUsage;
+    return kUsageError;
+  }
+
+  try {
+    ros::Time::init();
+    const io::CarmenLog log = io::readCarmenLog(arguments.log_path);
+    if (log.lasers.empty()) {
+      throw std::runtime_error(arguments.log_path + ": no FLASER scan in the log");
+    }
+    io::CorrectedMotionStats motion_stats;
+    const std::vector<io::StampedPose> motion = io::correctedMotion(log, &motion_stats);
+    const std::vector<io::StampedPose> odometry = io::simulateOdometry(motion, arguments.noise);
+    const std::vector<io::StampedPose> scans = io::scanPoses(log);
+    std::vector<io::StampedPose> reference;
+    for (const io::StampedPose& pose : scans) {
+      reference.push_back({kStampOffsetS + pose.stamp, pose.pose});
+    }
+    writeBag(arguments, log, odometry);
+    const std::string reference_path = referencePath(arguments.bag_path);
+    io::writeTum(reference_path, reference);
+
+    reportSkipped(log, motion_stats);
+    std::cerr << "carmen_to_bag: wrote " << arguments.bag_path << " (" << log.lasers.size()
+              << " scans, " << odometry.size() << " odometry messages over "
+              << (odometry.back().stamp - odometry.front().stamp) << " s) and " << reference_path
+              << "\n";
+  } catch (const std::exception& error) {
+    std::cerr << "carmen_to_bag: " << error.what() << "\n";
+    return kUsageError;
+  }
+  return 0;
+}
