@@ -343,8 +343,8 @@ World parseWorld(const std::string& yaml_text, const std::string& source) {
     root = YAML::Load(yaml_text);
   } catch (const YAML::ParserException& error) {
     throw WorldFileError(source + ":" + std::to_string(error.mark.line + 1) + ":" +
-                         std::to_string(error.mark.column + 1) + ": YAML syntax error: " +
-                         error.msg);
+                         std::to_string(error.mark.column + 1) +
+                         ": YAML syntax error: " + error.msg);
   }
   return readWorld(root, source);
 }

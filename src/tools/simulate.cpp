@@ -19,9 +19,9 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
-#include <memory>
 #include <iostream>
 #include <map>
+#include <memory>
 #include <stdexcept>
 #include <string>
 
@@ -371,8 +371,9 @@ void writeTruth(const std::string& path, const Arguments& arguments,
     root["changes"].push_back(node);
   }
   YAML::Emitter out;
-  out << YAML::Comment("True world written by simulate: landmarks and objects in the map frame, "
-                       "before and after the changes")
+  out << YAML::Comment(
+             "True world written by simulate: landmarks and objects in the map frame, "
+             "before and after the changes")
       << YAML::Newline << root;
   std::ofstream file(path);
   file << out.c_str() << "\n";

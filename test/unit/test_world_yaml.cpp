@@ -2,7 +2,9 @@
 // rejected with a message naming the file and the field.
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -35,7 +37,8 @@ sensors:
 
 /// Writes text to a fresh file in the test's temporary directory and returns its path.
 std::string writeWorld(const std::string& name, const std::string& text) {
-  const fs::path dir = fs::temp_directory_path() / "rbpf_slam_test_world_yaml";
+  const fs::path dir =
+      fs::temp_directory_path() / ("rbpf_slam_test_world_yaml_" + std::to_string(getpid()));
   fs::create_directories(dir);
   const fs::path path = dir / name;
   std::ofstream(path) << text;
@@ -122,9 +125,8 @@ TEST(WorldYaml, ShippedWorldsHaveThePapersParameters) {
 }
 
 TEST(WorldYaml, ShippedLeeSimulationARelocatesItsRightmostLandmarksAfterLapOne) {
-  core::sim::Simulator simulator(
-      loadWorld(std::string(RBPF_SOURCE_DIR) + "/worlds/lee_sim_a.yaml"),
-      core::sim::SimulatorOptions());
+  core::sim::Simulator simulator(loadWorld(std::string(RBPF_SOURCE_DIR) + "/worlds/lee_sim_a.yaml"),
+                                 core::sim::SimulatorOptions());
   simulator.run();
   EXPECT_TRUE(simulator.routeCompleted());
   ASSERT_EQ(simulator.appliedChanges().size(), 1u);
@@ -153,8 +155,8 @@ TEST(WorldYaml, MinimalWorldLoadsWithDefaults) {
 TEST(WorldYaml, RejectsAnUnknownKeyNamingFileAndField) {
   const std::string top = writeWorld("unknown_top.yaml", std::string(kMinimalWorld) + "lapz: 2\n");
   expectContains(loadError(top), top + ": lapz is not a known key");
-  const std::string nested = writeWorld(
-      "unknown_nested.yaml", replaced(kMinimalWorld, "range_noise_m", "range_noize_m"));
+  const std::string nested =
+      writeWorld("unknown_nested.yaml", replaced(kMinimalWorld, "range_noise_m", "range_noize_m"));
   const std::string message = loadError(nested);
   expectContains(message, nested + ":");
   expectContains(message, "sensors.laser.range_noize_m is not a known key");
@@ -168,15 +170,15 @@ TEST(WorldYaml, RejectsNegativeNoiseNamingFileAndField) {
 }
 
 TEST(WorldYaml, RejectsAnUnclosedPolygonNamingFileAndField) {
-  const std::string path =
-      writeWorld("unclosed.yaml", replaced(kMinimalWorld, ", [2.5, 2.5], [2.5, 1.5]]",
-                                           ", [2.5, 2.5]]"));
+  const std::string path = writeWorld(
+      "unclosed.yaml", replaced(kMinimalWorld, ", [2.5, 2.5], [2.5, 1.5]]", ", [2.5, 2.5]]"));
   const std::string message = loadError(path);
   expectContains(message, path + ": objects[1].polygon ('crate') is not closed");
   // The same points with closed: true are accepted.
-  const std::string flagged = writeWorld(
-      "flagged.yaml", replaced(replaced(kMinimalWorld, ", [2.5, 2.5], [2.5, 1.5]]", ", [2.5, 2.5]]"),
-                               "waypoints:", "    closed: true\nwaypoints:"));
+  const std::string flagged =
+      writeWorld("flagged.yaml",
+                 replaced(replaced(kMinimalWorld, ", [2.5, 2.5], [2.5, 1.5]]", ", [2.5, 2.5]]"),
+                          "waypoints:", "    closed: true\nwaypoints:"));
   EXPECT_EQ(loadError(flagged), "");
 }
 
@@ -188,16 +190,17 @@ TEST(WorldYaml, RejectsAWaypointInsideAWallNamingFileAndField) {
   const std::string near_wall =
       writeWorld("near_wall.yaml", replaced(kMinimalWorld, "[[1, 1], [5, 1]", "[[1, 1], [5.9, 1]"));
   message = loadError(near_wall);
-  expectContains(message, near_wall + ": waypoints[1] = (5.9, 1) is inside the wall of object "
-                                      "'walls'");
+  expectContains(message, near_wall +
+                              ": waypoints[1] = (5.9, 1) is inside the wall of object "
+                              "'walls'");
 }
 
 TEST(WorldYaml, RejectsWrongTypesEnumsSyntaxAndMissingFiles) {
-  const std::string not_number = writeWorld(
-      "not_number.yaml", replaced(kMinimalWorld, "radius_m: 0.2", "radius_m: wide"));
+  const std::string not_number =
+      writeWorld("not_number.yaml", replaced(kMinimalWorld, "radius_m: 0.2", "radius_m: wide"));
   expectContains(loadError(not_number), not_number + ": robot.radius_m = wide is not a number");
-  const std::string bad_enum = writeWorld(
-      "bad_enum.yaml", replaced(kMinimalWorld, "radius_m: 0.2", "drive: tank"));
+  const std::string bad_enum =
+      writeWorld("bad_enum.yaml", replaced(kMinimalWorld, "radius_m: 0.2", "drive: tank"));
   expectContains(loadError(bad_enum), bad_enum + ": robot.drive = 'tank' is not one of");
   const std::string bad_point = writeWorld(
       "bad_point.yaml", replaced(kMinimalWorld, "[[1, 1], [5, 1]", "[[1, 1], [5, 1, 0]"));

@@ -27,8 +27,7 @@ RayCaster::RayCaster(std::vector<Segment> segments, std::vector<Circle> circles)
   }
 }
 
-RayHit RayCaster::cast(const Eigen::Vector2d& origin, double angle_rad,
-                       double max_range_m) const {
+RayHit RayCaster::cast(const Eigen::Vector2d& origin, double angle_rad, double max_range_m) const {
   const Eigen::Vector2d d(std::cos(angle_rad), std::sin(angle_rad));
   RayHit best;
   for (const Segment& s : segments_) {

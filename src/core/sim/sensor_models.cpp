@@ -100,9 +100,9 @@ FeatureSet observeLandmarks(const RangeBearingConfig& config,
       point.range = std::max(0.0, range + sampleGaussian(*rng, config.range_noise_m));
       point.bearing = wrapAngle(bearing + sampleGaussian(*rng, sigma_bearing));
     }
-    point.covariance = Eigen::Vector2d(config.range_noise_m * config.range_noise_m,
-                                       sigma_bearing * sigma_bearing)
-                           .asDiagonal();
+    point.covariance =
+        Eigen::Vector2d(config.range_noise_m * config.range_noise_m, sigma_bearing * sigma_bearing)
+            .asDiagonal();
     point.id = config.known_ids ? landmark.id : -1;
     features.points.push_back(point);
   }

@@ -82,8 +82,8 @@ void Simulator::step() {
   const SensorsConfig& sensors = world_.sensors;
   const bool laser = sensors.laser.enabled && due(t, sensors.laser.rate_hz, &laser_count_);
   const bool sonar = sensors.sonar.enabled && due(t, sensors.sonar.rate_hz, &sonar_count_);
-  const bool range_bearing = sensors.range_bearing.enabled &&
-                             due(t, sensors.range_bearing.rate_hz, &range_bearing_count_);
+  const bool range_bearing =
+      sensors.range_bearing.enabled && due(t, sensors.range_bearing.rate_hz, &range_bearing_count_);
   const bool infrared =
       sensors.infrared.enabled && due(t, sensors.infrared.rate_hz, &infrared_count_);
   const bool odometry = due(t, world_.odometry.rate_hz, &odometry_count_);
@@ -133,12 +133,10 @@ void Simulator::step() {
   }
   measured.steering_rad +=
       sampleGaussian(motion_rng_, world_.odometry.steering_noise_deg * M_PI / 180.0);
-  const double measured_turn_rate = robot.drive == DriveType::kBicycle
-                                        ? turnRate(robot, measured)
-                                        : measured.turn_rate_radps;
-  pending_increment_ = compose(
-      pending_increment_,
-      integrateArc(Pose2::Zero(), measured.speed_mps, measured_turn_rate, dt_s_));
+  const double measured_turn_rate =
+      robot.drive == DriveType::kBicycle ? turnRate(robot, measured) : measured.turn_rate_radps;
+  pending_increment_ = compose(pending_increment_, integrateArc(Pose2::Zero(), measured.speed_mps,
+                                                                measured_turn_rate, dt_s_));
   ++tick_;
 }
 
@@ -152,8 +150,9 @@ void Simulator::applyOdometryNoise() {
   const double noisy_translation =
       translation * (1.0 + o.translation_scale_bias) +
       sampleGaussian(motion_rng_, o.translation_noise_m_per_m * translation);
-  const double noisy_rot1 = rot1 * (1.0 + o.rotation_scale_bias) +
-                            sampleGaussian(motion_rng_, o.rotation_noise_rad_per_rad * std::abs(rot1));
+  const double noisy_rot1 =
+      rot1 * (1.0 + o.rotation_scale_bias) +
+      sampleGaussian(motion_rng_, o.rotation_noise_rad_per_rad * std::abs(rot1));
   const double rot2_sigma = std::hypot(o.rotation_noise_rad_per_rad * std::abs(rot2),
                                        o.rotation_noise_rad_per_m * translation);
   const double noisy_rot2 =
@@ -188,8 +187,7 @@ std::vector<TransducerReading> Simulator::senseRing(const RingSensorConfig& conf
     TransducerReading reading;
     reading.index = static_cast<int>(i);
     reading.reading.stamp = time();
-    reading.reading.range =
-        simulateConeRange(config, caster_, compose(true_pose_, poses[i]), rng);
+    reading.reading.range = simulateConeRange(config, caster_, compose(true_pose_, poses[i]), rng);
     reading.reading.min_range = config.min_range_m;
     reading.reading.max_range = config.max_range_m;
     reading.reading.field_of_view = config.cone_deg * M_PI / 180.0;
@@ -262,9 +260,9 @@ void Simulator::applyChange(int index) {
   if (random.count_max > 0) {
     std::vector<int> pool;
     for (const Landmark& landmark : landmarks_) {
-      const bool candidate = random.candidate_ids.empty() ||
-                             std::count(random.candidate_ids.begin(), random.candidate_ids.end(),
-                                        landmark.id) > 0;
+      const bool candidate =
+          random.candidate_ids.empty() ||
+          std::count(random.candidate_ids.begin(), random.candidate_ids.end(), landmark.id) > 0;
       if (candidate) pool.push_back(landmark.id);
     }
     const int count_max = std::min(random.count_max, static_cast<int>(pool.size()));

@@ -44,8 +44,8 @@ Pose2 integrateArc(const Pose2& pose, double speed_mps, double turn_rate_radps, 
                wrapAngle(theta + rotation));
 }
 
-WaypointFollower::WaypointFollower(const RobotConfig& robot,
-                                   std::vector<Eigen::Vector2d> waypoints, int laps)
+WaypointFollower::WaypointFollower(const RobotConfig& robot, std::vector<Eigen::Vector2d> waypoints,
+                                   int laps)
     : robot_(robot), waypoints_(std::move(waypoints)), laps_(laps) {}
 
 Pose2 WaypointFollower::startPose() const {

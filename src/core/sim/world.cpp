@@ -27,8 +27,8 @@ std::string point(const Eigen::Vector2d& p) {
 [[noreturn]] void fail(const std::string& message) { throw std::invalid_argument(message); }
 
 /// Checks lo <= value <= hi (or strict where open); NaN always fails.
-void checkRange(const std::string& field, double value, double lo, double hi,
-                bool lo_open = false, bool hi_open = false) {
+void checkRange(const std::string& field, double value, double lo, double hi, bool lo_open = false,
+                bool hi_open = false) {
   const bool above = lo_open ? value > lo : value >= lo;
   const bool below = hi_open ? value < hi : value <= hi;
   if (above && below) return;
@@ -79,13 +79,13 @@ void checkRobot(const RobotConfig& robot) {
   positive("robot.lookahead_m", robot.lookahead_m);
   positive("robot.waypoint_tolerance_m", robot.waypoint_tolerance_m);
   if (robot.drive == DriveType::kBicycle && robot.controller == ControllerType::kTurnThenDrive) {
-    fail("robot.controller = turn_then_drive needs robot.drive = diff_drive (a car cannot turn "
-         "on the spot)");
+    fail(
+        "robot.controller = turn_then_drive needs robot.drive = diff_drive (a car cannot turn "
+        "on the spot)");
   }
 }
 
 void checkOdometry(const OdometryConfig& odometry, DriveType drive) {
-  positive("odometry.rate_hz", odometry.rate_hz);
   nonNegative("odometry.translation_noise_m_per_m", odometry.translation_noise_m_per_m);
   nonNegative("odometry.rotation_noise_rad_per_rad", odometry.rotation_noise_rad_per_rad);
   nonNegative("odometry.rotation_noise_rad_per_m", odometry.rotation_noise_rad_per_m);
@@ -108,9 +108,14 @@ void checkRangeLimits(const std::string& prefix, double min_range_m, double max_
   }
 }
 
-void checkLaser(const LaserConfig& laser) {
+/// Readings are taken at control steps, so no sensor can be faster than the control loop.
+void checkRate(const std::string& field, double rate_hz, double control_rate_hz) {
+  checkRange(field, rate_hz, 0.0, control_rate_hz, true);
+}
+
+void checkLaser(const LaserConfig& laser, double control_rate_hz) {
   const std::string p = "sensors.laser";
-  positive(p + ".rate_hz", laser.rate_hz);
+  checkRate(p + ".rate_hz", laser.rate_hz, control_rate_hz);
   checkRange(p + ".fov_deg", laser.fov_deg, 0.0, 360.0, true);
   checkRange(p + ".resolution_deg", laser.resolution_deg, 0.0, laser.fov_deg, true);
   checkRangeLimits(p, laser.min_range_m, laser.max_range_m);
@@ -120,8 +125,8 @@ void checkLaser(const LaserConfig& laser) {
   checkRange(p + ".mount_yaw_deg", laser.mount_yaw_deg, -360.0, 360.0);
 }
 
-void checkRing(const RingSensorConfig& ring, const std::string& p) {
-  positive(p + ".rate_hz", ring.rate_hz);
+void checkRing(const RingSensorConfig& ring, const std::string& p, double control_rate_hz) {
+  checkRate(p + ".rate_hz", ring.rate_hz, control_rate_hz);
   if (ring.angles_deg.empty()) {
     checkRange(p + ".count", ring.count, 1, 64);
   }
@@ -136,9 +141,9 @@ void checkRing(const RingSensorConfig& ring, const std::string& p) {
   checkRange(p + ".ray_spacing_deg", ring.ray_spacing_deg, 0.0, ring.cone_deg, true);
 }
 
-void checkRangeBearing(const RangeBearingConfig& sensor) {
+void checkRangeBearing(const RangeBearingConfig& sensor, double control_rate_hz) {
   const std::string p = "sensors.range_bearing";
-  positive(p + ".rate_hz", sensor.rate_hz);
+  checkRate(p + ".rate_hz", sensor.rate_hz, control_rate_hz);
   checkRangeLimits(p, sensor.min_range_m, sensor.max_range_m);
   checkRange(p + ".fov_deg", sensor.fov_deg, 0.0, 360.0, true);
   nonNegative(p + ".range_noise_m", sensor.range_noise_m);
@@ -147,8 +152,8 @@ void checkRangeBearing(const RangeBearingConfig& sensor) {
 }
 
 /// True when the segments pq and ab cross or touch.
-bool segmentsIntersect(const Eigen::Vector2d& p, const Eigen::Vector2d& q,
-                       const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+bool segmentsIntersect(const Eigen::Vector2d& p, const Eigen::Vector2d& q, const Eigen::Vector2d& a,
+                       const Eigen::Vector2d& b) {
   auto cross = [](const Eigen::Vector2d& u, const Eigen::Vector2d& v) {
     return u.x() * v.y() - u.y() * v.x();
   };
@@ -172,9 +177,9 @@ void checkWaypointClear(const World& world, const WorldObject& object, int objec
     for (const Segment& segment : objectSegments(object, object_index)) {
       const double distance = distanceToSegment(p, segment.a, segment.b);
       if (distance < world.robot.radius_m) {
-        fail(field + " is inside the wall of " + what + " '" + object.name + "': " +
-             number(distance) + " m from it, closer than robot.radius_m = " +
-             number(world.robot.radius_m));
+        fail(field + " is inside the wall of " + what + " '" + object.name +
+             "': " + number(distance) +
+             " m from it, closer than robot.radius_m = " + number(world.robot.radius_m));
       }
     }
   }
@@ -281,8 +286,8 @@ void checkChange(const World& world, const WorldChange& change, const std::strin
   const std::string field = p + ".random_landmarks";
   for (size_t i = 0; i < random.candidate_ids.size(); ++i) {
     if (!ids.count(random.candidate_ids[i])) {
-      fail(field + ".candidate_ids[" + std::to_string(i) + "] = " +
-           std::to_string(random.candidate_ids[i]) + " is not a landmark");
+      fail(field + ".candidate_ids[" + std::to_string(i) +
+           "] = " + std::to_string(random.candidate_ids[i]) + " is not a landmark");
     }
   }
   const int pool = static_cast<int>(random.candidate_ids.empty() ? world.landmarks.size()
@@ -364,7 +369,8 @@ WorldObject movedObject(const WorldObject& object, const ObjectMove& move) {
   const Eigen::Matrix2d rotation =
       (Eigen::Matrix2d() << std::cos(angle), -std::sin(angle), std::sin(angle), std::cos(angle))
           .finished();
-  for (Eigen::Vector2d& p : moved.points) p = centroid + rotation * (p - centroid) + move.translate_m;
+  for (Eigen::Vector2d& p : moved.points)
+    p = centroid + rotation * (p - centroid) + move.translate_m;
   return moved;
 }
 
@@ -388,10 +394,12 @@ void validate(const World& world) {
   checkOdometry(world.odometry, world.robot.drive);
   checkObjectsAndLandmarks(world);
   checkWaypoints(world);
-  checkLaser(world.sensors.laser);
-  checkRing(world.sensors.sonar, "sensors.sonar");
-  checkRangeBearing(world.sensors.range_bearing);
-  checkRing(world.sensors.infrared, "sensors.infrared");
+  const double control_rate_hz = world.robot.control_rate_hz;
+  checkRate("odometry.rate_hz", world.odometry.rate_hz, control_rate_hz);
+  checkLaser(world.sensors.laser, control_rate_hz);
+  checkRing(world.sensors.sonar, "sensors.sonar", control_rate_hz);
+  checkRangeBearing(world.sensors.range_bearing, control_rate_hz);
+  checkRing(world.sensors.infrared, "sensors.infrared", control_rate_hz);
   for (size_t i = 0; i < world.changes.size(); ++i) {
     checkChange(world, world.changes[i], "changes[" + std::to_string(i) + "]");
   }

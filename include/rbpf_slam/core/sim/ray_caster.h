@@ -32,8 +32,8 @@ class RayCaster {
 
   /// The nearest hit along direction angle_rad from origin, up to max_range_m.
   RayHit cast(const Eigen::Vector2d& origin, double angle_rad, double max_range_m) const;
-  /// True when nothing blocks the straight line from origin to a point target_range_m away,
-  /// except within tolerance_m of the target.
+  /// True when nothing blocks the straight line from origin to target, except within
+  /// tolerance_m of the target.
   bool clearLine(const Eigen::Vector2d& origin, const Eigen::Vector2d& target,
                  double tolerance_m) const;
   /// A caster holding only the geometry within radius_m of center (cheaper for one reading).

@@ -62,17 +62,17 @@ struct AppliedChange {
 /// payload matching the type is filled.
 struct SimEvent {
   SimEventType type = SimEventType::kOdometry;
-  double stamp = 0.0;                          // s since the start
-  Pose2 true_pose = Pose2::Zero();             // base_link in map (ground truth)
-  Pose2 odom_pose = Pose2::Zero();             // base_link in odom (dead reckoning)
+  double stamp = 0.0;                                    // s since the start
+  Pose2 true_pose = Pose2::Zero();                       // base_link in map (ground truth)
+  Pose2 odom_pose = Pose2::Zero();                       // base_link in odom (dead reckoning)
   Eigen::Vector3d odom_twist = Eigen::Vector3d::Zero();  // (vx, vy, wz) of the last increment
   double true_speed_mps = 0.0;
   double true_turn_rate_radps = 0.0;
   int laps_completed = 0;
-  std::shared_ptr<const RangeScan> scan;       // kLaser
-  std::vector<TransducerReading> cones;        // kSonar, kInfrared
-  FeatureSet features;                         // kRangeBearing: points in base_link
-  AppliedChange change;                        // kWorldChange
+  std::shared_ptr<const RangeScan> scan;  // kLaser
+  std::vector<TransducerReading> cones;   // kSonar, kInfrared
+  FeatureSet features;                    // kRangeBearing: points in base_link
+  AppliedChange change;                   // kWorldChange
 };
 
 /// Simulates the world's robot lap by lap; owns its random generators.

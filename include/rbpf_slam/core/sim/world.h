@@ -22,15 +22,15 @@ enum class ShapeType { kPolyline, kPolygon };
 struct RobotConfig {
   DriveType drive = DriveType::kDiffDrive;
   ControllerType controller = ControllerType::kPurePursuit;
-  double radius_m = 0.2;                  // footprint, for the waypoint clearance checks
-  double wheelbase_m = 0.33;              // diff drive: wheel separation; bicycle: axle distance
-  double speed_mps = 0.3;                 // cruise speed
-  double max_turn_rate_deg_s = 90.0;      // diff drive only
-  double max_steering_deg = 30.0;         // bicycle only
-  double max_steering_rate_deg_s = 0.0;   // bicycle only; 0 = unlimited
-  double control_rate_hz = 20.0;          // integration and control step
-  double lookahead_m = 0.5;               // pure pursuit carrot distance
-  double waypoint_tolerance_m = 0.2;      // a waypoint closer than this is reached
+  double radius_m = 0.2;                 // footprint, for the waypoint clearance checks
+  double wheelbase_m = 0.33;             // diff drive: wheel separation; bicycle: axle distance
+  double speed_mps = 0.3;                // cruise speed
+  double max_turn_rate_deg_s = 90.0;     // diff drive only
+  double max_steering_deg = 30.0;        // bicycle only
+  double max_steering_rate_deg_s = 0.0;  // bicycle only; 0 = unlimited
+  double control_rate_hz = 20.0;         // integration and control step
+  double lookahead_m = 0.5;              // pure pursuit carrot distance
+  double waypoint_tolerance_m = 0.2;     // a waypoint closer than this is reached
 };
 
 /// How the reported odometry departs from the true motion.
@@ -67,19 +67,19 @@ struct LaserConfig {
 struct RingSensorConfig {
   bool enabled = false;
   double rate_hz = 4.0;
-  int count = 12;                   // evenly spaced over 360 deg, unless angles_deg is given
-  std::vector<double> angles_deg;   // explicit transducer directions (overrides count)
-  double ring_radius_m = 0.2;       // transducers sit on this circle, facing outwards
-  double cone_deg = 30.0;           // full opening angle
+  int count = 12;                  // evenly spaced over 360 deg, unless angles_deg is given
+  std::vector<double> angles_deg;  // explicit transducer directions (overrides count)
+  double ring_radius_m = 0.2;      // transducers sit on this circle, facing outwards
+  double cone_deg = 30.0;          // full opening angle
   double min_range_m = 0.1;
-  double max_range_m = 5.0;         // a reading of max_range_m means "no echo"
+  double max_range_m = 5.0;  // a reading of max_range_m means "no echo"
   double range_noise_m = 0.02;
-  double critical_angle_deg = 60.0;  // incidence beyond which a surface echo is lost
-  bool corner_echoes = true;        // object vertices echo at any incidence
-  double ray_spacing_deg = 1.0;     // ray casting resolution inside the cone
+  double critical_angle_deg = 25.0;  // incidence beyond which a surface echo is lost
+  bool corner_echoes = true;         // object vertices echo at any incidence
+  double ray_spacing_deg = 1.0;      // ray casting resolution inside the cone
 };
 
-/// Default sonar ring: 12 transducers, 30 deg cones, 5 m.
+/// Default sonar ring: 12 transducers, 30 deg cones, 5 m, echoes lost beyond 25 deg incidence.
 RingSensorConfig defaultSonarConfig();
 /// Default infrared ring: 8 e-puck-like proximity sensors, 7 cm.
 RingSensorConfig defaultInfraredConfig();
@@ -90,11 +90,11 @@ struct RangeBearingConfig {
   double rate_hz = 5.0;
   double min_range_m = 0.0;
   double max_range_m = 20.0;
-  double fov_deg = 180.0;            // centred on the robot's heading
+  double fov_deg = 180.0;  // centred on the robot's heading
   double range_noise_m = 0.2;
   double bearing_noise_deg = 2.0;
-  bool known_ids = false;            // report landmark ids, else -1
-  bool occlusion = true;             // walls hide landmarks behind them
+  bool known_ids = false;  // report landmark ids, else -1
+  bool occlusion = true;   // walls hide landmarks behind them
   double detection_probability = 1.0;
 };
 
