@@ -7,8 +7,10 @@
 
 int main(int argc, char** argv) {
   ros::init(argc, argv, "rbpf_slam_node");
+  // Handles outlive the node object: rosconsole stays up to report a failed construction.
+  ros::NodeHandle nh, private_nh("~");
   try {
-    rbpf_slam::rosbridge::SlamNode node(ros::NodeHandle(), ros::NodeHandle("~"));
+    rbpf_slam::rosbridge::SlamNode node(nh, private_nh);
     ros::spin();
   } catch (const std::exception& e) {  // io::ConfigError or options the core rejects
     ROS_FATAL_STREAM("rbpf_slam_node: " << e.what());

@@ -1,0 +1,303 @@
+// Plays along with a bag (see bag_laser.test): collects what rbpf_slam_node publishes until
+// the bag ends, then checks the landmarks, the final map -> base_link pose against a
+// reference trajectory, and that nothing non-finite was published.
+
+#include <geometry_msgs/PoseWithCovarianceStamped.h>
+#include <gtest/gtest.h>
+#include <nav_msgs/Path.h>
+#include <ros/ros.h>
+#include <tf2_msgs/TFMessage.h>
+#include <tf2_ros/buffer.h>
+#include <tf2_ros/transform_listener.h>
+#include <visualization_msgs/MarkerArray.h>
+
+#include <cmath>
+#include <fstream>
+#include <memory>
+#include <mutex>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "rbpf_slam/core/geometry.h"
+#include "rbpf_slam/ros/conversions.h"
+
+namespace rbpf_slam {
+namespace {
+
+struct StampedPose {
+  double stamp = 0.0;
+  core::Pose2 pose = core::Pose2::Zero();
+};
+
+std::vector<StampedPose> readTum(const std::string& path) {
+  std::vector<StampedPose> poses;
+  std::ifstream in(path);
+  for (std::string line; std::getline(in, line);) {
+    if (line.empty() || line[0] == '#') continue;
+    std::istringstream fields(line);
+    double t, x, y, z, qx, qy, qz, qw;
+    if (!(fields >> t >> x >> y >> z >> qx >> qy >> qz >> qw)) continue;
+    const double yaw = std::atan2(2.0 * (qw * qz + qx * qy), 1.0 - 2.0 * (qy * qy + qz * qz));
+    poses.push_back({t, core::Pose2(x, y, yaw)});
+  }
+  return poses;
+}
+
+template <typename Array>
+bool allFinite(const Array& values) {
+  for (double v : values) {
+    if (!std::isfinite(v)) return false;
+  }
+  return true;
+}
+
+/// Subscribes to the node's outputs and tf, and remembers what the checks need.
+class PlaybackObserver {
+ public:
+  PlaybackObserver()
+      : private_nh_("~"), tf_buffer_(ros::Duration(3600.0)), tf_listener_(tf_buffer_, nh_) {
+    private_nh_.param<std::string>("slam_node", slam_node_, "rbpf_slam_node");
+    private_nh_.param<std::string>("map_frame", map_frame_, "map");
+    private_nh_.param<std::string>("odom_frame", odom_frame_, "odom");
+    private_nh_.param<std::string>("base_frame", base_frame_, "base_link");
+    const std::string prefix = "/" + slam_node_ + "/";
+    landmarks_sub_ = nh_.subscribe(prefix + "landmarks", 100, &PlaybackObserver::onLandmarks, this);
+    pose_sub_ = nh_.subscribe(prefix + "pose", 100, &PlaybackObserver::onPose, this);
+    path_sub_ = nh_.subscribe(prefix + "trajectory", 10, &PlaybackObserver::onPath, this);
+    tf_sub_ = nh_.subscribe("/tf", 1000, &PlaybackObserver::onTf, this);
+  }
+
+  /// Waits until the clock has passed end_stamp and the node published a pose at or after
+  /// last_update_stamp (or settle_s wall seconds went by); false after timeout_s.
+  bool waitForEnd(double end_stamp, double last_update_stamp, double settle_s, double timeout_s) {
+    const ros::WallTime start = ros::WallTime::now();
+    ros::WallTime clock_passed_end;
+    ros::WallRate rate(20.0);
+    while (ros::ok() && (ros::WallTime::now() - start).toSec() < timeout_s) {
+      if (ros::Time::now().toSec() >= end_stamp) {
+        if (clock_passed_end.isZero()) clock_passed_end = ros::WallTime::now();
+        std::lock_guard<std::mutex> lock(mutex_);
+        if (last_pose_stamp_ >= last_update_stamp - 1e-3 ||
+            (ros::WallTime::now() - clock_passed_end).toSec() > settle_s) {
+          return true;
+        }
+      }
+      rate.sleep();
+    }
+    return false;
+  }
+
+  tf2_ros::Buffer& tf() { return tf_buffer_; }
+  const std::string& mapFrame() const { return map_frame_; }
+  const std::string& odomFrame() const { return odom_frame_; }
+  const std::string& baseFrame() const { return base_frame_; }
+
+  std::mutex mutex_;
+  int landmark_messages_ = 0;
+  int max_line_markers_ = 0;
+  int malformed_markers_ = 0;
+  int poses_ = 0;
+  int non_finite_poses_ = 0;
+  double last_pose_stamp_ = 0.0;
+  nav_msgs::Path last_path_;
+  int map_to_odom_ = 0;
+  int non_finite_map_to_odom_ = 0;
+
+ private:
+  void onLandmarks(const visualization_msgs::MarkerArray& msg) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    ++landmark_messages_;
+    int lines = 0;
+    for (const auto& m : msg.markers) {
+      if (m.action != visualization_msgs::Marker::ADD) continue;
+      if (m.ns == "lines") {
+        if (m.type == visualization_msgs::Marker::LINE_LIST && m.points.size() == 2) {
+          ++lines;
+        } else {
+          ++malformed_markers_;
+        }
+      }
+      for (const auto& p : m.points) {
+        if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) {
+          ++malformed_markers_;
+        }
+      }
+    }
+    max_line_markers_ = std::max(max_line_markers_, lines);
+  }
+
+  void onPose(const geometry_msgs::PoseWithCovarianceStamped& msg) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    ++poses_;
+    const auto& p = msg.pose.pose;
+    const std::vector<double> values{p.position.x,    p.position.y,    p.position.z,
+                                     p.orientation.x, p.orientation.y, p.orientation.z,
+                                     p.orientation.w};
+    if (!allFinite(values) || !allFinite(msg.pose.covariance)) ++non_finite_poses_;
+    last_pose_stamp_ = std::max(last_pose_stamp_, msg.header.stamp.toSec());
+  }
+
+  void onPath(const nav_msgs::Path& msg) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    last_path_ = msg;
+  }
+
+  void onTf(const tf2_msgs::TFMessage& msg) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    for (const auto& t : msg.transforms) {
+      if (t.header.frame_id != map_frame_ || t.child_frame_id != odom_frame_) continue;
+      ++map_to_odom_;
+      const auto& r = t.transform.rotation;
+      const auto& x = t.transform.translation;
+      const std::vector<double> values{x.x, x.y, x.z, r.x, r.y, r.z, r.w};
+      if (!allFinite(values)) ++non_finite_map_to_odom_;
+    }
+  }
+
+  ros::NodeHandle nh_;
+  ros::NodeHandle private_nh_;
+  std::string slam_node_, map_frame_, odom_frame_, base_frame_;
+  tf2_ros::Buffer tf_buffer_;
+  tf2_ros::TransformListener tf_listener_;
+  ros::Subscriber landmarks_sub_, pose_sub_, path_sub_, tf_sub_;
+};
+
+/// Plays the bag once for all tests of the suite.
+class BagPlaybackTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    ros::NodeHandle private_nh("~");
+    private_nh.param<std::string>("reference", reference_path_, "");
+    private_nh.param("position_tolerance", position_tolerance_, 1.0);
+    private_nh.param("yaw_tolerance", yaw_tolerance_, 0.3);
+    double end_margin = 1.0, settle = 10.0, timeout = 600.0;
+    private_nh.param("end_margin", end_margin, end_margin);
+    private_nh.param("settle", settle, settle);
+    private_nh.param("timeout", timeout, timeout);
+    reference_ = readTum(reference_path_);
+    observer_ = std::make_unique<PlaybackObserver>();
+    spinner_ = std::make_unique<ros::AsyncSpinner>(1);
+    spinner_->start();
+    if (reference_.empty()) return;
+    const double last = reference_.back().stamp;
+    ended_ = observer_->waitForEnd(last + end_margin, last, settle, timeout);
+  }
+
+  static void TearDownTestSuite() {
+    spinner_->stop();
+    spinner_.reset();
+    observer_.reset();
+  }
+
+  static std::string reference_path_;
+  static std::vector<StampedPose> reference_;
+  static double position_tolerance_, yaw_tolerance_;
+  static bool ended_;
+  static std::unique_ptr<PlaybackObserver> observer_;
+  static std::unique_ptr<ros::AsyncSpinner> spinner_;
+};
+
+std::string BagPlaybackTest::reference_path_;
+std::vector<StampedPose> BagPlaybackTest::reference_;
+double BagPlaybackTest::position_tolerance_ = 1.0;
+double BagPlaybackTest::yaw_tolerance_ = 0.3;
+bool BagPlaybackTest::ended_ = false;
+std::unique_ptr<PlaybackObserver> BagPlaybackTest::observer_;
+std::unique_ptr<ros::AsyncSpinner> BagPlaybackTest::spinner_;
+
+TEST_F(BagPlaybackTest, BagPlayedToTheEnd) {
+  ASSERT_FALSE(reference_.empty()) << "cannot read the reference '" << reference_path_ << "'";
+  EXPECT_TRUE(ended_) << "the clock never reached the end of the bag (last reference stamp "
+                      << std::fixed << reference_.back().stamp << ", now "
+                      << ros::Time::now().toSec() << ")";
+}
+
+TEST_F(BagPlaybackTest, LandmarkMarkersContainLines) {
+  std::lock_guard<std::mutex> lock(observer_->mutex_);
+  EXPECT_GT(observer_->landmark_messages_, 0) << "nothing on ~landmarks";
+  EXPECT_GT(observer_->max_line_markers_, 0) << "no LINE_LIST marker in namespace 'lines'";
+  EXPECT_EQ(observer_->malformed_markers_, 0);
+  RecordProperty("max_line_markers", observer_->max_line_markers_);
+}
+
+TEST_F(BagPlaybackTest, NothingNonFinitePublished) {
+  std::lock_guard<std::mutex> lock(observer_->mutex_);
+  EXPECT_GT(observer_->map_to_odom_, 0) << "map -> odom never published on /tf";
+  EXPECT_EQ(observer_->non_finite_map_to_odom_, 0) << "non-finite map -> odom on /tf";
+  EXPECT_GT(observer_->poses_, 0) << "nothing on ~pose";
+  EXPECT_EQ(observer_->non_finite_poses_, 0) << "non-finite values on ~pose";
+}
+
+TEST_F(BagPlaybackTest, FinalPoseMatchesReference) {
+  ASSERT_FALSE(reference_.empty());
+  nav_msgs::Path path;
+  {
+    std::lock_guard<std::mutex> lock(observer_->mutex_);
+    path = observer_->last_path_;
+  }
+  ASSERT_FALSE(path.poses.empty()) << "nothing on ~trajectory";
+  // The map frame starts wherever the node's first update put it; align the reference on
+  // the trajectory's first pose (same stamp as one reference pose: both are scan times).
+  const double first_stamp = path.poses.front().header.stamp.toSec();
+  const StampedPose* first_reference = nullptr;
+  for (const auto& r : reference_) {
+    if (std::fabs(r.stamp - first_stamp) < 0.01) first_reference = &r;
+  }
+  ASSERT_NE(first_reference, nullptr) << "no reference pose at the first trajectory stamp "
+                                      << std::fixed << first_stamp;
+  const core::Pose2 first_map = rosbridge::toPose2(path.poses.front().pose);
+  const core::Pose2 reference_to_map = core::compose(first_map, core::inverse(first_reference->pose));
+  const StampedPose& last = reference_.back();
+  const core::Pose2 expected = core::compose(reference_to_map, last.pose);
+
+  // Final map -> base_link: the latest map -> odom correction applied to odometry at the last
+  // reference (scan) time.
+  core::Pose2 map_to_odom, odom_to_base, odom_at_first;
+  try {
+    tf2_ros::Buffer& tf = observer_->tf();
+    map_to_odom = rosbridge::toPose2(
+        tf.lookupTransform(observer_->mapFrame(), observer_->odomFrame(), ros::Time(0)).transform);
+    odom_to_base = rosbridge::toPose2(tf.lookupTransform(observer_->odomFrame(),
+                                                         observer_->baseFrame(),
+                                                         ros::Time(last.stamp)).transform);
+    odom_at_first = rosbridge::toPose2(tf.lookupTransform(observer_->odomFrame(),
+                                                          observer_->baseFrame(),
+                                                          ros::Time(first_stamp)).transform);
+  } catch (const tf2::TransformException& e) {
+    FAIL() << "tf lookup failed: " << e.what();
+  }
+  const core::Pose2 final_pose = core::compose(map_to_odom, odom_to_base);
+  const double position_error = (final_pose.head<2>() - expected.head<2>()).norm();
+  const double yaw_error = std::fabs(core::wrapAngle(final_pose.z() - expected.z()));
+
+  // Odometry alone, aligned the same way, for scale.
+  const core::Pose2 odom_expected =
+      core::compose(core::compose(odom_at_first, core::inverse(first_reference->pose)), last.pose);
+  const double odom_position_error = (odom_to_base.head<2>() - odom_expected.head<2>()).norm();
+  const double odom_yaw_error = std::fabs(core::wrapAngle(odom_to_base.z() - odom_expected.z()));
+
+  std::ostringstream summary;
+  summary << std::fixed;
+  summary.precision(3);
+  summary << "final pose error " << position_error << " m, " << yaw_error << " rad (tolerance "
+          << position_tolerance_ << " m, " << yaw_tolerance_ << " rad); odometry alone "
+          << odom_position_error << " m, " << odom_yaw_error << " rad; " << path.poses.size()
+          << " trajectory poses";
+  ROS_INFO_STREAM("bag_playback: " << summary.str());
+  std::cout << "[bag_playback] " << summary.str() << std::endl;
+  RecordProperty("final_position_error_m", std::to_string(position_error));
+  RecordProperty("final_yaw_error_rad", std::to_string(yaw_error));
+  RecordProperty("odometry_position_error_m", std::to_string(odom_position_error));
+  EXPECT_LE(position_error, position_tolerance_) << summary.str();
+  EXPECT_LE(yaw_error, yaw_tolerance_) << summary.str();
+}
+
+}  // namespace
+}  // namespace rbpf_slam
+
+int main(int argc, char** argv) {
+  testing::InitGoogleTest(&argc, argv);
+  ros::init(argc, argv, "bag_playback");
+  return RUN_ALL_TESTS();
+}
