@@ -1,0 +1,114 @@
+#pragma once
+// The UTIAS Multi-Robot Cooperative Localization and Mapping (MRCLAM) dataset files (Leung et
+// al., IJRR 2011): odometry commands, barcode range-bearing measurements, barcode table and
+// Vicon ground truth, plus the dead-reckoned odometry and measurement groups derived from them.
+// No ROS here: mrclam_to_bag turns the result into messages.
+
+#include <cstddef>
+#include <iosfwd>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "rbpf_slam/core/geometry.h"
+#include "rbpf_slam/io/trajectory.h"
+
+namespace rbpf_slam {
+namespace io {
+
+/// One velocity command of RobotN_Odometry.dat (`t v w`).
+struct MrclamOdometry {
+  double stamp = 0.0;     // s, Unix time
+  double v_mps = 0.0;     // forward velocity, m/s
+  double w_radps = 0.0;   // angular velocity, rad/s
+  std::size_t line = 0;   // 1-based line number in the file
+};
+
+/// One range-bearing sighting of RobotN_Measurement.dat (`t barcode range bearing`).
+struct MrclamMeasurement {
+  double stamp = 0.0;     // s, Unix time
+  int barcode = 0;        // as logged
+  int subject = -1;       // from Barcodes.dat (1..5 robots, 6..20 landmarks); -1 unknown
+  double range_m = 0.0;
+  double bearing_rad = 0.0;
+  std::size_t line = 0;   // 1-based line number in the file
+};
+
+/// One surveyed landmark of Landmark_Groundtruth.dat (`subject x y sd_x sd_y`).
+struct MrclamLandmark {
+  int subject = 0;
+  double x_m = 0.0;
+  double y_m = 0.0;
+  double sd_x_m = 0.0;
+  double sd_y_m = 0.0;
+};
+
+/// All the files of one robot of one dataset directory.
+struct MrclamRobot {
+  int robot = 0;                                 // 1..5
+  std::vector<MrclamOdometry> odometry;          // in file order
+  std::vector<MrclamMeasurement> measurements;   // subjects resolved through the barcodes
+  std::vector<StampedPose> ground_truth;         // Vicon, map frame
+  std::vector<MrclamLandmark> landmarks;         // surveyed, map frame
+  std::map<int, int> subject_of_barcode;         // Barcodes.dat, barcode -> subject
+};
+
+/// Measurements taken at one instant (one camera frame).
+struct MrclamMeasurementGroup {
+  double stamp = 0.0;
+  std::vector<MrclamMeasurement> measurements;
+};
+
+// Every parser below skips blank lines and lines starting with '#' (after blanks), accepts
+// spaces, tabs and CRLF, and throws std::runtime_error "SOURCE:LINE: why" when a line does not
+// hold the expected count of finite numbers or an integer field is not an integer.
+
+/// RobotN_Odometry.dat.
+std::vector<MrclamOdometry> parseMrclamOdometry(std::istream& in, const std::string& source);
+
+/// RobotN_Measurement.dat; subjects are left at -1 (see resolveSubjects()).
+std::vector<MrclamMeasurement> parseMrclamMeasurements(std::istream& in,
+                                                       const std::string& source);
+
+/// Barcodes.dat (`subject barcode`), as barcode -> subject. Also throws on a repeated barcode.
+std::map<int, int> parseMrclamBarcodes(std::istream& in, const std::string& source);
+
+/// RobotN_Groundtruth.dat (`t x y theta`).
+std::vector<StampedPose> parseMrclamGroundTruth(std::istream& in, const std::string& source);
+
+/// Landmark_Groundtruth.dat.
+std::vector<MrclamLandmark> parseMrclamLandmarks(std::istream& in, const std::string& source);
+
+/// Sets every measurement's subject from its barcode (-1 when the barcode is not in the table).
+void resolveSubjects(const std::map<int, int>& subject_of_barcode,
+                     std::vector<MrclamMeasurement>* measurements);
+
+/// Reads DIR/Barcodes.dat, DIR/Landmark_Groundtruth.dat and DIR/RobotN_{Odometry,Measurement,
+/// Groundtruth}.dat. Throws std::runtime_error naming the file when one is missing or malformed,
+/// std::invalid_argument when robot is not 1..5.
+MrclamRobot readMrclamRobot(const std::string& directory, int robot);
+
+/// Keeps only what lies in [start, start + duration_s] for odometry, measurements and ground
+/// truth, where start is the first odometry stamp; duration_s <= 0 keeps everything.
+void cropMrclamRobot(double duration_s, MrclamRobot* data);
+
+/// The ground-truth pose at `stamp`, interpolated linearly (heading along the shorter arc)
+/// between the two poses around it; the end pose outside the span. Throws std::invalid_argument
+/// on an empty trajectory. `trajectory` must be sorted by stamp.
+core::Pose2 interpolatePose(const std::vector<StampedPose>& trajectory, double stamp);
+
+/// Dead reckoning from the velocity commands: one pose per command stamp, starting at `start`
+/// at the first stamp; command i holds from its stamp until the next one (exact arcs of a
+/// unicycle). Commands with a stamp not after the previous one are skipped, and so is any
+/// interval longer than max_gap_s (the robot is assumed to stand still then).
+std::vector<StampedPose> integrateMrclamOdometry(const std::vector<MrclamOdometry>& odometry,
+                                                 const core::Pose2& start,
+                                                 double max_gap_s = 1.0);
+
+/// The landmark sightings (subject >= first_landmark_subject; robots and unknown barcodes are
+/// dropped) grouped by equal stamp, in time order.
+std::vector<MrclamMeasurementGroup> groupLandmarkMeasurements(
+    const std::vector<MrclamMeasurement>& measurements, int first_landmark_subject = 6);
+
+}  // namespace io
+}  // namespace rbpf_slam

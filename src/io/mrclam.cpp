@@ -1,0 +1,268 @@
+#include "rbpf_slam/io/mrclam.h"
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+
+namespace rbpf_slam {
+namespace io {
+namespace {
+
+/// The numbers of one data line and where it came from.
+struct Row {
+  std::vector<double> values;
+  std::size_t line = 0;
+};
+
+std::runtime_error lineError(const std::string& source, std::size_t line, const std::string& why) {
+  return std::runtime_error(source + ":" + std::to_string(line) + ": " + why);
+}
+
+// Parses a whole token as a finite double.
+bool parseDouble(const std::string& token, double* value) {
+  if (token.empty()) return false;
+  char* end = nullptr;
+  errno = 0;
+  *value = std::strtod(token.c_str(), &end);
+  return end == token.c_str() + token.size() && errno != ERANGE && std::isfinite(*value);
+}
+
+// Every data line of a file as exactly `columns` finite numbers; `format` names them in errors.
+std::vector<Row> readRows(std::istream& in, const std::string& source, std::size_t columns,
+                          const std::string& format) {
+  std::vector<Row> rows;
+  std::string text;
+  std::size_t line = 0;
+  while (std::getline(in, text)) {
+    ++line;
+    const std::size_t first = text.find_first_not_of(" \t\r");
+    if (first == std::string::npos || text[first] == '#') continue;
+    std::istringstream fields(text);
+    std::string token;
+    Row row;
+    row.line = line;
+    while (fields >> token) {
+      double value = 0.0;
+      if (!parseDouble(token, &value)) {
+        throw lineError(source, line, "not a finite number: '" + token + "' (expected " + format +
+                                          ")");
+      }
+      row.values.push_back(value);
+    }
+    if (row.values.size() != columns) {
+      throw lineError(source, line,
+                      "expected " + std::to_string(columns) + " numbers (" + format + "), got " +
+                          std::to_string(row.values.size()));
+    }
+    rows.push_back(std::move(row));
+  }
+  if (in.bad()) throw std::runtime_error(source + ": read error");
+  return rows;
+}
+
+int toInteger(double value, const std::string& source, std::size_t line, const char* what) {
+  if (value != std::floor(value) || std::abs(value) > 1e9) {
+    throw lineError(source, line, std::string(what) + " is not an integer");
+  }
+  return static_cast<int>(value);
+}
+
+std::ifstream openFile(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error(path + ": cannot be opened");
+  return in;
+}
+
+template <typename Parser>
+auto parseFile(const std::string& path, Parser parser) {
+  std::ifstream in = openFile(path);
+  return parser(in, path);
+}
+
+}  // namespace
+
+std::vector<MrclamOdometry> parseMrclamOdometry(std::istream& in, const std::string& source) {
+  std::vector<MrclamOdometry> odometry;
+  for (const Row& row : readRows(in, source, 3, "t v w")) {
+    odometry.push_back({row.values[0], row.values[1], row.values[2], row.line});
+  }
+  return odometry;
+}
+
+std::vector<MrclamMeasurement> parseMrclamMeasurements(std::istream& in,
+                                                       const std::string& source) {
+  std::vector<MrclamMeasurement> measurements;
+  for (const Row& row : readRows(in, source, 4, "t barcode range bearing")) {
+    MrclamMeasurement m;
+    m.stamp = row.values[0];
+    m.barcode = toInteger(row.values[1], source, row.line, "barcode");
+    m.range_m = row.values[2];
+    m.bearing_rad = row.values[3];
+    m.line = row.line;
+    if (m.range_m < 0.0) throw lineError(source, row.line, "negative range");
+    measurements.push_back(m);
+  }
+  return measurements;
+}
+
+std::map<int, int> parseMrclamBarcodes(std::istream& in, const std::string& source) {
+  std::map<int, int> subject_of_barcode;
+  for (const Row& row : readRows(in, source, 2, "subject barcode")) {
+    const int subject = toInteger(row.values[0], source, row.line, "subject");
+    const int barcode = toInteger(row.values[1], source, row.line, "barcode");
+    if (!subject_of_barcode.emplace(barcode, subject).second) {
+      throw lineError(source, row.line, "barcode " + std::to_string(barcode) + " listed twice");
+    }
+  }
+  return subject_of_barcode;
+}
+
+std::vector<StampedPose> parseMrclamGroundTruth(std::istream& in, const std::string& source) {
+  std::vector<StampedPose> poses;
+  for (const Row& row : readRows(in, source, 4, "t x y theta")) {
+    StampedPose pose;
+    pose.stamp = row.values[0];
+    pose.pose = core::Pose2(row.values[1], row.values[2], core::wrapAngle(row.values[3]));
+    poses.push_back(pose);
+  }
+  return poses;
+}
+
+std::vector<MrclamLandmark> parseMrclamLandmarks(std::istream& in, const std::string& source) {
+  std::vector<MrclamLandmark> landmarks;
+  for (const Row& row : readRows(in, source, 5, "subject x y sd_x sd_y")) {
+    MrclamLandmark landmark;
+    landmark.subject = toInteger(row.values[0], source, row.line, "subject");
+    landmark.x_m = row.values[1];
+    landmark.y_m = row.values[2];
+    landmark.sd_x_m = row.values[3];
+    landmark.sd_y_m = row.values[4];
+    landmarks.push_back(landmark);
+  }
+  return landmarks;
+}
+
+void resolveSubjects(const std::map<int, int>& subject_of_barcode,
+                     std::vector<MrclamMeasurement>* measurements) {
+  for (MrclamMeasurement& m : *measurements) {
+    const auto found = subject_of_barcode.find(m.barcode);
+    m.subject = found == subject_of_barcode.end() ? -1 : found->second;
+  }
+}
+
+MrclamRobot readMrclamRobot(const std::string& directory, int robot) {
+  if (robot < 1 || robot > 5) {
+    throw std::invalid_argument("robot must be 1..5, got " + std::to_string(robot));
+  }
+  const std::string prefix = directory + "/Robot" + std::to_string(robot) + "_";
+  MrclamRobot data;
+  data.robot = robot;
+  data.subject_of_barcode = parseFile(directory + "/Barcodes.dat", parseMrclamBarcodes);
+  data.landmarks = parseFile(directory + "/Landmark_Groundtruth.dat", parseMrclamLandmarks);
+  data.odometry = parseFile(prefix + "Odometry.dat", parseMrclamOdometry);
+  data.measurements = parseFile(prefix + "Measurement.dat", parseMrclamMeasurements);
+  data.ground_truth = parseFile(prefix + "Groundtruth.dat", parseMrclamGroundTruth);
+  resolveSubjects(data.subject_of_barcode, &data.measurements);
+  if (data.odometry.empty()) throw std::runtime_error(prefix + "Odometry.dat: no data line");
+  if (data.ground_truth.empty()) throw std::runtime_error(prefix + "Groundtruth.dat: no data line");
+  std::stable_sort(data.ground_truth.begin(), data.ground_truth.end(),
+                   [](const StampedPose& a, const StampedPose& b) { return a.stamp < b.stamp; });
+  std::stable_sort(data.measurements.begin(), data.measurements.end(),
+                   [](const MrclamMeasurement& a, const MrclamMeasurement& b) {
+                     return a.stamp < b.stamp;
+                   });
+  return data;
+}
+
+void cropMrclamRobot(double duration_s, MrclamRobot* data) {
+  if (!(duration_s > 0.0) || data->odometry.empty()) return;
+  const double start = data->odometry.front().stamp;
+  const double end = start + duration_s;
+  const auto outside = [&](double stamp) { return stamp < start || stamp > end; };
+  auto& o = data->odometry;
+  o.erase(std::remove_if(o.begin(), o.end(),
+                         [&](const MrclamOdometry& x) { return outside(x.stamp); }),
+          o.end());
+  auto& m = data->measurements;
+  m.erase(std::remove_if(m.begin(), m.end(),
+                         [&](const MrclamMeasurement& x) { return outside(x.stamp); }),
+          m.end());
+  auto& g = data->ground_truth;
+  g.erase(std::remove_if(g.begin(), g.end(),
+                         [&](const StampedPose& x) { return outside(x.stamp); }),
+          g.end());
+}
+
+core::Pose2 interpolatePose(const std::vector<StampedPose>& trajectory, double stamp) {
+  if (trajectory.empty()) throw std::invalid_argument("interpolatePose: empty trajectory");
+  if (stamp <= trajectory.front().stamp) return trajectory.front().pose;
+  if (stamp >= trajectory.back().stamp) return trajectory.back().pose;
+  const auto after = std::lower_bound(
+      trajectory.begin(), trajectory.end(), stamp,
+      [](const StampedPose& pose, double t) { return pose.stamp < t; });
+  const StampedPose& b = *after;
+  const StampedPose& a = *(after - 1);
+  const double span = b.stamp - a.stamp;
+  const double f = span > 0.0 ? (stamp - a.stamp) / span : 1.0;
+  const double dtheta = core::wrapAngle(b.pose.z() - a.pose.z());
+  return core::Pose2(a.pose.x() + f * (b.pose.x() - a.pose.x()),
+                     a.pose.y() + f * (b.pose.y() - a.pose.y()),
+                     core::wrapAngle(a.pose.z() + f * dtheta));
+}
+
+std::vector<StampedPose> integrateMrclamOdometry(const std::vector<MrclamOdometry>& odometry,
+                                                 const core::Pose2& start, double max_gap_s) {
+  std::vector<StampedPose> poses;
+  if (odometry.empty()) return poses;
+  poses.push_back({odometry.front().stamp, start});
+  const MrclamOdometry* previous = &odometry.front();
+  for (std::size_t i = 1; i < odometry.size(); ++i) {
+    const MrclamOdometry& command = odometry[i];
+    const double dt = command.stamp - previous->stamp;
+    if (!(dt > 0.0)) continue;
+    core::Pose2 pose = poses.back().pose;
+    if (dt <= max_gap_s) {
+      const double v = previous->v_mps;
+      const double w = previous->w_radps;
+      const double theta = pose.z();
+      const double dtheta = w * dt;
+      if (std::abs(dtheta) < 1e-9) {
+        pose.x() += v * dt * std::cos(theta);
+        pose.y() += v * dt * std::sin(theta);
+      } else {
+        const double radius = v / w;
+        pose.x() += radius * (std::sin(theta + dtheta) - std::sin(theta));
+        pose.y() += radius * (std::cos(theta) - std::cos(theta + dtheta));
+      }
+      pose.z() = core::wrapAngle(theta + dtheta);
+    }
+    poses.push_back({command.stamp, pose});
+    previous = &command;
+  }
+  return poses;
+}
+
+std::vector<MrclamMeasurementGroup> groupLandmarkMeasurements(
+    const std::vector<MrclamMeasurement>& measurements, int first_landmark_subject) {
+  std::vector<MrclamMeasurement> kept;
+  for (const MrclamMeasurement& m : measurements) {
+    if (m.subject >= first_landmark_subject) kept.push_back(m);
+  }
+  std::stable_sort(kept.begin(), kept.end(),
+                   [](const MrclamMeasurement& a, const MrclamMeasurement& b) {
+                     return a.stamp < b.stamp;
+                   });
+  std::vector<MrclamMeasurementGroup> groups;
+  for (const MrclamMeasurement& m : kept) {
+    if (groups.empty() || groups.back().stamp != m.stamp) groups.push_back({m.stamp, {}});
+    groups.back().measurements.push_back(m);
+  }
+  return groups;
+}
+
+}  // namespace io
+}  // namespace rbpf_slam
