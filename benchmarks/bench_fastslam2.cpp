@@ -1,0 +1,171 @@
+// Google Benchmark: FastSlam2::update against the number of particles (map of 100 point
+// landmarks) and against the number of landmarks in the map (100 particles), with the same
+// ten range-bearing observations every step; and resampleLowVariance against the particle
+// count. Not a pass/fail test: ./scripts/bench.sh runs it and writes docs/benchmarks.md.
+
+#include <benchmark/benchmark.h>
+
+#include <algorithm>
+#include <cmath>
+#include <memory>
+#include <vector>
+
+#include "rbpf_slam/core/filters/fastslam2.h"
+#include "rbpf_slam/core/filters/resampling.h"
+#include "rbpf_slam/core/random.h"
+
+namespace {
+
+namespace core = rbpf_slam::core;
+
+constexpr int kObservedLandmarks = 10;  // features per update
+constexpr double kGridSpacingM = 2.0;   // landmarks far apart compared with their noise
+constexpr int kBuildBatch = 200;        // features per map-building update
+
+/// Options shared by the map builder and the benchmarked filters: tight noise, so that the
+/// grid landmarks stay distinct even 100 m away.
+core::FilterOptions benchOptions(int particles) {
+  core::FilterOptions options;
+  options.particles = particles;
+  options.seed = 1;
+  options.use_lines = false;
+  options.measurement.use_feature_covariance = false;
+  options.measurement.sigma_range_m = 0.02;
+  options.measurement.sigma_bearing_rad = 0.002;
+  options.motion.min_sigma_xy_m = 1e-4;
+  options.motion.min_sigma_theta_rad = 1e-5;
+  return options;
+}
+
+/// FastSlam2 with every particle's map replaceable by a prebuilt one (shared, copy-on-write,
+/// exactly as after resampling).
+class BenchFastSlam2 : public core::FastSlam2 {
+ public:
+  using core::FastSlam2::FastSlam2;
+  void shareMap(const std::shared_ptr<core::LandmarkMap>& map) {
+    for (core::Particle& p : particles_) p.map = map;
+  }
+};
+
+/// Grid positions around the origin, nearest first.
+std::vector<Eigen::Vector2d> gridPositions(int count) {
+  const int side = static_cast<int>(std::ceil(std::sqrt(static_cast<double>(count))));
+  std::vector<Eigen::Vector2d> positions;
+  for (int i = 0; i < side; ++i) {
+    for (int j = 0; j < side; ++j) {
+      positions.emplace_back((i - 0.5 * (side - 1)) * kGridSpacingM + 0.3,
+                             (j - 0.5 * (side - 1)) * kGridSpacingM + 0.7);
+    }
+  }
+  std::sort(positions.begin(), positions.end(),
+            [](const Eigen::Vector2d& a, const Eigen::Vector2d& b) { return a.norm() < b.norm(); });
+  positions.resize(count);
+  return positions;
+}
+
+core::PointFeature observe(const Eigen::Vector2d& p, double range_error, double bearing_error) {
+  core::PointFeature f;
+  f.range = p.norm() + range_error;
+  f.bearing = std::atan2(p.y(), p.x()) + bearing_error;
+  return f;
+}
+
+/// A map of `count` distinct point landmarks, built by feeding their exact observations from
+/// the origin to a one-particle filter in batches (every feature starts a new landmark).
+std::shared_ptr<core::LandmarkMap> buildMap(int count) {
+  core::FastSlam2 builder(benchOptions(1));
+  const std::vector<Eigen::Vector2d> positions = gridPositions(count);
+  for (size_t begin = 0; begin < positions.size(); begin += kBuildBatch) {
+    core::FeatureSet batch;
+    const size_t end = std::min(positions.size(), begin + kBuildBatch);
+    for (size_t i = begin; i < end; ++i) batch.points.push_back(observe(positions[i], 0.0, 0.0));
+    builder.update(batch);
+  }
+  return std::make_shared<core::LandmarkMap>(*builder.particleSet()[0].map);
+}
+
+/// The nearest kObservedLandmarks landmarks, observed with small fixed errors.
+core::FeatureSet observedFeatures() {
+  core::FeatureSet features;
+  const std::vector<Eigen::Vector2d> positions = gridPositions(kObservedLandmarks);
+  for (size_t i = 0; i < positions.size(); ++i) {
+    const double sign = i % 2 == 0 ? 1.0 : -1.0;
+    features.points.push_back(observe(positions[i], 0.01 * sign, -0.001 * sign));
+  }
+  return features;
+}
+
+/// Times update() of a filter with `particles` particles over a prebuilt map of `landmarks`.
+void runUpdates(benchmark::State& state, int particles, int landmarks) {
+  BenchFastSlam2 filter(benchOptions(particles));
+  const std::shared_ptr<core::LandmarkMap> map = buildMap(landmarks);
+  if (map->size() != landmarks) {
+    state.SkipWithError("map building merged landmarks");
+    return;
+  }
+  filter.shareMap(map);
+  const core::FeatureSet features = observedFeatures();
+  long associated = 0, created = 0, resampled = 0;
+  for (auto _ : state) {
+    const core::UpdateStats stats = filter.update(features);
+    associated += stats.associated;
+    created += stats.new_landmarks;
+    resampled += stats.resampled ? 1 : 0;
+  }
+  const double iterations = static_cast<double>(state.iterations());
+  state.counters["particles"] = particles;
+  state.counters["landmarks"] = map->size();
+  state.counters["assoc/update"] = associated / iterations;
+  state.counters["new/update"] = created / iterations;
+  state.counters["resample_rate"] = resampled / iterations;
+  state.counters["updates/s"] = benchmark::Counter(iterations, benchmark::Counter::kIsRate);
+}
+
+void BM_FastSlam2UpdateVsParticles(benchmark::State& state) {
+  runUpdates(state, static_cast<int>(state.range(0)), 100);
+}
+BENCHMARK(BM_FastSlam2UpdateVsParticles)
+    ->Arg(10)
+    ->Arg(30)
+    ->Arg(100)
+    ->Arg(300)
+    ->Arg(1000)
+    ->Unit(benchmark::kMillisecond);
+
+void BM_FastSlam2UpdateVsLandmarks(benchmark::State& state) {
+  runUpdates(state, 100, static_cast<int>(state.range(0)));
+}
+BENCHMARK(BM_FastSlam2UpdateVsLandmarks)
+    ->Arg(10)
+    ->Arg(100)
+    ->Arg(1000)
+    ->Arg(10000)
+    ->Unit(benchmark::kMillisecond);
+
+void BM_ResampleLowVariance(benchmark::State& state) {
+  const int count = static_cast<int>(state.range(0));
+  core::Rng rng(3);
+  std::vector<double> log_weights(count);
+  for (double& w : log_weights) w = core::sampleGaussian(rng, 3.0);
+  std::vector<double> weights;
+  core::normalizeLogWeights(log_weights, &weights);
+  for (auto _ : state) {
+    std::vector<int> indices = core::resampleLowVariance(weights, count, rng);
+    benchmark::DoNotOptimize(indices.data());
+  }
+  state.counters["particles"] = count;
+  state.counters["particles/s"] =
+      benchmark::Counter(static_cast<double>(state.iterations()) * count,
+                         benchmark::Counter::kIsRate);
+}
+BENCHMARK(BM_ResampleLowVariance)
+    ->Arg(10)
+    ->Arg(100)
+    ->Arg(1000)
+    ->Arg(10000)
+    ->Arg(100000)
+    ->Unit(benchmark::kMicrosecond);
+
+}  // namespace
+
+BENCHMARK_MAIN();

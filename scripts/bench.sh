@@ -1,0 +1,120 @@
+#!/usr/bin/env bash
+# Builds in Release, runs every Google Benchmark of benchmarks/ and the offline runner end to
+# end on the real Intel and ACES bags (when ../shared/data has them), and writes the figures,
+# the machine and the exact commands to docs/benchmarks.md. Timing only, never pass/fail.
+#
+#   ./scripts/bench.sh                      # about 3 minutes on 2 cores
+#   BENCH_MIN_TIME=1 ./scripts/bench.sh     # steadier figures, slower
+#   BENCH_SKIP_BUILD=1 BUILD_DIR=/tmp/b ./scripts/bench.sh   # use an existing build
+set -euo pipefail
+source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
+
+MIN_TIME=${BENCH_MIN_TIME:-0.2}  # seconds per benchmark case (google benchmark min_time)
+DATA=${BENCH_DATA:-$ROOT/../shared/data}
+CONFIG=$ROOT/config/laser_fastslam2.yaml
+REPORT=${BENCH_REPORT:-$ROOT/docs/benchmarks.md}
+BUILD=${BUILD_DIR:-$BUILD}
+OUT=$BUILD/bench
+
+if [ -z "${BENCH_SKIP_BUILD:-}" ]; then
+  install_missing
+  build_package Release
+fi
+BIN=$BUILD/devel/lib/rbpf_slam
+mkdir -p "$OUT"
+rm -f "$OUT"/*.json
+
+mapfile -t BENCHES < <(find "$BIN" "$BUILD" -maxdepth 1 -type f -executable -name 'bench_*' \
+  2>/dev/null | sort -u)
+if [ ${#BENCHES[@]} -eq 0 ]; then
+  echo "bench.sh: no bench_* binary under $BIN or $BUILD (is libbenchmark-dev installed?)" >&2
+  exit 1
+fi
+
+COMMANDS=()
+START=$(date +%s)
+for bench in "${BENCHES[@]}"; do
+  name=$(basename "$bench")
+  cmd=("$bench" "--benchmark_min_time=$MIN_TIME" "--benchmark_out=$OUT/$name.json"
+       "--benchmark_out_format=json")
+  echo "== $name"
+  "${cmd[@]}"
+  COMMANDS+=("${cmd[*]}")
+done
+
+for bag in intel aces; do
+  if [ ! -f "$DATA/$bag.bag" ]; then
+    echo "bench.sh: $DATA/$bag.bag missing, skipping the end-to-end run" >&2
+    continue
+  fi
+  cmd=("$BIN/offline_slam" --bag "$DATA/$bag.bag" --config "$CONFIG" --output "$OUT/offline_$bag"
+       --reference "$DATA/$bag.ref.tum" --no-progress)
+  echo "== offline_slam $bag"
+  "${cmd[@]}" || echo "bench.sh: offline_slam on $bag failed" >&2
+  COMMANDS+=("${cmd[*]}")
+done
+ELAPSED=$(( $(date +%s) - START ))
+
+# The report: one table per benchmark binary, one for the end-to-end runs.
+printf '%s\n' "${COMMANDS[@]}" >"$OUT/commands.txt"
+/usr/bin/python3 - "$OUT" "$REPORT" "$ROOT" "$ELAPSED" <<'EOF'
+import datetime, json, os, pathlib, sys
+
+out, report, root, elapsed = pathlib.Path(sys.argv[1]), pathlib.Path(sys.argv[2]), sys.argv[3], sys.argv[4]
+cpu = next((l.split(":", 1)[1].strip() for l in open("/proc/cpuinfo") if l.startswith("model name")),
+           "unknown")
+rel = lambda s: s.replace(root + "/", "").replace(os.path.dirname(root) + "/", "../")
+lines = ["# Benchmarks", "",
+         "Written by `./scripts/bench.sh` (timing only; not pass/fail tests).", "",
+         "- date: " + datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC"),
+         "- nproc: %d" % os.cpu_count(), "- CPU: " + cpu,
+         "- total run time of the benchmarks and end-to-end runs: %s s" % elapsed,
+         "- the machine may have been shared with other jobs: compare figures of one run only", ""]
+
+def fmt(v):
+    return "%.3g" % v if abs(v) < 1000 else "%.4g" % v if abs(v) < 1e4 else "%.3e" % v
+
+for path in sorted(out.glob("bench_*.json")):
+    data = json.load(open(path))
+    lines += ["## " + path.stem, ""]
+    benches = [b for b in data["benchmarks"] if b.get("run_type", "iteration") == "iteration"]
+    skip = {"name", "run_name", "run_type", "repetitions", "repetition_index", "threads",
+            "iterations", "real_time", "cpu_time", "time_unit", "family_index",
+            "per_family_instance_index", "aggregate_name", "error_occurred", "error_message"}
+    counters = []
+    for b in benches:
+        counters += [k for k in b if k not in skip and k not in counters]
+    lines.append("| case | time/iter (real) | cpu | iterations | " + " | ".join(counters) + " |")
+    lines.append("|---" * (4 + len(counters)) + "|")
+    for b in benches:
+        if b.get("error_occurred"):
+            lines.append("| %s | error: %s |" % (b["name"], b.get("error_message", "")))
+            continue
+        unit = b["time_unit"]
+        cells = [b["name"], "%s %s" % (fmt(b["real_time"]), unit), "%s %s" % (fmt(b["cpu_time"]), unit),
+                 str(b["iterations"])]
+        cells += [fmt(b[c]) if isinstance(b.get(c), (int, float)) else "" for c in counters]
+        lines.append("| " + " | ".join(cells) + " |")
+    lines.append("")
+
+rows = []
+for bag in ("intel", "aces"):
+    summary = out / ("offline_" + bag) / "summary.json"
+    if summary.exists():
+        s = json.load(open(summary))
+        rows.append("| %s | %.1f | %.1f | %.0fx | %d | %.2f | %.2f | %s | %d |" % (
+            bag, s["wall_s"], s["bag_duration_s"], s["bag_duration_s"] / max(s["wall_s"], 1e-9),
+            s["updates"], s["update_ms_mean"], s["update_ms_p99"],
+            "%.3f" % s["ate_rmse_m"] if "ate_rmse_m" in s else "n/a", s["landmarks"]))
+if rows:
+    lines += ["## offline_slam end to end (config/laser_fastslam2.yaml)", "",
+              "| bag | wall_s | bag_duration_s | real-time factor | updates | update_ms_mean | "
+              "update_ms_p99 | ATE [m] | landmarks |", "|---" * 9 + "|"] + rows + [""]
+
+lines += ["## Commands", "", "```", "./scripts/bench.sh"]
+lines += [rel(c) for c in (out / "commands.txt").read_text().splitlines()]
+lines += ["```", ""]
+report.parent.mkdir(parents=True, exist_ok=True)
+report.write_text("\n".join(lines))
+print("bench.sh: wrote " + str(report))
+EOF
