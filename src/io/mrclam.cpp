@@ -48,8 +48,8 @@ std::vector<Row> readRows(std::istream& in, const std::string& source, std::size
     while (fields >> token) {
       double value = 0.0;
       if (!parseDouble(token, &value)) {
-        throw lineError(source, line, "not a finite number: '" + token + "' (expected " + format +
-                                          ")");
+        throw lineError(source, line,
+                        "not a finite number: '" + token + "' (expected " + format + ")");
       }
       row.values.push_back(value);
     }
@@ -171,10 +171,9 @@ MrclamRobot readMrclamRobot(const std::string& directory, int robot) {
   if (data.ground_truth.empty()) throw std::runtime_error(prefix + "Groundtruth.dat: no data line");
   std::stable_sort(data.ground_truth.begin(), data.ground_truth.end(),
                    [](const StampedPose& a, const StampedPose& b) { return a.stamp < b.stamp; });
-  std::stable_sort(data.measurements.begin(), data.measurements.end(),
-                   [](const MrclamMeasurement& a, const MrclamMeasurement& b) {
-                     return a.stamp < b.stamp;
-                   });
+  std::stable_sort(
+      data.measurements.begin(), data.measurements.end(),
+      [](const MrclamMeasurement& a, const MrclamMeasurement& b) { return a.stamp < b.stamp; });
   return data;
 }
 
@@ -184,26 +183,26 @@ void cropMrclamRobot(double duration_s, MrclamRobot* data) {
   const double end = start + duration_s;
   const auto outside = [&](double stamp) { return stamp < start || stamp > end; };
   auto& o = data->odometry;
-  o.erase(std::remove_if(o.begin(), o.end(),
-                         [&](const MrclamOdometry& x) { return outside(x.stamp); }),
-          o.end());
+  o.erase(
+      std::remove_if(o.begin(), o.end(), [&](const MrclamOdometry& x) { return outside(x.stamp); }),
+      o.end());
   auto& m = data->measurements;
   m.erase(std::remove_if(m.begin(), m.end(),
                          [&](const MrclamMeasurement& x) { return outside(x.stamp); }),
           m.end());
   auto& g = data->ground_truth;
-  g.erase(std::remove_if(g.begin(), g.end(),
-                         [&](const StampedPose& x) { return outside(x.stamp); }),
-          g.end());
+  g.erase(
+      std::remove_if(g.begin(), g.end(), [&](const StampedPose& x) { return outside(x.stamp); }),
+      g.end());
 }
 
 core::Pose2 interpolatePose(const std::vector<StampedPose>& trajectory, double stamp) {
   if (trajectory.empty()) throw std::invalid_argument("interpolatePose: empty trajectory");
   if (stamp <= trajectory.front().stamp) return trajectory.front().pose;
   if (stamp >= trajectory.back().stamp) return trajectory.back().pose;
-  const auto after = std::lower_bound(
-      trajectory.begin(), trajectory.end(), stamp,
-      [](const StampedPose& pose, double t) { return pose.stamp < t; });
+  const auto after =
+      std::lower_bound(trajectory.begin(), trajectory.end(), stamp,
+                       [](const StampedPose& pose, double t) { return pose.stamp < t; });
   const StampedPose& b = *after;
   const StampedPose& a = *(after - 1);
   const double span = b.stamp - a.stamp;
@@ -252,10 +251,9 @@ std::vector<MrclamMeasurementGroup> groupLandmarkMeasurements(
   for (const MrclamMeasurement& m : measurements) {
     if (m.subject >= first_landmark_subject) kept.push_back(m);
   }
-  std::stable_sort(kept.begin(), kept.end(),
-                   [](const MrclamMeasurement& a, const MrclamMeasurement& b) {
-                     return a.stamp < b.stamp;
-                   });
+  std::stable_sort(
+      kept.begin(), kept.end(),
+      [](const MrclamMeasurement& a, const MrclamMeasurement& b) { return a.stamp < b.stamp; });
   std::vector<MrclamMeasurementGroup> groups;
   for (const MrclamMeasurement& m : kept) {
     if (groups.empty() || groups.back().stamp != m.stamp) groups.push_back({m.stamp, {}});

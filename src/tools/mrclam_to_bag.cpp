@@ -117,8 +117,8 @@ Arguments parseArguments(int argc, char** argv) {
 /// OUT.bag -> OUT.suffix (the bag's name without ".bag").
 std::string besideBag(const std::string& bag, const std::string& suffix) {
   const std::string ext = ".bag";
-  const bool has_ext = bag.size() > ext.size() &&
-                       bag.compare(bag.size() - ext.size(), ext.size(), ext) == 0;
+  const bool has_ext =
+      bag.size() > ext.size() && bag.compare(bag.size() - ext.size(), ext.size(), ext) == 0;
   return (has_ext ? bag.substr(0, bag.size() - ext.size()) : bag) + suffix;
 }
 
@@ -129,9 +129,8 @@ geometry_msgs::Quaternion yawQuaternion(double yaw) {
   return q;
 }
 
-nav_msgs::Odometry odometryMessage(const std::string& frame, const core::Pose2& pose,
-                                   double v_mps, double w_radps, const ros::Time& stamp,
-                                   std::uint32_t seq) {
+nav_msgs::Odometry odometryMessage(const std::string& frame, const core::Pose2& pose, double v_mps,
+                                   double w_radps, const ros::Time& stamp, std::uint32_t seq) {
   nav_msgs::Odometry odometry;
   odometry.header.seq = seq;
   odometry.header.stamp = stamp;
@@ -282,8 +281,7 @@ int main(int argc, char** argv) {
     if (data.ground_truth.empty()) {
       throw std::runtime_error("no ground truth during the odometry's time span");
     }
-    const core::Pose2 start =
-        io::interpolatePose(data.ground_truth, data.odometry.front().stamp);
+    const core::Pose2 start = io::interpolatePose(data.ground_truth, data.odometry.front().stamp);
     const std::vector<io::StampedPose> odometry = io::integrateMrclamOdometry(data.odometry, start);
     const std::vector<io::MrclamMeasurementGroup> groups =
         io::groupLandmarkMeasurements(data.measurements);
@@ -298,8 +296,10 @@ int main(int argc, char** argv) {
 
     std::size_t robots = 0, unknown = 0;
     for (const io::MrclamMeasurement& m : data.measurements) {
-      if (m.subject < 0) ++unknown;
-      else if (m.subject < 6) ++robots;
+      if (m.subject < 0)
+        ++unknown;
+      else if (m.subject < 6)
+        ++robots;
     }
     std::cerr << "mrclam_to_bag: robot " << arguments.robot << ": " << counts.odometry
               << " odometry poses over " << (odometry.back().stamp - odometry.front().stamp)
@@ -307,8 +307,8 @@ int main(int argc, char** argv) {
               << counts.features << " landmark sightings in " << counts.feature_messages
               << " /features messages (" << (arguments.known_ids ? "known" : "unknown")
               << " ids; dropped " << robots << " sightings of robots and " << unknown
-              << " of unknown barcodes; " << measurements_read << " read), "
-              << counts.ground_truth << " ground-truth poses\n"
+              << " of unknown barcodes; " << measurements_read << " read), " << counts.ground_truth
+              << " ground-truth poses\n"
               << "mrclam_to_bag: wrote " << arguments.bag_path << ", " << reference_path << ", "
               << odometry_path << ", " << landmarks_path << "\n";
   } catch (const std::exception& error) {

@@ -18,20 +18,20 @@ namespace io {
 
 /// One velocity command of RobotN_Odometry.dat (`t v w`).
 struct MrclamOdometry {
-  double stamp = 0.0;     // s, Unix time
-  double v_mps = 0.0;     // forward velocity, m/s
-  double w_radps = 0.0;   // angular velocity, rad/s
-  std::size_t line = 0;   // 1-based line number in the file
+  double stamp = 0.0;    // s, Unix time
+  double v_mps = 0.0;    // forward velocity, m/s
+  double w_radps = 0.0;  // angular velocity, rad/s
+  std::size_t line = 0;  // 1-based line number in the file
 };
 
 /// One range-bearing sighting of RobotN_Measurement.dat (`t barcode range bearing`).
 struct MrclamMeasurement {
-  double stamp = 0.0;     // s, Unix time
-  int barcode = 0;        // as logged
-  int subject = -1;       // from Barcodes.dat (1..5 robots, 6..20 landmarks); -1 unknown
+  double stamp = 0.0;  // s, Unix time
+  int barcode = 0;     // as logged
+  int subject = -1;    // from Barcodes.dat (1..5 robots, 6..20 landmarks); -1 unknown
   double range_m = 0.0;
   double bearing_rad = 0.0;
-  std::size_t line = 0;   // 1-based line number in the file
+  std::size_t line = 0;  // 1-based line number in the file
 };
 
 /// One surveyed landmark of Landmark_Groundtruth.dat (`subject x y sd_x sd_y`).
@@ -45,12 +45,12 @@ struct MrclamLandmark {
 
 /// All the files of one robot of one dataset directory.
 struct MrclamRobot {
-  int robot = 0;                                 // 1..5
-  std::vector<MrclamOdometry> odometry;          // in file order
-  std::vector<MrclamMeasurement> measurements;   // subjects resolved through the barcodes
-  std::vector<StampedPose> ground_truth;         // Vicon, map frame
-  std::vector<MrclamLandmark> landmarks;         // surveyed, map frame
-  std::map<int, int> subject_of_barcode;         // Barcodes.dat, barcode -> subject
+  int robot = 0;                                // 1..5
+  std::vector<MrclamOdometry> odometry;         // in file order
+  std::vector<MrclamMeasurement> measurements;  // subjects resolved through the barcodes
+  std::vector<StampedPose> ground_truth;        // Vicon, map frame
+  std::vector<MrclamLandmark> landmarks;        // surveyed, map frame
+  std::map<int, int> subject_of_barcode;        // Barcodes.dat, barcode -> subject
 };
 
 /// Measurements taken at one instant (one camera frame).
@@ -67,8 +67,7 @@ struct MrclamMeasurementGroup {
 std::vector<MrclamOdometry> parseMrclamOdometry(std::istream& in, const std::string& source);
 
 /// RobotN_Measurement.dat; subjects are left at -1 (see resolveSubjects()).
-std::vector<MrclamMeasurement> parseMrclamMeasurements(std::istream& in,
-                                                       const std::string& source);
+std::vector<MrclamMeasurement> parseMrclamMeasurements(std::istream& in, const std::string& source);
 
 /// Barcodes.dat (`subject barcode`), as barcode -> subject. Also throws on a repeated barcode.
 std::map<int, int> parseMrclamBarcodes(std::istream& in, const std::string& source);
@@ -102,8 +101,7 @@ core::Pose2 interpolatePose(const std::vector<StampedPose>& trajectory, double s
 /// unicycle). Commands with a stamp not after the previous one are skipped, and so is any
 /// interval longer than max_gap_s (the robot is assumed to stand still then).
 std::vector<StampedPose> integrateMrclamOdometry(const std::vector<MrclamOdometry>& odometry,
-                                                 const core::Pose2& start,
-                                                 double max_gap_s = 1.0);
+                                                 const core::Pose2& start, double max_gap_s = 1.0);
 
 /// The landmark sightings (subject >= first_landmark_subject; robots and unknown barcodes are
 /// dropped) grouped by equal stamp, in time order.

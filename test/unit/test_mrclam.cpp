@@ -1,0 +1,203 @@
+// Tests of the UTIAS MRCLAM readers, the dead reckoning and the grouping of sightings.
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "rbpf_slam/io/mrclam.h"
+
+namespace rbpf_slam {
+namespace io {
+namespace {
+
+const char kHeader[] =
+    "# UTIAS Multi-Robot Cooperative Localization and Mapping Dataset\n"
+    "# Time [s]    x [m]    y [m]    orientation [rad]\n";
+
+std::string errorOf(void (*parse)(const std::string&), const std::string& text) {
+  try {
+    parse(text);
+  } catch (const std::runtime_error& error) {
+    return error.what();
+  }
+  return "";
+}
+
+TEST(MrclamParse, OdometrySkipsCommentsAndBlankLines) {
+  std::istringstream in(std::string(kHeader) +
+                        "1248444187.156 \t  0.086 \t -0.398\r\n\n   # note\n"
+                        "1248444187.186 \t  0.1 \t 0.0\n");
+  const std::vector<MrclamOdometry> odometry = parseMrclamOdometry(in, "odo.dat");
+  ASSERT_EQ(odometry.size(), 2u);
+  EXPECT_DOUBLE_EQ(odometry[0].stamp, 1248444187.156);
+  EXPECT_DOUBLE_EQ(odometry[0].v_mps, 0.086);
+  EXPECT_DOUBLE_EQ(odometry[0].w_radps, -0.398);
+  EXPECT_EQ(odometry[0].line, 3u);
+  EXPECT_EQ(odometry[1].line, 6u);
+}
+
+TEST(MrclamParse, MeasurementsBarcodesLandmarksAndGroundTruth) {
+  std::istringstream measurements(std::string(kHeader) + "10.5 14 3.787 -0.257\n10.5 90 6.7 0\n");
+  std::istringstream barcodes("# Subject # Barcode #\n  1 \t 5\n  2 \t 14\n 15 \t 90\n");
+  std::istringstream landmarks("# Subject x y sdx sdy\n 15 1.5 2.7 0.0001 0.00005\n");
+  std::istringstream truth(std::string(kHeader) + "10.0 1.4 -3.9 7.0\n");
+
+  std::vector<MrclamMeasurement> m = parseMrclamMeasurements(measurements, "m.dat");
+  const std::map<int, int> subjects = parseMrclamBarcodes(barcodes, "b.dat");
+  ASSERT_EQ(m.size(), 2u);
+  EXPECT_EQ(m[0].subject, -1);
+  resolveSubjects(subjects, &m);
+  EXPECT_EQ(m[0].barcode, 14);
+  EXPECT_EQ(m[0].subject, 2);
+  EXPECT_EQ(m[1].subject, 15);
+  EXPECT_DOUBLE_EQ(m[0].range_m, 3.787);
+  EXPECT_DOUBLE_EQ(m[0].bearing_rad, -0.257);
+
+  const std::vector<MrclamLandmark> l = parseMrclamLandmarks(landmarks, "l.dat");
+  ASSERT_EQ(l.size(), 1u);
+  EXPECT_EQ(l[0].subject, 15);
+  EXPECT_DOUBLE_EQ(l[0].y_m, 2.7);
+  EXPECT_DOUBLE_EQ(l[0].sd_y_m, 0.00005);
+
+  const std::vector<StampedPose> g = parseMrclamGroundTruth(truth, "g.dat");
+  ASSERT_EQ(g.size(), 1u);
+  EXPECT_NEAR(g[0].pose.z(), 7.0 - 2.0 * M_PI, 1e-12);  // wrapped into (-pi, pi]
+}
+
+void parseOdometryText(const std::string& text) {
+  std::istringstream in(text);
+  parseMrclamOdometry(in, "Robot1_Odometry.dat");
+}
+
+void parseMeasurementText(const std::string& text) {
+  std::istringstream in(text);
+  parseMrclamMeasurements(in, "Robot1_Measurement.dat");
+}
+
+void parseBarcodeText(const std::string& text) {
+  std::istringstream in(text);
+  parseMrclamBarcodes(in, "Barcodes.dat");
+}
+
+TEST(MrclamParse, MalformedLinesNameFileAndLine) {
+  EXPECT_EQ(errorOf(parseOdometryText, "# h\n1 2 3\n1 2\n"),
+            "Robot1_Odometry.dat:3: expected 3 numbers (t v w), got 2");
+  EXPECT_NE(errorOf(parseOdometryText, "1 2 3 4\n").find("Robot1_Odometry.dat:1: expected 3"),
+            std::string::npos);
+  EXPECT_NE(errorOf(parseOdometryText, "1 x 3\n").find("Robot1_Odometry.dat:1: not a finite"),
+            std::string::npos);
+  EXPECT_NE(errorOf(parseOdometryText, "1 nan 3\n").find("Robot1_Odometry.dat:1:"),
+            std::string::npos);
+  EXPECT_EQ(errorOf(parseMeasurementText, "\n1 14.5 2 0\n"),
+            "Robot1_Measurement.dat:2: barcode is not an integer");
+  EXPECT_EQ(errorOf(parseMeasurementText, "1 14 -2 0\n"),
+            "Robot1_Measurement.dat:1: negative range");
+  EXPECT_EQ(errorOf(parseBarcodeText, "1 5\n2 5\n"), "Barcodes.dat:2: barcode 5 listed twice");
+  EXPECT_EQ(errorOf(parseOdometryText, "# only a header\n"), "");
+}
+
+TEST(MrclamRead, MissingFileIsNamed) {
+  try {
+    readMrclamRobot("/nonexistent_mrclam_dir", 1);
+    FAIL() << "no exception";
+  } catch (const std::runtime_error& error) {
+    EXPECT_NE(std::string(error.what()).find("/nonexistent_mrclam_dir/Barcodes.dat"),
+              std::string::npos);
+  }
+  EXPECT_THROW(readMrclamRobot("/tmp", 6), std::invalid_argument);
+}
+
+TEST(MrclamRead, ReadsADirectoryAndCrops) {
+  const std::string dir = std::string(::testing::TempDir()) + "/mrclam_test";
+  ASSERT_EQ(std::system(("mkdir -p " + dir).c_str()), 0);
+  const auto write = [&](const std::string& name, const std::string& text) {
+    std::ofstream(dir + "/" + name) << text;
+  };
+  write("Barcodes.dat", "# h\n1 5\n6 63\n");
+  write("Landmark_Groundtruth.dat", "# h\n6 1 2 0 0\n");
+  write("Robot2_Odometry.dat", "# h\n100 0.1 0\n101 0.1 0\n105 0.1 0\n");
+  write("Robot2_Measurement.dat", "# h\n104 63 2 0\n100.5 5 1 0\n106 63 2 0\n");
+  write("Robot2_Groundtruth.dat", "# h\n101 1 0 0\n99 0 0 0\n");
+  const MrclamRobot all = readMrclamRobot(dir, 2);
+  EXPECT_EQ(all.robot, 2);
+  ASSERT_EQ(all.measurements.size(), 3u);
+  EXPECT_DOUBLE_EQ(all.measurements[0].stamp, 100.5);  // sorted by time
+  EXPECT_EQ(all.measurements[0].subject, 1);
+  EXPECT_DOUBLE_EQ(all.ground_truth[0].stamp, 99.0);  // sorted by time
+
+  MrclamRobot cropped = all;
+  cropMrclamRobot(4.5, &cropped);  // [100, 104.5]
+  EXPECT_EQ(cropped.odometry.size(), 2u);
+  EXPECT_EQ(cropped.measurements.size(), 2u);
+  ASSERT_EQ(cropped.ground_truth.size(), 1u);
+  EXPECT_DOUBLE_EQ(cropped.ground_truth[0].stamp, 101.0);
+  MrclamRobot uncropped = all;
+  cropMrclamRobot(0.0, &uncropped);
+  EXPECT_EQ(uncropped.odometry.size(), 3u);
+}
+
+TEST(MrclamOdometryIntegration, StraightLineAndCircle) {
+  // 1 m/s for 2 s along the start heading (pi/2), then a quarter circle of radius 1 m.
+  std::vector<MrclamOdometry> commands = {
+      {10.0, 1.0, 0.0, 1}, {11.0, 1.0, 0.0, 2}, {12.0, M_PI / 2, M_PI / 2, 3}, {13.0, 0.0, 0.0, 4}};
+  const std::vector<StampedPose> poses =
+      integrateMrclamOdometry(commands, core::Pose2(1.0, 0.0, M_PI / 2));
+  ASSERT_EQ(poses.size(), 4u);
+  EXPECT_DOUBLE_EQ(poses[0].stamp, 10.0);
+  EXPECT_NEAR(poses[2].pose.x(), 1.0, 1e-12);
+  EXPECT_NEAR(poses[2].pose.y(), 2.0, 1e-12);
+  // Turning left from heading +y on a 1 m circle ends 1 m to the left and 1 m ahead.
+  EXPECT_NEAR(poses[3].pose.x(), 0.0, 1e-12);
+  EXPECT_NEAR(poses[3].pose.y(), 3.0, 1e-12);
+  EXPECT_NEAR(std::abs(poses[3].pose.z()), M_PI, 1e-12);
+}
+
+TEST(MrclamOdometryIntegration, SkipsRepeatedStampsAndLongGaps) {
+  std::vector<MrclamOdometry> commands = {
+      {0.0, 1.0, 0.0, 1}, {0.0, 5.0, 0.0, 2}, {0.5, 1.0, 0.0, 3}, {10.5, 1.0, 0.0, 4}};
+  const std::vector<StampedPose> poses =
+      integrateMrclamOdometry(commands, core::Pose2::Zero(), 1.0);
+  ASSERT_EQ(poses.size(), 3u);
+  EXPECT_NEAR(poses[1].pose.x(), 0.5, 1e-12);
+  EXPECT_NEAR(poses[2].pose.x(), 0.5, 1e-12);  // the 10 s gap is not integrated
+  EXPECT_TRUE(integrateMrclamOdometry({}, core::Pose2::Zero()).empty());
+}
+
+TEST(MrclamInterpolation, LinearWithShortestHeading) {
+  const std::vector<StampedPose> truth = {{0.0, core::Pose2(0, 0, 3.0)},
+                                          {1.0, core::Pose2(2, 4, -3.0)}};
+  const core::Pose2 middle = interpolatePose(truth, 0.5);
+  EXPECT_NEAR(middle.x(), 1.0, 1e-12);
+  EXPECT_NEAR(middle.y(), 2.0, 1e-12);
+  EXPECT_NEAR(std::abs(middle.z()), M_PI, 1e-9);  // through pi, not through 0
+  EXPECT_NEAR(interpolatePose(truth, -5.0).x(), 0.0, 1e-12);
+  EXPECT_NEAR(interpolatePose(truth, 5.0).x(), 2.0, 1e-12);
+  EXPECT_THROW(interpolatePose({}, 0.0), std::invalid_argument);
+}
+
+TEST(MrclamGrouping, DropsRobotsAndUnknownAndGroupsEqualStamps) {
+  std::vector<MrclamMeasurement> m(5);
+  const double stamps[] = {2.0, 1.0, 1.0, 1.0, 2.5};
+  const int subjects[] = {6, 20, 3, -1, 7};
+  for (int i = 0; i < 5; ++i) {
+    m[i].stamp = stamps[i];
+    m[i].subject = subjects[i];
+  }
+  const std::vector<MrclamMeasurementGroup> groups = groupLandmarkMeasurements(m);
+  ASSERT_EQ(groups.size(), 3u);
+  EXPECT_DOUBLE_EQ(groups[0].stamp, 1.0);
+  ASSERT_EQ(groups[0].measurements.size(), 1u);
+  EXPECT_EQ(groups[0].measurements[0].subject, 20);
+  EXPECT_EQ(groups[1].measurements[0].subject, 6);
+  EXPECT_EQ(groups[2].measurements[0].subject, 7);
+}
+
+}  // namespace
+}  // namespace io
+}  // namespace rbpf_slam
