@@ -22,22 +22,23 @@ class OdometryMotionModel : public MotionModel {
   Pose2 sample(const Pose2& previous, const MotionInput& motion, Rng& rng) const override {
     double rot1, trans, rot2;
     decompose(motion.delta, &rot1, &trans, &rot2);
+    const double k = motion.noise_scale;
     const double rot1_hat =
-        rot1 - sampleGaussian(rng, std::sqrt(options_.alpha1 * rot1 * rot1 +
-                                             options_.alpha2 * trans * trans));
+        rot1 - sampleGaussian(rng, k * std::sqrt(options_.alpha1 * rot1 * rot1 +
+                                                 options_.alpha2 * trans * trans));
     const double trans_hat =
-        trans - sampleGaussian(rng, std::sqrt(options_.alpha3 * trans * trans +
-                                              options_.alpha4 * (rot1 * rot1 + rot2 * rot2)));
+        trans - sampleGaussian(rng, k * std::sqrt(options_.alpha3 * trans * trans +
+                                                  options_.alpha4 * (rot1 * rot1 + rot2 * rot2)));
     const double rot2_hat =
-        rot2 - sampleGaussian(rng, std::sqrt(options_.alpha1 * rot2 * rot2 +
-                                             options_.alpha2 * trans * trans));
+        rot2 - sampleGaussian(rng, k * std::sqrt(options_.alpha1 * rot2 * rot2 +
+                                                 options_.alpha2 * trans * trans));
     const double heading = previous.z() + rot1_hat;
     Pose2 next(previous.x() + trans_hat * std::cos(heading),
                previous.y() + trans_hat * std::sin(heading),
                wrapAngle(previous.z() + rot1_hat + rot2_hat));
-    next.x() += sampleGaussian(rng, options_.min_sigma_xy_m);
-    next.y() += sampleGaussian(rng, options_.min_sigma_xy_m);
-    next.z() = wrapAngle(next.z() + sampleGaussian(rng, options_.min_sigma_theta_rad));
+    next.x() += sampleGaussian(rng, motion.noise_scale * options_.min_sigma_xy_m);
+    next.y() += sampleGaussian(rng, motion.noise_scale * options_.min_sigma_xy_m);
+    next.z() = wrapAngle(next.z() + sampleGaussian(rng, motion.noise_scale * options_.min_sigma_theta_rad));
     return next;
   }
 
@@ -58,7 +59,7 @@ class OdometryMotionModel : public MotionModel {
     cov(0, 0) += options_.min_sigma_xy_m * options_.min_sigma_xy_m;
     cov(1, 1) += options_.min_sigma_xy_m * options_.min_sigma_xy_m;
     cov(2, 2) += options_.min_sigma_theta_rad * options_.min_sigma_theta_rad;
-    return cov;
+    return motion.noise_scale * motion.noise_scale * cov;
   }
 
  private:
@@ -87,20 +88,20 @@ class DiffDriveMotionModel : public MotionModel {
   Pose2 sample(const Pose2& previous, const MotionInput& motion, Rng& rng) const override {
     double left, right;
     wheels(motion.delta, &left, &right);
-    const double sigma = wheelSigma(left, right);
+    const double sigma = motion.noise_scale * wheelSigma(left, right);
     const double l = left + sampleGaussian(rng, sigma);
     const double r = right + sampleGaussian(rng, sigma);
     Pose2 next = integrate(previous, l, r);
-    next.x() += sampleGaussian(rng, options_.min_sigma_xy_m);
-    next.y() += sampleGaussian(rng, options_.min_sigma_xy_m);
-    next.z() = wrapAngle(next.z() + sampleGaussian(rng, options_.min_sigma_theta_rad));
+    next.x() += sampleGaussian(rng, motion.noise_scale * options_.min_sigma_xy_m);
+    next.y() += sampleGaussian(rng, motion.noise_scale * options_.min_sigma_xy_m);
+    next.z() = wrapAngle(next.z() + sampleGaussian(rng, motion.noise_scale * options_.min_sigma_theta_rad));
     return next;
   }
 
   Eigen::Matrix3d covariance(const Pose2& previous, const MotionInput& motion) const override {
     double left, right;
     wheels(motion.delta, &left, &right);
-    const double sigma = wheelSigma(left, right);
+    const double sigma = motion.noise_scale * wheelSigma(left, right);
     // Numerical Jacobian of the pose with respect to (l, r).
     Eigen::Matrix<double, 3, 2> j;
     const double h = 1e-6;

@@ -61,6 +61,24 @@ void readLaser(YamlSection section, core::LaserExtractorOptions* o) {
   section.finish();
 }
 
+void readScanMatching(YamlSection section, core::ScanMatcherOptions* o) {
+  section.read("enabled", &o->enabled);
+  section.read("max_iterations", &o->max_iterations, 1, 1000);
+  section.read("max_correspondence_m", &o->max_correspondence_m, 1e-3, 10.0);
+  section.read("min_correspondence_m", &o->min_correspondence_m, 1e-3, 10.0);
+  section.read("min_inlier_ratio", &o->min_inlier_ratio, 0.0, 1.0);
+  section.read("max_residual_rms_m", &o->max_residual_rms_m, 1e-4, 10.0);
+  section.read("max_range_m", &o->max_range_m, 0.1, 1000.0);
+  section.read("rotation_guess_rad", &o->rotation_guess_rad, 0.0, 1.6);
+  section.read("min_information", &o->min_information, 0.0, 1e9);
+  section.read("max_correction_m", &o->max_correction_m, 0.0, 100.0);
+  section.read("max_correction_rad", &o->max_correction_rad, 0.0, 3.2);
+  section.read("noise_scale", &o->noise_scale, 1e-3, 10.0);
+  section.read("prior_weight_xy", &o->prior_weight_xy, 0.0, 1e6);
+  section.read("prior_weight_theta", &o->prior_weight_theta, 0.0, 1e6);
+  section.finish();
+}
+
 void readRos(YamlSection& top, RosOptions* o) {
   top.read("map_frame", &o->map_frame);
   top.read("odom_frame", &o->odom_frame);
@@ -104,6 +122,7 @@ SlamConfig parseSlamConfig(const YAML::Node& root, const std::string& source) {
   readAssociation(top.section("association"), &f.association);
   readMeasurement(top.section("measurement"), &f.measurement);
   readLaser(top.section("laser_features"), &config.laser);
+  readScanMatching(top.section("scan_matching"), &config.scan_matching);
   core::SessionOptions& s = config.session;
   top.read("linear_update", &s.linear_update_m, 0.0, 100.0);
   top.read("angular_update", &s.angular_update_rad, 0.0, 10.0);
@@ -114,6 +133,7 @@ SlamConfig parseSlamConfig(const YAML::Node& root, const std::string& source) {
   validateAs(config.filter, source);
   validateAs(config.session, source);
   validateAs(config.laser, source);
+  validateAs(config.scan_matching, source);
   return config;
 }
 

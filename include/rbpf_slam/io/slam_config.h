@@ -35,9 +35,10 @@ struct SlamConfig {
   core::FilterOptions filter;
   core::SessionOptions session;
   core::LaserExtractorOptions laser;
+  core::ScanMatcherOptions scan_matching;
   RosOptions ros;
 
-  core::PipelineOptions pipeline() const { return {filter, session, laser}; }
+  core::PipelineOptions pipeline() const { return {filter, session, laser, scan_matching}; }
 };
 
 /// Parses a whole config tree; `source` names it in errors (a file name or "~ parameters").

@@ -4,12 +4,45 @@ namespace rbpf_slam {
 namespace core {
 
 SlamPipeline::SlamPipeline(const PipelineOptions& options)
-    : extractor_(options.laser), session_(createFilter(options.filter), options.session) {}
+    : extractor_(options.laser),
+      matcher_(options.scan_matching),
+      session_(createFilter(options.filter), options.session) {}
+
+void SlamPipeline::reset() {
+  session_.reset();
+  reference_points_.clear();
+  last_features_ = FeatureSet();
+}
 
 FrameResult SlamPipeline::processScan(const RangeScan& scan, const Pose2& odom_pose) {
   last_features_ = extractor_.extract(scan);
   last_features_.stamp = scan.stamp;
-  return session_.process(scan.stamp, odom_pose, last_features_);
+  if (!matcher_.options().enabled) return session_.process(scan.stamp, odom_pose, last_features_);
+
+  // Laser-corrected increment since the last scan the filter used, seeded by odometry.
+  std::vector<Eigen::Vector2d> points = scanPointsInBase(scan, matcher_.options().max_range_m);
+  MotionInput measured;
+  const MotionInput* override_motion = nullptr;
+  last_match_ = ScanMatchResult();
+  if (!reference_points_.empty() && session_.trajectory().size() > 0) {
+    const Pose2 odometry_delta = between(session_.lastOdomPose(), odom_pose);
+    const ScanMatchResult match = matcher_.match(reference_points_, points, odometry_delta);
+    last_match_ = match;
+    if (match.ok) {
+      measured.delta = match.delta;
+      // A degenerate match carries odometry's error along one direction: odometry's noise.
+      measured.noise_scale = match.degenerate ? 1.0 : matcher_.options().noise_scale;
+      override_motion = &measured;
+      ++scans_matched_;
+    } else {
+      ++scans_unmatched_;
+    }
+  }
+  const FrameResult result = session_.process(scan.stamp, odom_pose, last_features_, override_motion);
+  if (result == FrameResult::kUpdated || result == FrameResult::kFirstFrame) {
+    reference_points_ = std::move(points);
+  }
+  return result;
 }
 
 FrameResult SlamPipeline::processFeatures(const FeatureSet& features, const Pose2& odom_pose) {

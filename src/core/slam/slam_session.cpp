@@ -35,7 +35,7 @@ void SlamSession::reset() {
 }
 
 FrameResult SlamSession::process(double stamp, const Pose2& odom_pose,
-                                 const FeatureSet& features) {
+                                 const FeatureSet& features, const MotionInput* measured_motion) {
   if (!std::isfinite(stamp) || stamp <= 0.0) return FrameResult::kRejectedStamp;
   if (!odom_pose.allFinite()) return FrameResult::kRejectedPose;
   if (has_previous_ && stamp <= last_stamp_) {
@@ -67,6 +67,10 @@ FrameResult SlamSession::process(double stamp, const Pose2& odom_pose,
   motion.stamp = stamp;
   motion.dt = stamp - last_stamp_;
   motion.delta = delta;
+  if (measured_motion && measured_motion->delta.allFinite()) {
+    motion.delta = measured_motion->delta;
+    motion.noise_scale = measured_motion->noise_scale;
+  }
   filter_->predict(motion);
   last_stats_ = filter_->update(features);
   last_stamp_ = stamp;

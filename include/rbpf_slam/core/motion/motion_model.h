@@ -17,6 +17,7 @@ struct MotionInput {
   double stamp = 0.0;          // s, time of the new pose
   double dt = 0.0;             // s since the previous step
   Pose2 delta = Pose2::Zero(); // odometry increment, expressed in the previous base frame
+  double noise_scale = 1.0;    // multiplies the model's sigmas (< 1: laser-corrected increment)
 };
 
 /// Options of every motion model (unused fields are ignored by a model).

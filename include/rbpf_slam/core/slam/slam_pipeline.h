@@ -6,6 +6,7 @@
 #include <string>
 
 #include "rbpf_slam/core/features/laser_line_extractor.h"
+#include "rbpf_slam/core/features/scan_matcher.h"
 #include "rbpf_slam/core/filters/filter_options.h"
 #include "rbpf_slam/core/slam/slam_session.h"
 
@@ -16,6 +17,7 @@ struct PipelineOptions {
   FilterOptions filter;
   SessionOptions session;
   LaserExtractorOptions laser;
+  ScanMatcherOptions scan_matching;
 };
 
 /// Extraction plus filtering for one robot.
@@ -32,11 +34,23 @@ class SlamPipeline {
   SlamSession& session() { return session_; }
   const SlamSession& session() const { return session_; }
   const LaserLineExtractor& laserExtractor() const { return extractor_; }
+  /// Scans whose laser-corrected increment was used / fell back to odometry.
+  long scansMatched() const { return scans_matched_; }
+  long scansUnmatched() const { return scans_unmatched_; }
+  /// The scan match of the last processScan (ok = false when none was attempted or it failed).
+  const ScanMatchResult& lastMatch() const { return last_match_; }
+  /// Forgets everything, e.g. after the clock jumped backwards.
+  void reset();
 
  private:
   LaserLineExtractor extractor_;
+  ScanMatcher matcher_;
   SlamSession session_;
   FeatureSet last_features_;
+  std::vector<Eigen::Vector2d> reference_points_;  // last scan the filter used, base frame
+  ScanMatchResult last_match_;
+  long scans_matched_ = 0;
+  long scans_unmatched_ = 0;
 };
 
 }  // namespace core

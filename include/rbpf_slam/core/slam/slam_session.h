@@ -36,7 +36,12 @@ class SlamSession {
   SlamSession(std::unique_ptr<SlamFilter> filter, const SessionOptions& options);
 
   /// Offers one observation frame taken at stamp with the robot at odom_pose (odom frame).
-  FrameResult process(double stamp, const Pose2& odom_pose, const FeatureSet& features);
+  /// measured_motion, when given, replaces the odometry increment since the last update (e.g.
+  /// a laser-corrected one); odom_pose still defines the map -> odom correction.
+  FrameResult process(double stamp, const Pose2& odom_pose, const FeatureSet& features,
+                      const MotionInput* measured_motion = nullptr);
+  /// The odometry pose of the last frame the filter used.
+  const Pose2& lastOdomPose() const { return last_odom_; }
   /// Clears the filter and the history (e.g. after the clock jumped backwards).
   void reset();
 

@@ -1,0 +1,214 @@
+#include "rbpf_slam/core/features/scan_matcher.h"
+
+#include <Eigen/Dense>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+#include <unordered_map>
+
+namespace rbpf_slam {
+namespace core {
+namespace {
+
+/// A uniform hash grid over the reference points for nearest-neighbour queries.
+class PointGrid {
+ public:
+  PointGrid(const std::vector<Eigen::Vector2d>& points, double cell)
+      : points_(points), cell_(cell) {
+    for (size_t i = 0; i < points.size(); ++i) cells_[key(cellOf(points[i].x()), cellOf(points[i].y()))].push_back(static_cast<int>(i));
+  }
+  /// Index of the nearest point within radius (at most one cell), or -1.
+  int nearest(const Eigen::Vector2d& q, double radius, double* distance2) const {
+    const long cx = cellOf(q.x()), cy = cellOf(q.y());
+    int best = -1;
+    double best_d2 = radius * radius;
+    for (long dx = -1; dx <= 1; ++dx) {
+      for (long dy = -1; dy <= 1; ++dy) {
+        const auto it = cells_.find(key(cx + dx, cy + dy));
+        if (it == cells_.end()) continue;
+        for (int i : it->second) {
+          const double d2 = (points_[i] - q).squaredNorm();
+          if (d2 < best_d2) {
+            best_d2 = d2;
+            best = i;
+          }
+        }
+      }
+    }
+    *distance2 = best_d2;
+    return best;
+  }
+
+ private:
+  long cellOf(double v) const { return static_cast<long>(std::floor(v / cell_)); }
+  static long long key(long x, long y) { return (static_cast<long long>(x) << 32) ^ (y & 0xffffffffLL); }
+  const std::vector<Eigen::Vector2d>& points_;
+  const double cell_;
+  std::unordered_map<long long, std::vector<int>> cells_;
+};
+
+/// Unit normals of the reference from each point's neighbours (zero where undefined).
+std::vector<Eigen::Vector2d> normalsOf(const std::vector<Eigen::Vector2d>& points) {
+  std::vector<Eigen::Vector2d> normals(points.size(), Eigen::Vector2d::Zero());
+  for (size_t i = 1; i + 1 < points.size(); ++i) {
+    const Eigen::Vector2d a = points[i - 1], b = points[i + 1];
+    if ((a - points[i]).norm() > 0.5 || (b - points[i]).norm() > 0.5) continue;
+    const Eigen::Vector2d d = b - a;
+    if (d.norm() < 1e-6) continue;
+    normals[i] = Eigen::Vector2d(-d.y(), d.x()).normalized();
+  }
+  return normals;
+}
+
+}  // namespace
+
+void validate(const ScanMatcherOptions& o) {
+  auto require = [](const char* name, double v, double lo, double hi) {
+    if (!(v >= lo && v <= hi)) {
+      throw std::invalid_argument(std::string("scan_matching.") + name + " = " +
+                                  std::to_string(v) + " is out of range [" + std::to_string(lo) +
+                                  ", " + std::to_string(hi) + "]");
+    }
+  };
+  require("max_iterations", o.max_iterations, 1, 1000);
+  require("max_correspondence_m", o.max_correspondence_m, 1e-3, 10.0);
+  require("min_correspondence_m", o.min_correspondence_m, 1e-3, o.max_correspondence_m);
+  require("min_inlier_ratio", o.min_inlier_ratio, 0.0, 1.0);
+  require("max_residual_rms_m", o.max_residual_rms_m, 1e-4, 10.0);
+  require("max_range_m", o.max_range_m, 0.1, 1000.0);
+  require("rotation_guess_rad", o.rotation_guess_rad, 0.0, 1.6);
+  require("min_information", o.min_information, 0.0, 1e9);
+  require("max_correction_m", o.max_correction_m, 0.0, 100.0);
+  require("max_correction_rad", o.max_correction_rad, 0.0, 3.2);
+  require("noise_scale", o.noise_scale, 1e-3, 10.0);
+  require("prior_weight_xy", o.prior_weight_xy, 0.0, 1e6);
+  require("prior_weight_theta", o.prior_weight_theta, 0.0, 1e6);
+}
+
+std::vector<Eigen::Vector2d> scanPointsInBase(const RangeScan& scan, double max_range_m) {
+  std::vector<Eigen::Vector2d> points;
+  points.reserve(scan.ranges.size());
+  const double upper = std::isfinite(scan.range_max) && scan.range_max > 0.0
+                           ? std::min(scan.range_max, max_range_m)
+                           : max_range_m;
+  for (size_t i = 0; i < scan.ranges.size(); ++i) {
+    const double r = scan.ranges[i];
+    if (!std::isfinite(r) || r <= 0.0 || r < scan.range_min || r >= upper) continue;
+    const double a = scan.angle_min + static_cast<double>(i) * scan.angle_increment;
+    points.push_back(transformPoint(scan.sensor_pose, Eigen::Vector2d(r * std::cos(a), r * std::sin(a))));
+  }
+  return points;
+}
+
+ScanMatcher::ScanMatcher(const ScanMatcherOptions& options) : options_(options) {
+  validate(options_);
+}
+
+ScanMatchResult ScanMatcher::match(const std::vector<Eigen::Vector2d>& reference,
+                                   const std::vector<Eigen::Vector2d>& current,
+                                   const Pose2& initial_delta) const {
+  ScanMatchResult best;
+  if (reference.size() < 10 || current.size() < 10 || !initial_delta.allFinite()) return best;
+  const std::vector<Eigen::Vector2d> normals = normalsOf(reference);
+  std::vector<Pose2> starts{initial_delta};
+  if (options_.rotation_guess_rad > 0.0) {
+    for (double sign : {-1.0, 1.0}) {
+      Pose2 s = initial_delta;
+      s.z() = wrapAngle(s.z() + sign * options_.rotation_guess_rad);
+      starts.push_back(s);
+    }
+  }
+  // Prefer accepted results; keep the best rejected one for diagnostics.
+  double best_score = -1e300;
+  for (const Pose2& start : starts) {
+    const ScanMatchResult r = matchFrom(reference, normals, current, start);
+    const double score = (r.ok ? 10.0 : 0.0) + r.inlier_ratio - r.residual_rms_m;
+    if (score > best_score) {
+      best_score = score;
+      best = r;
+    }
+  }
+  if (best.ok) {
+    const Pose2 correction = between(initial_delta, best.delta);
+    if (correction.head<2>().norm() > options_.max_correction_m ||
+        std::fabs(correction.z()) > options_.max_correction_rad) {
+      best.ok = false;
+    }
+  }
+  return best;
+}
+
+ScanMatchResult ScanMatcher::matchFrom(const std::vector<Eigen::Vector2d>& reference,
+                                       const std::vector<Eigen::Vector2d>& normals,
+                                       const std::vector<Eigen::Vector2d>& current,
+                                       const Pose2& start) const {
+  ScanMatchResult result;
+  const PointGrid grid(reference, options_.max_correspondence_m);
+  Pose2 x = start;
+  Eigen::Matrix3d h = Eigen::Matrix3d::Zero();
+  Eigen::Matrix3d h_data = Eigen::Matrix3d::Zero();
+  int inliers = 0;
+  double sum_sq = 0.0;
+  for (int it = 0; it < options_.max_iterations; ++it) {
+    const double fraction = options_.max_iterations > 1 ? static_cast<double>(it) / (options_.max_iterations - 1) : 1.0;
+    const double radius = options_.max_correspondence_m +
+                          (options_.min_correspondence_m - options_.max_correspondence_m) * std::min(1.0, 2.0 * fraction);
+    const double c = std::cos(x.z()), s = std::sin(x.z());
+    h.setZero();
+    Eigen::Vector3d g = Eigen::Vector3d::Zero();
+    inliers = 0;
+    sum_sq = 0.0;
+    for (const Eigen::Vector2d& p : current) {
+      const Eigen::Vector2d q(x.x() + c * p.x() - s * p.y(), x.y() + s * p.x() + c * p.y());
+      double d2;
+      const int j = grid.nearest(q, radius, &d2);
+      if (j < 0 || normals[j].isZero()) continue;
+      const Eigen::Vector2d& n = normals[j];
+      const double residual = n.dot(q - reference[j]);
+      const Eigen::Vector2d dq_dtheta(-s * p.x() - c * p.y(), c * p.x() - s * p.y());
+      const Eigen::Vector3d jac(n.x(), n.y(), n.dot(dq_dtheta));
+      // Huber weight so that a few wrong pairs do not pull the solution.
+      const double k = 0.5 * radius;
+      const double w = std::fabs(residual) <= k ? 1.0 : k / std::fabs(residual);
+      h += w * jac * jac.transpose();
+      g += w * jac * residual;
+      ++inliers;
+      sum_sq += residual * residual;
+    }
+    if (inliers < 10) return result;
+    h_data = h;
+    // A weak prior toward the start (odometry): a direction the scan cannot see (along a
+    // corridor) stays where odometry put it instead of drifting freely.
+    Eigen::Vector3d offset = x - start;
+    offset.z() = wrapAngle(offset.z());
+    const Eigen::Vector3d prior(options_.prior_weight_xy, options_.prior_weight_xy,
+                                options_.prior_weight_theta);
+    h += prior.asDiagonal();
+    g += prior.cwiseProduct(offset);
+    const Eigen::Vector3d step = h.ldlt().solve(-g);
+    if (!step.allFinite()) return result;
+    x += step;
+    x.z() = wrapAngle(x.z());
+    result.iterations = it + 1;
+    if (fraction >= 0.5 && step.head<2>().norm() < 1e-4 && std::fabs(step.z()) < 1e-5) break;
+  }
+  result.delta = x;
+  result.inlier_ratio = static_cast<double>(inliers) / current.size();
+  result.residual_rms_m = std::sqrt(sum_sq / std::max(inliers, 1));
+  // Degenerate geometry (a corridor) leaves a translation direction unconstrained: along it
+  // keep the odometry's translation instead of wherever the points slid to.
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eigen(h_data.topLeftCorner<2, 2>());
+  result.weakest_information = eigen.eigenvalues().minCoeff();
+  for (int i = 0; i < 2; ++i) {
+    if (eigen.eigenvalues()(i) >= options_.min_information) continue;
+    const Eigen::Vector2d v = eigen.eigenvectors().col(i);
+    result.delta.head<2>() += v * v.dot(start.head<2>() - result.delta.head<2>());
+    result.degenerate = true;
+  }
+  result.ok = result.inlier_ratio >= options_.min_inlier_ratio &&
+              result.residual_rms_m <= options_.max_residual_rms_m;
+  return result;
+}
+
+}  // namespace core
+}  // namespace rbpf_slam
