@@ -235,16 +235,21 @@ OfflineSummary OfflineRunner::writeOutputs(const OfflineSummary& in) const {
 
   std::vector<core::Pose2> reference_path;
   if (!options_.reference_path.empty()) {
-    const std::vector<io::StampedPose> reference = io::readTum(options_.reference_path);
-    io::EvaluationOptions eval;
-    eval.max_dt_s = 0.05;
-    const io::EvaluationResult r = io::evaluateTrajectory(estimate, reference, eval);
-    summary.has_reference = r.matched_poses > 0;
-    summary.ate_rmse_m = r.ate_rmse_m;
-    summary.final_position_error_m = r.final_position_error_m;
-    // Draw the reference in the estimate's frame.
-    const core::Pose2 to_estimate = core::inverse(r.alignment);
-    for (const auto& p : reference) reference_path.push_back(core::compose(to_estimate, p.pose));
+    // A reference that cannot be read or matched costs the comparison, not the run's outputs.
+    try {
+      const std::vector<io::StampedPose> reference = io::readTum(options_.reference_path);
+      io::EvaluationOptions eval;
+      eval.max_dt_s = 0.05;
+      const io::EvaluationResult r = io::evaluateTrajectory(estimate, reference, eval);
+      summary.has_reference = r.matched_poses > 0;
+      summary.ate_rmse_m = r.ate_rmse_m;
+      summary.final_position_error_m = r.final_position_error_m;
+      // Draw the reference in the estimate's frame.
+      const core::Pose2 to_estimate = core::inverse(r.alignment);
+      for (const auto& p : reference) reference_path.push_back(core::compose(to_estimate, p.pose));
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "offline_slam: reference not evaluated: %s\n", e.what());
+    }
   }
 
   const std::vector<core::LandmarkEstimate> landmarks = pipeline_.session().filter().landmarks();
@@ -283,7 +288,9 @@ OfflineSummary OfflineRunner::writeOutputs(const OfflineSummary& in) const {
        << "  \"particles\": " << summary.particles << ",\n"
        << "  \"update_ms_mean\": " << summary.update_ms_mean << ",\n"
        << "  \"update_ms_p99\": " << summary.update_ms_p99 << ",\n"
-       << "  \"update_ms_max\": " << summary.update_ms_max;
+       << "  \"update_ms_max\": " << summary.update_ms_max << ",\n"
+       << "  \"scans_matched\": " << pipeline_.scansMatched() << ",\n"
+       << "  \"scans_unmatched\": " << pipeline_.scansUnmatched();
   if (summary.has_reference) {
     json << ",\n  \"ate_rmse_m\": " << summary.ate_rmse_m
          << ",\n  \"final_position_error_m\": " << summary.final_position_error_m;
