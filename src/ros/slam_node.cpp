@@ -249,7 +249,7 @@ bool SlamNode::checkClock() {
 
 void SlamNode::resetAll(const std::string& why) {
   ROS_WARN_STREAM("rbpf_slam_node: " << why << ": clearing the map, the trajectory and tf");
-  pipeline_.session().reset();
+  pipeline_.reset();  // filter, history and the scan matcher's reference
   tf_buffer_.clear();
   if (scan_filter_) scan_filter_->clear();
   features_filter_->clear();
