@@ -73,7 +73,9 @@ lines = ["# Benchmarks", "",
          "- date: " + datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC"),
          "- nproc: %d" % os.cpu_count(), "- CPU: " + cpu,
          "- total run time of the benchmarks and end-to-end runs: %s s" % elapsed,
-         "- the machine may have been shared with other jobs: compare figures of one run only", ""]
+         "- load average when the report was written: " + open("/proc/loadavg").read().split()[0]
+         + " (real time well above cpu time means other jobs were competing for the cores;"
+         " compare figures of one run only)", ""]
 
 def fmt(v):
     if float(v).is_integer() and abs(v) < 1e9:
