@@ -1,6 +1,6 @@
 #include "rbpf_slam/ros/markers.h"
 
-#include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <cmath>
 
 #include "rbpf_slam/ros/conversions.h"
@@ -94,16 +94,21 @@ std::vector<Eigen::Vector2d> covarianceEllipse(const Eigen::Vector2d& mean,
                                                int segments) {
   std::vector<Eigen::Vector2d> points;
   if (!mean.allFinite() || !covariance.allFinite() || segments < 3) return points;
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> solver(
-      0.5 * (covariance + covariance.transpose()));
-  if (solver.info() != Eigen::Success) return points;
+  // Closed-form eigen decomposition of the symmetric part [a b; b c].
+  const double a = covariance(0, 0), c = covariance(1, 1);
+  const double b = 0.5 * (covariance(0, 1) + covariance(1, 0));
+  const double half_sum = 0.5 * (a + c);
+  const double spread = std::hypot(0.5 * (a - c), b);
+  const double angle = 0.5 * std::atan2(2.0 * b, a - c);  // of the major axis
   // Negative eigenvalues (a not quite positive semi-definite matrix) are drawn as zero.
-  const Eigen::Vector2d radii = n_sigma * solver.eigenvalues().cwiseMax(0.0).cwiseSqrt();
-  const Eigen::Matrix2d axes = solver.eigenvectors();
+  const Eigen::Vector2d radii(n_sigma * std::sqrt(std::max(half_sum + spread, 0.0)),
+                              n_sigma * std::sqrt(std::max(half_sum - spread, 0.0)));
+  Eigen::Matrix2d axes;
+  axes << std::cos(angle), -std::sin(angle), std::sin(angle), std::cos(angle);
   for (int i = 0; i <= segments; ++i) {
-    const double a = 2.0 * M_PI * (i % segments) / segments;
-    points.push_back(mean + axes.col(0) * radii(0) * std::cos(a) +
-                     axes.col(1) * radii(1) * std::sin(a));
+    const double t = 2.0 * M_PI * (i % segments) / segments;
+    points.push_back(mean + axes.col(0) * radii(0) * std::cos(t) +
+                     axes.col(1) * radii(1) * std::sin(t));
   }
   return points;
 }

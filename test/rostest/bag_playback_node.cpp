@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 #include <nav_msgs/Path.h>
 #include <ros/ros.h>
+#include <std_srvs/Empty.h>
 #include <tf2_msgs/TFMessage.h>
 #include <tf2_ros/buffer.h>
 #include <tf2_ros/transform_listener.h>
@@ -89,12 +90,15 @@ class PlaybackObserver {
   }
 
   tf2_ros::Buffer& tf() { return tf_buffer_; }
+  const std::string& slamNode() const { return slam_node_; }
   const std::string& mapFrame() const { return map_frame_; }
   const std::string& odomFrame() const { return odom_frame_; }
   const std::string& baseFrame() const { return base_frame_; }
 
   std::mutex mutex_;
   int landmark_messages_ = 0;
+  int last_adds_ = 0;     // ADD markers in the latest landmarks message
+  int last_deletes_ = 0;  // DELETE markers in the latest landmarks message
   int max_line_markers_ = 0;
   int malformed_markers_ = 0;
   int poses_ = 0;
@@ -109,8 +113,11 @@ class PlaybackObserver {
     std::lock_guard<std::mutex> lock(mutex_);
     ++landmark_messages_;
     int lines = 0;
+    last_adds_ = last_deletes_ = 0;
     for (const auto& m : msg.markers) {
+      if (m.action == visualization_msgs::Marker::DELETE) ++last_deletes_;
       if (m.action != visualization_msgs::Marker::ADD) continue;
+      ++last_adds_;
       if (m.ns == "lines") {
         if (m.type == visualization_msgs::Marker::LINE_LIST && m.points.size() == 2) {
           ++lines;
@@ -291,6 +298,25 @@ TEST_F(BagPlaybackTest, FinalPoseMatchesReference) {
   RecordProperty("odometry_position_error_m", std::to_string(odom_position_error));
   EXPECT_LE(position_error, position_tolerance_) << summary.str();
   EXPECT_LE(yaw_error, yaw_tolerance_) << summary.str();
+}
+
+// Runs last (gtest keeps the order of definition): it clears the node's map.
+TEST_F(BagPlaybackTest, ResetServiceDeletesTheLandmarks) {
+  const std::string service = "/" + observer_->slamNode() + "/reset";
+  ASSERT_TRUE(ros::service::waitForService(service, ros::Duration(10.0))) << service;
+  std_srvs::Empty call;
+  ASSERT_TRUE(ros::service::call(service, call));
+  const ros::WallTime deadline = ros::WallTime::now() + ros::WallDuration(10.0);
+  bool cleared = false;
+  while (!cleared && ros::WallTime::now() < deadline) {
+    {
+      std::lock_guard<std::mutex> lock(observer_->mutex_);
+      cleared = observer_->last_adds_ == 0 && observer_->last_deletes_ > 0 &&
+                observer_->last_path_.poses.empty();
+    }
+    ros::WallDuration(0.05).sleep();
+  }
+  EXPECT_TRUE(cleared) << "after ~reset: expected only DELETE markers and an empty trajectory";
 }
 
 }  // namespace
