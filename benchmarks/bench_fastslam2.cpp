@@ -154,9 +154,8 @@ void BM_ResampleLowVariance(benchmark::State& state) {
     benchmark::DoNotOptimize(indices.data());
   }
   state.counters["particles"] = count;
-  state.counters["particles/s"] =
-      benchmark::Counter(static_cast<double>(state.iterations()) * count,
-                         benchmark::Counter::kIsRate);
+  state.counters["particles/s"] = benchmark::Counter(
+      static_cast<double>(state.iterations()) * count, benchmark::Counter::kIsRate);
 }
 BENCHMARK(BM_ResampleLowVariance)
     ->Arg(10)

@@ -28,7 +28,9 @@ sim::RayCaster roomCaster() {
       {"stub", sim::ShapeType::kPolyline, {{6, 9}, {6, 6}}, false},
       {"table_a", sim::ShapeType::kPolygon, {{2, 2}, {3.5, 2}, {3.5, 3}, {2, 3}}, true},
       {"table_b", sim::ShapeType::kPolygon, {{8, 5}, {9.2, 5}, {9.2, 6.4}, {8, 6.4}}, true},
-      {"cabinet", sim::ShapeType::kPolygon, {{11.3, 0.3}, {11.8, 0.3}, {11.8, 1.8}, {11.3, 1.8}},
+      {"cabinet",
+       sim::ShapeType::kPolygon,
+       {{11.3, 0.3}, {11.8, 0.3}, {11.8, 1.8}, {11.3, 1.8}},
        true},
   };
   std::vector<sim::Segment> segments;
