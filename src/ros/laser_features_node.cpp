@@ -33,13 +33,12 @@ LaserFeaturesNode::LaserFeaturesNode(ros::NodeHandle nh, ros::NodeHandle private
 void LaserFeaturesNode::scanCallback(const sensor_msgs::LaserScan::ConstPtr& msg) {
   core::Pose2 sensor_in_base;
   try {
-    sensor_in_base = toPose2(tf_buffer_.lookupTransform(config_.ros.base_frame,
-                                                        msg->header.frame_id, msg->header.stamp)
-                                 .transform);
+    sensor_in_base = toPose2(
+        tf_buffer_.lookupTransform(config_.ros.base_frame, msg->header.frame_id, msg->header.stamp)
+            .transform);
   } catch (const tf2::TransformException& e) {
-    warnThrottled("tf " + msg->header.frame_id, "No transform " + config_.ros.base_frame +
-                                                    " -> " + msg->header.frame_id + ": " +
-                                                    e.what());
+    warnThrottled("tf " + msg->header.frame_id, "No transform " + config_.ros.base_frame + " -> " +
+                                                    msg->header.frame_id + ": " + e.what());
     return;
   }
   core::RangeScan scan;

@@ -31,8 +31,8 @@ geometry_msgs::Point point(const Eigen::Vector2d& p) {
   return out;
 }
 
-visualization_msgs::Marker baseMarker(const std_msgs::Header& header, const std::string& ns,
-                                      int id, int type) {
+visualization_msgs::Marker baseMarker(const std_msgs::Header& header, const std::string& ns, int id,
+                                      int type) {
   visualization_msgs::Marker m;
   m.header = header;
   m.ns = ns;

@@ -22,12 +22,18 @@ constexpr double kSummaryPeriodS = 30.0;
 
 const char* describe(core::FrameResult result) {
   switch (result) {
-    case core::FrameResult::kUpdated: return "updated";
-    case core::FrameResult::kSkippedNoMotion: return "skipped (no motion)";
-    case core::FrameResult::kFirstFrame: return "first frame";
-    case core::FrameResult::kRejectedStamp: return "rejected (stamp not after the last)";
-    case core::FrameResult::kRejectedPose: return "rejected (odometry pose not finite)";
-    case core::FrameResult::kReset: return "reset";
+    case core::FrameResult::kUpdated:
+      return "updated";
+    case core::FrameResult::kSkippedNoMotion:
+      return "skipped (no motion)";
+    case core::FrameResult::kFirstFrame:
+      return "first frame";
+    case core::FrameResult::kRejectedStamp:
+      return "rejected (stamp not after the last)";
+    case core::FrameResult::kRejectedPose:
+      return "rejected (odometry pose not finite)";
+    case core::FrameResult::kReset:
+      return "reset";
   }
   return "unknown";
 }
@@ -74,8 +80,8 @@ SlamNode::SlamNode(ros::NodeHandle nh, ros::NodeHandle private_nh)
 
   pose_publisher_ = private_nh_.advertise<geometry_msgs::PoseWithCovarianceStamped>("pose", 10);
   trajectory_publisher_ = private_nh_.advertise<nav_msgs::Path>("trajectory", 1, true);
-  landmarks_publisher_ = private_nh_.advertise<visualization_msgs::MarkerArray>("landmarks", 1,
-                                                                                true);
+  landmarks_publisher_ =
+      private_nh_.advertise<visualization_msgs::MarkerArray>("landmarks", 1, true);
   particles_publisher_ = private_nh_.advertise<geometry_msgs::PoseArray>("particles", 1);
   reset_server_ = private_nh_.advertiseService("reset", &SlamNode::resetService, this);
   if (ros_options.transform_publish_period > 0.0) {
@@ -115,8 +121,7 @@ void SlamNode::featuresCallback(const FeatureArray::ConstPtr& msg) {
   handleResult(pipeline_.processFeatures(features, odom_pose), msg->header.stamp);
 }
 
-void SlamNode::messageDropped(const std_msgs::Header& header,
-                              tf2_ros::FilterFailureReason reason) {
+void SlamNode::messageDropped(const std_msgs::Header& header, tf2_ros::FilterFailureReason reason) {
   const std::string& odom = config_.ros.odom_frame;
   switch (reason) {
     case tf2_ros::filter_failure_reasons::EmptyFrameID:
@@ -145,16 +150,16 @@ bool SlamNode::lookupPoses(const std_msgs::Header& header, core::Pose2* odom_pos
   const std::string* from = &o.odom_frame;
   const std::string* to = &o.base_frame;
   try {
-    *odom_pose = toPose2(tf_buffer_.lookupTransform(o.odom_frame, o.base_frame, header.stamp)
-                             .transform);
+    *odom_pose =
+        toPose2(tf_buffer_.lookupTransform(o.odom_frame, o.base_frame, header.stamp).transform);
     from = &o.base_frame;
     to = &header.frame_id;
-    *frame_in_base = toPose2(tf_buffer_.lookupTransform(o.base_frame, header.frame_id,
-                                                        header.stamp).transform);
+    *frame_in_base =
+        toPose2(tf_buffer_.lookupTransform(o.base_frame, header.frame_id, header.stamp).transform);
   } catch (const tf2::TransformException& e) {
-    warnThrottled("tf " + *from + " -> " + *to,
-                  "No transform " + *from + " -> " + *to + " at " +
-                      std::to_string(header.stamp.toSec()) + ": " + e.what());
+    warnThrottled("tf " + *from + " -> " + *to, "No transform " + *from + " -> " + *to + " at " +
+                                                    std::to_string(header.stamp.toSec()) + ": " +
+                                                    e.what());
     return false;
   }
   if (!odom_pose->allFinite() || !frame_in_base->allFinite()) {
@@ -175,10 +180,10 @@ void SlamNode::handleResult(core::FrameResult result, const ros::Time& stamp) {
   }
   ++updates_;
   const core::FilterStats stats = pipeline_.session().filter().stats();
-  ROS_INFO_STREAM_THROTTLE(kSummaryPeriodS, "rbpf_slam_node: " << updates_ << " updates, "
-                                                << stats.landmarks << " landmarks, Neff "
-                                                << stats.last_neff << ", " << stats.resamples
-                                                << " resamples");
+  ROS_INFO_STREAM_THROTTLE(kSummaryPeriodS,
+                           "rbpf_slam_node: " << updates_ << " updates, " << stats.landmarks
+                                              << " landmarks, Neff " << stats.last_neff << ", "
+                                              << stats.resamples << " resamples");
   publishState(stamp);
 }
 

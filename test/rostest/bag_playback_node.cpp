@@ -251,10 +251,11 @@ TEST_F(BagPlaybackTest, FinalPoseMatchesReference) {
   for (const auto& r : reference_) {
     if (std::fabs(r.stamp - first_stamp) < 0.01) first_reference = &r;
   }
-  ASSERT_NE(first_reference, nullptr) << "no reference pose at the first trajectory stamp "
-                                      << std::fixed << first_stamp;
+  ASSERT_NE(first_reference, nullptr)
+      << "no reference pose at the first trajectory stamp " << std::fixed << first_stamp;
   const core::Pose2 first_map = rosbridge::toPose2(path.poses.front().pose);
-  const core::Pose2 reference_to_map = core::compose(first_map, core::inverse(first_reference->pose));
+  const core::Pose2 reference_to_map =
+      core::compose(first_map, core::inverse(first_reference->pose));
   const StampedPose& last = reference_.back();
   const core::Pose2 expected = core::compose(reference_to_map, last.pose);
 
@@ -265,12 +266,12 @@ TEST_F(BagPlaybackTest, FinalPoseMatchesReference) {
     tf2_ros::Buffer& tf = observer_->tf();
     map_to_odom = rosbridge::toPose2(
         tf.lookupTransform(observer_->mapFrame(), observer_->odomFrame(), ros::Time(0)).transform);
-    odom_to_base = rosbridge::toPose2(tf.lookupTransform(observer_->odomFrame(),
-                                                         observer_->baseFrame(),
-                                                         ros::Time(last.stamp)).transform);
-    odom_at_first = rosbridge::toPose2(tf.lookupTransform(observer_->odomFrame(),
-                                                          observer_->baseFrame(),
-                                                          ros::Time(first_stamp)).transform);
+    odom_to_base = rosbridge::toPose2(
+        tf.lookupTransform(observer_->odomFrame(), observer_->baseFrame(), ros::Time(last.stamp))
+            .transform);
+    odom_at_first = rosbridge::toPose2(
+        tf.lookupTransform(observer_->odomFrame(), observer_->baseFrame(), ros::Time(first_stamp))
+            .transform);
   } catch (const tf2::TransformException& e) {
     FAIL() << "tf lookup failed: " << e.what();
   }

@@ -112,9 +112,9 @@ TEST(CovarianceEllipse, TwoSigmaAxesFollowTheEigenvectors) {
   EXPECT_NEAR(min_r, 0.4, 1e-2);  // 2 * 0.2 (sampled)
   const Eigen::Vector2d major = points.front() - Eigen::Vector2d(1.0, -1.0);
   EXPECT_NEAR(std::atan2(major.y(), major.x()), angle, 1e-9);
-  EXPECT_TRUE(rosbridge::covarianceEllipse(Eigen::Vector2d::Zero(),
-                                           Eigen::Matrix2d::Constant(NAN), 2.0, 32)
-                  .empty());
+  EXPECT_TRUE(
+      rosbridge::covarianceEllipse(Eigen::Vector2d::Zero(), Eigen::Matrix2d::Constant(NAN), 2.0, 32)
+          .empty());
 }
 
 TEST(ToPoseArray, SkipsNonFinitePoses) {
