@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "rbpf_slam/io/mrclam.h"
+#include "rbpf_slam/io/slam_config.h"
 
 namespace rbpf_slam {
 namespace io {
@@ -196,6 +197,17 @@ TEST(MrclamGrouping, DropsRobotsAndUnknownAndGroupsEqualStamps) {
   EXPECT_EQ(groups[0].measurements[0].subject, 20);
   EXPECT_EQ(groups[1].measurements[0].subject, 6);
   EXPECT_EQ(groups[2].measurements[0].subject, 7);
+}
+
+TEST(MrclamConfig, LandmarksFastSlam2Loads) {
+  const SlamConfig config =
+      loadSlamConfig(std::string(RBPF_SOURCE_DIR) + "/config/landmarks_fastslam2.yaml");
+  EXPECT_EQ(config.frontend, "features");
+  EXPECT_EQ(config.filter.variant, "fastslam2");
+  EXPECT_EQ(config.filter.particles, 100);
+  EXPECT_FALSE(config.filter.use_lines);
+  EXPECT_TRUE(config.filter.use_points);
+  EXPECT_FALSE(config.scan_matching.enabled);
 }
 
 }  // namespace
