@@ -38,8 +38,10 @@ bool YamlSection::has(const std::string& key) const { return node_ && node_.IsMa
 
 YAML::Node YamlSection::child(const std::string& key) {
   read_.insert(key);
-  if (!node_ || !node_.IsMap()) return YAML::Node();
-  return node_[key];
+  // An absent key must read as undefined (false), not as a defined null node.
+  if (!node_ || !node_.IsMap()) return YAML::Node(YAML::NodeType::Undefined);
+  const YAML::Node n = node_[key];
+  return n ? n : YAML::Node(YAML::NodeType::Undefined);
 }
 
 void YamlSection::read(const std::string& key, double* value, double min, double max) {
@@ -133,7 +135,8 @@ void YamlSection::read(const std::string& key, std::vector<double>* value) {
 YamlSection YamlSection::section(const std::string& key) {
   const YAML::Node n = child(key);
   if (n && !n.IsMap() && !n.IsNull()) throw ConfigError(where(key) + " must be a map");
-  return YamlSection(n ? n : YAML::Node(), source_, path_.empty() ? key : path_ + "." + key);
+  return YamlSection(n ? n : YAML::Node(YAML::NodeType::Undefined), source_,
+                     path_.empty() ? key : path_ + "." + key);
 }
 
 void YamlSection::finish() const {
