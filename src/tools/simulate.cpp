@@ -5,14 +5,7 @@
 //
 //   simulate --world WORLD.yaml --output OUT.bag [--seed N] [--duration S]
 
-#include <geometry_msgs/TransformStamped.h>
-#include <nav_msgs/Odometry.h>
-#include <rbpf_slam/FeatureArray.h>
 #include <rosbag/bag.h>
-#include <sensor_msgs/LaserScan.h>
-#include <sensor_msgs/PointCloud.h>
-#include <sensor_msgs/Range.h>
-#include <tf2_msgs/TFMessage.h>
 #include <yaml-cpp/yaml.h>
 
 #include <chrono>
@@ -27,13 +20,12 @@
 
 #include "rbpf_slam/core/sim/simulator.h"
 #include "rbpf_slam/io/world_yaml.h"
+#include "rbpf_slam/ros/sim_messages.h"
 
 namespace {
 
 namespace sim = rbpf_slam::core::sim;
-using rbpf_slam::core::Pose2;
-
-constexpr std::uint32_t kStartStampS = 1262304000;  // 2010-01-01, as the converted real logs
+namespace rosbridge = rbpf_slam::rosbridge;
 
 const char kUsage[] =
     "usage: simulate --world WORLD.yaml --output OUT.bag [--seed N] [--duration S]\n"
@@ -95,77 +87,33 @@ std::string besideBag(const std::string& bag, const std::string& suffix) {
   return (has_ext ? bag.substr(0, bag.size() - 4) : bag) + suffix;
 }
 
-ros::Time stampAt(double t) { return ros::Time(kStartStampS, 0) + ros::Duration(t); }
-
-double absoluteStamp(double t) { return static_cast<double>(kStartStampS) + t; }
-
-geometry_msgs::Quaternion yawQuaternion(double yaw) {
-  geometry_msgs::Quaternion q;
-  q.z = std::sin(0.5 * yaw);
-  q.w = std::cos(0.5 * yaw);
-  return q;
-}
-
-geometry_msgs::TransformStamped transformMessage(const std::string& parent,
-                                                 const std::string& child, const Pose2& pose,
-                                                 const ros::Time& stamp) {
-  geometry_msgs::TransformStamped t;
-  t.header.stamp = stamp;
-  t.header.frame_id = parent;
-  t.child_frame_id = child;
-  t.transform.translation.x = pose.x();
-  t.transform.translation.y = pose.y();
-  t.transform.rotation = yawQuaternion(pose.z());
-  return t;
-}
-
-nav_msgs::Odometry odometryMessage(const std::string& frame, const Pose2& pose,
-                                   const Eigen::Vector3d& twist, const ros::Time& stamp) {
-  nav_msgs::Odometry odometry;
-  odometry.header.stamp = stamp;
-  odometry.header.frame_id = frame;
-  odometry.child_frame_id = "base_link";
-  odometry.pose.pose.position.x = pose.x();
-  odometry.pose.pose.position.y = pose.y();
-  odometry.pose.pose.orientation = yawQuaternion(pose.z());
-  odometry.twist.twist.linear.x = twist.x();
-  odometry.twist.twist.linear.y = twist.y();
-  odometry.twist.twist.angular.z = twist.z();
-  return odometry;
-}
-
-/// Converts simulator events into the messages and topics of the real bags.
+/// Writes the simulator's events to a bag with the topics of the real ones.
 class BagWriter {
  public:
   BagWriter(const std::string& path, const sim::Simulator& simulator, const std::string& ref_path)
       : simulator_(simulator), reference_(std::fopen(ref_path.c_str(), "w"), &std::fclose) {
     if (!reference_) throw std::runtime_error(ref_path + ": cannot be written");
     bag_.open(path, rosbag::bagmode::Write);
-    writeStaticTransforms();
+    const tf2_msgs::TFMessage mounts =
+        rosbridge::simStaticTransforms(simulator_, clock_.stamp(0.0));
+    if (!mounts.transforms.empty()) put("/tf_static", clock_.stamp(0.0), mounts);
   }
 
   void write(const sim::SimEvent& event) {
-    const ros::Time stamp = stampAt(event.stamp);
-    switch (event.type) {
-      case sim::SimEventType::kOdometry:
-        writeOdometry(event, stamp);
-        break;
-      case sim::SimEventType::kLaser:
-        writeScan(*event.scan, stamp);
-        break;
-      case sim::SimEventType::kSonar:
-        writeCones(event, stamp, "/sonar", "sonar_", sensor_msgs::Range::ULTRASOUND);
-        writeSonarCloud(event, stamp);
-        break;
-      case sim::SimEventType::kInfrared:
-        writeCones(event, stamp, "/ir", "ir_", sensor_msgs::Range::INFRARED);
-        break;
-      case sim::SimEventType::kRangeBearing:
-        writeFeatures(event, stamp);
-        break;
-      case sim::SimEventType::kWorldChange:
-        break;  // recorded in OUT.landmarks.yaml
+    const ros::Time stamp = clock_.stamp(event.stamp);
+    const rosbridge::SimMessages messages =
+        rosbridge::toSimMessages(event, simulator_, clock_);
+    if (messages.tf) put("/tf", stamp, *messages.tf);
+    if (messages.odom) put("/odom", stamp, *messages.odom);
+    if (messages.ground_truth) {
+      put("/ground_truth", stamp, *messages.ground_truth);
+      std::fputs(rosbridge::groundTruthTumLine(event, clock_).c_str(), reference_.get());
     }
+    if (messages.scan) put("/scan", stamp, *messages.scan);
+    for (const auto& range : messages.sonar) put("/sonar", stamp, range);
+    if (messages.sonar_cloud) put("/sonar_cloud", stamp, *messages.sonar_cloud);
+    for (const auto& range : messages.infrared) put("/ir", stamp, range);
+    if (messages.features) put("/features", stamp, *messages.features);
   }
 
   void close() {
@@ -173,6 +121,7 @@ class BagWriter {
     if (std::fflush(reference_.get()) != 0) throw std::runtime_error("ground truth not written");
   }
   const std::map<std::string, long>& counts() const { return counts_; }
+  const rosbridge::SimClock& clock() const { return clock_; }
 
  private:
   template <typename Message>
@@ -181,99 +130,8 @@ class BagWriter {
     ++counts_[topic];
   }
 
-  void writeStaticTransforms() {
-    const ros::Time stamp = stampAt(0.0);
-    const sim::SensorsConfig& sensors = simulator_.world().sensors;
-    tf2_msgs::TFMessage message;
-    if (sensors.laser.enabled) {
-      message.transforms.push_back(
-          transformMessage("base_link", "base_laser_link", simulator_.laserPose(), stamp));
-    }
-    for (size_t i = 0; sensors.sonar.enabled && i < simulator_.sonarPoses().size(); ++i) {
-      message.transforms.push_back(transformMessage("base_link", "sonar_" + std::to_string(i),
-                                                    simulator_.sonarPoses()[i], stamp));
-    }
-    for (size_t i = 0; sensors.infrared.enabled && i < simulator_.infraredPoses().size(); ++i) {
-      message.transforms.push_back(transformMessage("base_link", "ir_" + std::to_string(i),
-                                                    simulator_.infraredPoses()[i], stamp));
-    }
-    if (!message.transforms.empty()) put("/tf_static", stamp, message);
-  }
-
-  void writeOdometry(const sim::SimEvent& event, const ros::Time& stamp) {
-    tf2_msgs::TFMessage tf;
-    tf.transforms.push_back(transformMessage("odom", "base_link", event.odom_pose, stamp));
-    put("/tf", stamp, tf);
-    put("/odom", stamp, odometryMessage("odom", event.odom_pose, event.odom_twist, stamp));
-    const Eigen::Vector3d true_twist(event.true_speed_mps, 0.0, event.true_turn_rate_radps);
-    put("/ground_truth", stamp, odometryMessage("map", event.true_pose, true_twist, stamp));
-    const Pose2& p = event.true_pose;
-    std::fprintf(reference_.get(), "%.6f %.6f %.6f 0 0.000000000 0.000000000 %.9f %.9f\n",
-                 absoluteStamp(event.stamp), p.x(), p.y(), std::sin(0.5 * p.z()),
-                 std::cos(0.5 * p.z()));
-  }
-
-  void writeScan(const rbpf_slam::core::RangeScan& scan, const ros::Time& stamp) {
-    sensor_msgs::LaserScan message;
-    message.header.stamp = stamp;
-    message.header.frame_id = "base_laser_link";
-    message.angle_min = scan.angle_min;
-    message.angle_increment = scan.angle_increment;
-    message.angle_max = scan.angle_min + (scan.ranges.size() - 1) * scan.angle_increment;
-    message.scan_time = 1.0 / simulator_.world().sensors.laser.rate_hz;
-    message.range_min = scan.range_min;
-    message.range_max = scan.range_max;
-    message.ranges = scan.ranges;
-    put("/scan", stamp, message);
-  }
-
-  void writeCones(const sim::SimEvent& event, const ros::Time& stamp, const std::string& topic,
-                  const std::string& frame_prefix, std::uint8_t radiation) {
-    for (const sim::TransducerReading& cone : event.cones) {
-      sensor_msgs::Range message;
-      message.header.stamp = stamp;
-      message.header.frame_id = frame_prefix + std::to_string(cone.index);
-      message.radiation_type = radiation;
-      message.field_of_view = cone.reading.field_of_view;
-      message.min_range = cone.reading.min_range;
-      message.max_range = cone.reading.max_range;
-      message.range = cone.reading.range;
-      put(topic, stamp, message);
-    }
-  }
-
-  /// Echoes (readings below max range) as points in base_link, as RosAria publishes them.
-  void writeSonarCloud(const sim::SimEvent& event, const ros::Time& stamp) {
-    sensor_msgs::PointCloud cloud;
-    cloud.header.stamp = stamp;
-    cloud.header.frame_id = "base_link";
-    for (const sim::TransducerReading& cone : event.cones) {
-      if (cone.reading.range >= cone.reading.max_range) continue;
-      const Pose2& mount = cone.reading.sensor_pose;
-      geometry_msgs::Point32 point;
-      point.x = mount.x() + cone.reading.range * std::cos(mount.z());
-      point.y = mount.y() + cone.reading.range * std::sin(mount.z());
-      cloud.points.push_back(point);
-    }
-    put("/sonar_cloud", stamp, cloud);
-  }
-
-  void writeFeatures(const sim::SimEvent& event, const ros::Time& stamp) {
-    rbpf_slam::FeatureArray message;
-    message.header.stamp = stamp;
-    message.header.frame_id = "base_link";
-    for (const auto& feature : event.features.points) {
-      rbpf_slam::PointFeature point;
-      point.range = feature.range;
-      point.bearing = feature.bearing;
-      for (int k = 0; k < 4; ++k) point.covariance[k] = feature.covariance(k / 2, k % 2);
-      point.id = feature.id;
-      message.points.push_back(point);
-    }
-    put("/features", stamp, message);
-  }
-
   const sim::Simulator& simulator_;
+  const rosbridge::SimClock clock_;
   rosbag::Bag bag_;
   std::unique_ptr<FILE, int (*)(FILE*)> reference_;  // TUM ground truth, one line per odometry
   std::map<std::string, long> counts_;
@@ -306,7 +164,7 @@ void writeTruth(const std::string& path, const Arguments& arguments,
   root["world"] = arguments.world;
   root["seed"] = arguments.seed;
   root["frame"] = "map";
-  root["start_stamp"] = kStartStampS;
+  root["start_stamp"] = static_cast<std::uint32_t>(rosbridge::SimClock().stamp(0.0).sec);
   std::map<int, const sim::Landmark*> final_landmarks;
   for (const sim::Landmark& l : simulator.landmarks()) final_landmarks[l.id] = &l;
   for (const sim::Landmark& l : simulator.world().landmarks) {
@@ -343,7 +201,7 @@ void writeTruth(const std::string& path, const Arguments& arguments,
   for (const sim::AppliedChange& change : simulator.appliedChanges()) {
     YAML::Node node;
     node["change"] = change.change_index;
-    node["stamp"] = number(absoluteStamp(change.stamp), "%.6f");
+    node["stamp"] = number(rosbridge::SimClock().seconds(change.stamp), "%.6f");
     node["laps_completed"] = change.laps_completed;
     for (const sim::LandmarkChange& l : change.landmarks) {
       YAML::Node moved;

@@ -25,11 +25,15 @@ FrameResult SlamPipeline::processScan(const RangeScan& scan, const Pose2& odom_p
   const MotionInput* override_motion = nullptr;
   last_match_ = ScanMatchResult();
   if (!reference_points_.empty() && session_.trajectory().size() > 0) {
-    const Pose2 odometry_delta = between(session_.lastOdomPose(), odom_pose);
+    // The match spans reference scan -> this scan; frames from other sources (features) may
+    // have been processed in between, so the filter's increment is the part after the last
+    // frame: odometry covers reference -> last frame, the match the whole span.
+    const Pose2 odometry_delta = between(reference_odom_pose_, odom_pose);
     const ScanMatchResult match = matcher_.match(reference_points_, points, odometry_delta);
     last_match_ = match;
     if (match.ok) {
-      measured.delta = match.delta;
+      const Pose2 reference_to_last = between(reference_odom_pose_, session_.lastOdomPose());
+      measured.delta = compose(inverse(reference_to_last), match.delta);
       // A degenerate match carries odometry's error along one direction: odometry's noise.
       measured.noise_scale = match.degenerate ? 1.0 : matcher_.options().noise_scale;
       override_motion = &measured;
@@ -41,6 +45,7 @@ FrameResult SlamPipeline::processScan(const RangeScan& scan, const Pose2& odom_p
   const FrameResult result = session_.process(scan.stamp, odom_pose, last_features_, override_motion);
   if (result == FrameResult::kUpdated || result == FrameResult::kFirstFrame) {
     reference_points_ = std::move(points);
+    reference_odom_pose_ = odom_pose;
   }
   return result;
 }

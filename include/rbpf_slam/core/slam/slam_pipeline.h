@@ -48,6 +48,7 @@ class SlamPipeline {
   SlamSession session_;
   FeatureSet last_features_;
   std::vector<Eigen::Vector2d> reference_points_;  // last scan the filter used, base frame
+  Pose2 reference_odom_pose_ = Pose2::Zero();      // odometry pose of that scan
   ScanMatchResult last_match_;
   long scans_matched_ = 0;
   long scans_unmatched_ = 0;

@@ -1,0 +1,178 @@
+#include "rbpf_slam/ros/sim_messages.h"
+
+#include <cmath>
+#include <cstdio>
+
+namespace rbpf_slam {
+namespace rosbridge {
+namespace {
+
+namespace sim = core::sim;
+using core::Pose2;
+
+geometry_msgs::Quaternion yawQuaternion(double yaw) {
+  geometry_msgs::Quaternion q;
+  q.z = std::sin(0.5 * yaw);
+  q.w = std::cos(0.5 * yaw);
+  return q;
+}
+
+geometry_msgs::TransformStamped transformMessage(const std::string& parent,
+                                                 const std::string& child, const Pose2& pose,
+                                                 const ros::Time& stamp) {
+  geometry_msgs::TransformStamped t;
+  t.header.stamp = stamp;
+  t.header.frame_id = parent;
+  t.child_frame_id = child;
+  t.transform.translation.x = pose.x();
+  t.transform.translation.y = pose.y();
+  t.transform.rotation = yawQuaternion(pose.z());
+  return t;
+}
+
+nav_msgs::Odometry odometryMessage(const std::string& frame, const Pose2& pose,
+                                   const Eigen::Vector3d& twist, const ros::Time& stamp) {
+  nav_msgs::Odometry odometry;
+  odometry.header.stamp = stamp;
+  odometry.header.frame_id = frame;
+  odometry.child_frame_id = "base_link";
+  odometry.pose.pose.position.x = pose.x();
+  odometry.pose.pose.position.y = pose.y();
+  odometry.pose.pose.orientation = yawQuaternion(pose.z());
+  odometry.twist.twist.linear.x = twist.x();
+  odometry.twist.twist.linear.y = twist.y();
+  odometry.twist.twist.angular.z = twist.z();
+  return odometry;
+}
+
+sensor_msgs::LaserScan scanMessage(const core::RangeScan& scan, double rate_hz,
+                                   const ros::Time& stamp) {
+  sensor_msgs::LaserScan message;
+  message.header.stamp = stamp;
+  message.header.frame_id = "base_laser_link";
+  message.angle_min = scan.angle_min;
+  message.angle_increment = scan.angle_increment;
+  message.angle_max = scan.angle_min + (scan.ranges.size() - 1) * scan.angle_increment;
+  message.scan_time = rate_hz > 0.0 ? 1.0 / rate_hz : 0.0;
+  message.range_min = scan.range_min;
+  message.range_max = scan.range_max;
+  message.ranges = scan.ranges;
+  return message;
+}
+
+std::vector<sensor_msgs::Range> coneMessages(const sim::SimEvent& event,
+                                             const std::string& frame_prefix,
+                                             std::uint8_t radiation, const ros::Time& stamp) {
+  std::vector<sensor_msgs::Range> messages;
+  for (const sim::TransducerReading& cone : event.cones) {
+    sensor_msgs::Range message;
+    message.header.stamp = stamp;
+    message.header.frame_id = frame_prefix + std::to_string(cone.index);
+    message.radiation_type = radiation;
+    message.field_of_view = cone.reading.field_of_view;
+    message.min_range = cone.reading.min_range;
+    message.max_range = cone.reading.max_range;
+    message.range = cone.reading.range;
+    messages.push_back(message);
+  }
+  return messages;
+}
+
+/// Echoes (readings below max range) as points in base_link, as RosAria publishes them.
+sensor_msgs::PointCloud sonarCloud(const sim::SimEvent& event, const ros::Time& stamp) {
+  sensor_msgs::PointCloud cloud;
+  cloud.header.stamp = stamp;
+  cloud.header.frame_id = "base_link";
+  for (const sim::TransducerReading& cone : event.cones) {
+    if (cone.reading.range >= cone.reading.max_range) continue;
+    const Pose2& mount = cone.reading.sensor_pose;
+    geometry_msgs::Point32 point;
+    point.x = mount.x() + cone.reading.range * std::cos(mount.z());
+    point.y = mount.y() + cone.reading.range * std::sin(mount.z());
+    cloud.points.push_back(point);
+  }
+  return cloud;
+}
+
+FeatureArray featureMessage(const sim::SimEvent& event, const ros::Time& stamp) {
+  FeatureArray message;
+  message.header.stamp = stamp;
+  message.header.frame_id = "base_link";
+  for (const auto& feature : event.features.points) {
+    PointFeature point;
+    point.range = feature.range;
+    point.bearing = feature.bearing;
+    for (int k = 0; k < 4; ++k) point.covariance[k] = feature.covariance(k / 2, k % 2);
+    point.id = feature.id;
+    message.points.push_back(point);
+  }
+  return message;
+}
+
+}  // namespace
+
+tf2_msgs::TFMessage simStaticTransforms(const sim::Simulator& simulator,
+                                        const ros::Time& stamp) {
+  const sim::SensorsConfig& sensors = simulator.world().sensors;
+  tf2_msgs::TFMessage message;
+  if (sensors.laser.enabled) {
+    message.transforms.push_back(
+        transformMessage("base_link", "base_laser_link", simulator.laserPose(), stamp));
+  }
+  for (size_t i = 0; sensors.sonar.enabled && i < simulator.sonarPoses().size(); ++i) {
+    message.transforms.push_back(transformMessage("base_link", "sonar_" + std::to_string(i),
+                                                  simulator.sonarPoses()[i], stamp));
+  }
+  for (size_t i = 0; sensors.infrared.enabled && i < simulator.infraredPoses().size(); ++i) {
+    message.transforms.push_back(transformMessage("base_link", "ir_" + std::to_string(i),
+                                                  simulator.infraredPoses()[i], stamp));
+  }
+  return message;
+}
+
+SimMessages toSimMessages(const sim::SimEvent& event, const sim::Simulator& simulator,
+                          const SimClock& clock) {
+  const ros::Time stamp = clock.stamp(event.stamp);
+  SimMessages out;
+  switch (event.type) {
+    case sim::SimEventType::kOdometry: {
+      tf2_msgs::TFMessage tf;
+      tf.transforms.push_back(transformMessage("odom", "base_link", event.odom_pose, stamp));
+      out.tf = tf;
+      out.odom = odometryMessage("odom", event.odom_pose, event.odom_twist, stamp);
+      const Eigen::Vector3d true_twist(event.true_speed_mps, 0.0, event.true_turn_rate_radps);
+      out.ground_truth = odometryMessage("map", event.true_pose, true_twist, stamp);
+      break;
+    }
+    case sim::SimEventType::kLaser:
+      if (event.scan) {
+        out.scan = scanMessage(*event.scan, simulator.world().sensors.laser.rate_hz, stamp);
+      }
+      break;
+    case sim::SimEventType::kSonar:
+      out.sonar = coneMessages(event, "sonar_", sensor_msgs::Range::ULTRASOUND, stamp);
+      out.sonar_cloud = sonarCloud(event, stamp);
+      break;
+    case sim::SimEventType::kInfrared:
+      out.infrared = coneMessages(event, "ir_", sensor_msgs::Range::INFRARED, stamp);
+      break;
+    case sim::SimEventType::kRangeBearing:
+      out.features = featureMessage(event, stamp);
+      break;
+    case sim::SimEventType::kWorldChange:
+      break;  // no message: the truth file and the node's log record changes
+  }
+  return out;
+}
+
+std::string groundTruthTumLine(const sim::SimEvent& event, const SimClock& clock) {
+  const Pose2& p = event.true_pose;
+  char line[160];
+  std::snprintf(line, sizeof(line), "%.6f %.6f %.6f 0 0.000000000 0.000000000 %.9f %.9f\n",
+                clock.seconds(event.stamp), p.x(), p.y(), std::sin(0.5 * p.z()),
+                std::cos(0.5 * p.z()));
+  return line;
+}
+
+}  // namespace rosbridge
+}  // namespace rbpf_slam
