@@ -5,6 +5,9 @@ set -euo pipefail
 
 ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 BUILD="$ROOT/build"
+# The devel space sits beside build/ and build/devel links to it: rosrun skips every file under
+# PACKAGE/build/, so executables in build/devel/lib would be invisible to `rosrun rbpf_slam X`.
+DEVEL="$ROOT/devel"
 export PATH=/usr/bin:/bin:/usr/sbin:/sbin:$PATH
 
 APT_PACKAGES=(ros-base-dev libtf2-ros-dev libtf2-geometry-msgs-dev libsensor-msgs-dev
@@ -29,10 +32,13 @@ install_missing() {
 
 build_package() {
   local build_type=${1:-Release}
-  mkdir -p "$BUILD"
+  mkdir -p "$BUILD" "$DEVEL"
+  # A build/devel directory from an older layout is replaced by the link.
+  if [ -d "$BUILD/devel" ] && [ ! -L "$BUILD/devel" ]; then rm -rf "$BUILD/devel"; fi
+  ln -sfn ../devel "$BUILD/devel"
   echo "Building ($build_type) in $BUILD ..."
   cmake -S "$ROOT" -B "$BUILD" -DCMAKE_BUILD_TYPE="$build_type" \
-    -DPYTHON_EXECUTABLE=/usr/bin/python3 -DCATKIN_DEVEL_PREFIX="$BUILD/devel" >"$BUILD/cmake.log" 2>&1 \
+    -DPYTHON_EXECUTABLE=/usr/bin/python3 -DCATKIN_DEVEL_PREFIX="$DEVEL" >"$BUILD/cmake.log" 2>&1 \
     || { tail -n 40 "$BUILD/cmake.log"; echo "cmake failed (log: $BUILD/cmake.log)" >&2; return 1; }
   make -C "$BUILD" -j"$(nproc)" >"$BUILD/make.log" 2>&1 \
     || { grep -E "error|Error" "$BUILD/make.log" | head -n 40; echo "build failed (log: $BUILD/make.log)" >&2; return 1; }

@@ -24,12 +24,14 @@ echo "== integration tests (rostest) =="
 for t in "$ROOT"/test/rostest/*.test; do
   [ -e "$t" ] || continue
   name=$(basename "$t")
-  if rostest --text rbpf_slam "$name" >"$BUILD/rostest_${name%.test}.log" 2>&1; then
+  # Without --text: with it rostest exits 0 even when a test case fails.
+  if rostest rbpf_slam "$name" >"$BUILD/rostest_${name%.test}.log" 2>&1; then
     echo "PASS $name"
     passed=$((passed + 1))
   else
-    echo "FAIL $name (log: $BUILD/rostest_${name%.test}.log)"
+    echo "FAIL $name (log: $BUILD/rostest_${name%.test}.log, test output: $ROS_LOG_DIR)"
     tail -n 30 "$BUILD/rostest_${name%.test}.log"
+    grep -h -A4 "<failure" "$ROS_HOME"/test_results/rbpf_slam/rosunit-*.xml 2>/dev/null | head -n 40 || true
     failed=$((failed + 1))
     failures+=("rostest $name")
   fi

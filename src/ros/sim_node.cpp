@@ -3,6 +3,7 @@
 #include <rosgraph_msgs/Clock.h>
 
 #include <cmath>
+#include <filesystem>
 #include <stdexcept>
 
 #include "rbpf_slam/io/world_yaml.h"
@@ -31,6 +32,7 @@ SimNodeOptions loadSimNodeOptions(const ros::NodeHandle& private_nh) {
   private_nh.param("seed", options.seed, options.seed);
   private_nh.param("rate", options.rate, options.rate);
   private_nh.param("duration", options.duration_s, options.duration_s);
+  private_nh.param("start_delay", options.start_delay_s, options.start_delay_s);
   bool use_sim_time = false;
   ros::param::param("/use_sim_time", use_sim_time, false);
   private_nh.param("publish_clock", options.publish_clock, use_sim_time);
@@ -46,6 +48,10 @@ SimNodeOptions loadSimNodeOptions(const ros::NodeHandle& private_nh) {
   if (!std::isfinite(options.duration_s) || options.duration_s < 0.0) {
     throw std::invalid_argument(ns + "/duration = " + std::to_string(options.duration_s) +
                                 " must be >= 0 (0: the whole route)");
+  }
+  if (!std::isfinite(options.start_delay_s) || options.start_delay_s < 0.0) {
+    throw std::invalid_argument(ns + "/start_delay = " + std::to_string(options.start_delay_s) +
+                                " must be >= 0 (wall s)");
   }
   if (!options.publish_clock && options.rate != 1.0) {
     throw std::invalid_argument(ns + "/rate = " + std::to_string(options.rate) +
@@ -77,10 +83,14 @@ SimNode::SimNode(ros::NodeHandle nh, const SimNodeOptions& options)
     features_publisher_ = nh_.advertise<FeatureArray>("features", 10);
   }
   if (!options_.ground_truth_file.empty()) {
-    ground_truth_file_.reset(std::fopen(options_.ground_truth_file.c_str(), "w"));
+    // Written as FILE.part and renamed when the route is done: FILE appears complete.
+    const std::filesystem::path path(options_.ground_truth_file);
+    std::error_code ignored;
+    if (path.has_parent_path()) std::filesystem::create_directories(path.parent_path(), ignored);
+    const std::string partial = options_.ground_truth_file + ".part";
+    ground_truth_file_.reset(std::fopen(partial.c_str(), "w"));
     if (!ground_truth_file_) {
-      throw std::invalid_argument("~ground_truth_file: cannot write '" +
-                                  options_.ground_truth_file + "'");
+      throw std::invalid_argument("~ground_truth_file: cannot write '" + partial + "'");
     }
   }
   ROS_INFO_STREAM("sim_node: world " << options_.world << " (" << simulator_.world().name
@@ -137,7 +147,12 @@ void SimNode::publish(const core::sim::SimEvent& event) {
 }
 
 void SimNode::run() {
-  // Let subscribers connect before the first message, in simulated time 0.
+  // Let subscribers connect before the first message, with the clock held at time 0.
+  const ros::WallTime connect_until = ros::WallTime::now() + ros::WallDuration(options_.start_delay_s);
+  while (ros::ok() && ros::WallTime::now() < connect_until) {
+    publishClock(0.0);
+    ros::WallDuration(0.05).sleep();
+  }
   wall_start_ = ros::WallTime::now();
   publishClock(0.0);
   static_broadcaster_.sendTransform(simStaticTransforms(simulator_, clock_.stamp(0.0)).transforms);
@@ -153,6 +168,14 @@ void SimNode::run() {
     ros::spinOnce();
   }
   if (!ros::ok()) return;
+  if (ground_truth_file_) {
+    ground_truth_file_.reset();
+    const std::string partial = options_.ground_truth_file + ".part";
+    if (std::rename(partial.c_str(), options_.ground_truth_file.c_str()) != 0) {
+      ROS_ERROR_STREAM("sim_node: cannot rename " << partial << " to "
+                                                  << options_.ground_truth_file);
+    }
+  }
   ROS_INFO_STREAM("sim_node: route done after " << simulator_.time() << " s simulated ("
                                                 << simulator_.lapsCompleted() << " of "
                                                 << simulator_.world().laps

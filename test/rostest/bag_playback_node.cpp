@@ -74,9 +74,22 @@ class PlaybackObserver {
   bool waitForEnd(double end_stamp, double last_update_stamp, double settle_s, double timeout_s) {
     const ros::WallTime start = ros::WallTime::now();
     ros::WallTime clock_passed_end;
+    ros::WallTime clock_changed = start;
+    double last_clock = -1.0;
     ros::WallRate rate(20.0);
     while (ros::ok() && (ros::WallTime::now() - start).toSec() < timeout_s) {
-      if (ros::Time::now().toSec() >= end_stamp) {
+      const double now = ros::Time::now().toSec();
+      if (now != last_clock) {
+        last_clock = now;
+        clock_changed = ros::WallTime::now();
+      }
+      // A bag whose last message is the last reference pose: the player's clock stops just
+      // short of it. Stopped within a scan period of the end for settle_s: the bag is over.
+      if (now >= last_update_stamp - 0.5 &&
+          (ros::WallTime::now() - clock_changed).toSec() > settle_s) {
+        return true;
+      }
+      if (now >= end_stamp) {
         if (clock_passed_end.isZero()) clock_passed_end = ros::WallTime::now();
         std::lock_guard<std::mutex> lock(mutex_);
         if (last_pose_stamp_ >= last_update_stamp - 1e-3 ||
@@ -100,6 +113,7 @@ class PlaybackObserver {
   int last_adds_ = 0;     // ADD markers in the latest landmarks message
   int last_deletes_ = 0;  // DELETE markers in the latest landmarks message
   int max_line_markers_ = 0;
+  int max_point_markers_ = 0;
   int malformed_markers_ = 0;
   int poses_ = 0;
   int non_finite_poses_ = 0;
@@ -112,12 +126,13 @@ class PlaybackObserver {
   void onLandmarks(const visualization_msgs::MarkerArray& msg) {
     std::lock_guard<std::mutex> lock(mutex_);
     ++landmark_messages_;
-    int lines = 0;
+    int lines = 0, points = 0;
     last_adds_ = last_deletes_ = 0;
     for (const auto& m : msg.markers) {
       if (m.action == visualization_msgs::Marker::DELETE) ++last_deletes_;
       if (m.action != visualization_msgs::Marker::ADD) continue;
       ++last_adds_;
+      if (m.ns == "points") ++points;
       if (m.ns == "lines") {
         if (m.type == visualization_msgs::Marker::LINE_LIST && m.points.size() == 2) {
           ++lines;
@@ -132,6 +147,7 @@ class PlaybackObserver {
       }
     }
     max_line_markers_ = std::max(max_line_markers_, lines);
+    max_point_markers_ = std::max(max_point_markers_, points);
   }
 
   void onPose(const geometry_msgs::PoseWithCovarianceStamped& msg) {
@@ -182,10 +198,17 @@ class BagPlaybackTest : public ::testing::Test {
     private_nh.param("end_margin", end_margin, end_margin);
     private_nh.param("settle", settle, settle);
     private_nh.param("timeout", timeout, timeout);
-    reference_ = readTum(reference_path_);
+    // Subscribe first: a live simulation writes its ground truth only when its route is done.
     observer_ = std::make_unique<PlaybackObserver>();
     spinner_ = std::make_unique<ros::AsyncSpinner>(1);
     spinner_->start();
+    double reference_wait = 0.0;
+    private_nh.param("reference_wait", reference_wait, reference_wait);
+    const ros::WallTime give_up = ros::WallTime::now() + ros::WallDuration(reference_wait);
+    while (!std::ifstream(reference_path_).good() && ros::WallTime::now() < give_up) {
+      ros::WallDuration(0.2).sleep();
+    }
+    reference_ = readTum(reference_path_);
     if (reference_.empty()) return;
     const double last = reference_.back().stamp;
     ended_ = observer_->waitForEnd(last + end_margin, last, settle, timeout);
@@ -220,12 +243,23 @@ TEST_F(BagPlaybackTest, BagPlayedToTheEnd) {
                       << ros::Time::now().toSec() << ")";
 }
 
-TEST_F(BagPlaybackTest, LandmarkMarkersContainLines) {
+// ~expected_markers: "lines" (laser configs), "points" (range-bearing landmarks) or "both".
+TEST_F(BagPlaybackTest, LandmarkMarkersContainTheExpectedKinds) {
+  std::string expected = "lines";
+  ros::NodeHandle("~").param<std::string>("expected_markers", expected, expected);
   std::lock_guard<std::mutex> lock(observer_->mutex_);
   EXPECT_GT(observer_->landmark_messages_, 0) << "nothing on ~landmarks";
-  EXPECT_GT(observer_->max_line_markers_, 0) << "no LINE_LIST marker in namespace 'lines'";
+  if (expected == "lines" || expected == "both") {
+    EXPECT_GT(observer_->max_line_markers_, 0) << "no LINE_LIST marker in namespace 'lines'";
+  }
+  if (expected == "points" || expected == "both") {
+    EXPECT_GT(observer_->max_point_markers_, 0) << "no marker in namespace 'points'";
+  }
+  EXPECT_TRUE(expected == "lines" || expected == "points" || expected == "both")
+      << "~expected_markers = '" << expected << "' is not lines, points or both";
   EXPECT_EQ(observer_->malformed_markers_, 0);
   RecordProperty("max_line_markers", observer_->max_line_markers_);
+  RecordProperty("max_point_markers", observer_->max_point_markers_);
 }
 
 TEST_F(BagPlaybackTest, NothingNonFinitePublished) {

@@ -24,7 +24,8 @@ struct SimNodeOptions {
   double rate = 1.0;               // ~rate: simulated seconds per wall second (> 0)
   bool publish_clock = true;       // ~publish_clock: default = /use_sim_time
   double duration_s = 0.0;         // ~duration: stop earlier; 0 = the whole route
-  std::string ground_truth_file;   // ~ground_truth_file: TUM file written as it runs ("" = none)
+  double start_delay_s = 2.0;      // ~start_delay: wall s with the clock at 0 before starting
+  std::string ground_truth_file;   // ~ground_truth_file: TUM file, complete when the route is done
 };
 
 /// Reads and checks the options; throws std::invalid_argument naming the parameter.
