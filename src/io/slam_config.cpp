@@ -2,6 +2,8 @@
 
 #include <stdexcept>
 
+#include "rbpf_slam/io/landmark_file.h"
+
 namespace rbpf_slam {
 namespace io {
 namespace {
@@ -90,6 +92,7 @@ void readRos(YamlSection& top, RosOptions* o) {
   top.read("tf_wait_timeout", &o->tf_wait_timeout, 0.0, 10.0);
   top.read("queue_size", &o->queue_size, 1, 10000);
   top.read("publish_particles", &o->publish_particles);
+  top.read("map_save_prefix", &o->map_save_prefix);
   for (const std::string* frame : {&o->map_frame, &o->odom_frame, &o->base_frame}) {
     if (frame->empty()) throw ConfigError(top.source() + ": frame names must not be empty");
   }
@@ -128,8 +131,14 @@ SlamConfig parseSlamConfig(const YAML::Node& root, const std::string& source) {
   top.read("angular_update", &s.angular_update_rad, 0.0, 10.0);
   top.read("max_time_gap", &s.max_time_gap_s, 0.0, 1e6);
   top.read("reset_on_time_jump_back", &s.reset_on_time_jump_back_s, 0.0, 1e6);
+  top.read("map_file", &config.map_file);
+  top.read("localization_only", &config.localization_only);
   readRos(top, &config.ros);
   top.finish();
+  if (config.localization_only && config.map_file.empty()) {
+    throw ConfigError(source + ": localization_only = true needs map_file (a landmarks YAML "
+                               "written by ~save_map or offline_slam)");
+  }
   validateAs(config.filter, source);
   validateAs(config.session, source);
   validateAs(config.laser, source);
@@ -149,6 +158,23 @@ SlamConfig loadSlamConfig(const std::string& path, const std::vector<std::string
   if (root.IsNull()) root = YAML::Node(YAML::NodeType::Map);
   for (const auto& assignment : overrides) applyOverride(&root, assignment);
   return parseSlamConfig(root, path);
+}
+
+void applyMapConfig(const SlamConfig& config, core::SlamSession* session) {
+  if (config.map_file.empty()) return;
+  std::vector<core::LandmarkEstimate> landmarks;
+  try {
+    landmarks = loadLandmarksYaml(config.map_file);
+  } catch (const std::exception& e) {
+    throw ConfigError(std::string("map_file: ") + e.what());
+  }
+  if (!session->setPriorMap(landmarks)) {
+    throw ConfigError("map_file: variant " + config.filter.variant + " cannot start from a map");
+  }
+  if (config.localization_only && !session->setMapping(false)) {
+    throw ConfigError("localization_only: variant " + config.filter.variant +
+                      " has no localization-only mode");
+  }
 }
 
 }  // namespace io

@@ -16,6 +16,7 @@
 #include <map>
 #include <sstream>
 
+#include "rbpf_slam/io/landmark_file.h"
 #include "rbpf_slam/io/evaluation.h"
 #include "rbpf_slam/io/map_image.h"
 #include "rbpf_slam/io/trajectory.h"
@@ -90,7 +91,9 @@ long loadTransforms(const rosbag::Bag& bag, tf2::BufferCore* buffer) {
 }  // namespace
 
 OfflineRunner::OfflineRunner(const io::SlamConfig& config, const OfflineOptions& options)
-    : config_(config), options_(options), pipeline_(config.pipeline()) {}
+    : config_(config), options_(options), pipeline_(config.pipeline()) {
+  io::applyMapConfig(config_, &pipeline_.session());
+}
 
 OfflineSummary OfflineRunner::run() {
   OfflineSummary summary;
@@ -253,20 +256,7 @@ OfflineSummary OfflineRunner::writeOutputs(const OfflineSummary& in) const {
   }
 
   const std::vector<core::LandmarkEstimate> landmarks = pipeline_.session().filter().landmarks();
-  std::ofstream yaml(dir + "/landmarks.yaml");
-  yaml << std::setprecision(9) << "# landmarks of the best particle, map frame\nlandmarks:\n";
-  for (const auto& l : landmarks) {
-    const bool line = l.type == core::LandmarkType::kLine;
-    yaml << "  - {id: " << l.id << ", type: " << (line ? "line" : "point") << ", "
-         << (line ? "rho: " : "x: ") << l.mean.x() << ", " << (line ? "theta: " : "y: ")
-         << l.mean.y() << ", covariance: [" << l.covariance(0, 0) << ", " << l.covariance(0, 1)
-         << ", " << l.covariance(1, 0) << ", " << l.covariance(1, 1) << "]";
-    if (line) {
-      yaml << ", start: [" << l.start.x() << ", " << l.start.y() << "], end: [" << l.end.x()
-           << ", " << l.end.y() << "]";
-    }
-    yaml << ", observations: " << l.observations << "}\n";
-  }
+  io::writeLandmarksYaml(dir + "/landmarks.yaml", landmarks);
 
   std::ofstream json(dir + "/summary.json");
   json << std::setprecision(6) << "{\n"

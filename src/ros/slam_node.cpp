@@ -9,6 +9,7 @@
 #include <cmath>
 #include <sstream>
 
+#include "rbpf_slam/io/landmark_file.h"
 #include "rbpf_slam/ros/conversions.h"
 #include "rbpf_slam/ros/param_loader.h"
 
@@ -84,6 +85,20 @@ SlamNode::SlamNode(ros::NodeHandle nh, ros::NodeHandle private_nh)
       private_nh_.advertise<visualization_msgs::MarkerArray>("landmarks", 1, true);
   particles_publisher_ = private_nh_.advertise<geometry_msgs::PoseArray>("particles", 1);
   reset_server_ = private_nh_.advertiseService("reset", &SlamNode::resetService, this);
+  pause_server_ = private_nh_.advertiseService("pause", &SlamNode::pauseService, this);
+  resume_server_ = private_nh_.advertiseService("resume", &SlamNode::resumeService, this);
+  save_map_server_ = private_nh_.advertiseService("save_map", &SlamNode::saveMapService, this);
+  load_map_server_ = private_nh_.advertiseService("load_map", &SlamNode::loadMapService, this);
+  initial_pose_subscriber_ =
+      nh_.subscribe("initialpose", 1, &SlamNode::initialPoseCallback, this);
+  io::applyMapConfig(config_, &pipeline_.session());  // throws io::ConfigError
+  if (!config_.map_file.empty()) {
+    ROS_INFO_STREAM("rbpf_slam_node: started from the map " << config_.map_file << " ("
+                                                           << (config_.localization_only
+                                                                   ? "localization only"
+                                                                   : "mapping on")
+                                                           << "); set the pose with initialpose");
+  }
   if (ros_options.transform_publish_period > 0.0) {
     transform_timer_ = nh_.createTimer(ros::Duration(ros_options.transform_publish_period),
                                        &SlamNode::publishTransform, this);
@@ -97,6 +112,10 @@ SlamNode::SlamNode(ros::NodeHandle nh, ros::NodeHandle private_nh)
 
 void SlamNode::scanCallback(const sensor_msgs::LaserScan::ConstPtr& msg) {
   if (!checkClock()) return;
+  if (paused_) {
+    ++frames_while_paused_;
+    return;
+  }
   core::Pose2 odom_pose, sensor_in_base;
   if (!lookupPoses(msg->header, &odom_pose, &sensor_in_base)) return;
   core::RangeScan scan;
@@ -109,6 +128,10 @@ void SlamNode::scanCallback(const sensor_msgs::LaserScan::ConstPtr& msg) {
 
 void SlamNode::featuresCallback(const FeatureArray::ConstPtr& msg) {
   if (!checkClock()) return;
+  if (paused_) {
+    ++frames_while_paused_;
+    return;
+  }
   core::Pose2 odom_pose, frame_in_base;
   if (!lookupPoses(msg->header, &odom_pose, &frame_in_base)) return;
   int dropped = 0;
@@ -238,6 +261,96 @@ void SlamNode::publishTransform(const ros::TimerEvent&) {
 bool SlamNode::resetService(std_srvs::Empty::Request&, std_srvs::Empty::Response&) {
   resetAll("reset requested through " + reset_server_.getService());
   return true;
+}
+
+bool SlamNode::pauseService(std_srvs::Empty::Request&, std_srvs::Empty::Response&) {
+  if (!paused_) ROS_INFO("rbpf_slam_node: paused (frames are ignored, map -> odom still published)");
+  paused_ = true;
+  return true;
+}
+
+bool SlamNode::resumeService(std_srvs::Empty::Request&, std_srvs::Empty::Response&) {
+  if (paused_) {
+    ROS_INFO_STREAM("rbpf_slam_node: resumed after ignoring " << frames_while_paused_
+                                                             << " frame(s)");
+  }
+  paused_ = false;
+  frames_while_paused_ = 0;
+  return true;
+}
+
+bool SlamNode::saveMapService(MapFile::Request& request, MapFile::Response& response) {
+  const std::string prefix = request.path.empty() ? config_.ros.map_save_prefix : request.path;
+  try {
+    const std::vector<core::LandmarkEstimate> landmarks = pipeline_.session().filter().landmarks();
+    io::writeLandmarksYaml(prefix + ".landmarks.yaml", landmarks);
+    const std::vector<std::string> grid = io::writeLandmarkGrid(prefix, landmarks);
+    response.success = true;
+    response.message = "wrote " + std::to_string(landmarks.size()) + " landmarks to " + prefix +
+                       ".landmarks.yaml and the picture to " + grid[0] + " + " + grid[1];
+    ROS_INFO_STREAM("rbpf_slam_node: save_map: " << response.message);
+  } catch (const std::exception& e) {
+    response.success = false;
+    response.message = std::string("save_map failed: ") + e.what();
+    ROS_ERROR_STREAM("rbpf_slam_node: " << response.message);
+  }
+  return true;
+}
+
+bool SlamNode::loadMapService(MapFile::Request& request, MapFile::Response& response) {
+  const std::string path = request.path.empty() ? config_.map_file : request.path;
+  response.success = false;
+  if (path.empty()) {
+    response.message = "load_map: no path given and ~map_file is not set";
+  } else {
+    try {
+      const std::vector<core::LandmarkEstimate> landmarks = io::loadLandmarksYaml(path);
+      if (pipeline_.session().setPriorMap(landmarks)) {
+        response.success = true;
+        response.message = "loaded " + std::to_string(landmarks.size()) + " landmarks from " +
+                           path + "; set the robot's pose on it with initialpose";
+        publishLandmarks(ros::Time::now());
+      } else {
+        response.message = "load_map: variant " + config_.filter.variant + " cannot take a map";
+      }
+    } catch (const std::exception& e) {
+      response.message = std::string("load_map failed: ") + e.what();
+    }
+  }
+  if (response.success) {
+    ROS_INFO_STREAM("rbpf_slam_node: " << response.message);
+  } else {
+    ROS_ERROR_STREAM("rbpf_slam_node: " << response.message);
+  }
+  return true;
+}
+
+void SlamNode::initialPoseCallback(const geometry_msgs::PoseWithCovarianceStamped::ConstPtr& msg) {
+  if (!msg->header.frame_id.empty() && msg->header.frame_id != config_.ros.map_frame) {
+    warnThrottled("initialpose frame", "Ignoring initialpose in frame '" + msg->header.frame_id +
+                                           "': expected the map frame '" +
+                                           config_.ros.map_frame + "'");
+    return;
+  }
+  const core::Pose2 pose = toPose2(msg->pose.pose);
+  Eigen::Matrix3d covariance;
+  const int index[3] = {0, 1, 5};
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) covariance(i, j) = msg->pose.covariance[index[i] * 6 + index[j]];
+  }
+  if (!covariance.allFinite() || covariance.diagonal().minCoeff() <= 0.0) {
+    // rviz sends 0.25 m^2 and 0.0685 rad^2; a zero or broken covariance gets those.
+    covariance = Eigen::Vector3d(0.25, 0.25, 0.0685).asDiagonal();
+  }
+  if (!pipeline_.session().setPose(pose, covariance)) {
+    warnThrottled("initialpose", "Ignoring an initialpose that is not finite or that the "
+                                 "filter variant cannot take");
+    return;
+  }
+  ROS_INFO_STREAM("rbpf_slam_node: pose set to (" << pose.x() << ", " << pose.y() << ", "
+                                                  << pose.z() << " rad) from initialpose");
+  const ros::Time now = ros::Time::now();
+  publishState(now.isZero() ? msg->header.stamp : now);
 }
 
 bool SlamNode::checkClock() {

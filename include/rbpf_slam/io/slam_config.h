@@ -27,6 +27,7 @@ struct RosOptions {
   double tf_wait_timeout = 0.2;            // s the offline runner and node wait for tf
   int queue_size = 20;
   bool publish_particles = true;
+  std::string map_save_prefix = "rbpf_slam_map";  // ~save_map with no path: PREFIX.{yaml,pgm}
 };
 
 /// Everything a config file configures.
@@ -37,6 +38,8 @@ struct SlamConfig {
   core::LaserExtractorOptions laser;
   core::ScanMatcherOptions scan_matching;
   RosOptions ros;
+  std::string map_file;            // landmarks YAML to start from ("" = empty map)
+  bool localization_only = false;  // true: track the robot on map_file, add no landmarks
 
   core::PipelineOptions pipeline() const { return {filter, session, laser, scan_matching}; }
 };
@@ -46,6 +49,10 @@ struct SlamConfig {
 SlamConfig parseSlamConfig(const YAML::Node& root, const std::string& source);
 /// Loads a YAML file and applies "key=value" overrides before parsing.
 SlamConfig loadSlamConfig(const std::string& path, const std::vector<std::string>& overrides = {});
+
+/// Gives the session config.map_file as its prior map and turns mapping off when
+/// config.localization_only; throws ConfigError naming what failed. No-op without map_file.
+void applyMapConfig(const SlamConfig& config, core::SlamSession* session);
 
 }  // namespace io
 }  // namespace rbpf_slam

@@ -1,9 +1,12 @@
 #pragma once
 // Wires ROS topics and tf to one SlamPipeline: scans and features in, map -> odom, pose,
-// trajectory, landmarks and particles out.
+// trajectory, landmarks and particles out; services ~reset, ~pause, ~resume, ~save_map,
+// ~load_map and the `initialpose` topic.
 
+#include <geometry_msgs/PoseWithCovarianceStamped.h>
 #include <message_filters/subscriber.h>
 #include <rbpf_slam/FeatureArray.h>
+#include <rbpf_slam/MapFile.h>
 #include <ros/ros.h>
 #include <sensor_msgs/LaserScan.h>
 #include <std_srvs/Empty.h>
@@ -45,6 +48,12 @@ class SlamNode {
   void publishLandmarks(const ros::Time& stamp);
   void publishTransform(const ros::TimerEvent& event);
   bool resetService(std_srvs::Empty::Request& request, std_srvs::Empty::Response& response);
+  bool pauseService(std_srvs::Empty::Request& request, std_srvs::Empty::Response& response);
+  bool resumeService(std_srvs::Empty::Request& request, std_srvs::Empty::Response& response);
+  bool saveMapService(MapFile::Request& request, MapFile::Response& response);
+  bool loadMapService(MapFile::Request& request, MapFile::Response& response);
+  /// rviz's 2D Pose Estimate: the particles are redrawn around the pose, maps kept.
+  void initialPoseCallback(const geometry_msgs::PoseWithCovarianceStamped::ConstPtr& msg);
   /// Resets everything when ros::Time::now() went backwards (a bag played again); returns
   /// false while there is no clock yet.
   bool checkClock();
@@ -69,7 +78,11 @@ class SlamNode {
   ros::Publisher trajectory_publisher_;
   ros::Publisher landmarks_publisher_;
   ros::Publisher particles_publisher_;
-  ros::ServiceServer reset_server_;
+  ros::ServiceServer reset_server_, pause_server_, resume_server_, save_map_server_,
+      load_map_server_;
+  ros::Subscriber initial_pose_subscriber_;
+  bool paused_ = false;
+  long frames_while_paused_ = 0;
   ros::Timer transform_timer_;
 
   LandmarkMarkers landmark_markers_;

@@ -263,6 +263,10 @@ FastSlam2::ParticleUpdate FastSlam2::updateParticle(Particle* particle,
   particle->pose = sampleMultivariate<3>(rng_, mean, cov);
   particle->pose.z() = wrapAngle(particle->pose.z());
   particle->log_weight += log_likelihood;
+  if (!mapping_) {  // localization only: the map is a fixed prior
+    result.associated = static_cast<int>(matched.size());
+    return result;
+  }
   if (matched.empty() && fresh.empty()) return result;
   LandmarkMap& writable = mutableMap(&particle->map);
   for (const auto& [k, index] : matched) {
@@ -389,6 +393,52 @@ std::vector<WeightedPose> FastSlam2::particles() const {
 }
 
 FilterStats FastSlam2::stats() const { return stats_; }
+
+bool FastSlam2::resetPose(const Pose2& pose, const Eigen::Matrix3d& covariance) {
+  if (!pose.allFinite() || !covariance.allFinite()) return false;
+  const Eigen::Matrix3d c = 0.5 * (covariance + covariance.transpose());
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(c);
+  if (eigen.info() != Eigen::Success || eigen.eigenvalues().minCoeff() < 0.0) return false;
+  for (auto& p : particles_) {
+    p.pose = sampleMultivariate<3>(rng_, pose, c);
+    p.pose.z() = wrapAngle(p.pose.z());
+    p.log_weight = 0.0;
+  }
+  weights_.assign(particles_.size(), 1.0 / particles_.size());
+  has_pending_motion_ = false;
+  return true;
+}
+
+bool FastSlam2::loadMap(const std::vector<LandmarkEstimate>& landmarks) {
+  auto map = std::make_shared<LandmarkMap>();
+  int max_id = -1;
+  for (const LandmarkEstimate& e : landmarks) {
+    if (!e.mean.allFinite() || !e.covariance.allFinite()) return false;
+    Landmark lm;
+    lm.id = e.id;
+    lm.type = e.type;
+    lm.mean = e.mean;
+    lm.covariance = symmetrize(e.covariance);
+    lm.observations = std::max(1, e.observations);
+    lm.last_seen_step = step_;
+    if (lm.type == LandmarkType::kLine) {
+      const double a = alongLine(lm.mean, e.start), b = alongLine(lm.mean, e.end);
+      lm.extent_min = std::min(a, b);
+      lm.extent_max = std::max(a, b);
+    }
+    map->add(lm);
+    max_id = std::max(max_id, lm.id);
+  }
+  for (auto& p : particles_) p.map = map;  // shared until a particle writes to it
+  next_landmark_id_ = std::max(next_landmark_id_, max_id + 1);
+  stats_.landmarks = map->size();
+  return true;
+}
+
+bool FastSlam2::setMapping(bool enabled) {
+  mapping_ = enabled;
+  return true;
+}
 
 }  // namespace core
 }  // namespace rbpf_slam

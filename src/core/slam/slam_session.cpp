@@ -25,8 +25,33 @@ SlamSession::SlamSession(std::unique_ptr<SlamFilter> filter, const SessionOption
   if (!filter_) throw std::invalid_argument("SlamSession needs a filter");
 }
 
+bool SlamSession::setPriorMap(const std::vector<LandmarkEstimate>& landmarks) {
+  if (!filter_->loadMap(landmarks)) return false;
+  prior_map_ = landmarks;
+  return true;
+}
+
+bool SlamSession::setMapping(bool enabled) {
+  if (!filter_->setMapping(enabled)) return false;
+  mapping_ = enabled;
+  return true;
+}
+
+bool SlamSession::setPose(const Pose2& pose, const Eigen::Matrix3d& covariance) {
+  if (!pose.allFinite() || !covariance.allFinite()) return false;
+  if (!has_previous_) {
+    start_pose_.emplace(pose, covariance);
+    return true;
+  }
+  if (!filter_->resetPose(pose, covariance)) return false;
+  map_to_odom_ = compose(pose, inverse(last_odom_));
+  return true;
+}
+
 void SlamSession::reset() {
   filter_->reset(Pose2::Zero());
+  if (prior_map_) filter_->loadMap(*prior_map_);
+  start_pose_.reset();
   has_previous_ = false;
   last_stamp_ = 0.0;
   map_to_odom_ = Pose2::Zero();
@@ -52,10 +77,22 @@ FrameResult SlamSession::process(double stamp, const Pose2& odom_pose,
     has_previous_ = true;
     last_stamp_ = stamp;
     last_odom_ = odom_pose;
-    // Anchor the map at the first pose: map == odom at start.
-    filter_->reset(odom_pose);
+    if (start_pose_) {
+      // A given start (initial pose, usually on a prior map): map -> odom puts odom there.
+      filter_->reset(start_pose_->first);
+      if (prior_map_) filter_->loadMap(*prior_map_);
+      filter_->resetPose(start_pose_->first, start_pose_->second);
+      map_to_odom_ = compose(start_pose_->first, inverse(odom_pose));
+      start_pose_.reset();
+    } else {
+      // Anchor the map at the first pose: map == odom at start.
+      filter_->reset(odom_pose);
+      if (prior_map_) filter_->loadMap(*prior_map_);
+      map_to_odom_ = Pose2::Zero();
+    }
     last_stats_ = filter_->update(features);
-    map_to_odom_ = Pose2::Zero();
+    const Pose2 first = filter_->estimate().mean;
+    if (first.allFinite()) map_to_odom_ = compose(first, inverse(odom_pose));
     trajectory_.push_back({stamp, filter_->estimate().mean});
     return FrameResult::kFirstFrame;
   }

@@ -44,6 +44,10 @@ class FastSlam2 : public SlamFilter {
   std::vector<LandmarkEstimate> landmarks() const override;
   std::vector<WeightedPose> particles() const override;
   FilterStats stats() const override;
+  bool resetPose(const Pose2& pose, const Eigen::Matrix3d& covariance) override;
+  bool loadMap(const std::vector<LandmarkEstimate>& landmarks) override;
+  bool setMapping(bool enabled) override;
+  bool mapping() const { return mapping_; }
 
   /// Feature set -> observations with the configured noise; counts rejected features.
   std::vector<Observation> prepare(const FeatureSet& features, int* rejected) const;
@@ -84,6 +88,7 @@ class FastSlam2 : public SlamFilter {
   MotionInput pending_motion_;
   bool has_pending_motion_ = false;
   int next_landmark_id_ = 0;
+  bool mapping_ = true;  // false: localization only, the maps stay as they are
   int step_ = 0;
   FilterStats stats_;
 };

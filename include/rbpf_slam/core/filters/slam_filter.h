@@ -77,6 +77,18 @@ class SlamFilter {
   virtual std::vector<LandmarkEstimate> landmarks() const = 0;
   virtual std::vector<WeightedPose> particles() const = 0;
   virtual FilterStats stats() const = 0;
+
+  // Map reuse and localization (rviz's 2D Pose Estimate, ~load_map, localization mode).
+  // Variants that cannot do one of these keep the default, which declines (returns false).
+
+  /// Redraws every hypothesis' pose from N(pose, covariance), keeping its map.
+  virtual bool resetPose(const Pose2& /*pose*/, const Eigen::Matrix3d& /*covariance*/) {
+    return false;
+  }
+  /// Gives every hypothesis this map (map frame), replacing what it had.
+  virtual bool loadMap(const std::vector<LandmarkEstimate>& /*landmarks*/) { return false; }
+  /// Mapping off = localization only: landmarks are neither added nor changed.
+  virtual bool setMapping(bool enabled) { return enabled; }
 };
 
 /// Builds the variant named by options.variant; throws std::invalid_argument if unknown or

@@ -42,8 +42,19 @@ class SlamSession {
                       const MotionInput* measured_motion = nullptr);
   /// The odometry pose of the last frame the filter used.
   const Pose2& lastOdomPose() const { return last_odom_; }
-  /// Clears the filter and the history (e.g. after the clock jumped backwards).
+  /// Clears the filter and the history (e.g. after the clock jumped backwards); a prior map
+  /// and the mapping mode are kept.
   void reset();
+
+  /// A map to start from (map frame), e.g. a saved one: given to the filter now and again
+  /// after every reset. Returns false when the filter variant cannot take a map.
+  bool setPriorMap(const std::vector<LandmarkEstimate>& landmarks);
+  /// Mapping (true) or localization only on the current map (false); false if unsupported.
+  bool setMapping(bool enabled);
+  bool mapping() const { return mapping_; }
+  /// Puts the robot at pose (map frame) with this uncertainty (rviz's 2D Pose Estimate).
+  /// Before the first frame, the first frame starts there instead of at the map origin.
+  bool setPose(const Pose2& pose, const Eigen::Matrix3d& covariance);
 
   /// map -> odom so that map -> base equals the filter's estimate at the last update.
   Pose2 mapToOdom() const { return map_to_odom_; }
@@ -64,6 +75,9 @@ class SlamSession {
   std::vector<TrajectoryPoint> trajectory_;
   UpdateStats last_stats_;
   long resets_ = 0;
+  std::optional<std::vector<LandmarkEstimate>> prior_map_;
+  std::optional<std::pair<Pose2, Eigen::Matrix3d>> start_pose_;  // for the first frame
+  bool mapping_ = true;
 };
 
 }  // namespace core

@@ -1,0 +1,59 @@
+#!/usr/bin/env bash
+# Map, save, reuse: maps worlds/test_small.yaml with the laser config (offline_slam), then runs
+# a second simulated run (another seed) in localization-only mode on the saved landmarks
+# (map_file + localization_only). Fails unless the second run tracks the robot (ATE under
+# 0.15 m against the ground truth) without adding a landmark, and unless a missing map_file
+# and localization_only without map_file are refused with a message naming the key.
+set -euo pipefail
+
+here=$(cd "$(dirname "$0")" && pwd)
+root=$(cd "$here/../.." && pwd)
+bin="${RBPF_BIN:-$root/build/devel/lib/rbpf_slam}"  # RBPF_BIN: another build
+for tool in simulate offline_slam; do
+  [ -x "$bin/$tool" ] || { echo "FAIL: $bin/$tool is not built"; exit 1; }
+done
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+config="$root/config/laser_fastslam2.yaml"
+world="$root/worlds/test_small.yaml"
+
+"$bin/simulate" --world "$world" --output "$work/a.bag" --seed 11 >/dev/null
+"$bin/offline_slam" --bag "$work/a.bag" --config "$config" --output "$work/map" --no-progress \
+  --reference "$work/a.ref.tum" >/dev/null
+"$bin/simulate" --world "$world" --output "$work/b.bag" --seed 12 >/dev/null
+"$bin/offline_slam" --bag "$work/b.bag" --config "$config" --output "$work/loc" --no-progress \
+  --reference "$work/b.ref.tum" --set "map_file=$work/map/landmarks.yaml" \
+  --set localization_only=true >/dev/null
+
+/usr/bin/python3 - "$work" <<'PY'
+import json, sys, yaml
+work = sys.argv[1]
+saved = yaml.safe_load(open(work + "/map/landmarks.yaml"))["landmarks"]
+after = yaml.safe_load(open(work + "/loc/landmarks.yaml"))["landmarks"]
+summary = json.load(open(work + "/loc/summary.json"))
+print("saved map: %d landmarks; localization run: %d landmarks, ATE %.3f m, %d updates"
+      % (len(saved), len(after), summary["ate_rmse_m"], summary["updates"]))
+ok = True
+if len(after) != len(saved):
+    print("FAIL: localization-only changed the landmark count"); ok = False
+if sorted(l["id"] for l in after) != sorted(l["id"] for l in saved):
+    print("FAIL: localization-only changed the landmark ids"); ok = False
+if not summary["ate_rmse_m"] < 0.15:
+    print("FAIL: ATE %.3f m >= 0.15 m" % summary["ate_rmse_m"]); ok = False
+if summary["updates"] < 100:
+    print("FAIL: only %d updates" % summary["updates"]); ok = False
+sys.exit(0 if ok else 1)
+PY
+
+expect_refusal() {  # expect_refusal TEXT ARGS...: offline_slam must fail and print TEXT
+  local text=$1
+  shift
+  if "$bin/offline_slam" --bag "$work/b.bag" --config "$config" --output "$work/bad" \
+      --no-progress "$@" >"$work/bad.log" 2>&1; then
+    echo "FAIL: offline_slam accepted $*"; exit 1
+  fi
+  grep -q "$text" "$work/bad.log" || { echo "FAIL: no '$text' in:"; cat "$work/bad.log"; exit 1; }
+}
+expect_refusal "map_file" --set "map_file=$work/none.yaml"
+expect_refusal "localization_only" --set localization_only=true
+echo "PASS"
