@@ -1,0 +1,204 @@
+#include "rbpf_slam/ros/bag_validation.h"
+
+#include <nav_msgs/Odometry.h>
+#include <rbpf_slam/FeatureArray.h>
+#include <rosbag/bag.h>
+#include <rosbag/view.h>
+#include <sensor_msgs/LaserScan.h>
+#include <sensor_msgs/PointCloud.h>
+#include <sensor_msgs/Range.h>
+#include <tf2_msgs/TFMessage.h>
+
+#include <cmath>
+#include <iomanip>
+#include <sstream>
+#include <stdexcept>
+
+namespace rbpf_slam {
+namespace rosbridge {
+namespace {
+
+std::string stripSlash(const std::string& frame) {
+  return !frame.empty() && frame[0] == '/' ? frame.substr(1) : frame;
+}
+
+/// Keeps the running state of one stream while the bag is read.
+struct StreamState {
+  StreamReport report;
+  ros::Time last;
+  bool has_last = false;
+
+  void add(const ros::Time& stamp, const ros::Time& bag_begin, double max_gap_s) {
+    ++report.messages;
+    if (stamp.isZero()) {
+      ++report.zero_stamps;
+      return;
+    }
+    if (has_last) {
+      if (stamp < last) {
+        ++report.backwards;
+        return;  // measure gaps against the newest stamp
+      }
+      if (stamp == last) ++report.duplicates;
+      const double step = (stamp - last).toSec();
+      if (step > max_gap_s) {
+        ++report.gaps;
+        if (report.first_gap_at_s < 0.0) report.first_gap_at_s = (last - bag_begin).toSec();
+      }
+      report.largest_gap_s = std::max(report.largest_gap_s, step);
+    }
+    last = stamp;
+    has_last = true;
+  }
+};
+
+std::string fixed(double v, int digits = 1) {
+  std::ostringstream out;
+  out << std::fixed << std::setprecision(digits) << v;
+  return out.str();
+}
+
+}  // namespace
+
+BagReport validateBag(const std::string& path, const BagValidationOptions& options) {
+  BagReport report;
+  report.path = path;
+  rosbag::Bag bag;
+  try {
+    bag.open(path, rosbag::bagmode::Read);
+  } catch (const rosbag::BagException& e) {
+    throw std::runtime_error(path + ": cannot open bag: " + e.what());
+  }
+  rosbag::View view(bag);
+  const ros::Time begin = view.getBeginTime();
+  report.duration_s = (view.getEndTime() - begin).toSec();
+
+  std::map<std::string, StreamState> streams;  // topic or tf edge
+  std::map<std::string, std::set<std::string>> tf_neighbours;
+  std::map<std::string, std::string> range_topics;  // topics of sensor_msgs/Range
+  for (const rosbag::MessageInstance& m : view) {
+    const std::string topic = m.getTopic();
+    if (const auto tf = m.instantiate<tf2_msgs::TFMessage>()) {
+      const bool is_static = topic.find("tf_static") != std::string::npos;
+      for (const auto& t : tf->transforms) {
+        const std::string parent = stripSlash(t.header.frame_id);
+        const std::string child = stripSlash(t.child_frame_id);
+        const std::string edge = "tf " + parent + " -> " + child;
+        StreamState& s = streams[edge];
+        s.report.name = edge;
+        const auto& q = t.transform.rotation;
+        const auto& p = t.transform.translation;
+        if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z) ||
+            !std::isfinite(q.x) || !std::isfinite(q.y) || !std::isfinite(q.z) ||
+            !std::isfinite(q.w)) {
+          ++s.report.invalid_values;
+        }
+        if (!is_static) s.add(t.header.stamp, begin, options.max_gap_s);
+        else ++s.report.messages;
+        if (!parent.empty() && !child.empty()) {
+          tf_neighbours[parent].insert(child);
+          tf_neighbours[child].insert(parent);
+        }
+      }
+      continue;
+    }
+    StreamState& s = streams[topic];
+    s.report.name = topic;
+    std_msgs::Header header;
+    if (const auto scan = m.instantiate<sensor_msgs::LaserScan>()) {
+      header = scan->header;
+      for (float r : scan->ranges) {
+        if (std::isnan(r) || (std::isinf(r) && r < 0)) ++s.report.invalid_values;
+      }
+    } else if (const auto range = m.instantiate<sensor_msgs::Range>()) {
+      header = range->header;
+      range_topics[topic] = topic;
+      if (!std::isfinite(range->range) && !(std::isinf(range->range) && range->range > 0)) {
+        ++s.report.invalid_values;
+      }
+    } else if (const auto cloud = m.instantiate<sensor_msgs::PointCloud>()) {
+      header = cloud->header;
+    } else if (const auto features = m.instantiate<FeatureArray>()) {
+      header = features->header;
+    } else if (const auto odometry = m.instantiate<nav_msgs::Odometry>()) {
+      header = odometry->header;
+    } else {
+      ++s.report.messages;  // a type without a header we look at: counted only
+      continue;
+    }
+    s.report.frames.insert(stripSlash(header.frame_id));
+    // Range topics carry one stream per transducer frame: check the order per frame.
+    if (range_topics.count(topic)) {
+      StreamState& per_frame = streams[topic + " [" + stripSlash(header.frame_id) + "]"];
+      per_frame.report.name = topic + " [" + stripSlash(header.frame_id) + "]";
+      per_frame.add(header.stamp, begin, options.max_gap_s);
+      ++s.report.messages;
+    } else {
+      s.add(header.stamp, begin, options.max_gap_s);
+    }
+  }
+
+  // Frames tf can reach from the base frame (edges at any time).
+  std::set<std::string> connected{options.base_frame};
+  std::vector<std::string> todo{options.base_frame};
+  while (!todo.empty()) {
+    const std::string frame = todo.back();
+    todo.pop_back();
+    for (const std::string& next : tf_neighbours[frame]) {
+      if (connected.insert(next).second) todo.push_back(next);
+    }
+  }
+  if (!tf_neighbours.count(options.odom_frame) || !connected.count(options.odom_frame)) {
+    report.problems.push_back("tf never connects " + options.odom_frame + " and " +
+                              options.base_frame + ": no odometry for SLAM");
+  }
+
+  for (auto& [name, state] : streams) {
+    StreamReport& r = state.report;
+    const bool is_tf = name.rfind("tf ", 0) == 0;
+    const bool range_topic = range_topics.count(name) > 0;
+    if (r.backwards > 0) {
+      report.problems.push_back(name + ": " + std::to_string(r.backwards) +
+                                " stamp(s) older than the one before");
+    }
+    if (r.duplicates > 0) {
+      report.problems.push_back(name + ": " + std::to_string(r.duplicates) + " repeated stamp(s)");
+    }
+    if (r.zero_stamps > 0) {
+      report.problems.push_back(name + ": " + std::to_string(r.zero_stamps) + " zero stamp(s)");
+    }
+    if (r.gaps > 0) {
+      report.problems.push_back(name + ": " + std::to_string(r.gaps) + " gap(s) longer than " +
+                                fixed(options.max_gap_s) + " s (largest " +
+                                fixed(r.largest_gap_s) + " s, first at " +
+                                fixed(r.first_gap_at_s) + " s into the bag)");
+    }
+    if (r.invalid_values > 0) {
+      report.problems.push_back(name + ": " + std::to_string(r.invalid_values) +
+                                (is_tf ? " non-finite transform(s)" : " NaN or -inf value(s)"));
+    }
+    if (is_tf) continue;
+    if (r.frames.size() > 1) {
+      std::string list;
+      for (const auto& f : r.frames) list += (list.empty() ? "" : ", ") + f;
+      if (range_topic) {
+        report.notes.push_back(name + ": one frame per transducer (" + list + ")");
+      } else {
+        report.problems.push_back(name + ": messages in several frames (" + list + ")");
+      }
+    }
+    for (const std::string& frame : r.frames) {
+      if (frame.empty()) {
+        report.problems.push_back(name + ": message(s) with an empty frame_id");
+      } else if (frame != "map" && frame != options.odom_frame && !connected.count(frame)) {
+        report.problems.push_back(name + ": frame '" + frame + "' is not connected to " +
+                                  options.base_frame + " by any transform in the bag");
+      }
+    }
+  }
+  for (auto& [name, state] : streams) report.streams.push_back(state.report);
+  return report;
+}
+
+}  // namespace rosbridge
+}  // namespace rbpf_slam

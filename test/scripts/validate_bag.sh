@@ -1,0 +1,56 @@
+#!/usr/bin/env bash
+# validate_bag: a clean simulated bag passes (exit 0); a copy with injected faults (a scan
+# stamped back in time, a repeated scan stamp, a scan in a frame tf does not know, NaN ranges,
+# 5 s without odometry tf) fails (exit 1) with each fault named.
+set -euo pipefail
+
+here=$(cd "$(dirname "$0")" && pwd)
+root=$(cd "$here/../.." && pwd)
+bin="${RBPF_BIN:-$root/build/devel/lib/rbpf_slam}"
+for tool in simulate validate_bag; do
+  [ -x "$bin/$tool" ] || { echo "FAIL: $bin/$tool is not built"; exit 1; }
+done
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+
+"$bin/simulate" --world "$root/worlds/test_small.yaml" --output "$work/clean.bag" --seed 4 >/dev/null
+if ! "$bin/validate_bag" "$work/clean.bag" >"$work/clean.txt"; then
+  echo "FAIL: the clean bag was reported:"; cat "$work/clean.txt"; exit 1
+fi
+grep -q "no problems found" "$work/clean.txt" || { echo "FAIL: no verdict"; exit 1; }
+
+/usr/bin/python3 - "$work/clean.bag" "$work/faulty.bag" <<'PY'
+import math, sys
+import rosbag, rospy
+source, target = sys.argv[1], sys.argv[2]
+with rosbag.Bag(source) as bag_in, rosbag.Bag(target, "w") as bag_out:
+    start = bag_in.get_start_time()
+    scans = 0
+    previous_stamp = None
+    for topic, msg, t in bag_in.read_messages():
+        rel = t.to_sec() - start
+        if topic == "/tf" and 20.0 <= rel < 25.0:
+            continue  # 5 s without odom -> base_link
+        if topic == "/scan":
+            scans += 1
+            if scans == 50:
+                msg.header.stamp = msg.header.stamp - rospy.Duration(1.0)
+            elif scans == 60:
+                msg.header.stamp = previous_stamp
+            elif scans == 70:
+                msg.header.frame_id = "ghost_laser"
+            elif scans == 80:
+                msg.ranges = [float("nan")] * len(msg.ranges)
+            previous_stamp = msg.header.stamp
+        bag_out.write(topic, msg, t)
+PY
+
+status=0
+"$bin/validate_bag" "$work/faulty.bag" >"$work/faulty.txt" || status=$?
+cat "$work/faulty.txt" | grep PROBLEM || true
+[ "$status" -eq 1 ] || { echo "FAIL: exit status $status for the faulty bag, expected 1"; exit 1; }
+for expected in "/scan: 1 stamp(s) older" "/scan: 1 repeated stamp" "frame 'ghost_laser' is not connected" \
+    "/scan: 181 NaN" "/scan: messages in several frames" "tf odom -> base_link: 1 gap(s)"; do
+  grep -qF "$expected" "$work/faulty.txt" || { echo "FAIL: '$expected' not reported"; exit 1; }
+done
+echo "PASS"
