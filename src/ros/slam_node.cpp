@@ -6,6 +6,7 @@
 #include <nav_msgs/Path.h>
 #include <visualization_msgs/MarkerArray.h>
 
+#include <chrono>
 #include <cmath>
 #include <sstream>
 
@@ -20,6 +21,10 @@ namespace {
 constexpr double kWarningPeriodS = 10.0;
 constexpr double kTfCacheS = 30.0;
 constexpr double kSummaryPeriodS = 30.0;
+
+double millisecondsSince(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+}
 
 const char* describe(core::FrameResult result) {
   switch (result) {
@@ -91,6 +96,9 @@ SlamNode::SlamNode(ros::NodeHandle nh, ros::NodeHandle private_nh)
   load_map_server_ = private_nh_.advertiseService("load_map", &SlamNode::loadMapService, this);
   initial_pose_subscriber_ =
       nh_.subscribe("initialpose", 1, &SlamNode::initialPoseCallback, this);
+  diagnostics_publisher_ = nh_.advertise<diagnostic_msgs::DiagnosticArray>("/diagnostics", 10);
+  diagnostics_timer_ =
+      nh_.createWallTimer(ros::WallDuration(1.0), &SlamNode::publishDiagnostics, this);
   io::applyMapConfig(config_, &pipeline_.session());  // throws io::ConfigError
   if (!config_.map_file.empty()) {
     ROS_INFO_STREAM("rbpf_slam_node: started from the map " << config_.map_file << " ("
@@ -122,8 +130,13 @@ void SlamNode::scanCallback(const sensor_msgs::LaserScan::ConstPtr& msg) {
   std::string error;
   const bool ok = toRangeScan(*msg, sensor_in_base, &scan, &error);
   if (!error.empty()) warnThrottled("scan header " + msg->header.frame_id, "Scan: " + error);
-  if (!ok) return;
-  handleResult(pipeline_.processScan(scan, odom_pose), msg->header.stamp);
+  if (!ok) {
+    diagnostics_.recordDrop("bad scan");
+    return;
+  }
+  const auto t0 = std::chrono::steady_clock::now();
+  const core::FrameResult result = pipeline_.processScan(scan, odom_pose);
+  handleResult(result, msg->header.stamp, millisecondsSince(t0));
 }
 
 void SlamNode::featuresCallback(const FeatureArray::ConstPtr& msg) {
@@ -141,11 +154,17 @@ void SlamNode::featuresCallback(const FeatureArray::ConstPtr& msg) {
                                              " feature(s) with non-finite values from " +
                                              features_subscriber_.getTopic());
   }
-  handleResult(pipeline_.processFeatures(features, odom_pose), msg->header.stamp);
+  const auto t0 = std::chrono::steady_clock::now();
+  const core::FrameResult result = pipeline_.processFeatures(features, odom_pose);
+  handleResult(result, msg->header.stamp, millisecondsSince(t0));
 }
 
 void SlamNode::messageDropped(const std_msgs::Header& header, tf2_ros::FilterFailureReason reason) {
   const std::string& odom = config_.ros.odom_frame;
+  diagnostics_.recordDrop(reason == tf2_ros::filter_failure_reasons::EmptyFrameID ? "empty frame_id"
+                          : reason == tf2_ros::filter_failure_reasons::OutTheBack
+                              ? "older than the tf cache"
+                              : "no tf in time");
   switch (reason) {
     case tf2_ros::filter_failure_reasons::EmptyFrameID:
       warnThrottled("empty frame_id", "Dropping a message with an empty header.frame_id");
@@ -180,6 +199,7 @@ bool SlamNode::lookupPoses(const std_msgs::Header& header, core::Pose2* odom_pos
     *frame_in_base =
         toPose2(tf_buffer_.lookupTransform(o.base_frame, header.frame_id, header.stamp).transform);
   } catch (const tf2::TransformException& e) {
+    diagnostics_.recordDrop("tf lookup failed");
     warnThrottled("tf " + *from + " -> " + *to, "No transform " + *from + " -> " + *to + " at " +
                                                     std::to_string(header.stamp.toSec()) + ": " +
                                                     e.what());
@@ -193,14 +213,17 @@ bool SlamNode::lookupPoses(const std_msgs::Header& header, core::Pose2* odom_pos
   return true;
 }
 
-void SlamNode::handleResult(core::FrameResult result, const ros::Time& stamp) {
+void SlamNode::handleResult(core::FrameResult result, const ros::Time& stamp, double update_ms) {
   ROS_DEBUG_STREAM("Frame at " << stamp << ": " << describe(result));
   if (result != core::FrameResult::kUpdated && result != core::FrameResult::kFirstFrame) {
     if (result == core::FrameResult::kRejectedStamp || result == core::FrameResult::kRejectedPose) {
       warnThrottled(describe(result), std::string("Frame ") + describe(result));
+      diagnostics_.recordDrop(result == core::FrameResult::kRejectedStamp ? "stamp not after the last"
+                                                                         : "odometry not finite");
     }
     return;
   }
+  diagnostics_.recordUpdate(update_ms);
   ++updates_;
   const core::FilterStats stats = pipeline_.session().filter().stats();
   ROS_INFO_STREAM_THROTTLE(kSummaryPeriodS,
@@ -365,7 +388,16 @@ bool SlamNode::checkClock() {
   return true;
 }
 
+void SlamNode::publishDiagnostics(const ros::WallTimerEvent&) {
+  diagnostics_.setPaused(paused_);
+  const ros::Time now = ros::Time::now();
+  diagnostics_publisher_.publish(diagnostics_.report(
+      now.isZero() ? ros::Time(ros::WallTime::now().toSec()) : now,
+      pipeline_.session().filter().stats(), config_.filter.particles));
+}
+
 void SlamNode::resetAll(const std::string& why) {
+  diagnostics_.recordReset();
   ROS_WARN_STREAM("rbpf_slam_node: " << why << ": clearing the map, the trajectory and tf");
   pipeline_.reset();  // filter, history and the scan matcher's reference
   tf_buffer_.clear();

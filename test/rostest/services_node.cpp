@@ -3,6 +3,7 @@
 // landmark file that loads back and a map_server picture, ~load_map reports bad paths,
 // initialpose moves the estimate to the given pose. Run in this order on one node.
 
+#include <diagnostic_msgs/DiagnosticArray.h>
 #include <geometry_msgs/PoseWithCovarianceStamped.h>
 #include <gtest/gtest.h>
 #include <nav_msgs/Path.h>
@@ -170,6 +171,37 @@ TEST_F(ServicesTest, InitialPoseMovesTheEstimate) {
   EXPECT_LT((pose.head<2>() - requested.head<2>()).norm(), 0.05) << pose.transpose();
   EXPECT_LT(std::fabs(core::wrapAngle(pose.z() - requested.z())), 0.02) << pose.transpose();
   EXPECT_TRUE(call("resume"));
+}
+
+TEST_F(ServicesTest, DiagnosticsReportTheNode) {
+  ros::NodeHandle nh;
+  std::mutex mutex;
+  diagnostic_msgs::DiagnosticStatus last;
+  bool received = false;
+  ros::Subscriber sub = nh.subscribe<diagnostic_msgs::DiagnosticArray>(
+      "/diagnostics", 10, [&](const diagnostic_msgs::DiagnosticArray::ConstPtr& msg) {
+        for (const auto& status : msg->status) {
+          if (status.name != "rbpf_slam_node") continue;
+          std::lock_guard<std::mutex> lock(mutex);
+          last = status;
+          received = true;
+        }
+      });
+  const ros::WallTime deadline = ros::WallTime::now() + ros::WallDuration(5.0);
+  while (ros::WallTime::now() < deadline) {
+    {
+      std::lock_guard<std::mutex> lock(mutex);
+      if (received) break;
+    }
+    ros::WallDuration(0.05).sleep();
+  }
+  std::lock_guard<std::mutex> lock(mutex);
+  ASSERT_TRUE(received) << "no rbpf_slam_node status on /diagnostics";
+  long updates = -1;
+  for (const auto& kv : last.values) {
+    if (kv.key == "updates") updates = std::stol(kv.value);
+  }
+  EXPECT_GT(updates, 20) << "the report does not count the updates";
 }
 
 }  // namespace

@@ -21,6 +21,7 @@
 
 #include "rbpf_slam/core/slam/slam_pipeline.h"
 #include "rbpf_slam/io/slam_config.h"
+#include "rbpf_slam/ros/diagnostics.h"
 #include "rbpf_slam/ros/markers.h"
 
 namespace rbpf_slam {
@@ -43,7 +44,8 @@ class SlamNode {
   /// the header's stamp; false (with a throttled warning) if tf cannot give them.
   bool lookupPoses(const std_msgs::Header& header, core::Pose2* odom_pose,
                    core::Pose2* frame_in_base);
-  void handleResult(core::FrameResult result, const ros::Time& stamp);
+  void handleResult(core::FrameResult result, const ros::Time& stamp, double update_ms);
+  void publishDiagnostics(const ros::WallTimerEvent& event);
   void publishState(const ros::Time& stamp);
   void publishLandmarks(const ros::Time& stamp);
   void publishTransform(const ros::TimerEvent& event);
@@ -81,6 +83,9 @@ class SlamNode {
   ros::ServiceServer reset_server_, pause_server_, resume_server_, save_map_server_,
       load_map_server_;
   ros::Subscriber initial_pose_subscriber_;
+  ros::Publisher diagnostics_publisher_;
+  ros::WallTimer diagnostics_timer_;
+  SlamDiagnostics diagnostics_{"rbpf_slam_node"};
   bool paused_ = false;
   long frames_while_paused_ = 0;
   ros::Timer transform_timer_;

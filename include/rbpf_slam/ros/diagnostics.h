@@ -1,0 +1,48 @@
+#pragma once
+// The node's health on /diagnostics (diagnostic_msgs): effective sample size, landmark
+// count, update time, frames processed, dropped messages by cause, resets, pause state.
+
+#include <diagnostic_msgs/DiagnosticArray.h>
+#include <ros/time.h>
+
+#include <map>
+#include <string>
+
+#include "rbpf_slam/core/filters/slam_filter.h"
+
+namespace rbpf_slam {
+namespace rosbridge {
+
+/// Thresholds that turn the status to WARN.
+struct DiagnosticsOptions {
+  double low_neff_fraction = 0.1;  // Neff below this fraction of the particles
+  double slow_update_ms = 200.0;   // mean update time above this
+};
+
+/// Counts what happened since the last report and builds one DiagnosticStatus from it.
+class SlamDiagnostics {
+ public:
+  explicit SlamDiagnostics(std::string name, DiagnosticsOptions options = DiagnosticsOptions())
+      : name_(std::move(name)), options_(options) {}
+
+  void recordUpdate(double update_ms);
+  /// A message that could not be used; cause is a short fixed phrase ("no tf", "bad scan").
+  void recordDrop(const std::string& cause);
+  void recordReset() { ++resets_total_; }
+  void setPaused(bool paused) { paused_ = paused; }
+
+  /// The report for the period since the previous call (then the period counters restart).
+  diagnostic_msgs::DiagnosticArray report(const ros::Time& stamp, const core::FilterStats& stats,
+                                          int particles);
+
+ private:
+  const std::string name_;
+  const DiagnosticsOptions options_;
+  long updates_period_ = 0, updates_total_ = 0, resets_total_ = 0;
+  double update_ms_sum_period_ = 0.0;
+  std::map<std::string, long> drops_period_, drops_total_;
+  bool paused_ = false;
+};
+
+}  // namespace rosbridge
+}  // namespace rbpf_slam

@@ -1,0 +1,89 @@
+#include "rbpf_slam/ros/diagnostics.h"
+
+#include <sstream>
+
+namespace rbpf_slam {
+namespace rosbridge {
+namespace {
+
+diagnostic_msgs::KeyValue keyValue(const std::string& key, const std::string& value) {
+  diagnostic_msgs::KeyValue kv;
+  kv.key = key;
+  kv.value = value;
+  return kv;
+}
+
+template <typename T>
+std::string text(T value) {
+  std::ostringstream out;
+  out << value;
+  return out.str();
+}
+
+}  // namespace
+
+void SlamDiagnostics::recordUpdate(double update_ms) {
+  ++updates_period_;
+  ++updates_total_;
+  update_ms_sum_period_ += update_ms;
+}
+
+void SlamDiagnostics::recordDrop(const std::string& cause) {
+  ++drops_period_[cause];
+  ++drops_total_[cause];
+}
+
+diagnostic_msgs::DiagnosticArray SlamDiagnostics::report(const ros::Time& stamp,
+                                                         const core::FilterStats& stats,
+                                                         int particles) {
+  diagnostic_msgs::DiagnosticStatus status;
+  status.name = name_;
+  status.hardware_id = "rbpf_slam";
+  const double mean_ms = updates_period_ > 0 ? update_ms_sum_period_ / updates_period_ : 0.0;
+  long dropped_period = 0;
+  for (const auto& [cause, count] : drops_period_) dropped_period += count;
+
+  std::string problem;
+  if (paused_) {
+    problem = "paused (~resume to continue)";
+  } else if (dropped_period > 0) {
+    problem = std::to_string(dropped_period) + " message(s) dropped since the last report";
+  } else if (updates_total_ > 0 && stats.last_neff < options_.low_neff_fraction * particles) {
+    problem = "effective sample size " + text(stats.last_neff) + " of " +
+              std::to_string(particles) + " particles";
+  } else if (mean_ms > options_.slow_update_ms) {
+    problem = "updates take " + text(mean_ms) + " ms on average";
+  }
+  if (problem.empty()) {
+    status.level = diagnostic_msgs::DiagnosticStatus::OK;
+    status.message = updates_total_ > 0 ? "mapping" : "waiting for data";
+  } else {
+    status.level = diagnostic_msgs::DiagnosticStatus::WARN;
+    status.message = problem;
+  }
+  status.values.push_back(keyValue("updates", text(updates_total_)));
+  status.values.push_back(keyValue("updates since last report", text(updates_period_)));
+  status.values.push_back(keyValue("update time mean [ms]", text(mean_ms)));
+  status.values.push_back(keyValue("Neff", text(stats.last_neff)));
+  status.values.push_back(keyValue("particles", text(particles)));
+  status.values.push_back(keyValue("landmarks", text(stats.landmarks)));
+  status.values.push_back(keyValue("resamples", text(stats.resamples)));
+  status.values.push_back(keyValue("weight resets", text(stats.weight_resets)));
+  status.values.push_back(keyValue("numeric fallbacks", text(stats.fallbacks)));
+  status.values.push_back(keyValue("resets", text(resets_total_)));
+  status.values.push_back(keyValue("paused", paused_ ? "true" : "false"));
+  for (const auto& [cause, count] : drops_total_) {
+    status.values.push_back(keyValue("dropped: " + cause, text(count)));
+  }
+  updates_period_ = 0;
+  update_ms_sum_period_ = 0.0;
+  drops_period_.clear();
+
+  diagnostic_msgs::DiagnosticArray array;
+  array.header.stamp = stamp;
+  array.status.push_back(status);
+  return array;
+}
+
+}  // namespace rosbridge
+}  // namespace rbpf_slam

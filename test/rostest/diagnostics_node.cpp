@@ -1,0 +1,93 @@
+// The node's /diagnostics report (no roscore needed; run by diagnostics.test with the other
+// ROS-layer tests): levels, messages and values for each condition.
+
+#include <gtest/gtest.h>
+
+#include <string>
+
+#include "rbpf_slam/ros/diagnostics.h"
+
+namespace rbpf_slam {
+namespace {
+
+std::string value(const diagnostic_msgs::DiagnosticStatus& status, const std::string& key) {
+  for (const auto& kv : status.values) {
+    if (kv.key == key) return kv.value;
+  }
+  return "<missing " + key + ">";
+}
+
+core::FilterStats healthy() {
+  core::FilterStats stats;
+  stats.last_neff = 80.0;
+  stats.landmarks = 12;
+  return stats;
+}
+
+TEST(Diagnostics, OkWhileMappingWithTheFigures) {
+  rosbridge::SlamDiagnostics diagnostics("rbpf_slam_node");
+  diagnostics.recordUpdate(2.0);
+  diagnostics.recordUpdate(4.0);
+  const auto array = diagnostics.report(ros::Time(10.0), healthy(), 100);
+  ASSERT_EQ(array.status.size(), 1u);
+  const auto& s = array.status[0];
+  EXPECT_EQ(s.level, diagnostic_msgs::DiagnosticStatus::OK);
+  EXPECT_EQ(s.message, "mapping");
+  EXPECT_EQ(value(s, "updates"), "2");
+  EXPECT_EQ(value(s, "update time mean [ms]"), "3");
+  EXPECT_EQ(value(s, "landmarks"), "12");
+  EXPECT_EQ(value(s, "Neff"), "80");
+}
+
+TEST(Diagnostics, DropsWarnForOnePeriodAndAreCountedByCause) {
+  rosbridge::SlamDiagnostics diagnostics("rbpf_slam_node");
+  diagnostics.recordUpdate(1.0);
+  diagnostics.recordDrop("no tf");
+  diagnostics.recordDrop("no tf");
+  diagnostics.recordDrop("bad scan");
+  auto s = diagnostics.report(ros::Time(1.0), healthy(), 100).status[0];
+  EXPECT_EQ(s.level, diagnostic_msgs::DiagnosticStatus::WARN);
+  EXPECT_NE(s.message.find("3 message(s) dropped"), std::string::npos) << s.message;
+  EXPECT_EQ(value(s, "dropped: no tf"), "2");
+  EXPECT_EQ(value(s, "dropped: bad scan"), "1");
+  diagnostics.recordUpdate(1.0);
+  s = diagnostics.report(ros::Time(2.0), healthy(), 100).status[0];
+  EXPECT_EQ(s.level, diagnostic_msgs::DiagnosticStatus::OK) << "drops of an earlier period";
+  EXPECT_EQ(value(s, "dropped: no tf"), "2") << "totals are kept";
+}
+
+TEST(Diagnostics, LowNeffSlowUpdatesAndPauseWarn) {
+  rosbridge::SlamDiagnostics diagnostics("rbpf_slam_node");
+  diagnostics.recordUpdate(1.0);
+  core::FilterStats degenerate = healthy();
+  degenerate.last_neff = 3.0;
+  auto s = diagnostics.report(ros::Time(1.0), degenerate, 100).status[0];
+  EXPECT_EQ(s.level, diagnostic_msgs::DiagnosticStatus::WARN);
+  EXPECT_NE(s.message.find("effective sample size"), std::string::npos) << s.message;
+
+  diagnostics.recordUpdate(500.0);
+  s = diagnostics.report(ros::Time(2.0), healthy(), 100).status[0];
+  EXPECT_EQ(s.level, diagnostic_msgs::DiagnosticStatus::WARN);
+  EXPECT_NE(s.message.find("500 ms"), std::string::npos) << s.message;
+
+  diagnostics.setPaused(true);
+  s = diagnostics.report(ros::Time(3.0), healthy(), 100).status[0];
+  EXPECT_EQ(s.level, diagnostic_msgs::DiagnosticStatus::WARN);
+  EXPECT_EQ(value(s, "paused"), "true");
+}
+
+TEST(Diagnostics, WaitingBeforeTheFirstUpdate) {
+  rosbridge::SlamDiagnostics diagnostics("rbpf_slam_node");
+  const auto s = diagnostics.report(ros::Time(1.0), core::FilterStats(), 100).status[0];
+  EXPECT_EQ(s.level, diagnostic_msgs::DiagnosticStatus::OK);
+  EXPECT_EQ(s.message, "waiting for data");
+}
+
+}  // namespace
+}  // namespace rbpf_slam
+
+int main(int argc, char** argv) {
+  testing::InitGoogleTest(&argc, argv);
+  ros::Time::init();
+  return RUN_ALL_TESTS();
+}
