@@ -30,6 +30,24 @@ void readAssociation(YamlSection section, core::AssociationOptions* o) {
   section.finish();
 }
 
+void readRobust(YamlSection section, core::RobustOptions* o) {
+  section.read("ancestor_sets", &o->ancestor_sets, 1, 100);
+  section.read("ancestor_spacing_steps", &o->ancestor_spacing_steps, 1, 100000);
+  section.read("window_steps", &o->window_steps, 1, 100000);
+  section.read("intermediate_path", &o->intermediate_path);
+  section.read("path_iterations", &o->path_iterations, 1, 100);
+  section.finish();
+}
+
+void readTracker(YamlSection section, core::LandmarkTrackerOptions* o) {
+  section.read("gate_chi2", &o->gate_chi2, 0.1, 1000.0);
+  section.read("new_landmark_chi2", &o->new_landmark_chi2, 0.1, 1000.0);
+  section.read("forget_after_steps", &o->forget_after_steps, 1, 100000);
+  section.read("forget_distance_m", &o->forget_distance_m, 0.1, 1e4);
+  section.read("max_landmarks", &o->max_landmarks, 1, 1000);
+  section.finish();
+}
+
 void readMeasurement(YamlSection section, core::MeasurementOptions* o) {
   section.read("use_feature_covariance", &o->use_feature_covariance);
   section.read("sigma_range_m", &o->sigma_range_m, 1e-6, 100.0);
@@ -124,6 +142,8 @@ SlamConfig parseSlamConfig(const YAML::Node& root, const std::string& source) {
   readMotion(top.section("motion"), &f.motion);
   readAssociation(top.section("association"), &f.association);
   readMeasurement(top.section("measurement"), &f.measurement);
+  readRobust(top.section("robust"), &f.robust);
+  readTracker(top.section("tracker"), &f.tracker);
   readLaser(top.section("laser_features"), &config.laser);
   readScanMatching(top.section("scan_matching"), &config.scan_matching);
   core::SessionOptions& s = config.session;

@@ -72,6 +72,30 @@ TEST(SlamConfig, OverridesApplyDottedKeys) {
   EXPECT_THROW(applyOverride(&root, "novalue"), ConfigError);
 }
 
+TEST(SlamConfig, RobustConfigsLoadWithTheirSections) {
+  const std::string dir = std::string(RBPF_SOURCE_DIR) + "/config/";
+  const SlamConfig landmarks = loadSlamConfig(dir + "landmarks_robust.yaml");
+  EXPECT_EQ(landmarks.filter.variant, "robust_fastslam2");
+  EXPECT_EQ(landmarks.frontend, "features");
+  EXPECT_EQ(landmarks.filter.particles, 100);
+  EXPECT_EQ(landmarks.filter.robust.ancestor_sets, 5);
+  EXPECT_EQ(landmarks.filter.tracker.forget_after_steps, 25);
+  const SlamConfig laser = loadSlamConfig(dir + "laser_robust.yaml");
+  EXPECT_EQ(laser.filter.variant, "robust_fastslam2");
+  EXPECT_EQ(laser.frontend, "laser");
+  EXPECT_EQ(laser.filter.particles, 50);
+  EXPECT_TRUE(laser.filter.robust.intermediate_path);
+  EXPECT_NE(errorOf("robust: {ancestor_set: 3}").find("in robust: ancestor_set"),
+            std::string::npos);
+  EXPECT_NE(errorOf("tracker: {forget_after: 3}").find("in tracker: forget_after"),
+            std::string::npos);
+  EXPECT_NE(errorOf("robust: {window_steps: 0}").find("robust.window_steps = 0"),
+            std::string::npos);
+  EXPECT_NE(errorOf("tracker: {gate_chi2: 30, new_landmark_chi2: 20}")
+                .find("tracker.new_landmark_chi2"),
+            std::string::npos);
+}
+
 TEST(SlamConfig, MissingFileIsNamed) {
   try {
     loadSlamConfig("/nonexistent/x.yaml");

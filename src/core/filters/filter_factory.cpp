@@ -3,6 +3,7 @@
 #include <string>
 
 #include "rbpf_slam/core/filters/fastslam2.h"
+#include "rbpf_slam/core/filters/robust_fastslam2.h"
 #include "rbpf_slam/core/filters/slam_filter.h"
 
 namespace rbpf_slam {
@@ -18,7 +19,14 @@ void requireRange(const std::string& name, double value, double min, double max)
 
 }  // namespace
 
-std::vector<std::string> availableVariants() { return {"fastslam2"}; }
+std::vector<std::string> availableVariants() { return {"fastslam2", "robust_fastslam2"}; }
+
+void validate(const RobustOptions& o) {
+  requireRange("robust.ancestor_sets", o.ancestor_sets, 1, 100);
+  requireRange("robust.ancestor_spacing_steps", o.ancestor_spacing_steps, 1, 100000);
+  requireRange("robust.window_steps", o.window_steps, 1, 100000);
+  requireRange("robust.path_iterations", o.path_iterations, 1, 100);
+}
 
 void validate(const FilterOptions& o) {
   bool known = false;
@@ -39,11 +47,14 @@ void validate(const FilterOptions& o) {
     throw std::invalid_argument("use_points and use_lines are both false: nothing to map");
   }
   validate(o.motion);
+  validate(o.robust);
+  validate(o.tracker);
 }
 
 std::unique_ptr<SlamFilter> createFilter(const FilterOptions& options) {
   validate(options);
   if (options.variant == "fastslam2") return std::make_unique<FastSlam2>(options);
+  if (options.variant == "robust_fastslam2") return std::make_unique<RobustFastSlam2>(options);
   throw std::invalid_argument("variant = '" + options.variant + "' is not implemented");
 }
 

@@ -4,6 +4,7 @@
 #include <string>
 
 #include "rbpf_slam/core/motion/motion_model.h"
+#include "rbpf_slam/core/tracking/landmark_tracker_options.h"
 
 namespace rbpf_slam {
 namespace core {
@@ -26,6 +27,15 @@ struct MeasurementOptions {
   double covariance_inflation = 1.0;  // multiplies every feature covariance
 };
 
+/// Robust RBPF-SLAM (Lee, Kim and Chung 2010): sampling from K ancestor sets on a new landmark.
+struct RobustOptions {
+  int ancestor_sets = 5;           // K: sets sampled from on a new landmark, the latest included
+  int ancestor_spacing_steps = 5;  // minimum steps between two stored sets (and robust steps)
+  int window_steps = 100;          // oldest usable set, in steps; bounds the stored history
+  bool intermediate_path = true;   // estimate the skipped path and replay its observations
+  int path_iterations = 10;        // iterated EKF steps of the intermediate path estimate
+};
+
 struct FilterOptions {
   std::string variant = "fastslam2";
   int particles = 100;
@@ -36,10 +46,13 @@ struct FilterOptions {
   MeasurementOptions measurement;
   bool use_points = true;
   bool use_lines = true;
+  RobustOptions robust;            // variant robust_fastslam2 (particles = M per set)
+  LandmarkTrackerOptions tracker;  // variant robust_fastslam2
 };
 
 /// Throws std::invalid_argument naming the first out-of-range field and its allowed range.
 void validate(const FilterOptions& options);
+void validate(const RobustOptions& options);
 
 }  // namespace core
 }  // namespace rbpf_slam

@@ -1,0 +1,62 @@
+#pragma once
+// Robust RBPF-SLAM of Lee, Kim and Chung (ICRA 2010): FastSLAM 2.0 that, when the landmark
+// tracker reports a new landmark, draws M particles from each of K ancestor sets (eq. 8),
+// weights all M x K by the current observations, keeps M (Fig. 3, 4), and fills the path a
+// particle skipped by the intermediate path estimate, replaying the stored observations into
+// its map (sec. IV). Between such steps it is exactly FastSLAM 2.0.
+
+#include <vector>
+
+#include "rbpf_slam/core/filters/ancestor_sets.h"
+#include "rbpf_slam/core/filters/fastslam2.h"
+#include "rbpf_slam/core/tracking/landmark_tracker.h"
+
+namespace rbpf_slam {
+namespace core {
+
+/// Running totals of the robust steps.
+struct RobustStats {
+  long tracker_events = 0;      // steps at which the tracker started a landmark
+  long robust_steps = 0;        // steps sampled from several ancestor sets
+  long from_older_sets = 0;     // particles kept at robust steps that came from an older set
+  long replayed_steps = 0;      // intermediate steps replayed into particles' maps
+};
+
+class RobustFastSlam2 : public FastSlam2 {
+ public:
+  explicit RobustFastSlam2(const FilterOptions& options);
+
+  std::string variant() const override { return "robust_fastslam2"; }
+  void reset(const Pose2& initial_pose) override;
+  UpdateStats update(const FeatureSet& features) override;
+
+  const RobustStats& robustStats() const { return robust_stats_; }
+  /// For each particle, the step of the set it was drawn from at the latest robust step
+  /// (that step - 1 for the latest set); empty before the first robust step.
+  const std::vector<int>& origins() const { return origins_; }
+  const AncestorMemory& memory() const { return memory_; }
+  const LandmarkTracker& tracker() const { return tracker_; }
+
+ private:
+  /// Odometry increment covariance in the frame of the previous pose.
+  Eigen::Matrix3d incrementCovariance(const MotionInput& motion) const;
+  UpdateStats robustUpdate(const std::vector<Observation>& observations,
+                           const std::vector<const AncestorSet*>& ancestors);
+  /// The FastSLAM 2.0 step of one candidate from its propagated pose Gaussian; returns its
+  /// weight, counting only landmarks older than old_id_limit (those every ancestor can know),
+  /// so that candidates from older sets are not penalised for lacking newer landmarks.
+  double updateCandidate(Particle* particle, const Pose2& mean, const Eigen::Matrix3d& cov,
+                         const std::vector<Observation>& observations, int old_id_limit);
+  /// Samples the skipped poses of a particle drawn from the set of step `from` and replays the
+  /// stored observations into its map, from the latest step back (sec. IV).
+  void replayIntermediatePath(Particle* particle, const Pose2& start, int from);
+
+  LandmarkTracker tracker_;
+  AncestorMemory memory_;
+  std::vector<int> origins_;
+  int last_robust_step_ = -1000000;
+  RobustStats robust_stats_;
+};
+
+}  // namespace core
+}  // namespace rbpf_slam

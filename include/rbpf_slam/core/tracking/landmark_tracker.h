@@ -1,0 +1,72 @@
+#pragma once
+// Landmark tracker of Lee, Kim and Chung (ICRA 2010, sec. III): an independent short-horizon
+// EKF-SLAM over the robot pose and the nearby landmarks, with its own nearest-neighbour
+// association, that reports when the robot starts observing a landmark it was not tracking
+// (the timing of the robust filter's multi-ancestor sampling) and forgets landmarks left behind.
+
+#include <Eigen/Core>
+#include <vector>
+
+#include "rbpf_slam/core/filters/slam_filter.h"
+#include "rbpf_slam/core/geometry.h"
+#include "rbpf_slam/core/tracking/landmark_tracker_options.h"
+
+namespace rbpf_slam {
+namespace core {
+
+/// One observation for the tracker: a point (range, bearing) or a line (rho, theta) in the
+/// base frame, with its noise covariance.
+struct TrackerObservation {
+  LandmarkType type = LandmarkType::kPoint;
+  Eigen::Vector2d z = Eigen::Vector2d::Zero();
+  Eigen::Matrix2d noise = Eigen::Matrix2d::Identity();
+};
+
+/// What one tracker step found.
+struct TrackerEvent {
+  int step = 0;               // the step passed to update()
+  bool new_landmark = false;  // at least one observation started a landmark
+  int started = 0;            // landmarks started at this step
+  int matched = 0;            // observations associated with tracked landmarks
+  int forgotten = 0;          // landmarks dropped at this step
+  int tracked = 0;            // landmarks in the state after this step
+};
+
+class LandmarkTracker {
+ public:
+  explicit LandmarkTracker(const LandmarkTrackerOptions& options);
+
+  /// Forgets every landmark; the tracker's frame restarts at the robot.
+  void reset();
+  /// Prediction with the odometry increment (base frame of the previous step) and its
+  /// covariance in that frame, then the EKF update with the observations of `step`.
+  TrackerEvent update(int step, const Pose2& increment, const Eigen::Matrix3d& increment_cov,
+                      const std::vector<TrackerObservation>& observations);
+
+  int trackedLandmarks() const { return static_cast<int>(landmarks_.size()); }
+  /// The robot pose in the tracker's own frame (origin: the pose at reset).
+  Pose2 pose() const { return state_.head<3>(); }
+  const Eigen::VectorXd& state() const { return state_; }
+  const Eigen::MatrixXd& covariance() const { return covariance_; }
+
+ private:
+  struct Tracked {
+    LandmarkType type = LandmarkType::kPoint;
+    int last_seen_step = 0;
+  };
+  void predict(const Pose2& increment, const Eigen::Matrix3d& increment_cov);
+  /// Index of the tracked landmark nearest in Mahalanobis distance, -1 when none.
+  int associate(const TrackerObservation& observation, double* distance2) const;
+  void correct(int landmark, const TrackerObservation& observation);
+  void start(const TrackerObservation& observation, int step);
+  void remove(int landmark);
+  int forget(int step);
+
+  const LandmarkTrackerOptions options_;
+  Eigen::VectorXd state_;       // pose (x, y, theta), then two entries per landmark
+  Eigen::MatrixXd covariance_;
+  std::vector<Tracked> landmarks_;
+};
+
+}  // namespace core
+}  // namespace rbpf_slam

@@ -1,0 +1,231 @@
+#include "rbpf_slam/core/filters/robust_fastslam2.h"
+
+#include <Eigen/Dense>
+#include <cmath>
+#include <utility>
+
+#include "rbpf_slam/core/filters/intermediate_path.h"
+#include "rbpf_slam/core/filters/resampling.h"
+
+namespace rbpf_slam {
+namespace core {
+namespace {
+
+constexpr double kLog2Pi = 1.8378770664093453;
+
+std::vector<TrackerObservation> forTracker(const std::vector<Observation>& observations) {
+  std::vector<TrackerObservation> out(observations.size());
+  for (size_t i = 0; i < observations.size(); ++i) {
+    out[i].type = observations[i].type;
+    out[i].z = observations[i].z;
+    out[i].noise = observations[i].noise;
+  }
+  return out;
+}
+
+}  // namespace
+
+RobustFastSlam2::RobustFastSlam2(const FilterOptions& options)
+    : FastSlam2(options),
+      tracker_(options.tracker),
+      memory_(options.robust.ancestor_sets - 1, options.robust.ancestor_spacing_steps,
+              options.robust.window_steps) {}
+
+void RobustFastSlam2::reset(const Pose2& initial_pose) {
+  FastSlam2::reset(initial_pose);
+  tracker_.reset();
+  memory_.clear();
+  origins_.clear();
+  last_robust_step_ = -1000000;
+  robust_stats_ = RobustStats();
+}
+
+Eigen::Matrix3d RobustFastSlam2::incrementCovariance(const MotionInput& motion) const {
+  return motion_model_->covariance(Pose2::Zero(), motion);  // previous pose = its own frame
+}
+
+UpdateStats RobustFastSlam2::update(const FeatureSet& features) {
+  const MotionInput motion = has_pending_motion_ ? pending_motion_ : MotionInput();
+  int rejected = 0;
+  std::vector<Observation> observations = prepare(features, &rejected);
+  const int step = step_ + 1;
+  const TrackerEvent event =
+      tracker_.update(step, motion.delta, incrementCovariance(motion), forTracker(observations));
+  StepRecord record;
+  record.step = step;
+  record.motion = motion;
+  record.observations = observations;
+  memory_.record(std::move(record));
+  if (!event.new_landmark) return FastSlam2::update(features);
+  ++robust_stats_.tracker_events;
+
+  // S_{t-1}, the latest set, is the first ancestor; the stored ones follow, newest first.
+  AncestorSet latest;
+  latest.step = step - 1;
+  latest.particles = particles_;
+  latest.weights = weights_;
+  latest.next_landmark_id = next_landmark_id_;
+  std::vector<const AncestorSet*> ancestors{&latest};
+  for (const AncestorSet* set : memory_.usable(step)) {
+    if (static_cast<int>(ancestors.size()) < options_.robust.ancestor_sets) ancestors.push_back(set);
+  }
+  UpdateStats stats;
+  if (ancestors.size() > 1 &&
+      step - last_robust_step_ >= options_.robust.ancestor_spacing_steps) {
+    stats = robustUpdate(observations, ancestors);
+    stats.features_rejected = rejected;
+    stats.features_in = static_cast<int>(features.lines.size() + features.points.size());
+    last_robust_step_ = step;
+  } else {
+    stats = FastSlam2::update(features);
+  }
+  if (memory_.canStore(latest.step)) memory_.store(std::move(latest));
+  return stats;
+}
+
+UpdateStats RobustFastSlam2::robustUpdate(const std::vector<Observation>& observations,
+                                          const std::vector<const AncestorSet*>& ancestors) {
+  UpdateStats stats;
+  ++step_;
+  has_pending_motion_ = false;
+  const int t = step_;
+  const int count = options_.particles;
+  const int old_id_limit = ancestors.back()->next_landmark_id;
+  std::vector<Particle> candidates;
+  std::vector<int> candidate_set;
+  std::vector<Pose2> candidate_start;
+  candidates.reserve(count * ancestors.size());
+  for (size_t k = 0; k < ancestors.size(); ++k) {
+    const AncestorSet& set = *ancestors[k];
+    const std::vector<const StepRecord*> records = memory_.records(set.step, t);
+    for (int index : resampleLowVariance(set.weights, count, rng_)) {
+      Particle candidate = set.particles[index];
+      // Eq. 8: x_t ~ p(x_t | x_{t-s}, u_{t-s+1:t}), as a Gaussian propagated over the steps.
+      Pose2 mean = candidate.pose;
+      Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+      for (const StepRecord* r : records) {
+        const Eigen::Matrix3d f = composeJacobianFirst(mean, r->motion.delta);
+        cov = f * cov * f.transpose() + motion_model_->covariance(mean, r->motion);
+        mean = motion_model_->mean(mean, r->motion);
+      }
+      candidate_start.push_back(candidate.pose);
+      candidate.log_weight = updateCandidate(&candidate, mean, cov, observations, old_id_limit);
+      candidates.push_back(std::move(candidate));
+      candidate_set.push_back(static_cast<int>(k));
+    }
+  }
+  // Fig. 3 (b), (c): weight all M x K by z_t, keep M.
+  std::vector<double> log_weights(candidates.size()), weights;
+  for (size_t i = 0; i < candidates.size(); ++i) log_weights[i] = candidates[i].log_weight;
+  if (!normalizeLogWeights(log_weights, &weights)) {
+    ++stats.weight_resets;
+    ++stats_.weight_resets;
+  }
+  stats.neff = effectiveSampleSize(weights) / static_cast<double>(ancestors.size());
+  const std::vector<int> kept = resampleLowVariance(weights, count, rng_);
+  std::vector<Particle> next;
+  next.reserve(count);
+  origins_.assign(count, t - 1);
+  for (int i = 0; i < count; ++i) {
+    next.push_back(candidates[kept[i]]);
+    next.back().log_weight = 0.0;
+    const AncestorSet& set = *ancestors[candidate_set[kept[i]]];
+    origins_[i] = set.step;
+    if (set.step < t - 1) {
+      ++robust_stats_.from_older_sets;
+      if (options_.robust.intermediate_path) {
+        replayIntermediatePath(&next.back(), candidate_start[kept[i]], set.step);
+      }
+    }
+  }
+  particles_.swap(next);
+  weights_.assign(count, 1.0 / count);
+  stats.resampled = true;
+  ++stats_.resamples;
+  ++stats_.updates;
+  ++robust_stats_.robust_steps;
+  stats_.last_neff = stats.neff;
+  stats_.landmarks = particles_[0].map->size();
+  return stats;
+}
+
+double RobustFastSlam2::updateCandidate(Particle* particle, const Pose2& predicted_mean,
+                                        const Eigen::Matrix3d& predicted_cov,
+                                        const std::vector<Observation>& observations,
+                                        int old_id_limit) {
+  const AssociationOptions& a = options_.association;
+  Pose2 mean = predicted_mean;
+  Eigen::Matrix3d cov = predicted_cov;
+  double log_likelihood = 0.0;
+  std::vector<std::pair<int, int>> matched;  // (observation, landmark index)
+  std::vector<int> fresh;
+  const LandmarkMap& map = *particle->map;
+  for (size_t k = 0; k < observations.size(); ++k) {
+    const Observation& o = observations[k];
+    // An observation no candidate can explain by a landmark of the oldest set counts the same
+    // for all: as if observed at the new-landmark threshold.
+    const double log_new =
+        -0.5 * a.new_landmark_chi2 - 0.5 * std::log(o.noise.determinant()) - kLog2Pi;
+    const Match m = associate(map, mean, cov, o);
+    if (m.index < 0 || m.distance2 >= a.gate_chi2) {
+      log_likelihood += log_new;
+      if (m.index < 0 || m.distance2 > a.new_landmark_chi2) fresh.push_back(static_cast<int>(k));
+      continue;
+    }
+    // FastSLAM 2.0 proposal (Montemerlo 2003, eq. 3.7) from the propagated Gaussian.
+    const Eigen::Matrix<double, 2, 3>& h = m.prediction.h_pose;
+    const Eigen::Matrix2d s = h * cov * h.transpose() + m.landmark_innovation_cov;
+    const double det = s.determinant();
+    if (!(det > 0.0) || !std::isfinite(det)) continue;
+    const Eigen::Matrix2d s_inv = s.inverse();
+    const Eigen::Vector2d v = innovation(o.z, m.prediction.z);
+    const bool old = o.known_id >= 0 || map[m.index].id < old_id_limit;
+    log_likelihood += old ? -0.5 * v.dot(s_inv * v) - 0.5 * std::log(det) - kLog2Pi : log_new;
+    const Eigen::Matrix<double, 3, 2> gain = cov * h.transpose() * s_inv;
+    mean += gain * v;
+    mean.z() = wrapAngle(mean.z());
+    cov = (Eigen::Matrix3d::Identity() - gain * h) * cov;
+    cov = 0.5 * (cov + cov.transpose());
+    matched.emplace_back(static_cast<int>(k), m.index);
+  }
+  particle->pose = sampleMultivariate<3>(rng_, mean, cov);
+  particle->pose.z() = wrapAngle(particle->pose.z());
+  if (matched.empty() && fresh.empty()) return log_likelihood;
+  LandmarkMap& writable = mutableMap(&particle->map);
+  for (const auto& [k, index] : matched) {
+    Match m;
+    m.index = index;
+    updateLandmark(&writable, m, particle->pose, observations[k], nullptr);
+  }
+  for (int k : fresh) addLandmark(&writable, particle->pose, observations[k]);
+  return log_likelihood;
+}
+
+void RobustFastSlam2::replayIntermediatePath(Particle* particle, const Pose2& start, int from) {
+  const std::vector<const StepRecord*> records = memory_.records(from, step_);
+  if (records.size() < 2) return;
+  std::vector<Pose2> increments;
+  std::vector<Eigen::Matrix3d> covariances;
+  for (const StepRecord* r : records) {
+    increments.push_back(r->motion.delta);
+    covariances.push_back(incrementCovariance(r->motion));
+  }
+  const IntermediatePath path = estimateIntermediatePath(start, particle->pose, increments,
+                                                         covariances,
+                                                         options_.robust.path_iterations);
+  // Sec. IV: from t - 1 back to t - s + 1, each pose sampled FastSLAM 2.0-style from its
+  // Gaussian and the stored observations, which update the map (relocated objects that do not
+  // match become new landmarks).
+  Particle replay;
+  replay.map = particle->map;
+  for (int j = static_cast<int>(path.means.size()) - 1; j >= 0; --j) {
+    const std::vector<Observation>& observations = records[j]->observations;
+    if (observations.empty()) continue;
+    updateParticle(&replay, path.means[j], path.covariances[j], observations);
+    ++robust_stats_.replayed_steps;
+  }
+  particle->map = replay.map;
+}
+
+}  // namespace core
+}  // namespace rbpf_slam

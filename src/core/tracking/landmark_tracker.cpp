@@ -1,0 +1,209 @@
+#include "rbpf_slam/core/tracking/landmark_tracker.h"
+
+#include <Eigen/Dense>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include "rbpf_slam/core/filters/measurement_models.h"
+
+namespace rbpf_slam {
+namespace core {
+namespace {
+
+void requireRange(const std::string& name, double value, double min, double max) {
+  if (!(value >= min && value <= max)) {
+    throw std::invalid_argument("tracker." + name + " = " + std::to_string(value) +
+                                " is out of range [" + std::to_string(min) + ", " +
+                                std::to_string(max) + "]");
+  }
+}
+
+/// The observation model of landmark `m` (point or line) from `pose`.
+Prediction observationModel(LandmarkType type, const Pose2& pose, const Eigen::Vector2d& m,
+                   const Eigen::Vector2d& z) {
+  return type == LandmarkType::kLine ? predictLine(pose, m, z.y()) : predictPoint(pose, m);
+}
+
+}  // namespace
+
+void validate(const LandmarkTrackerOptions& o) {
+  requireRange("gate_chi2", o.gate_chi2, 0.1, 1000.0);
+  requireRange("new_landmark_chi2", o.new_landmark_chi2, o.gate_chi2, 1000.0);
+  requireRange("forget_after_steps", o.forget_after_steps, 1, 100000);
+  requireRange("forget_distance_m", o.forget_distance_m, 0.1, 1e4);
+  requireRange("max_landmarks", o.max_landmarks, 1, 1000);
+}
+
+LandmarkTracker::LandmarkTracker(const LandmarkTrackerOptions& options) : options_(options) {
+  validate(options_);
+  reset();
+}
+
+void LandmarkTracker::reset() {
+  state_ = Eigen::VectorXd::Zero(3);
+  covariance_ = Eigen::MatrixXd::Zero(3, 3);
+  landmarks_.clear();
+}
+
+TrackerEvent LandmarkTracker::update(int step, const Pose2& increment,
+                                     const Eigen::Matrix3d& increment_cov,
+                                     const std::vector<TrackerObservation>& observations) {
+  TrackerEvent event;
+  event.step = step;
+  predict(increment, increment_cov);
+  std::vector<const TrackerObservation*> fresh;
+  for (const TrackerObservation& o : observations) {
+    double d2 = 0.0;
+    const int index = associate(o, &d2);
+    if (index >= 0 && d2 < options_.gate_chi2) {
+      correct(index, o);
+      landmarks_[index].last_seen_step = step;
+      ++event.matched;
+    } else if (index < 0 || d2 > options_.new_landmark_chi2) {
+      fresh.push_back(&o);  // started after the corrections, so that they cannot match it
+    }
+  }
+  for (const TrackerObservation* o : fresh) start(*o, step);
+  event.started = static_cast<int>(fresh.size());
+  event.new_landmark = event.started > 0;
+  event.forgotten = forget(step);
+  event.tracked = trackedLandmarks();
+  return event;
+}
+
+void LandmarkTracker::predict(const Pose2& increment, const Eigen::Matrix3d& increment_cov) {
+  const Pose2 pose = state_.head<3>();
+  const double c = std::cos(pose.z()), s = std::sin(pose.z());
+  Eigen::Matrix3d f = Eigen::Matrix3d::Identity();  // d (pose + increment) / d pose
+  f(0, 2) = -s * increment.x() - c * increment.y();
+  f(1, 2) = c * increment.x() - s * increment.y();
+  Eigen::Matrix3d g = Eigen::Matrix3d::Identity();  // d (pose + increment) / d increment
+  g.topLeftCorner<2, 2>() << c, -s, s, c;
+  state_.head<3>() = compose(pose, increment);
+  const int n = static_cast<int>(state_.size());
+  covariance_.topLeftCorner<3, 3>() =
+      f * covariance_.topLeftCorner<3, 3>() * f.transpose() + g * increment_cov * g.transpose();
+  if (n > 3) {
+    covariance_.topRightCorner(3, n - 3) = f * covariance_.topRightCorner(3, n - 3);
+    covariance_.bottomLeftCorner(n - 3, 3) = covariance_.topRightCorner(3, n - 3).transpose();
+  }
+}
+
+int LandmarkTracker::associate(const TrackerObservation& o, double* distance2) const {
+  int best = -1;
+  *distance2 = INFINITY;
+  const Pose2 pose = state_.head<3>();
+  const int n = static_cast<int>(state_.size());
+  for (int i = 0; i < trackedLandmarks(); ++i) {
+    if (landmarks_[i].type != o.type) continue;
+    const int j = 3 + 2 * i;
+    const Prediction p = observationModel(o.type, pose, state_.segment<2>(j), o.z);
+    Eigen::MatrixXd h = Eigen::MatrixXd::Zero(2, n);
+    h.leftCols<3>() = p.h_pose;
+    h.middleCols<2>(j) = p.h_landmark;
+    const Eigen::Matrix2d s = h * covariance_ * h.transpose() + o.noise;
+    const Eigen::Vector2d v = innovation(o.z, p.z);
+    const double d2 = v.dot(s.inverse() * v);
+    if (std::isfinite(d2) && d2 < *distance2) {
+      *distance2 = d2;
+      best = i;
+    }
+  }
+  return best;
+}
+
+void LandmarkTracker::correct(int landmark, const TrackerObservation& o) {
+  const int n = static_cast<int>(state_.size());
+  const int j = 3 + 2 * landmark;
+  const Prediction p = observationModel(o.type, state_.head<3>(), state_.segment<2>(j), o.z);
+  Eigen::MatrixXd h = Eigen::MatrixXd::Zero(2, n);
+  h.leftCols<3>() = p.h_pose;
+  h.middleCols<2>(j) = p.h_landmark;
+  const Eigen::Matrix2d s = h * covariance_ * h.transpose() + o.noise;
+  const Eigen::MatrixXd k = covariance_ * h.transpose() * s.inverse();
+  state_ += k * innovation(o.z, p.z);
+  state_(2) = wrapAngle(state_(2));
+  if (o.type == LandmarkType::kLine) state_(j + 1) = wrapAngle(state_(j + 1));
+  covariance_ = (Eigen::MatrixXd::Identity(n, n) - k * h) * covariance_;
+  covariance_ = 0.5 * (covariance_ + covariance_.transpose()).eval();
+}
+
+void LandmarkTracker::start(const TrackerObservation& o, int step) {
+  const Pose2 pose = state_.head<3>();
+  Eigen::Matrix2d g_z;
+  Eigen::Matrix<double, 2, 3> g_pose;
+  Eigen::Vector2d m;
+  if (o.type == LandmarkType::kLine) {
+    m = lineFromObservation(pose, o.z, &g_z);
+    const double alpha = pose.z() + o.z.y();
+    const double c = std::cos(alpha), s = std::sin(alpha);
+    g_pose << c, s, -pose.x() * s + pose.y() * c, 0.0, 0.0, 1.0;
+    if (std::fabs(wrapAngle(m.y() - alpha)) > M_PI / 2.0) g_pose.row(0) *= -1.0;  // flipped
+  } else {
+    m = pointFromObservation(pose, o.z, &g_z);
+    const double angle = pose.z() + o.z.y();
+    g_pose << 1.0, 0.0, -o.z.x() * std::sin(angle), 0.0, 1.0, o.z.x() * std::cos(angle);
+  }
+  const int n = static_cast<int>(state_.size());
+  state_.conservativeResize(n + 2);
+  state_.segment<2>(n) = m;
+  Eigen::MatrixXd grown = Eigen::MatrixXd::Zero(n + 2, n + 2);
+  grown.topLeftCorner(n, n) = covariance_;
+  const Eigen::MatrixXd cross = g_pose * covariance_.topRows<3>();  // 2 x n
+  grown.block(n, 0, 2, n) = cross;
+  grown.block(0, n, n, 2) = cross.transpose();
+  grown.block<2, 2>(n, n) = g_pose * covariance_.topLeftCorner<3, 3>() * g_pose.transpose() +
+                            g_z * o.noise * g_z.transpose();
+  covariance_.swap(grown);
+  Tracked t;
+  t.type = o.type;
+  t.last_seen_step = step;
+  landmarks_.push_back(t);
+}
+
+void LandmarkTracker::remove(int landmark) {
+  const int n = static_cast<int>(state_.size());
+  const int j = 3 + 2 * landmark;
+  const int tail = n - j - 2;
+  state_.segment(j, tail) = state_.tail(tail).eval();
+  state_.conservativeResize(n - 2);
+  Eigen::MatrixXd shrunk(n - 2, n - 2);
+  shrunk.topLeftCorner(j, j) = covariance_.topLeftCorner(j, j);
+  shrunk.topRightCorner(j, tail) = covariance_.topRightCorner(j, tail);
+  shrunk.bottomLeftCorner(tail, j) = covariance_.bottomLeftCorner(tail, j);
+  shrunk.bottomRightCorner(tail, tail) = covariance_.bottomRightCorner(tail, tail);
+  covariance_.swap(shrunk);
+  landmarks_.erase(landmarks_.begin() + landmark);
+}
+
+int LandmarkTracker::forget(int step) {
+  int forgotten = 0;
+  const Pose2 pose = state_.head<3>();
+  for (int i = trackedLandmarks() - 1; i >= 0; --i) {
+    const Eigen::Vector2d m = state_.segment<2>(3 + 2 * i);
+    const double distance =
+        landmarks_[i].type == LandmarkType::kLine
+            ? std::fabs(m.x() - pose.x() * std::cos(m.y()) - pose.y() * std::sin(m.y()))
+            : (m - pose.head<2>()).norm();
+    if (step - landmarks_[i].last_seen_step >= options_.forget_after_steps ||
+        distance > options_.forget_distance_m) {
+      remove(i);
+      ++forgotten;
+    }
+  }
+  while (trackedLandmarks() > options_.max_landmarks) {
+    int oldest = 0;
+    for (int i = 1; i < trackedLandmarks(); ++i) {
+      if (landmarks_[i].last_seen_step < landmarks_[oldest].last_seen_step) oldest = i;
+    }
+    remove(oldest);
+    ++forgotten;
+  }
+  // With nothing left to anchor it, the tracker's frame restarts at the robot (bounded drift).
+  if (landmarks_.empty()) covariance_.setZero();
+  return forgotten;
+}
+
+}  // namespace core
+}  // namespace rbpf_slam

@@ -1,0 +1,222 @@
+// Robust RBPF-SLAM: the ancestor-set bookkeeping (bounded, spaced, windowed), which set the
+// particles come from after a corrupted stretch, and the variant through the factory.
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <map>
+#include <memory>
+
+#include "rbpf_slam/core/filters/ancestor_sets.h"
+#include "rbpf_slam/core/filters/measurement_models.h"
+#include "rbpf_slam/core/filters/robust_fastslam2.h"
+
+namespace rbpf_slam {
+namespace core {
+namespace {
+
+AncestorSet setAt(int step, int particles) {
+  AncestorSet set;
+  set.step = step;
+  set.particles.resize(particles);
+  set.weights.assign(particles, 1.0 / particles);
+  return set;
+}
+
+StepRecord recordAt(int step) {
+  StepRecord r;
+  r.step = step;
+  r.motion.delta = Pose2(0.1 * step, 0, 0);
+  return r;
+}
+
+TEST(AncestorMemory, BoundedSpacedAndWindowed) {
+  AncestorMemory memory(/*max_sets=*/3, /*spacing_steps=*/5, /*window_steps=*/20);
+  for (int step = 1; step <= 1000; ++step) {
+    memory.record(recordAt(step));
+    if (memory.canStore(step - 1)) memory.store(setAt(step - 1, 10));
+    ASSERT_LE(memory.storedSets(), 3);
+    ASSERT_LE(memory.storedRecords(), 20);
+  }
+  // Sets stored at 0, 5, 10, ...: the latest three are 985, 990, 995.
+  const std::vector<const AncestorSet*> usable = memory.usable(1000);
+  ASSERT_EQ(usable.size(), 3u);
+  EXPECT_EQ(usable[0]->step, 995);
+  EXPECT_EQ(usable[1]->step, 990);
+  EXPECT_EQ(usable[2]->step, 985);
+  // The records a set needs, in order.
+  const std::vector<const StepRecord*> records = memory.records(985, 1000);
+  ASSERT_EQ(records.size(), 15u);
+  EXPECT_EQ(records.front()->step, 986);
+  EXPECT_EQ(records.back()->step, 1000);
+  EXPECT_DOUBLE_EQ(records.back()->motion.delta.x(), 100.0);
+  EXPECT_TRUE(memory.records(900, 1000).empty());  // dropped: beyond the window
+}
+
+TEST(AncestorMemory, SetsOutsideTheWindowAreNotUsable) {
+  AncestorMemory memory(4, 1, 10);
+  for (int step = 1; step <= 3; ++step) memory.record(recordAt(step));
+  memory.store(setAt(2, 5));
+  for (int step = 4; step <= 12; ++step) memory.record(recordAt(step));
+  ASSERT_EQ(memory.usable(12).size(), 1u);  // 12 - 2 = 10 steps: still inside
+  memory.record(recordAt(13));
+  EXPECT_TRUE(memory.usable(13).empty());
+}
+
+TEST(AncestorMemory, SpacingRefusesCloseSets) {
+  AncestorMemory memory(4, 5, 100);
+  memory.store(setAt(10, 1));
+  EXPECT_FALSE(memory.canStore(14));
+  memory.store(setAt(14, 1));
+  EXPECT_EQ(memory.storedSets(), 1);
+  EXPECT_TRUE(memory.canStore(15));
+}
+
+// A robot drives along x, 0.2 m per step, with exact odometry:
+//   steps 1-10 it sees posts A and B; 11-20 nothing (the tracker forgets them);
+//   21-25 it sees A, which has been moved 0.35 m along x: a corrupted observation that pulls
+//   every FastSLAM 2.0 particle off; 26-28 nothing; 29-31 it sees B, which has not moved.
+// At step 29 the tracker reports B as new, and the robust filter samples from S_28
+// (corrupted) and S_20 (stored when A reappeared, before the corruption).
+class CorruptedStretch : public ::testing::Test {
+ protected:
+  static FilterOptions options(const std::string& variant) {
+    FilterOptions o;
+    o.variant = variant;
+    o.particles = 60;
+    o.seed = 7;
+    o.use_lines = false;
+    o.motion.alpha1 = o.motion.alpha2 = o.motion.alpha3 = o.motion.alpha4 = 1e-4;
+    o.motion.min_sigma_xy_m = 0.04;
+    o.motion.min_sigma_theta_rad = 0.002;
+    o.measurement.sigma_range_m = 1e-3;
+    o.measurement.sigma_bearing_rad = 1e-3;
+    o.robust.ancestor_sets = 3;
+    o.robust.ancestor_spacing_steps = 2;
+    o.robust.window_steps = 15;
+    o.tracker.forget_after_steps = 5;
+    return o;
+  }
+
+  static double run(SlamFilter* filter) {
+    const Eigen::Vector2d a(8.0, 0.5), b(9.0, -0.5);
+    const Eigen::Vector2d moved_a = a + Eigen::Vector2d(0.35, 0.0);
+    Pose2 truth = Pose2::Zero();
+    for (int step = 1; step <= 31; ++step) {
+      MotionInput motion;
+      motion.dt = 0.2;
+      motion.delta = Pose2(0.2, 0, 0);
+      truth = compose(truth, motion.delta);
+      filter->predict(motion);
+      FeatureSet features;
+      auto see = [&](const Eigen::Vector2d& landmark) {
+        PointFeature f;
+        const Prediction p = predictPoint(truth, landmark);
+        f.range = p.z.x();
+        f.bearing = p.z.y();
+        f.covariance = Eigen::Vector2d(0.0025, 0.0001).asDiagonal();
+        features.points.push_back(f);
+      };
+      if (step <= 10) {
+        see(a);
+        see(b);
+      } else if (step >= 21 && step <= 25) {
+        see(moved_a);
+      } else if (step >= 29) {
+        see(b);
+      }
+      filter->update(features);
+    }
+    return (filter->estimate().mean.head<2>() - truth.head<2>()).norm();
+  }
+};
+
+TEST_F(CorruptedStretch, ParticlesComeFromTheSetBeforeTheCorruption) {
+  RobustFastSlam2 robust(options("robust_fastslam2"));
+  const double robust_error = run(&robust);
+  auto plain = createFilter(options("fastslam2"));
+  const double plain_error = run(plain.get());
+  std::map<int, int> by_origin;
+  for (int origin : robust.origins()) ++by_origin[origin];
+  ASSERT_EQ(static_cast<int>(robust.origins().size()), 60);
+  // Every particle names a set that existed: S_28 or a stored one.
+  for (const auto& [step, count] : by_origin) {
+    EXPECT_TRUE(step == 28 || step == 20) << "origin step " << step << " x" << count;
+  }
+  EXPECT_GT(by_origin[20], 40) << "most particles should come from S_20";
+  EXPECT_GE(robust.robustStats().robust_steps, 1);
+  EXPECT_GT(robust.robustStats().replayed_steps, 0);
+  EXPECT_GT(plain_error, 0.08) << "the scenario must corrupt FastSLAM 2.0";
+  EXPECT_LT(robust_error, 0.5 * plain_error) << robust_error << " vs " << plain_error;
+}
+
+TEST_F(CorruptedStretch, MemoryStaysBoundedOverALongRun) {
+  FilterOptions o = options("robust_fastslam2");
+  o.particles = 10;
+  RobustFastSlam2 robust(o);
+  for (int step = 1; step <= 600; ++step) {
+    MotionInput motion;
+    motion.delta = Pose2(0.2, 0, 0.01);
+    robust.predict(motion);
+    FeatureSet features;
+    PointFeature f;  // a new post every 8 steps, 2 m ahead
+    f.range = 2.0;
+    f.bearing = 0.3 * ((step / 8) % 3) - 0.3;
+    f.covariance = Eigen::Vector2d(0.01, 0.0004).asDiagonal();
+    if (step % 8 < 4) features.points.push_back(f);
+    robust.update(features);
+    ASSERT_LE(robust.memory().storedSets(), o.robust.ancestor_sets - 1);
+    ASSERT_LE(robust.memory().storedRecords(), o.robust.window_steps);
+    ASSERT_LE(robust.tracker().trackedLandmarks(), o.tracker.max_landmarks);
+  }
+  EXPECT_GT(robust.robustStats().robust_steps, 10);
+}
+
+TEST(RobustFastSlam2, FactoryAndValidation) {
+  FilterOptions o;
+  o.variant = "robust_fastslam2";
+  auto filter = createFilter(o);
+  EXPECT_EQ(filter->variant(), "robust_fastslam2");
+  o.robust.ancestor_sets = 0;
+  try {
+    createFilter(o);
+    FAIL();
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("robust.ancestor_sets"), std::string::npos);
+  }
+  o = FilterOptions();
+  o.tracker.max_landmarks = 0;
+  EXPECT_THROW(createFilter(o), std::invalid_argument);
+}
+
+// With K = 1 there is no older set: the robust variant is FastSLAM 2.0, draw for draw.
+TEST(RobustFastSlam2, OneSetIsFastSlam2) {
+  FilterOptions o;
+  o.particles = 20;
+  o.use_lines = false;
+  o.robust.ancestor_sets = 1;
+  o.variant = "robust_fastslam2";
+  auto robust = createFilter(o);
+  o.variant = "fastslam2";
+  auto plain = createFilter(o);
+  for (int step = 1; step <= 40; ++step) {
+    MotionInput motion;
+    motion.delta = Pose2(0.1, 0.0, 0.02);
+    FeatureSet features;
+    PointFeature f;
+    f.range = 3.0 + 0.01 * step;
+    f.bearing = 0.2 - 0.01 * step;
+    f.covariance = Eigen::Vector2d(0.01, 0.0004).asDiagonal();
+    features.points.push_back(f);
+    for (SlamFilter* filter : {robust.get(), plain.get()}) {
+      filter->predict(motion);
+      filter->update(features);
+    }
+  }
+  EXPECT_TRUE(robust->estimate().mean.isApprox(plain->estimate().mean, 1e-12));
+  EXPECT_EQ(robust->landmarks().size(), plain->landmarks().size());
+}
+
+}  // namespace
+}  // namespace core
+}  // namespace rbpf_slam
