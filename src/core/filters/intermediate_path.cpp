@@ -24,21 +24,23 @@ Eigen::Matrix3d composeJacobianSecond(const Pose2& a) {
 
 namespace {
 
-/// Poses along the chain and, for each, its Jacobian with respect to all increments.
-void chain(const Pose2& start, const Eigen::VectorXd& d, std::vector<Pose2>* poses,
-           std::vector<Eigen::MatrixXd>* jacobians) {
-  const int n = static_cast<int>(d.size() / 3);
+/// Poses along the chain and, for each pose j, its Jacobian blocks d pose_j / d d_k (k < j;
+/// blocks[j][k]), O(n^2) 3x3 blocks in all.
+void chain(const Pose2& start, const std::vector<Pose2>& d, std::vector<Pose2>* poses,
+           std::vector<std::vector<Eigen::Matrix3d>>* blocks) {
+  const int n = static_cast<int>(d.size());
   poses->assign(1, start);
-  jacobians->assign(1, Eigen::MatrixXd::Zero(3, 3 * n));
+  blocks->assign(1, {});
   for (int k = 0; k < n; ++k) {
     const Pose2& previous = poses->back();
-    const Pose2 increment = d.segment<3>(3 * k);
-    Eigen::MatrixXd j = composeJacobianFirst(previous, increment) * jacobians->back();
-    j.middleCols<3>(3 * k) += composeJacobianSecond(previous);
-    Pose2 next = compose(previous, increment);
-    next.z() = previous.z() + increment.z();  // unwrapped along the chain, wrapped on output
+    const Eigen::Matrix3d f = composeJacobianFirst(previous, d[k]);
+    std::vector<Eigen::Matrix3d> next_blocks(k + 1);
+    for (int m = 0; m < k; ++m) next_blocks[m] = f * (*blocks)[k][m];
+    next_blocks[k] = composeJacobianSecond(previous);
+    Pose2 next = compose(previous, d[k]);
+    next.z() = previous.z() + d[k].z();  // unwrapped along the chain, wrapped on output
     poses->push_back(next);
-    jacobians->push_back(j);
+    blocks->push_back(std::move(next_blocks));
   }
 }
 
@@ -52,44 +54,55 @@ IntermediatePath estimateIntermediatePath(const Pose2& start, const Pose2& end,
   if (n < 1 || increment_covariances.size() != increments.size()) {
     throw std::invalid_argument("estimateIntermediatePath: need one covariance per increment");
   }
-  Eigen::VectorXd prior(3 * n);
-  Eigen::MatrixXd prior_cov = Eigen::MatrixXd::Zero(3 * n, 3 * n);
-  for (int k = 0; k < n; ++k) {
-    prior.segment<3>(3 * k) = increments[k];
-    prior_cov.block<3, 3>(3 * k, 3 * k) = increment_covariances[k];
-  }
-  // Iterated EKF with the end pose as a noise-free measurement of the chain's last pose:
-  // d_{i+1} = prior + K (r(d_i) + J (d_i - prior)), K = P J^T (J P J^T)^-1.
+  const std::vector<Eigen::Matrix3d>& p = increment_covariances;  // block-diagonal prior
+  // Iterated EKF with the end pose as a noise-free measurement h(d) of the chain's last pose:
+  // d_{i+1} = prior + K (r(d_i) + H (d_i - prior)), K = P H^T S^-1, S = H P H^T. P is
+  // block-diagonal, so every product is taken block by block (O(n) per iteration).
   IntermediatePath path;
-  Eigen::VectorXd d = prior;
+  std::vector<Pose2> d = increments;
   std::vector<Pose2> poses;
-  std::vector<Eigen::MatrixXd> jacobians;
-  Eigen::MatrixXd gain;
-  Eigen::MatrixXd h;
+  std::vector<std::vector<Eigen::Matrix3d>> blocks;
+  std::vector<Eigen::Matrix3d> p_ht(n);  // P_k H_k^T
+  Eigen::Matrix3d s_inv = Eigen::Matrix3d::Identity();
   for (int iteration = 0; iteration < std::max(1, max_iterations); ++iteration) {
-    chain(start, d, &poses, &jacobians);
-    h = jacobians.back();
-    Eigen::Vector3d residual = end - poses.back();
-    residual.z() = wrapAngle(residual.z());
-    const Eigen::Matrix3d s = h * prior_cov * h.transpose() + 1e-12 * Eigen::Matrix3d::Identity();
-    gain = prior_cov * h.transpose() * s.inverse();
-    const Eigen::VectorXd next = prior + gain * (residual + h * (d - prior));
-    const double change = (next - d).norm();
-    d = next;
+    chain(start, d, &poses, &blocks);
+    const std::vector<Eigen::Matrix3d>& h = blocks.back();
+    Eigen::Vector3d innovation = end - poses.back();
+    innovation.z() = wrapAngle(innovation.z());
+    Eigen::Matrix3d s = 1e-12 * Eigen::Matrix3d::Identity();
+    for (int k = 0; k < n; ++k) {
+      p_ht[k] = p[k] * h[k].transpose();
+      s += h[k] * p_ht[k];
+      innovation += h[k] * (d[k] - increments[k]);
+    }
+    s_inv = s.inverse();
+    const Eigen::Vector3d correction = s_inv * innovation;
+    double change = 0.0;
+    for (int k = 0; k < n; ++k) {
+      const Pose2 next = increments[k] + p_ht[k] * correction;
+      change += (next - d[k]).squaredNorm();
+      d[k] = next;
+    }
     path.iterations = iteration + 1;
-    if (change < 1e-10) {
+    if (change < 1e-20) {
       path.converged = true;
       break;
     }
   }
-  chain(start, d, &poses, &jacobians);
-  const Eigen::MatrixXd posterior_cov =
-      (Eigen::MatrixXd::Identity(3 * n, 3 * n) - gain * h) * prior_cov;
-  for (int k = 1; k < n; ++k) {
-    Pose2 mean = poses[k];
+  chain(start, d, &poses, &blocks);
+  // Covariance of pose j: G_j P G_j^T - (G_j P H^T) S^-1 (G_j P H^T)^T, with G_j = blocks[j]
+  // (P H^T from the last linearisation).
+  for (int j = 1; j < n; ++j) {
+    Eigen::Matrix3d prior = Eigen::Matrix3d::Zero();
+    Eigen::Matrix3d g_p_ht = Eigen::Matrix3d::Zero();
+    for (int k = 0; k < j; ++k) {
+      prior += blocks[j][k] * p[k] * blocks[j][k].transpose();
+      g_p_ht += blocks[j][k] * p_ht[k];
+    }
+    const Eigen::Matrix3d cov = prior - g_p_ht * s_inv * g_p_ht.transpose();
+    Pose2 mean = poses[j];
     mean.z() = wrapAngle(mean.z());
     path.means.push_back(mean);
-    const Eigen::Matrix3d cov = jacobians[k] * posterior_cov * jacobians[k].transpose();
     path.covariances.push_back(0.5 * (cov + cov.transpose()));
   }
   return path;

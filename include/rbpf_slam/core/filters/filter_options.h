@@ -31,7 +31,7 @@ struct MeasurementOptions {
 struct RobustOptions {
   int ancestor_sets = 5;           // K: sets sampled from on a new landmark, the latest included
   int ancestor_spacing_steps = 5;  // minimum steps between two stored sets (and robust steps)
-  int window_steps = 100;          // oldest usable set, in steps; bounds the stored history
+  int window_steps = 25;           // oldest usable set, in steps; bounds the stored history
   bool intermediate_path = true;   // estimate the skipped path and replay its observations
   int path_iterations = 10;        // iterated EKF steps of the intermediate path estimate
 };
