@@ -91,13 +91,16 @@ void runStream(benchmark::State& state, const core::FilterOptions& options) {
 void BM_FastSlam2Stream(benchmark::State& state) {
   runStream(state, configOptions("landmarks_fastslam2", static_cast<int>(state.range(0))));
 }
-BENCHMARK(BM_FastSlam2Stream)->Arg(100)->Arg(200)->Arg(500)->Unit(benchmark::kMillisecond)
+BENCHMARK(BM_FastSlam2Stream)
+    ->Arg(100)
+    ->Arg(200)
+    ->Arg(500)
+    ->Unit(benchmark::kMillisecond)
     ->MinTime(2.0);
 
 /// Robust with M = range(0) particles per set and K = range(1) sets.
 void BM_RobustStream(benchmark::State& state) {
-  core::FilterOptions options =
-      configOptions("landmarks_robust", static_cast<int>(state.range(0)));
+  core::FilterOptions options = configOptions("landmarks_robust", static_cast<int>(state.range(0)));
   options.robust.ancestor_sets = static_cast<int>(state.range(1));
   runStream(state, options);
 }

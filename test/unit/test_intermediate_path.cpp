@@ -21,9 +21,9 @@ Eigen::Matrix3d diag(double xx, double yy, double tt) {
 // var(x_1) = q - q^2 / 4q = 0.75 q; y and heading stay 0.
 TEST(IntermediatePath, StraightChainSharesTheErrorByVariance) {
   const double q = 0.01;
-  const IntermediatePath path = estimateIntermediatePath(
-      Pose2(0, 0, 0), Pose2(2.2, 0, 0), {Pose2(1, 0, 0), Pose2(1, 0, 0)},
-      {diag(q, q, 0.001), diag(3 * q, 3 * q, 0.003)});
+  const IntermediatePath path =
+      estimateIntermediatePath(Pose2(0, 0, 0), Pose2(2.2, 0, 0), {Pose2(1, 0, 0), Pose2(1, 0, 0)},
+                               {diag(q, q, 0.001), diag(3 * q, 3 * q, 0.003)});
   ASSERT_EQ(path.means.size(), 1u);
   EXPECT_TRUE(path.converged);
   EXPECT_NEAR(path.means[0].x(), 1.05, 1e-9);
@@ -50,9 +50,9 @@ TEST(IntermediatePath, RotatedFrame) {
 // third of the 0.3 rad; the intermediate headings are 0.1 and 0.2 rad off dead reckoning.
 TEST(IntermediatePath, HeadingErrorSplitsEvenlyOverEqualIncrements) {
   const Eigen::Matrix3d c = diag(1e-4, 1e-4, 0.01);
-  const IntermediatePath path = estimateIntermediatePath(
-      Pose2(0, 0, 0), Pose2(0, 0, 0.3), {Pose2(0, 0, 0), Pose2(0, 0, 0), Pose2(0, 0, 0)},
-      {c, c, c});
+  const IntermediatePath path =
+      estimateIntermediatePath(Pose2(0, 0, 0), Pose2(0, 0, 0.3),
+                               {Pose2(0, 0, 0), Pose2(0, 0, 0), Pose2(0, 0, 0)}, {c, c, c});
   ASSERT_EQ(path.means.size(), 2u);
   EXPECT_NEAR(path.means[0].z(), 0.1, 1e-9);
   EXPECT_NEAR(path.means[1].z(), 0.2, 1e-9);

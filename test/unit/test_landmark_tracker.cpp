@@ -52,8 +52,7 @@ TEST(LandmarkTracker, NewLandmarkOnlyWhenAnUntrackedOneAppears) {
   EXPECT_EQ(e.matched, 1);
   EXPECT_EQ(e.tracked, 2);
   // A few centimetres off: the same landmark.
-  e = tracker.update(7, kStep, kStepCov,
-                     {pointSeen(robotAt(7), a + Eigen::Vector2d(0.05, -0.03))});
+  e = tracker.update(7, kStep, kStepCov, {pointSeen(robotAt(7), a + Eigen::Vector2d(0.05, -0.03))});
   EXPECT_FALSE(e.new_landmark);
   EXPECT_EQ(e.matched, 1);
   // Two metres from every tracked landmark: a new one.
@@ -69,7 +68,8 @@ TEST(LandmarkTracker, AmbiguousObservationIsNeitherMatchedNorStarted) {
   LandmarkTracker tracker(options);
   const Eigen::Vector2d a(3.0, 0.0);
   tracker.update(1, kStep, kStepCov, {pointSeen(robotAt(1), a)});
-  for (int step = 2; step <= 4; ++step) tracker.update(step, kStep, kStepCov, {pointSeen(robotAt(step), a)});
+  for (int step = 2; step <= 4; ++step)
+    tracker.update(step, kStep, kStepCov, {pointSeen(robotAt(step), a)});
   // 0.4 m behind along the range: (0.4 / ~0.14)^2 ~ 8, between the gate and the threshold.
   const TrackerEvent e =
       tracker.update(5, kStep, kStepCov, {pointSeen(robotAt(5), a + Eigen::Vector2d(0.4, 0))});
@@ -83,7 +83,8 @@ TEST(LandmarkTracker, ForgetsLandmarksLeftBehindAndReportsThemAgain) {
   options.forget_after_steps = 5;
   LandmarkTracker tracker(options);
   const Eigen::Vector2d a(4.0, 1.0);
-  for (int step = 1; step <= 3; ++step) tracker.update(step, kStep, kStepCov, {pointSeen(robotAt(step), a)});
+  for (int step = 1; step <= 3; ++step)
+    tracker.update(step, kStep, kStepCov, {pointSeen(robotAt(step), a)});
   EXPECT_EQ(tracker.trackedLandmarks(), 1);
   int forgotten_at = -1;
   for (int step = 4; step <= 12; ++step) {
@@ -102,15 +103,16 @@ TEST(LandmarkTracker, ForgetsLandmarksFartherThanTheDistance) {
   LandmarkTracker tracker(options);
   tracker.update(1, kStep, kStepCov, {pointSeen(robotAt(1), Eigen::Vector2d(2.0, 1.0))});
   int step = 2;
-  for (; step < 40 && tracker.trackedLandmarks() > 0; ++step) tracker.update(step, kStep, kStepCov, {});
+  for (; step < 40 && tracker.trackedLandmarks() > 0; ++step)
+    tracker.update(step, kStep, kStepCov, {});
   // Robot at x = 0.2 step; the landmark at (2, 1) is beyond 3 m once x > 4.83.
   EXPECT_EQ(step - 1, 25);
 }
 
 TEST(LandmarkTracker, LinesFromLaserOrSonar) {
   LandmarkTracker tracker{LandmarkTrackerOptions()};
-  const Eigen::Vector2d wall(2.0, M_PI / 2);   // y = 2
-  const Eigen::Vector2d front(8.0, 0.0);        // x = 8
+  const Eigen::Vector2d wall(2.0, M_PI / 2);  // y = 2
+  const Eigen::Vector2d front(8.0, 0.0);      // x = 8
   TrackerEvent e = tracker.update(1, kStep, kStepCov, {lineSeen(robotAt(1), wall)});
   EXPECT_TRUE(e.new_landmark);
   for (int step = 2; step <= 6; ++step) {

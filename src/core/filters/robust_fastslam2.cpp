@@ -67,11 +67,11 @@ UpdateStats RobustFastSlam2::update(const FeatureSet& features) {
   latest.next_landmark_id = next_landmark_id_;
   std::vector<const AncestorSet*> ancestors{&latest};
   for (const AncestorSet* set : memory_.usable(step)) {
-    if (static_cast<int>(ancestors.size()) < options_.robust.ancestor_sets) ancestors.push_back(set);
+    if (static_cast<int>(ancestors.size()) < options_.robust.ancestor_sets)
+      ancestors.push_back(set);
   }
   UpdateStats stats;
-  if (ancestors.size() > 1 &&
-      step - last_robust_step_ >= options_.robust.ancestor_spacing_steps) {
+  if (ancestors.size() > 1 && step - last_robust_step_ >= options_.robust.ancestor_spacing_steps) {
     stats = robustUpdate(observations, ancestors);
     stats.features_rejected = rejected;
     stats.features_in = static_cast<int>(features.lines.size() + features.points.size());
@@ -210,9 +210,8 @@ void RobustFastSlam2::replayIntermediatePath(Particle* particle, const Pose2& st
     increments.push_back(r->motion.delta);
     covariances.push_back(incrementCovariance(r->motion));
   }
-  const IntermediatePath path = estimateIntermediatePath(start, particle->pose, increments,
-                                                         covariances,
-                                                         options_.robust.path_iterations);
+  const IntermediatePath path = estimateIntermediatePath(
+      start, particle->pose, increments, covariances, options_.robust.path_iterations);
   // Sec. IV: from t - 1 back to t - s + 1, each pose sampled FastSLAM 2.0-style from its
   // Gaussian and the stored observations, which update the map (relocated objects that do not
   // match become new landmarks).

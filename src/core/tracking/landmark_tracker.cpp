@@ -21,7 +21,7 @@ void requireRange(const std::string& name, double value, double min, double max)
 
 /// The observation model of landmark `m` (point or line) from `pose`.
 Prediction observationModel(LandmarkType type, const Pose2& pose, const Eigen::Vector2d& m,
-                   const Eigen::Vector2d& z) {
+                            const Eigen::Vector2d& z) {
   return type == LandmarkType::kLine ? predictLine(pose, m, z.y()) : predictPoint(pose, m);
 }
 

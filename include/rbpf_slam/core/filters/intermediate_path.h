@@ -14,8 +14,8 @@ namespace core {
 
 /// Mean and covariance of each pose strictly between the two end poses.
 struct IntermediatePath {
-  std::vector<Pose2> means;                 // x_{t-s+1} .. x_{t-1}
-  std::vector<Eigen::Matrix3d> covariances; // map frame
+  std::vector<Pose2> means;                  // x_{t-s+1} .. x_{t-1}
+  std::vector<Eigen::Matrix3d> covariances;  // map frame
   int iterations = 0;
   bool converged = false;
 };

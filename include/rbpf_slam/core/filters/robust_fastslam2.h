@@ -16,10 +16,10 @@ namespace core {
 
 /// Running totals of the robust steps.
 struct RobustStats {
-  long tracker_events = 0;      // steps at which the tracker started a landmark
-  long robust_steps = 0;        // steps sampled from several ancestor sets
-  long from_older_sets = 0;     // particles kept at robust steps that came from an older set
-  long replayed_steps = 0;      // intermediate steps replayed into particles' maps
+  long tracker_events = 0;   // steps at which the tracker started a landmark
+  long robust_steps = 0;     // steps sampled from several ancestor sets
+  long from_older_sets = 0;  // particles kept at robust steps that came from an older set
+  long replayed_steps = 0;   // intermediate steps replayed into particles' maps
 };
 
 class RobustFastSlam2 : public FastSlam2 {

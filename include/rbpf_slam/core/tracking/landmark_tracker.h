@@ -63,7 +63,7 @@ class LandmarkTracker {
   int forget(int step);
 
   const LandmarkTrackerOptions options_;
-  Eigen::VectorXd state_;       // pose (x, y, theta), then two entries per landmark
+  Eigen::VectorXd state_;  // pose (x, y, theta), then two entries per landmark
   Eigen::MatrixXd covariance_;
   std::vector<Tracked> landmarks_;
 };
