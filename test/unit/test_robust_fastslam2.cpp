@@ -172,6 +172,73 @@ TEST_F(CorruptedStretch, MemoryStaysBoundedOverALongRun) {
   EXPECT_GT(robust.robustStats().robust_steps, 10);
 }
 
+// Drives 0.2 m per step past posts at (3 k, +-2), each seen for a few steps: tracker events.
+void drivePastPosts(SlamFilter* filter, int steps) {
+  Pose2 truth = Pose2::Zero();
+  for (int step = 1; step <= steps; ++step) {
+    MotionInput motion;
+    motion.delta = Pose2(0.2, 0, 0);
+    truth = compose(truth, motion.delta);
+    filter->predict(motion);
+    FeatureSet features;
+    for (int k = 1; k <= 20; ++k) {
+      const Eigen::Vector2d post(3.0 * k, k % 2 == 0 ? 2.0 : -2.0);
+      const Prediction p = predictPoint(truth, post);
+      if (p.z.x() > 4.0 || std::fabs(p.z.y()) > M_PI / 2) continue;
+      PointFeature f;
+      f.range = p.z.x();
+      f.bearing = p.z.y();
+      f.covariance = Eigen::Vector2d(0.01, 0.0004).asDiagonal();
+      features.points.push_back(f);
+    }
+    filter->update(features);
+  }
+}
+
+FilterOptions postOptions() {
+  FilterOptions o;
+  o.variant = "robust_fastslam2";
+  o.particles = 20;
+  o.use_lines = false;
+  o.robust.ancestor_sets = 3;
+  o.robust.ancestor_spacing_steps = 2;
+  o.robust.window_steps = 40;
+  return o;
+}
+
+TEST(RobustFastSlam2, NewPoseOrMapForgetsTheStoredSets) {
+  RobustFastSlam2 robust(postOptions());
+  drivePastPosts(&robust, 60);
+  ASSERT_GT(robust.memory().storedSets(), 0);
+  ASSERT_GT(robust.robustStats().robust_steps, 0);
+  ASSERT_TRUE(robust.resetPose(Pose2(1, 2, 0.3), Eigen::Matrix3d::Identity() * 1e-4));
+  EXPECT_EQ(robust.memory().storedSets(), 0);
+  EXPECT_EQ(robust.memory().storedRecords(), 0);
+  EXPECT_EQ(robust.tracker().trackedLandmarks(), 0);
+  drivePastPosts(&robust, 30);
+  ASSERT_GT(robust.memory().storedSets(), 0);
+  ASSERT_TRUE(robust.loadMap(robust.landmarks()));
+  EXPECT_EQ(robust.memory().storedSets(), 0);
+}
+
+TEST(RobustFastSlam2, LocalizationOnlyLeavesTheMapAlone) {
+  RobustFastSlam2 mapper(postOptions());
+  drivePastPosts(&mapper, 80);
+  const std::vector<LandmarkEstimate> map = mapper.landmarks();
+  ASSERT_GE(map.size(), 4u);
+  RobustFastSlam2 robust(postOptions());
+  ASSERT_TRUE(robust.loadMap(map));
+  ASSERT_TRUE(robust.setMapping(false));
+  drivePastPosts(&robust, 80);
+  EXPECT_GT(robust.robustStats().robust_steps, 0);
+  const std::vector<LandmarkEstimate> after = robust.landmarks();
+  ASSERT_EQ(after.size(), map.size());
+  for (size_t i = 0; i < map.size(); ++i) {
+    EXPECT_EQ(after[i].id, map[i].id);
+    EXPECT_TRUE(after[i].mean.isApprox(map[i].mean, 1e-12)) << i;
+  }
+}
+
 TEST(RobustFastSlam2, FactoryAndValidation) {
   FilterOptions o;
   o.variant = "robust_fastslam2";

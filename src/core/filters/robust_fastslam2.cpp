@@ -33,11 +33,27 @@ RobustFastSlam2::RobustFastSlam2(const FilterOptions& options)
 
 void RobustFastSlam2::reset(const Pose2& initial_pose) {
   FastSlam2::reset(initial_pose);
+  forgetHistory();
+  robust_stats_ = RobustStats();
+}
+
+void RobustFastSlam2::forgetHistory() {
   tracker_.reset();
   memory_.clear();
   origins_.clear();
   last_robust_step_ = -1000000;
-  robust_stats_ = RobustStats();
+}
+
+bool RobustFastSlam2::resetPose(const Pose2& pose, const Eigen::Matrix3d& covariance) {
+  if (!FastSlam2::resetPose(pose, covariance)) return false;
+  forgetHistory();
+  return true;
+}
+
+bool RobustFastSlam2::loadMap(const std::vector<LandmarkEstimate>& landmarks) {
+  if (!FastSlam2::loadMap(landmarks)) return false;
+  forgetHistory();
+  return true;
 }
 
 Eigen::Matrix3d RobustFastSlam2::incrementCovariance(const MotionInput& motion) const {
@@ -94,6 +110,7 @@ UpdateStats RobustFastSlam2::robustUpdate(const std::vector<Observation>& observ
   std::vector<Particle> candidates;
   std::vector<int> candidate_set;
   std::vector<Pose2> candidate_start;
+  std::vector<ParticleUpdate> candidate_counts;
   candidates.reserve(count * ancestors.size());
   for (size_t k = 0; k < ancestors.size(); ++k) {
     const AncestorSet& set = *ancestors[k];
@@ -109,7 +126,9 @@ UpdateStats RobustFastSlam2::robustUpdate(const std::vector<Observation>& observ
         mean = motion_model_->mean(mean, r->motion);
       }
       candidate_start.push_back(candidate.pose);
-      candidate.log_weight = updateCandidate(&candidate, mean, cov, observations, old_id_limit);
+      candidate_counts.emplace_back();
+      candidate.log_weight = updateCandidate(&candidate, mean, cov, observations, old_id_limit,
+                                             &candidate_counts.back());
       candidates.push_back(std::move(candidate));
       candidate_set.push_back(static_cast<int>(k));
     }
@@ -133,11 +152,13 @@ UpdateStats RobustFastSlam2::robustUpdate(const std::vector<Observation>& observ
     origins_[i] = set.step;
     if (set.step < t - 1) {
       ++robust_stats_.from_older_sets;
-      if (options_.robust.intermediate_path) {
+      if (options_.robust.intermediate_path && mapping()) {
         replayIntermediatePath(&next.back(), candidate_start[kept[i]], set.step);
       }
     }
   }
+  stats.associated = candidate_counts[kept[0]].associated;
+  stats.new_landmarks = candidate_counts[kept[0]].created;
   particles_.swap(next);
   weights_.assign(count, 1.0 / count);
   stats.resampled = true;
@@ -152,7 +173,7 @@ UpdateStats RobustFastSlam2::robustUpdate(const std::vector<Observation>& observ
 double RobustFastSlam2::updateCandidate(Particle* particle, const Pose2& predicted_mean,
                                         const Eigen::Matrix3d& predicted_cov,
                                         const std::vector<Observation>& observations,
-                                        int old_id_limit) {
+                                        int old_id_limit, ParticleUpdate* counts) {
   const AssociationOptions& a = options_.association;
   Pose2 mean = predicted_mean;
   Eigen::Matrix3d cov = predicted_cov;
@@ -190,7 +211,9 @@ double RobustFastSlam2::updateCandidate(Particle* particle, const Pose2& predict
   }
   particle->pose = sampleMultivariate<3>(rng_, mean, cov);
   particle->pose.z() = wrapAngle(particle->pose.z());
-  if (matched.empty() && fresh.empty()) return log_likelihood;
+  counts->associated = static_cast<int>(matched.size());
+  // Localization only: the map is a fixed prior.
+  if (!mapping() || (matched.empty() && fresh.empty())) return log_likelihood;
   LandmarkMap& writable = mutableMap(&particle->map);
   for (const auto& [k, index] : matched) {
     Match m;
@@ -198,6 +221,7 @@ double RobustFastSlam2::updateCandidate(Particle* particle, const Pose2& predict
     updateLandmark(&writable, m, particle->pose, observations[k], nullptr);
   }
   for (int k : fresh) addLandmark(&writable, particle->pose, observations[k]);
+  counts->created = static_cast<int>(fresh.size());
   return log_likelihood;
 }
 

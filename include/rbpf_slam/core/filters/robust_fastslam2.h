@@ -29,6 +29,9 @@ class RobustFastSlam2 : public FastSlam2 {
   std::string variant() const override { return "robust_fastslam2"; }
   void reset(const Pose2& initial_pose) override;
   UpdateStats update(const FeatureSet& features) override;
+  /// A new pose or map invalidates the stored sets and the tracker: both start again.
+  bool resetPose(const Pose2& pose, const Eigen::Matrix3d& covariance) override;
+  bool loadMap(const std::vector<LandmarkEstimate>& landmarks) override;
 
   const RobustStats& robustStats() const { return robust_stats_; }
   /// For each particle, the step of the set it was drawn from at the latest robust step
@@ -46,7 +49,9 @@ class RobustFastSlam2 : public FastSlam2 {
   /// weight, counting only landmarks older than old_id_limit (those every ancestor can know),
   /// so that candidates from older sets are not penalised for lacking newer landmarks.
   double updateCandidate(Particle* particle, const Pose2& mean, const Eigen::Matrix3d& cov,
-                         const std::vector<Observation>& observations, int old_id_limit);
+                         const std::vector<Observation>& observations, int old_id_limit,
+                         ParticleUpdate* counts);
+  void forgetHistory();
   /// Samples the skipped poses of a particle drawn from the set of step `from` and replays the
   /// stored observations into its map, from the latest step back (sec. IV).
   void replayIntermediatePath(Particle* particle, const Pose2& start, int from);
