@@ -44,6 +44,40 @@ Eigen::Vector2d readPair(const YAML::Node& node, const std::string& key, const s
   return v;
 }
 
+core::LandmarkEstimate readLandmark(const YAML::Node& node, const std::string& where) {
+  core::LandmarkEstimate l;
+  const double id = readNumber(node, "id", where);
+  if (id != std::floor(id) || std::fabs(id) > 1e9) {
+    throw std::runtime_error(where + ": 'id' must be an integer");
+  }
+  l.id = static_cast<int>(id);
+  const std::string type = node["type"] ? node["type"].as<std::string>() : "";
+  if (type == "line") {
+    l.type = core::LandmarkType::kLine;
+    l.mean << readNumber(node, "rho", where), readNumber(node, "theta", where);
+    l.start = readPair(node, "start", where);
+    l.end = readPair(node, "end", where);
+  } else if (type == "point") {
+    l.mean << readNumber(node, "x", where), readNumber(node, "y", where);
+    l.start = l.end = l.mean;
+  } else {
+    throw std::runtime_error(where + ": type = '" + type + "' is not point or line");
+  }
+  const YAML::Node c = node["covariance"];
+  if (!c || !c.IsSequence() || c.size() != 4) {
+    throw std::runtime_error(where + ": 'covariance' must be a list of 4 numbers (row-major 2x2)");
+  }
+  for (int k = 0; k < 4; ++k) l.covariance(k / 2, k % 2) = c[k].as<double>();
+  const bool symmetric = std::fabs(l.covariance(0, 1) - l.covariance(1, 0)) <=
+                         1e-9 * (1.0 + l.covariance.cwiseAbs().maxCoeff());
+  if (!l.covariance.allFinite() || !symmetric || l.covariance(0, 0) <= 0.0 ||
+      l.covariance.determinant() <= 0.0) {
+    throw std::runtime_error(where + ": covariance is not symmetric positive definite");
+  }
+  l.observations = node["observations"] ? node["observations"].as<int>() : 1;
+  return l;
+}
+
 }  // namespace
 
 void writeLandmarksYaml(const std::string& path,
@@ -76,44 +110,22 @@ std::vector<core::LandmarkEstimate> loadLandmarksYaml(const std::string& path) {
   } catch (const YAML::Exception& e) {
     throw std::runtime_error(path + ": not YAML: " + e.what());
   }
-  const YAML::Node list = root["landmarks"];
+  const YAML::Node list = root.IsMap() ? root["landmarks"] : YAML::Node();
   if (!list || !(list.IsSequence() || list.IsNull())) {
     throw std::runtime_error(path + ": 'landmarks' (a list) is missing");
   }
   std::vector<core::LandmarkEstimate> out;
   for (size_t i = 0; list.IsSequence() && i < list.size(); ++i) {
-    const YAML::Node node = list[i];
     const std::string where = path + ": landmarks[" + std::to_string(i) + "]";
-    core::LandmarkEstimate l;
-    l.id = static_cast<int>(readNumber(node, "id", where));
-    const std::string type = node["type"] ? node["type"].as<std::string>() : "";
-    if (type == "line") {
-      l.type = core::LandmarkType::kLine;
-      l.mean << readNumber(node, "rho", where), readNumber(node, "theta", where);
-      l.start = readPair(node, "start", where);
-      l.end = readPair(node, "end", where);
-    } else if (type == "point") {
-      l.mean << readNumber(node, "x", where), readNumber(node, "y", where);
-      l.start = l.end = l.mean;
-    } else {
-      throw std::runtime_error(where + ": type = '" + type + "' is not point or line");
+    try {
+      out.push_back(readLandmark(list[i], where));
+    } catch (const YAML::Exception& e) {
+      throw std::runtime_error(where + ": " + e.what());
     }
-    const YAML::Node c = node["covariance"];
-    if (!c || !c.IsSequence() || c.size() != 4) {
-      throw std::runtime_error(where + ": 'covariance' must be a list of 4 numbers (row-major 2x2)");
-    }
-    for (int k = 0; k < 4; ++k) l.covariance(k / 2, k % 2) = c[k].as<double>();
-    const bool symmetric = std::fabs(l.covariance(0, 1) - l.covariance(1, 0)) <=
-                           1e-9 * (1.0 + l.covariance.cwiseAbs().maxCoeff());
-    if (!l.covariance.allFinite() || !symmetric || l.covariance(0, 0) <= 0.0 ||
-        l.covariance.determinant() <= 0.0) {
-      throw std::runtime_error(where + ": covariance is not symmetric positive definite");
-    }
-    l.observations = node["observations"] ? node["observations"].as<int>() : 1;
-    out.push_back(l);
   }
   return out;
 }
+
 
 std::vector<std::string> writeLandmarkGrid(const std::string& prefix,
                                            const std::vector<core::LandmarkEstimate>& landmarks,

@@ -41,7 +41,10 @@ class PointGrid {
 
  private:
   long cellOf(double v) const { return static_cast<long>(std::floor(v / cell_)); }
-  static long long key(long x, long y) { return (static_cast<long long>(x) << 32) ^ (y & 0xffffffffLL); }
+  static long long key(long x, long y) {
+    return static_cast<long long>((static_cast<unsigned long long>(x) << 32) ^
+                                  (static_cast<unsigned long long>(y) & 0xffffffffULL));
+  }
   const std::vector<Eigen::Vector2d>& points_;
   const double cell_;
   std::unordered_map<long long, std::vector<int>> cells_;
@@ -95,7 +98,10 @@ std::vector<Eigen::Vector2d> scanPointsInBase(const RangeScan& scan, double max_
     const double r = scan.ranges[i];
     if (!std::isfinite(r) || r <= 0.0 || r < scan.range_min || r >= upper) continue;
     const double a = scan.angle_min + static_cast<double>(i) * scan.angle_increment;
-    points.push_back(transformPoint(scan.sensor_pose, Eigen::Vector2d(r * std::cos(a), r * std::sin(a))));
+    if (!std::isfinite(a)) continue;  // a broken header (NaN or inf angles): no usable beam
+    const Eigen::Vector2d p =
+        transformPoint(scan.sensor_pose, Eigen::Vector2d(r * std::cos(a), r * std::sin(a)));
+    if (p.allFinite()) points.push_back(p);
   }
   return points;
 }

@@ -1,0 +1,62 @@
+#!/usr/bin/env bash
+# Fuzzing: builds the libFuzzer targets of test/fuzz/ with clang (address and undefined
+# behaviour sanitizers, the code under test compiled in) and runs each for FUZZ_SECONDS
+# (default 60). Fails on any crash, sanitizer report or broken invariant; the input that
+# found it is kept in build/fuzz/. Prints SKIP and passes when clang's libFuzzer is missing.
+set -euo pipefail
+
+here=$(cd "$(dirname "$0")" && pwd)
+root=$(cd "$here/../.." && pwd)
+seconds="${FUZZ_SECONDS:-60}"
+out="$root/build/fuzz"
+mkdir -p "$out/obj"
+if ! command -v clang++ >/dev/null; then
+  echo "SKIP: clang++ not installed"
+  exit 0
+fi
+echo 'extern "C" int LLVMFuzzerTestOneInput(const unsigned char*, unsigned long) { return 0; }' \
+  >"$out/probe.cpp"
+if ! clang++ -fsanitize=fuzzer "$out/probe.cpp" -o "$out/probe" 2>/dev/null; then
+  echo "SKIP: clang++ has no libFuzzer runtime"
+  exit 0
+fi
+
+export FUZZ_FLAGS="-std=c++17 -O1 -g -fsanitize=fuzzer-no-link,address,undefined \
+-fno-sanitize-recover=undefined -I$root/include -I/usr/include/eigen3 -DNDEBUG"
+export root out
+# Every source compiled once (in parallel; again only when it or a header changed), then
+# linked into each target.
+compile() {
+  local source=$1 object
+  object="$out/obj/$(echo "${source#"$root"/}" | tr '/' '_').o"
+  if [ ! -f "$object" ] || [ "$source" -nt "$object" ] ||
+     [ -n "$(find "$root/include" "$root/test/fuzz" -newer "$object" -name '*.h' | head -1)" ]; then
+    # shellcheck disable=SC2086
+    clang++ $FUZZ_FLAGS -c "$source" -o "$object"
+  fi
+}
+export -f compile
+sources=$(find "$root/src/core" "$root/src/io" "$root/test/fuzz" -name '*.cpp' | sort)
+echo "compiling $(echo "$sources" | wc -l) sources with clang (sanitizers on) ..."
+echo "$sources" | xargs -P "$(nproc)" -I{} bash -c 'compile "$1"' _ {}
+library=$(find "$out/obj" -name 'src_*.o' | sort)
+status=0
+for target in fuzz_laser fuzz_config fuzz_landmarks; do
+  # shellcheck disable=SC2086
+  clang++ -fsanitize=fuzzer,address,undefined "$out/obj/test_fuzz_$target.cpp.o" $library \
+    -lyaml-cpp -lz -o "$out/$target"
+  mkdir -p "$out/corpus_$target"
+  seeds=()
+  [ -d "$root/test/fuzz/seeds_$target" ] && seeds=("$root/test/fuzz/seeds_$target")
+  if (cd "$out" && "./$target" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 \
+        -artifact_prefix="$out/${target}_" "corpus_$target" "${seeds[@]+"${seeds[@]}"}" \
+        >"$out/$target.log" 2>&1); then
+    echo "ok $target: $(grep -E '^#[0-9]+' "$out/$target.log" | tail -1)"
+  else
+    echo "FAIL $target (log: $out/$target.log)"
+    grep -E "ERROR|SUMMARY|runtime error|deadly|Test unit written" "$out/$target.log" | head -n 10
+    status=1
+  fi
+done
+[ "$status" -eq 0 ] && echo "PASS"
+exit "$status"
