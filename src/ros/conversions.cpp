@@ -54,6 +54,30 @@ geometry_msgs::Pose toPoseMsg(const core::Pose2& pose) {
   return p;
 }
 
+geometry_msgs::TransformStamped toTransformStamped(const core::Pose2& pose, const std::string& parent,
+                                                   const std::string& child, const ros::Time& stamp) {
+  geometry_msgs::TransformStamped t;
+  t.header.stamp = stamp;
+  t.header.frame_id = parent;
+  t.child_frame_id = child;
+  t.transform = toTransform(pose);
+  return t;
+}
+
+nav_msgs::Odometry toOdometryMsg(const core::Pose2& pose, const Eigen::Vector3d& twist,
+                                 const std::string& frame, const std::string& child,
+                                 const ros::Time& stamp) {
+  nav_msgs::Odometry odometry;
+  odometry.header.stamp = stamp;
+  odometry.header.frame_id = frame;
+  odometry.child_frame_id = child;
+  odometry.pose.pose = toPoseMsg(pose);
+  odometry.twist.twist.linear.x = twist.x();
+  odometry.twist.twist.linear.y = twist.y();
+  odometry.twist.twist.angular.z = twist.z();
+  return odometry;
+}
+
 bool toRangeScan(const sensor_msgs::LaserScan& msg, const core::Pose2& sensor_in_base,
                  core::RangeScan* scan, std::string* error) {
   if (!std::isfinite(msg.angle_min) || !std::isfinite(msg.angle_increment) ||

@@ -3,47 +3,14 @@
 #include <cmath>
 #include <cstdio>
 
+#include "rbpf_slam/ros/conversions.h"
+
 namespace rbpf_slam {
 namespace rosbridge {
 namespace {
 
 namespace sim = core::sim;
 using core::Pose2;
-
-geometry_msgs::Quaternion yawQuaternion(double yaw) {
-  geometry_msgs::Quaternion q;
-  q.z = std::sin(0.5 * yaw);
-  q.w = std::cos(0.5 * yaw);
-  return q;
-}
-
-geometry_msgs::TransformStamped transformMessage(const std::string& parent,
-                                                 const std::string& child, const Pose2& pose,
-                                                 const ros::Time& stamp) {
-  geometry_msgs::TransformStamped t;
-  t.header.stamp = stamp;
-  t.header.frame_id = parent;
-  t.child_frame_id = child;
-  t.transform.translation.x = pose.x();
-  t.transform.translation.y = pose.y();
-  t.transform.rotation = yawQuaternion(pose.z());
-  return t;
-}
-
-nav_msgs::Odometry odometryMessage(const std::string& frame, const Pose2& pose,
-                                   const Eigen::Vector3d& twist, const ros::Time& stamp) {
-  nav_msgs::Odometry odometry;
-  odometry.header.stamp = stamp;
-  odometry.header.frame_id = frame;
-  odometry.child_frame_id = "base_link";
-  odometry.pose.pose.position.x = pose.x();
-  odometry.pose.pose.position.y = pose.y();
-  odometry.pose.pose.orientation = yawQuaternion(pose.z());
-  odometry.twist.twist.linear.x = twist.x();
-  odometry.twist.twist.linear.y = twist.y();
-  odometry.twist.twist.angular.z = twist.z();
-  return odometry;
-}
 
 sensor_msgs::LaserScan scanMessage(const core::RangeScan& scan, double rate_hz,
                                    const ros::Time& stamp) {
@@ -117,15 +84,15 @@ tf2_msgs::TFMessage simStaticTransforms(const sim::Simulator& simulator,
   tf2_msgs::TFMessage message;
   if (sensors.laser.enabled) {
     message.transforms.push_back(
-        transformMessage("base_link", "base_laser_link", simulator.laserPose(), stamp));
+        toTransformStamped(simulator.laserPose(), "base_link", "base_laser_link", stamp));
   }
   for (size_t i = 0; sensors.sonar.enabled && i < simulator.sonarPoses().size(); ++i) {
-    message.transforms.push_back(transformMessage("base_link", "sonar_" + std::to_string(i),
-                                                  simulator.sonarPoses()[i], stamp));
+    message.transforms.push_back(toTransformStamped(simulator.sonarPoses()[i], "base_link",
+                                                    "sonar_" + std::to_string(i), stamp));
   }
   for (size_t i = 0; sensors.infrared.enabled && i < simulator.infraredPoses().size(); ++i) {
-    message.transforms.push_back(transformMessage("base_link", "ir_" + std::to_string(i),
-                                                  simulator.infraredPoses()[i], stamp));
+    message.transforms.push_back(toTransformStamped(simulator.infraredPoses()[i], "base_link",
+                                                    "ir_" + std::to_string(i), stamp));
   }
   return message;
 }
@@ -137,11 +104,11 @@ SimMessages toSimMessages(const sim::SimEvent& event, const sim::Simulator& simu
   switch (event.type) {
     case sim::SimEventType::kOdometry: {
       tf2_msgs::TFMessage tf;
-      tf.transforms.push_back(transformMessage("odom", "base_link", event.odom_pose, stamp));
+      tf.transforms.push_back(toTransformStamped(event.odom_pose, "odom", "base_link", stamp));
       out.tf = tf;
-      out.odom = odometryMessage("odom", event.odom_pose, event.odom_twist, stamp);
+      out.odom = toOdometryMsg(event.odom_pose, event.odom_twist, "odom", "base_link", stamp);
       const Eigen::Vector3d true_twist(event.true_speed_mps, 0.0, event.true_turn_rate_radps);
-      out.ground_truth = odometryMessage("map", event.true_pose, true_twist, stamp);
+      out.ground_truth = toOdometryMsg(event.true_pose, true_twist, "map", "base_link", stamp);
       break;
     }
     case sim::SimEventType::kLaser:

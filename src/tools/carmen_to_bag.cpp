@@ -24,11 +24,13 @@
 #include "rbpf_slam/core/geometry.h"
 #include "rbpf_slam/io/carmen.h"
 #include "rbpf_slam/io/trajectory.h"
+#include "rbpf_slam/ros/conversions.h"
 
 namespace {
 
 namespace io = rbpf_slam::io;
 namespace core = rbpf_slam::core;
+namespace rosbridge = rbpf_slam::rosbridge;
 
 constexpr int kUsageError = 2;
 constexpr double kStampOffsetS = 1262304000.0;  // 2010-01-01, as in the shared bags
@@ -106,25 +108,6 @@ std::string referencePath(const std::string& bag_path) {
 
 ros::Time toRosTime(double log_stamp) { return ros::Time(kStampOffsetS + log_stamp); }
 
-geometry_msgs::Quaternion yawQuaternion(double yaw) {
-  geometry_msgs::Quaternion q;
-  q.z = std::sin(0.5 * yaw);
-  q.w = std::cos(0.5 * yaw);
-  return q;
-}
-
-geometry_msgs::TransformStamped toTransform(const core::Pose2& pose, const ros::Time& stamp,
-                                            const std::string& parent, const std::string& child) {
-  geometry_msgs::TransformStamped transform;
-  transform.header.stamp = stamp;
-  transform.header.frame_id = parent;
-  transform.child_frame_id = child;
-  transform.transform.translation.x = pose.x();
-  transform.transform.translation.y = pose.y();
-  transform.transform.rotation = yawQuaternion(pose.z());
-  return transform;
-}
-
 // The laser in the robot frame, from the first scan; warns when later scans disagree.
 core::Pose2 laserOffset(const io::CarmenLog& log) {
   const io::CarmenLaser& first = log.lasers.front();
@@ -167,22 +150,14 @@ sensor_msgs::LaserScan toScan(const io::CarmenLaser& laser, std::uint32_t seq) {
 
 nav_msgs::Odometry toOdometry(const io::StampedPose& pose, const io::StampedPose* previous,
                               std::uint32_t seq) {
-  nav_msgs::Odometry odometry;
-  odometry.header.seq = seq;
-  odometry.header.stamp = toRosTime(pose.stamp);
-  odometry.header.frame_id = "odom";
-  odometry.child_frame_id = "base_link";
-  odometry.pose.pose.position.x = pose.pose.x();
-  odometry.pose.pose.position.y = pose.pose.y();
-  odometry.pose.pose.orientation = yawQuaternion(pose.pose.z());
+  // Twist in the child frame: the increment since the previous reading over its duration.
+  Eigen::Vector3d twist = Eigen::Vector3d::Zero();
   if (previous != nullptr && pose.stamp > previous->stamp) {
-    // Twist in the child frame: the increment since the previous reading over its duration.
-    const core::Pose2 step = core::between(previous->pose, pose.pose);
-    const double dt = pose.stamp - previous->stamp;
-    odometry.twist.twist.linear.x = step.x() / dt;
-    odometry.twist.twist.linear.y = step.y() / dt;
-    odometry.twist.twist.angular.z = step.z() / dt;
+    twist = core::between(previous->pose, pose.pose) / (pose.stamp - previous->stamp);
   }
+  nav_msgs::Odometry odometry =
+      rosbridge::toOdometryMsg(pose.pose, twist, "odom", "base_link", toRosTime(pose.stamp));
+  odometry.header.seq = seq;
   return odometry;
 }
 
@@ -229,7 +204,7 @@ void writeBag(const Arguments& arguments, const io::CarmenLog& log,
     if (event.kind == 0) {
       tf2_msgs::TFMessage tf_static;
       tf_static.transforms.push_back(
-          toTransform(laserOffset(log), stamp, "base_link", "base_laser_link"));
+          rosbridge::toTransformStamped(laserOffset(log), "base_link", "base_laser_link", stamp));
       // A custom connection header replaces rosbag's, so it must carry the type fields too.
       auto header = boost::make_shared<ros::M_string>();
       (*header)["type"] = ros::message_traits::datatype(tf_static);
@@ -244,7 +219,7 @@ void writeBag(const Arguments& arguments, const io::CarmenLog& log,
           toOdometry(odometry[event.index], previous, odometry_seq++);
       bag.write("/odom", stamp, message);
       tf2_msgs::TFMessage tf;
-      tf.transforms.push_back(toTransform(odometry[event.index].pose, stamp, "odom", "base_link"));
+      tf.transforms.push_back(rosbridge::toTransformStamped(odometry[event.index].pose, "odom", "base_link", stamp));
       tf.transforms.back().header.seq = message.header.seq;
       bag.write("/tf", stamp, tf);
     } else {

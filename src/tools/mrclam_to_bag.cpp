@@ -28,11 +28,13 @@
 #include "rbpf_slam/core/geometry.h"
 #include "rbpf_slam/io/mrclam.h"
 #include "rbpf_slam/io/trajectory.h"
+#include "rbpf_slam/ros/conversions.h"
 
 namespace {
 
 namespace io = rbpf_slam::io;
 namespace core = rbpf_slam::core;
+namespace rosbridge = rbpf_slam::rosbridge;
 
 constexpr int kUsageError = 2;
 
@@ -122,38 +124,17 @@ std::string besideBag(const std::string& bag, const std::string& suffix) {
   return (has_ext ? bag.substr(0, bag.size() - ext.size()) : bag) + suffix;
 }
 
-geometry_msgs::Quaternion yawQuaternion(double yaw) {
-  geometry_msgs::Quaternion q;
-  q.z = std::sin(0.5 * yaw);
-  q.w = std::cos(0.5 * yaw);
-  return q;
-}
-
 nav_msgs::Odometry odometryMessage(const std::string& frame, const core::Pose2& pose, double v_mps,
                                    double w_radps, const ros::Time& stamp, std::uint32_t seq) {
-  nav_msgs::Odometry odometry;
+  nav_msgs::Odometry odometry = rosbridge::toOdometryMsg(pose, Eigen::Vector3d(v_mps, 0.0, w_radps),
+                                                         frame, "base_link", stamp);
   odometry.header.seq = seq;
-  odometry.header.stamp = stamp;
-  odometry.header.frame_id = frame;
-  odometry.child_frame_id = "base_link";
-  odometry.pose.pose.position.x = pose.x();
-  odometry.pose.pose.position.y = pose.y();
-  odometry.pose.pose.orientation = yawQuaternion(pose.z());
-  odometry.twist.twist.linear.x = v_mps;
-  odometry.twist.twist.angular.z = w_radps;
   return odometry;
 }
 
 tf2_msgs::TFMessage odomTransform(const core::Pose2& pose, const ros::Time& stamp) {
-  geometry_msgs::TransformStamped transform;
-  transform.header.stamp = stamp;
-  transform.header.frame_id = "odom";
-  transform.child_frame_id = "base_link";
-  transform.transform.translation.x = pose.x();
-  transform.transform.translation.y = pose.y();
-  transform.transform.rotation = yawQuaternion(pose.z());
   tf2_msgs::TFMessage message;
-  message.transforms.push_back(transform);
+  message.transforms.push_back(rosbridge::toTransformStamped(pose, "odom", "base_link", stamp));
   return message;
 }
 

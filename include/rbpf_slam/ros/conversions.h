@@ -3,6 +3,8 @@
 
 #include <geometry_msgs/Pose.h>
 #include <geometry_msgs/Transform.h>
+#include <geometry_msgs/TransformStamped.h>
+#include <nav_msgs/Odometry.h>
 #include <rbpf_slam/FeatureArray.h>
 #include <sensor_msgs/LaserScan.h>
 #include <std_msgs/Header.h>
@@ -19,6 +21,13 @@ core::Pose2 toPose2(const geometry_msgs::Transform& transform);
 core::Pose2 toPose2(const geometry_msgs::Pose& pose);
 geometry_msgs::Transform toTransform(const core::Pose2& pose);
 geometry_msgs::Pose toPoseMsg(const core::Pose2& pose);
+/// The transform parent -> child (child's pose in parent) at stamp.
+geometry_msgs::TransformStamped toTransformStamped(const core::Pose2& pose, const std::string& parent,
+                                                   const std::string& child, const ros::Time& stamp);
+/// child's pose in frame with its twist (vx, vy, wz, in the child frame) at stamp.
+nav_msgs::Odometry toOdometryMsg(const core::Pose2& pose, const Eigen::Vector3d& twist,
+                                 const std::string& frame, const std::string& child,
+                                 const ros::Time& stamp);
 
 /// The scan with its sensor mounting pose in the base frame. Returns false and sets error
 /// when the header of the scan cannot describe a scan (zero or non-finite increment, ...).
