@@ -1,5 +1,6 @@
 #include "rbpf_slam/io/slam_config.h"
 
+#include <cmath>
 #include <stdexcept>
 
 #include "rbpf_slam/io/landmark_file.h"
@@ -55,6 +56,27 @@ void readMeasurement(YamlSection section, core::MeasurementOptions* o) {
   section.read("sigma_rho_m", &o->sigma_rho_m, 1e-6, 100.0);
   section.read("sigma_theta_rad", &o->sigma_theta_rad, 1e-6, 3.2);
   section.read("covariance_inflation", &o->covariance_inflation, 1e-3, 1e3);
+  section.finish();
+}
+
+void readExistence(YamlSection section, core::ExistenceOptions* o) {
+  section.read("min_observations", &o->min_observations, 1, 1000);
+  section.read("tentative_updates", &o->tentative_updates, 1, 1000000);
+  section.read("visible_range_m", &o->visible_range_m, 0.0, 1000.0);
+  section.read("visible_min_range_m", &o->visible_min_range_m, 0.0, 1000.0);
+  section.read("visible_fov_rad", &o->visible_fov_rad, 1e-6, 2.0 * M_PI);
+  section.read("max_count", &o->max_count, 1, 1000000);
+  section.finish();
+}
+
+void readHinf(YamlSection section, core::HinfOptions* o) {
+  // Config values are finite; 1e12 is the EKF for any realistic covariance.
+  section.read("gamma_position", &o->gamma_position, 1e-12, 1e12);
+  section.read("gamma_heading", &o->gamma_heading, 1e-12, 1e12);
+  section.read("gamma_landmark", &o->gamma_landmark, 1e-12, 1e12);
+  section.read("gain", &o->gain, {"posterior", "prior"});
+  section.read("weight", &o->weight, {"pointwise", "marginal"});
+  section.read("max_inflation", &o->max_inflation, 1.0, 1e12);
   section.finish();
 }
 
@@ -144,6 +166,8 @@ SlamConfig parseSlamConfig(const YAML::Node& root, const std::string& source) {
   readMeasurement(top.section("measurement"), &f.measurement);
   readRobust(top.section("robust"), &f.robust);
   readTracker(top.section("tracker"), &f.tracker);
+  readExistence(top.section("existence"), &f.existence);
+  readHinf(top.section("hinf"), &f.hinf);
   readLaser(top.section("laser_features"), &config.laser);
   readScanMatching(top.section("scan_matching"), &config.scan_matching);
   core::SessionOptions& s = config.session;

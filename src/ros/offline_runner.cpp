@@ -221,6 +221,7 @@ OfflineSummary OfflineRunner::run() {
   }
   summary.landmarks = static_cast<int>(pipeline_.session().filter().landmarks().size());
   summary.particles = config_.filter.particles;
+  summary.fallbacks = pipeline_.session().filter().stats().fallbacks;
   return writeOutputs(summary);
 }
 
@@ -276,6 +277,7 @@ OfflineSummary OfflineRunner::writeOutputs(const OfflineSummary& in) const {
        << "  \"skipped_transforms\": " << summary.skipped_transforms << ",\n"
        << "  \"landmarks\": " << summary.landmarks << ",\n"
        << "  \"particles\": " << summary.particles << ",\n"
+       << "  \"fallbacks\": " << summary.fallbacks << ",\n"
        << "  \"update_ms_mean\": " << summary.update_ms_mean << ",\n"
        << "  \"update_ms_p99\": " << summary.update_ms_p99 << ",\n"
        << "  \"update_ms_max\": " << summary.update_ms_max << ",\n"

@@ -5,8 +5,10 @@
 
 #include <dirent.h>
 
+#include <cmath>
 #include <string>
 
+#include "rbpf_slam/core/filters/slam_filter.h"
 #include "rbpf_slam/io/slam_config.h"
 
 namespace rbpf_slam {
@@ -94,6 +96,34 @@ TEST(SlamConfig, RobustConfigsLoadWithTheirSections) {
   EXPECT_NE(errorOf("tracker: {gate_chi2: 30, new_landmark_chi2: 20}")
                 .find("tracker.new_landmark_chi2"),
             std::string::npos);
+}
+
+TEST(SlamConfig, LandmarksHinfConfigSelectsHinfFastSlam) {
+  const SlamConfig c = loadSlamConfig(std::string(RBPF_SOURCE_DIR) + "/config/landmarks_hinf.yaml");
+  EXPECT_EQ(c.filter.variant, "hinf_fastslam");
+  EXPECT_EQ(c.frontend, "features");
+  EXPECT_DOUBLE_EQ(c.filter.resample_threshold, 0.75);  // Havangi eq. 39
+  EXPECT_GT(c.filter.hinf.gamma_position, 0.0);
+  EXPECT_GT(c.filter.hinf.gamma_heading, 0.0);
+  EXPECT_GT(c.filter.hinf.gamma_landmark, 0.0);
+  EXPECT_EQ(c.filter.hinf.gain, "posterior");
+  EXPECT_EQ(c.filter.existence.visible_range_m, 0.0);  // documented: off on MRCLAM
+  EXPECT_EQ(c.filter.existence.max_count, 10);
+  EXPECT_EQ(core::createFilter(c.filter)->variant(), "hinf_fastslam");
+}
+
+TEST(SlamConfig, HinfAndExistenceErrorsNameTheKey) {
+  EXPECT_NE(errorOf("hinf: {gamma_pose: 1}").find("in hinf: gamma_pose"), std::string::npos);
+  const std::string gamma = errorOf("hinf: {gamma_heading: 0}");
+  EXPECT_NE(gamma.find("hinf.gamma_heading = 0 is out of range"), std::string::npos) << gamma;
+  EXPECT_NE(errorOf("hinf: {gain: kalman}").find("not one of: posterior"), std::string::npos);
+  EXPECT_NE(errorOf("existence: {max_count: 0}").find("existence.max_count"), std::string::npos);
+  const std::string fov = errorOf("existence: {visible_range_m: 4, visible_min_range_m: 5}");
+  EXPECT_NE(fov.find("existence.visible_min_range_m"), std::string::npos) << fov;
+  EXPECT_NE(errorOf("variant: hinf").find("hinf_fastslam"), std::string::npos);
+  EXPECT_NE(errorOf("hinf: {gamma_landmark: .inf}").find("out of range [1e-12, 1e+12]"),
+            std::string::npos)
+      << errorOf("hinf: {gamma_landmark: .inf}");
 }
 
 TEST(SlamConfig, MissingFileIsNamed) {

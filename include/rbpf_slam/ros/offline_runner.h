@@ -33,6 +33,7 @@ struct OfflineSummary {
   long skipped_transforms = 0;  // repeated or malformed tf in the bag
   int landmarks = 0;
   int particles = 0;
+  long fallbacks = 0;  // H-infinity steps that fell back to the EKF (since the last reset)
   double update_ms_mean = 0.0;
   double update_ms_p99 = 0.0;
   double update_ms_max = 0.0;

@@ -3,6 +3,7 @@
 #include <Eigen/Dense>
 #include <cmath>
 
+#include "rbpf_slam/core/filters/landmark_existence.h"
 #include "rbpf_slam/core/filters/measurement_models.h"
 #include "rbpf_slam/core/filters/resampling.h"
 
@@ -18,6 +19,17 @@ double logGaussian2(const Eigen::Vector2d& v, const Eigen::Matrix2d& s, Eigen::M
   if (!(det > 0.0) || !std::isfinite(det)) return -INFINITY;
   *s_inv = s.inverse();
   return -0.5 * v.dot(*s_inv * v) - 0.5 * std::log(det) - kLog2Pi;
+}
+
+/// log N(pose; mean, cov) with the heading difference wrapped; -inf when cov is singular.
+double logGaussianPose(const Pose2& pose, const Pose2& mean, const Eigen::Matrix3d& cov) {
+  Eigen::Vector3d d = pose - mean;
+  d.z() = wrapAngle(d.z());
+  const Eigen::LLT<Eigen::Matrix3d> llt(cov);
+  if (llt.info() != Eigen::Success) return -INFINITY;
+  const Eigen::Vector3d w = llt.matrixL().solve(d);
+  const double log_det = 2.0 * llt.matrixL().toDenseMatrix().diagonal().array().log().sum();
+  return -0.5 * w.squaredNorm() - 0.5 * log_det - 1.5 * kLog2Pi;
 }
 
 Eigen::Matrix2d symmetrize(const Eigen::Matrix2d& m) { return 0.5 * (m + m.transpose()); }
@@ -45,7 +57,13 @@ LandmarkEstimate toEstimate(const Landmark& landmark) {
 }
 
 FastSlam2::FastSlam2(const FilterOptions& options)
-    : options_(options), motion_model_(createMotionModel(options.motion)), rng_(options.seed) {
+    : FastSlam2(options, std::make_unique<EkfRule>()) {}
+
+FastSlam2::FastSlam2(const FilterOptions& options, std::unique_ptr<EstimatorRule> rule)
+    : options_(options),
+      motion_model_(createMotionModel(options.motion)),
+      rule_(std::move(rule)),
+      rng_(options.seed) {
   reset(Pose2::Zero());
 }
 
@@ -183,12 +201,13 @@ void FastSlam2::addLandmark(LandmarkMap* map, const Pose2& pose, const Observati
   } else {
     lm.mean = pointFromObservation(pose, observation.z, &g);
   }
-  lm.covariance = symmetrize(g * observation.noise * g.transpose());
+  lm.covariance = symmetrize(g * observation.noise * g.transpose());  // Havangi eq. 35
   lm.last_seen_step = step_;
+  lm.created_step = step_;
   map->add(lm);
 }
 
-void FastSlam2::updateLandmark(LandmarkMap* map, const Match& match, const Pose2& pose,
+bool FastSlam2::updateLandmark(LandmarkMap* map, const Match& match, const Pose2& pose,
                                const Observation& observation, double* log_likelihood) {
   Landmark lm = (*map)[match.index];
   const bool is_line = lm.type == LandmarkType::kLine;
@@ -199,11 +218,13 @@ void FastSlam2::updateLandmark(LandmarkMap* map, const Match& match, const Pose2
   Eigen::Matrix2d s_inv;
   const Eigen::Vector2d v = innovation(observation.z, p.z);
   const double ll = logGaussian2(v, s, &s_inv);
-  if (!std::isfinite(ll)) return;
+  if (!std::isfinite(ll)) return true;
+  // EKF (Montemerlo 2003) or H-infinity (Havangi eqs. 28-34) landmark update.
+  const Correction<2> c = rule_->correctLandmark(lm.covariance, p.h_landmark, observation.noise);
+  if (!c.ok) return true;
   if (log_likelihood) *log_likelihood += ll;
-  const Eigen::Matrix<double, 2, 2> k = lm.covariance * p.h_landmark.transpose() * s_inv;
-  lm.mean += k * v;
-  lm.covariance = symmetrize((Eigen::Matrix2d::Identity() - k * p.h_landmark) * lm.covariance);
+  lm.mean += c.gain * v;
+  lm.covariance = c.covariance;
   if (is_line) {
     lm.mean.y() = wrapAngle(lm.mean.y());
     if (lm.mean.x() < 0.0) {  // keep rho >= 0: flip the normal and the extent's direction
@@ -221,6 +242,7 @@ void FastSlam2::updateLandmark(LandmarkMap* map, const Match& match, const Pose2
   ++lm.observations;
   lm.last_seen_step = step_;
   if (lm.mean.allFinite() && lm.covariance.allFinite()) map->set(match.index, lm);
+  return !c.fallback;
 }
 
 FastSlam2::ParticleUpdate FastSlam2::updateParticle(Particle* particle,
@@ -231,6 +253,7 @@ FastSlam2::ParticleUpdate FastSlam2::updateParticle(Particle* particle,
   Pose2 mean = predicted_mean;
   Eigen::Matrix3d cov = motion_cov;
   double log_likelihood = 0.0;
+  const bool pointwise = rule_->pointwiseWeights();
   std::vector<std::pair<int, int>> matched;  // (observation, landmark index)
   std::vector<int> fresh;
   const LandmarkMap& map = *particle->map;
@@ -246,12 +269,12 @@ FastSlam2::ParticleUpdate FastSlam2::updateParticle(Particle* particle,
       const Eigen::Vector2d v = innovation(o.z, m.prediction.z);
       const double ll = logGaussian2(v, s, &s_inv);
       if (!std::isfinite(ll)) continue;
-      log_likelihood += ll;
-      const Eigen::Matrix<double, 3, 2> gain = cov * h.transpose() * s_inv;
-      mean += gain * v;
+      const Correction<3> c = ekfCorrection<3>(cov, h, m.landmark_innovation_cov);
+      if (!c.ok) continue;
+      if (!pointwise) log_likelihood += ll;  // the marginal weight of FastSLAM 2.0
+      mean += c.gain * v;
       mean.z() = wrapAngle(mean.z());
-      cov = (Eigen::Matrix3d::Identity() - gain * h) * cov;
-      cov = 0.5 * (cov + cov.transpose());
+      cov = c.covariance;
       matched.emplace_back(static_cast<int>(k), m.index);
     } else if (m.index < 0 || m.distance2 > a.new_landmark_chi2) {
       // Likelihood of a new landmark: as if observed at the new-landmark threshold.
@@ -260,8 +283,27 @@ FastSlam2::ParticleUpdate FastSlam2::updateParticle(Particle* particle,
     }
     // Between the gate and the new-landmark threshold: ambiguous, left out.
   }
-  particle->pose = sampleMultivariate<3>(rng_, mean, cov);
+  if (rule_->attenuatesPose() && !matched.empty()) {
+    // H-infinity proposal (Havangi eqs. 20-23, every matched landmark of the step stacked, the
+    // landmark's uncertainty counted in R as in FastSLAM 2.0).
+    const Attenuation<3> h = rule_->attenuatePose(cov);
+    if (h.correction_scale != Eigen::Matrix3d::Identity()) {
+      Eigen::Vector3d shift = mean - predicted_mean;
+      shift.z() = wrapAngle(shift.z());
+      mean = predicted_mean + h.correction_scale * shift;
+      mean.z() = wrapAngle(mean.z());
+    }
+    cov = h.covariance;
+    result.fallbacks += h.fallback;
+  }
+  particle->pose = sampleMultivariate<3>(rng_, mean, cov);  // Havangi eq. 24
   particle->pose.z() = wrapAngle(particle->pose.z());
+  // Pointwise importance weight (Havangi eq. 36): p(z | s) p(s | s_prev, u) / q(s) at the
+  // drawn pose s; p(z | s) is accumulated by the landmark updates below.
+  if (pointwise && !matched.empty()) {
+    log_likelihood += logGaussianPose(particle->pose, predicted_mean, motion_cov) -
+                      logGaussianPose(particle->pose, mean, cov);
+  }
   particle->log_weight += log_likelihood;
   if (!mapping_) {  // localization only: the map is a fixed prior
     result.associated = static_cast<int>(matched.size());
@@ -272,7 +314,10 @@ FastSlam2::ParticleUpdate FastSlam2::updateParticle(Particle* particle,
   for (const auto& [k, index] : matched) {
     Match m;
     m.index = index;
-    updateLandmark(&writable, m, particle->pose, observations[k], nullptr);
+    if (!updateLandmark(&writable, m, particle->pose, observations[k],
+                        pointwise ? &particle->log_weight : nullptr)) {
+      ++result.fallbacks;
+    }
     ++result.associated;
   }
   for (int k : fresh) {
@@ -299,7 +344,10 @@ UpdateStats FastSlam2::update(const FeatureSet& features) {
     const Pose2 predicted = motion_model_->mean(p.pose, motion);
     const Eigen::Matrix3d motion_cov = motion_model_->covariance(p.pose, motion);
     results[i] = updateParticle(&p, predicted, motion_cov, observations);
+    results[i].removed = manageExistence(options_.existence, &p.map, p.pose, step_);
+    stats.fallbacks += results[i].fallbacks;
   }
+  stats_.fallbacks += stats.fallbacks;
   weighAndResample(&stats);
   // Report the association of the particle that now carries the most weight.
   const int best = bestParticle();

@@ -3,6 +3,8 @@
 #include <string>
 
 #include "rbpf_slam/core/filters/fastslam2.h"
+#include "rbpf_slam/core/filters/hinf_fastslam.h"
+#include "rbpf_slam/core/filters/landmark_existence.h"
 #include "rbpf_slam/core/filters/robust_fastslam2.h"
 #include "rbpf_slam/core/filters/slam_filter.h"
 
@@ -19,7 +21,9 @@ void requireRange(const std::string& name, double value, double min, double max)
 
 }  // namespace
 
-std::vector<std::string> availableVariants() { return {"fastslam2", "robust_fastslam2"}; }
+std::vector<std::string> availableVariants() {
+  return {"fastslam2", "robust_fastslam2", "hinf_fastslam"};
+}
 
 void validate(const RobustOptions& o) {
   requireRange("robust.ancestor_sets", o.ancestor_sets, 1, 100);
@@ -49,12 +53,15 @@ void validate(const FilterOptions& o) {
   validate(o.motion);
   validate(o.robust);
   validate(o.tracker);
+  validate(o.existence);
+  validate(o.hinf);
 }
 
 std::unique_ptr<SlamFilter> createFilter(const FilterOptions& options) {
   validate(options);
   if (options.variant == "fastslam2") return std::make_unique<FastSlam2>(options);
   if (options.variant == "robust_fastslam2") return std::make_unique<RobustFastSlam2>(options);
+  if (options.variant == "hinf_fastslam") return std::make_unique<HinfFastSlam>(options);
   throw std::invalid_argument("variant = '" + options.variant + "' is not implemented");
 }
 

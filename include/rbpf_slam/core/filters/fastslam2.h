@@ -6,6 +6,7 @@
 #include <memory>
 #include <vector>
 
+#include "rbpf_slam/core/filters/estimator_rule.h"
 #include "rbpf_slam/core/filters/landmark_map.h"
 #include "rbpf_slam/core/filters/measurement_models.h"
 #include "rbpf_slam/core/filters/slam_filter.h"
@@ -55,10 +56,15 @@ class FastSlam2 : public SlamFilter {
   int bestParticle() const;
 
  protected:
+  /// A FastSLAM 2.0 whose proposal and landmark updates follow `rule` (e.g. H-infinity).
+  FastSlam2(const FilterOptions& options, std::unique_ptr<EstimatorRule> rule);
+
   /// Outcome of incorporating all observations into one particle.
   struct ParticleUpdate {
     int associated = 0;
     int created = 0;
+    int fallbacks = 0;  // H-infinity corrections that fell back to the EKF
+    int removed = 0;    // landmarks dropped by existence management
   };
   /// FastSLAM 2.0 step for one particle from its predicted pose and motion covariance.
   ParticleUpdate updateParticle(Particle* particle, const Pose2& predicted_mean,
@@ -77,11 +83,13 @@ class FastSlam2 : public SlamFilter {
   Match associate(const LandmarkMap& map, const Pose2& pose, const Eigen::Matrix3d& pose_cov,
                   const Observation& observation) const;
   void addLandmark(LandmarkMap* map, const Pose2& pose, const Observation& observation);
-  void updateLandmark(LandmarkMap* map, const Match& match, const Pose2& pose,
+  /// Returns false when the correction fell back to the EKF.
+  bool updateLandmark(LandmarkMap* map, const Match& match, const Pose2& pose,
                       const Observation& observation, double* log_likelihood);
 
   const FilterOptions options_;
   std::unique_ptr<MotionModel> motion_model_;
+  std::unique_ptr<EstimatorRule> rule_;
   Rng rng_;
   std::vector<Particle> particles_;
   std::vector<double> weights_;  // normalised, same order as particles_

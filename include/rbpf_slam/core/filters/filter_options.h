@@ -3,6 +3,7 @@
 
 #include <string>
 
+#include "rbpf_slam/core/filters/estimator_rule.h"
 #include "rbpf_slam/core/motion/motion_model.h"
 #include "rbpf_slam/core/tracking/landmark_tracker_options.h"
 
@@ -36,6 +37,18 @@ struct RobustOptions {
   int path_iterations = 10;        // iterated EKF steps of the intermediate path estimate
 };
 
+/// Landmark existence management (landmark_existence.h), shared by the FastSLAM variants:
+/// a tentative landmark that is not confirmed soon is dropped, and a point landmark that the
+/// sensor should see but does not is counted down and dropped at zero.
+struct ExistenceOptions {
+  int min_observations = 1;     // a landmark seen fewer times than this ...
+  int tentative_updates = 20;   // ... this many updates after its creation is removed
+  double visible_range_m = 0.0;      // negative evidence for points within [min, max] range;
+  double visible_min_range_m = 0.0;  // visible_range_m = 0 switches it off
+  double visible_fov_rad = M_PI;     // full width of the field of view, centred ahead
+  int max_count = 5;  // existence counter: +1 per sighting up to this, -1 per unexplained miss
+};
+
 struct FilterOptions {
   std::string variant = "fastslam2";
   int particles = 100;
@@ -44,6 +57,8 @@ struct FilterOptions {
   MotionOptions motion;
   AssociationOptions association;
   MeasurementOptions measurement;
+  ExistenceOptions existence;
+  HinfOptions hinf;  // variant hinf_fastslam only
   bool use_points = true;
   bool use_lines = true;
   RobustOptions robust;            // variant robust_fastslam2 (particles = M per set)

@@ -21,6 +21,8 @@ struct Landmark {
   double extent_max = 0.0;
   int observations = 1;
   int last_seen_step = 0;
+  int created_step = 0;
+  int existence = 1;  // existence counter (landmark_existence.h)
 };
 
 /// The landmarks of one particle. Value semantics through shared, immutable landmarks.

@@ -1,0 +1,90 @@
+#include "rbpf_slam/core/filters/landmark_existence.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+namespace rbpf_slam {
+namespace core {
+
+bool existenceEnabled(const ExistenceOptions& o) {
+  return o.min_observations > 1 || o.visible_range_m > 0.0;
+}
+
+bool predictedVisible(const ExistenceOptions& o, const Pose2& pose, const Eigen::Vector2d& point) {
+  if (!(o.visible_range_m > 0.0)) return false;
+  const Eigen::Vector2d d = point - pose.head<2>();
+  const double range = d.norm();
+  if (range < o.visible_min_range_m || range > o.visible_range_m) return false;
+  const double bearing = wrapAngle(std::atan2(d.y(), d.x()) - pose.z());
+  return std::fabs(bearing) <= 0.5 * o.visible_fov_rad;
+}
+
+std::vector<int> landmarksToRemove(const ExistenceOptions& o, const LandmarkMap& map,
+                                   const Pose2& pose, int step, std::vector<int>* counters) {
+  std::vector<int> remove;
+  counters->resize(map.size());
+  for (int i = 0; i < map.size(); ++i) {
+    const Landmark& lm = map[i];
+    int count = lm.existence;
+    if (lm.last_seen_step == step) {
+      if (lm.created_step != step) count = std::min(count + 1, o.max_count);
+    } else if (lm.type == LandmarkType::kPoint && predictedVisible(o, pose, lm.mean)) {
+      --count;  // in view, not seen: negative evidence
+    }
+    (*counters)[i] = count;
+    const bool on_probation =
+        lm.observations < o.min_observations && step - lm.created_step >= o.tentative_updates;
+    if (count <= 0 || on_probation) remove.push_back(i);
+  }
+  return remove;
+}
+
+int manageExistence(const ExistenceOptions& o, std::shared_ptr<LandmarkMap>* map, const Pose2& pose,
+                    int step) {
+  if (!existenceEnabled(o) || !*map) return 0;
+  std::vector<int> counters;
+  const std::vector<int> remove = landmarksToRemove(o, **map, pose, step, &counters);
+  bool changed = !remove.empty();
+  for (int i = 0; i < (*map)->size() && !changed; ++i) {
+    changed = counters[i] != (**map)[i].existence;
+  }
+  if (!changed) return 0;
+  LandmarkMap& writable = mutableMap(map);
+  for (int i = 0; i < writable.size(); ++i) {
+    if (counters[i] == writable[i].existence) continue;
+    Landmark lm = writable[i];
+    lm.existence = counters[i];
+    writable.set(i, lm);
+  }
+  for (auto it = remove.rbegin(); it != remove.rend(); ++it) writable.remove(*it);
+  return static_cast<int>(remove.size());
+}
+
+void validate(const ExistenceOptions& o) {
+  auto fail = [](const std::string& key, double value, const std::string& range) {
+    throw std::invalid_argument("existence." + key + " = " + std::to_string(value) +
+                                " is out of range " + range);
+  };
+  if (o.min_observations < 1 || o.min_observations > 1000) {
+    fail("min_observations", o.min_observations, "[1, 1000]");
+  }
+  if (o.tentative_updates < 1 || o.tentative_updates > 1000000) {
+    fail("tentative_updates", o.tentative_updates, "[1, 1000000]");
+  }
+  if (!(o.visible_range_m >= 0.0 && o.visible_range_m <= 1000.0)) {
+    fail("visible_range_m", o.visible_range_m, "[0, 1000]");
+  }
+  if (!(o.visible_min_range_m >= 0.0 && o.visible_min_range_m <= o.visible_range_m) &&
+      o.visible_range_m > 0.0) {
+    fail("visible_min_range_m", o.visible_min_range_m, "[0, visible_range_m]");
+  }
+  if (!(o.visible_fov_rad > 0.0 && o.visible_fov_rad <= 2.0 * M_PI)) {
+    fail("visible_fov_rad", o.visible_fov_rad, "(0, 2 pi]");
+  }
+  if (o.max_count < 1 || o.max_count > 1000000) fail("max_count", o.max_count, "[1, 1000000]");
+}
+
+}  // namespace core
+}  // namespace rbpf_slam

@@ -1,0 +1,327 @@
+// H-infinity FastSLAM (Havangi et al.): the H-infinity correction against
+// hand-computed and information-form values, its limit (the EKF) and its
+// fallback, the variant in the factory, and the filter on a small simulated
+// landmark world with a fixed seed.
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Dense>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include "rbpf_slam/core/filters/estimator_rule.h"
+#include "rbpf_slam/core/filters/fastslam2.h"
+#include "rbpf_slam/core/filters/hinf_fastslam.h"
+#include "rbpf_slam/core/filters/slam_filter.h"
+#include "rbpf_slam/core/random.h"
+
+namespace rbpf_slam {
+namespace core {
+namespace {
+
+Eigen::Matrix3d randomCovariance(Rng& rng) {
+  Eigen::Matrix3d a;
+  for (int i = 0; i < 9; ++i) a(i / 3, i % 3) = sampleGaussian(rng, 1.0);
+  return a * a.transpose() + 0.5 * Eigen::Matrix3d::Identity();
+}
+
+TEST(HinfCorrection, DiagonalCaseMatchesHandComputation) {
+  // P = diag(4, 1), H = I, R = diag(1, 0.25), gamma = 2:
+  // P+ = diag(1 / (1/4 + 1 - 1/2), 1 / (1 + 4 - 1/2)) = diag(4/3, 2/9).
+  const Eigen::Matrix2d p = Eigen::Vector2d(4.0, 1.0).asDiagonal();
+  const Eigen::Matrix2d r = Eigen::Vector2d(1.0, 0.25).asDiagonal();
+  const Correction<2> c =
+      hinfCorrection<2>(p, Eigen::Matrix2d::Identity(), r, Eigen::Vector2d(2.0, 2.0), true);
+  ASSERT_TRUE(c.ok);
+  EXPECT_FALSE(c.fallback);
+  EXPECT_NEAR(c.covariance(0, 0), 4.0 / 3.0, 1e-12);
+  EXPECT_NEAR(c.covariance(1, 1), 2.0 / 9.0, 1e-12);
+  EXPECT_NEAR(c.covariance(0, 1), 0.0, 1e-12);
+  // Posterior gain P+ R^-1 = diag(4/3, 8/9); the EKF gain would be diag(4/5,
+  // 4/5).
+  EXPECT_NEAR(c.gain(0, 0), 4.0 / 3.0, 1e-12);
+  EXPECT_NEAR(c.gain(1, 1), 8.0 / 9.0, 1e-12);
+  // The prior (Kalman-form, eq. 20) gain is the EKF gain on the same prior.
+  const Correction<2> prior =
+      hinfCorrection<2>(p, Eigen::Matrix2d::Identity(), r, Eigen::Vector2d(2.0, 2.0), false);
+  EXPECT_NEAR(prior.gain(0, 0), 0.8, 1e-12);
+  EXPECT_NEAR(prior.gain(1, 1), 0.8, 1e-12);
+  EXPECT_NEAR(prior.covariance(0, 0), 4.0 / 3.0, 1e-12);
+}
+
+/// Eqs. 22, 23 as printed: R_e = [R 0; 0 -Gamma] + [H; I] P [H^T I], P+ = P - P
+/// [H^T I] R_e^-1 [H; I] P.
+Eigen::Matrix3d paperCovariance(const Eigen::Matrix3d& p, const Eigen::Matrix<double, 2, 3>& h,
+                                const Eigen::Matrix2d& r, const Eigen::Vector3d& gamma) {
+  Eigen::Matrix<double, 5, 3> stacked;
+  stacked << h, Eigen::Matrix3d::Identity();
+  Eigen::Matrix<double, 5, 5> r_e = stacked * p * stacked.transpose();
+  r_e.topLeftCorner<2, 2>() += r;
+  r_e.bottomRightCorner<3, 3>() -= Eigen::Matrix3d(gamma.asDiagonal());
+  return p - p * stacked.transpose() * r_e.inverse() * stacked * p;
+}
+
+TEST(HinfCorrection, InflationGuardFallsBackNearTheBound) {
+  // Same case: P_ekf = diag(4/5, 1/5), I - Gamma^-1 P_ekf = diag(0.6, 0.9): P+ is 1/0.6 = 1.67
+  // times P_ekf along x. A guard of 2 lets it through, one of 1.5 does not.
+  const Eigen::Matrix2d p = Eigen::Vector2d(4.0, 1.0).asDiagonal();
+  const Eigen::Matrix2d r = Eigen::Vector2d(1.0, 0.25).asDiagonal();
+  const Eigen::Vector2d gamma(2.0, 2.0);
+  const Correction<2> loose =
+      hinfCorrection<2>(p, Eigen::Matrix2d::Identity(), r, gamma, true, 2.0);
+  EXPECT_FALSE(loose.fallback);
+  EXPECT_NEAR(loose.covariance(0, 0), 4.0 / 3.0, 1e-12);
+  const Correction<2> tight =
+      hinfCorrection<2>(p, Eigen::Matrix2d::Identity(), r, gamma, true, 1.5);
+  EXPECT_TRUE(tight.fallback);
+  EXPECT_NEAR(tight.covariance(0, 0), 0.8, 1e-12);
+  EXPECT_NEAR(tight.gain(0, 0), 0.8, 1e-12);
+}
+
+TEST(HinfCorrection, CovarianceMatchesInformationFormForPoseJacobians) {
+  Rng rng(3);
+  for (int trial = 0; trial < 20; ++trial) {
+    const Eigen::Matrix3d p = randomCovariance(rng);
+    Eigen::Matrix<double, 2, 3> h;
+    for (int i = 0; i < 6; ++i) h(i / 3, i % 3) = sampleGaussian(rng, 1.0);
+    const Eigen::Matrix2d r = Eigen::Vector2d(0.3, 0.7).asDiagonal();
+    const Eigen::Vector3d gamma(20.0, 20.0, 40.0);
+    const Eigen::Matrix3d information = p.inverse() + h.transpose() * r.inverse() * h -
+                                        Eigen::Matrix3d(gamma.cwiseInverse().asDiagonal());
+    const Correction<3> c = hinfCorrection<3>(p, h, r, gamma, true);
+    ASSERT_TRUE(c.ok);
+    ASSERT_FALSE(c.fallback) << "min eigenvalue " << information.eigenvalues().real().minCoeff();
+    EXPECT_LT((c.covariance - information.inverse()).norm(), 1e-9);
+    EXPECT_LT((c.covariance - paperCovariance(p, h, r, gamma)).norm(), 1e-9);
+    EXPECT_LT((c.gain - information.inverse() * h.transpose() * r.inverse()).norm(), 1e-9);
+    // Attenuation keeps the covariance above the EKF's: P+ - P_ekf is positive
+    // semidefinite.
+    const Correction<3> ekf = ekfCorrection<3>(p, h, r);
+    EXPECT_GE(Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(c.covariance - ekf.covariance)
+                  .eigenvalues()
+                  .minCoeff(),
+              -1e-12);
+  }
+}
+
+TEST(HinfCorrection, StepAttenuationIsOneUpdateWithEveryLandmarkStacked) {
+  // Two landmarks' EKF updates in sequence, then one attenuation, equal the
+  // H-infinity update of the stacked 4D measurement: P+^-1 = P^-1 + sum H_k^T
+  // R_k^-1 H_k - Gamma^-1, and the mean moves by P+ sum H_k^T R_k^-1 v_k.
+  Rng rng(12);
+  const Eigen::Matrix3d p = randomCovariance(rng);
+  Eigen::Matrix<double, 2, 3> h1, h2;
+  h1 << -0.8, -0.6, 0.0, 0.12, -0.16, -1.0;
+  h2 << 0.6, -0.8, 0.0, 0.16, 0.12, -1.0;
+  const Eigen::Matrix2d r1 = Eigen::Vector2d(0.04, 0.001).asDiagonal();
+  const Eigen::Matrix2d r2 = Eigen::Vector2d(0.09, 0.002).asDiagonal();
+  const Eigen::Vector2d v1(0.1, -0.02), v2(-0.05, 0.01);
+  const Correction<3> c1 = ekfCorrection<3>(p, h1, r1);
+  Eigen::Vector3d shift = c1.gain * v1;
+  const Correction<3> c2 = ekfCorrection<3>(c1.covariance, h2, r2);
+  shift += c2.gain * (v2 - h2 * shift);
+  const Eigen::Vector3d gamma(0.5, 0.5, 0.05);
+  const Attenuation<3> a = hinfAttenuation<3>(c2.covariance, gamma, true);
+  ASSERT_FALSE(a.fallback);
+  const Eigen::Matrix3d information = p.inverse() + h1.transpose() * r1.inverse() * h1 +
+                                      h2.transpose() * r2.inverse() * h2 -
+                                      Eigen::Matrix3d(gamma.cwiseInverse().asDiagonal());
+  EXPECT_LT((a.covariance - information.inverse()).norm(), 1e-9);
+  const Eigen::Vector3d expected = information.inverse() * (h1.transpose() * r1.inverse() * v1 +
+                                                            h2.transpose() * r2.inverse() * v2);
+  EXPECT_LT((a.correction_scale * shift - expected).norm(), 1e-9);
+  // The prior gain keeps the EKF's mean and only widens the covariance.
+  const Attenuation<3> prior = hinfAttenuation<3>(c2.covariance, gamma, false);
+  EXPECT_EQ(prior.correction_scale, Eigen::Matrix3d::Identity());
+  EXPECT_LT((prior.covariance - a.covariance).norm(), 1e-12);
+}
+
+TEST(HinfCorrection, ReducesToTheEkfAsGammaGrows) {
+  Rng rng(8);
+  const Eigen::Matrix3d p = randomCovariance(rng);
+  Eigen::Matrix<double, 2, 3> h;
+  h << -0.8, -0.6, 0.0, 0.12, -0.16, -1.0;  // a point landmark 5 m away
+  const Eigen::Matrix2d r = Eigen::Vector2d(0.01, 0.0004).asDiagonal();
+  const Correction<3> ekf = ekfCorrection<3>(p, h, r);
+  double previous_gap = INFINITY;
+  for (double gamma : {1.0, 10.0, 100.0, 1e4, 1e8}) {
+    const Correction<3> c = hinfCorrection<3>(p, h, r, Eigen::Vector3d::Constant(gamma), true);
+    ASSERT_TRUE(c.ok);
+    ASSERT_FALSE(c.fallback) << "gamma " << gamma;
+    const double gap = (c.gain - ekf.gain).norm() + (c.covariance - ekf.covariance).norm();
+    EXPECT_LT(gap, previous_gap) << "gamma " << gamma;
+    previous_gap = gap;
+  }
+  EXPECT_LT(previous_gap, 1e-6);
+  const Correction<3> exact = hinfCorrection<3>(p, h, r, Eigen::Vector3d::Constant(INFINITY), true);
+  EXPECT_EQ(exact.gain, ekf.gain);
+  EXPECT_EQ(exact.covariance, ekf.covariance);
+}
+
+TEST(HinfCorrection, FallsBackToTheEkfWhenTheConditionFails) {
+  // Information of the posterior along x: 1/4 + 1 = 1.25 < 1/gamma = 2: no
+  // H-infinity solution.
+  const Eigen::Matrix2d p = Eigen::Vector2d(4.0, 0.1).asDiagonal();
+  const Eigen::Matrix2d r = Eigen::Matrix2d::Identity();
+  const Correction<2> c =
+      hinfCorrection<2>(p, Eigen::Matrix2d::Identity(), r, Eigen::Vector2d(0.5, 0.5), true);
+  const Correction<2> ekf = ekfCorrection<2>(p, Eigen::Matrix2d::Identity(), r);
+  ASSERT_TRUE(c.ok);
+  EXPECT_TRUE(c.fallback);
+  EXPECT_EQ(c.gain, ekf.gain);
+  EXPECT_EQ(c.covariance, ekf.covariance);
+  EXPECT_TRUE(c.covariance.allFinite());
+}
+
+TEST(HinfOptions, BadValuesAreRejectedByName) {
+  FilterOptions options;
+  options.variant = "hinf_fastslam";
+  EXPECT_EQ(createFilter(options)->variant(), "hinf_fastslam");
+  options.hinf.gamma_heading = 0.0;
+  try {
+    createFilter(options);
+    FAIL() << "gamma_heading 0 accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("hinf.gamma_heading"), std::string::npos) << e.what();
+  }
+  options.hinf.gamma_heading = 1.0;
+  options.hinf.gain = "kalman";
+  EXPECT_THROW(createFilter(options), std::invalid_argument);
+  options.hinf.gain = "prior";
+  options.hinf.gamma_landmark = NAN;
+  EXPECT_THROW(createFilter(options), std::invalid_argument);
+}
+
+/// Point landmarks on a 30 m x 30 m square, seen from a robot driving a circle
+/// of radius 8 m.
+struct PointWorld {
+  std::vector<Eigen::Vector2d> landmarks;
+  PointWorld() {
+    for (int i = 0; i < 16; ++i) {
+      const double a = 2.0 * M_PI * i / 16.0;
+      landmarks.emplace_back((i % 2 ? 5.0 : 11.0) * std::cos(a),
+                             (i % 2 ? 5.0 : 11.0) * std::sin(a));
+    }
+  }
+  FeatureSet observe(const Pose2& pose, Rng& rng, double sigma_r, double sigma_b, double reported_r,
+                     double reported_b) const {
+    FeatureSet set;
+    for (size_t i = 0; i < landmarks.size(); ++i) {
+      const Eigen::Vector2d d = landmarks[i] - pose.head<2>();
+      const double bearing = wrapAngle(std::atan2(d.y(), d.x()) - pose.z());
+      if (d.norm() > 8.0 || std::fabs(bearing) > M_PI / 2) continue;
+      PointFeature f;
+      f.range = d.norm() + sampleGaussian(rng, sigma_r);
+      f.bearing = wrapAngle(bearing + sampleGaussian(rng, sigma_b));
+      f.covariance << reported_r * reported_r, 0.0, 0.0, reported_b * reported_b;
+      f.id = static_cast<int>(i);
+      set.points.push_back(f);
+    }
+    return set;
+  }
+};
+
+struct RunResult {
+  double ate = 0.0;       // RMSE of the estimate's position over the run, unaligned
+  double odom_ate = 0.0;  // same for dead reckoning
+  long fallbacks = 0;
+  bool finite = true;
+};
+
+/// Drives 1.5 circles with noisy odometry; the filter is told `reported`
+/// sigmas.
+RunResult runCircle(const FilterOptions& options, unsigned seed, double reported_r,
+                    double reported_b) {
+  PointWorld world;
+  std::unique_ptr<SlamFilter> filter = createFilter(options);
+  Rng rng(seed);
+  Pose2 truth(8.0, 0.0, M_PI / 2), odom = truth;
+  filter->reset(truth);
+  RunResult result;
+  double sq = 0.0, odom_sq = 0.0;
+  const int steps = 450;
+  for (int k = 0; k < steps; ++k) {
+    const Pose2 delta(0.167, 0.0, 0.167 / 8.0);
+    truth = compose(truth, delta);
+    const Pose2 noisy(delta.x() + sampleGaussian(rng, 0.01), sampleGaussian(rng, 0.005),
+                      delta.z() + sampleGaussian(rng, 0.01));
+    odom = compose(odom, noisy);
+    MotionInput motion;
+    motion.delta = noisy;
+    filter->predict(motion);
+    const UpdateStats stats =
+        filter->update(world.observe(truth, rng, 0.05, 0.002, reported_r, reported_b));
+    result.fallbacks += stats.fallbacks;
+    const Pose2 estimate = filter->estimate().mean;
+    result.finite = result.finite && estimate.allFinite();
+    sq += (estimate.head<2>() - truth.head<2>()).squaredNorm();
+    odom_sq += (odom.head<2>() - truth.head<2>()).squaredNorm();
+  }
+  result.ate = std::sqrt(sq / steps);
+  result.odom_ate = std::sqrt(odom_sq / steps);
+  EXPECT_EQ(filter->stats().fallbacks, result.fallbacks);
+  return result;
+}
+
+FilterOptions circleOptions(const std::string& variant) {
+  FilterOptions options;
+  options.variant = variant;
+  options.particles = 30;
+  options.seed = 4;
+  options.use_lines = false;
+  options.resample_threshold = 0.75;
+  options.measurement.sigma_range_m = 1e-3;
+  options.measurement.sigma_bearing_rad = 1e-4;
+  options.motion.alpha1 = options.motion.alpha2 = 0.01;
+  options.motion.alpha3 = options.motion.alpha4 = 0.01;
+  options.motion.min_sigma_xy_m = 0.01;
+  options.motion.min_sigma_theta_rad = 0.01;
+  return options;
+}
+
+TEST(HinfFastSlam, ConvergesOnASimulatedLandmarkWorld) {
+  const RunResult r = runCircle(circleOptions("hinf_fastslam"), 21, 0.05, 0.002);
+  const RunResult f = runCircle(circleOptions("fastslam2"), 21, 0.05, 0.002);
+  EXPECT_TRUE(r.finite);
+  EXPECT_EQ(r.fallbacks, 0);
+  EXPECT_LT(r.ate, 0.4) << "odometry " << r.odom_ate << ", FastSLAM 2.0 " << f.ate;
+  EXPECT_LT(r.ate, 0.25 * r.odom_ate);
+}
+
+TEST(HinfFastSlam, StaysAccurateWhenTheMeasurementNoiseIsOverstated) {
+  // Told 0.5 m / 0.05 rad while the truth is 0.05 m / 0.002 rad.
+  const RunResult r = runCircle(circleOptions("hinf_fastslam"), 21, 0.5, 0.05);
+  const RunResult f = runCircle(circleOptions("fastslam2"), 21, 0.5, 0.05);
+  EXPECT_TRUE(r.finite);
+  EXPECT_LT(r.ate, 0.5) << "odometry " << r.odom_ate << ", FastSLAM 2.0 " << f.ate;
+  EXPECT_LT(r.ate, 0.3 * r.odom_ate);
+}
+
+TEST(HinfFastSlam, CountsFallbacksAndNeverPublishesNaN) {
+  FilterOptions options = circleOptions("hinf_fastslam");
+  options.hinf.gamma_landmark = 1e-9;  // 1 / gamma beyond any landmark's information
+  options.hinf.gamma_position = options.hinf.gamma_heading = 1e-9;
+  const RunResult r = runCircle(options, 5, 0.05, 0.002);
+  EXPECT_TRUE(r.finite);
+  EXPECT_GT(r.fallbacks, 0);
+  EXPECT_LT(r.ate, 0.5 * r.odom_ate);  // it is FastSLAM 2.0 then
+  options.hinf.gamma_landmark = options.hinf.gamma_position = INFINITY;
+  options.hinf.gamma_heading = INFINITY;
+  EXPECT_EQ(runCircle(options, 5, 0.05, 0.002).fallbacks, 0);
+}
+
+TEST(HinfFastSlam, InfiniteGammaWithMarginalWeightsIsFastSlam2) {
+  FilterOptions options = circleOptions("hinf_fastslam");
+  options.hinf.gamma_landmark = options.hinf.gamma_position = INFINITY;
+  options.hinf.gamma_heading = INFINITY;
+  options.hinf.weight = "marginal";
+  const RunResult hinf = runCircle(options, 9, 0.05, 0.002);
+  options.variant = "fastslam2";
+  const RunResult fastslam = runCircle(options, 9, 0.05, 0.002);
+  EXPECT_DOUBLE_EQ(hinf.ate, fastslam.ate);
+}
+
+}  // namespace
+}  // namespace core
+}  // namespace rbpf_slam
