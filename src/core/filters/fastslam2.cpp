@@ -307,6 +307,20 @@ FastSlam2::ParticleUpdate FastSlam2::updateParticle(Particle* particle,
   particle->log_weight += log_likelihood;
   if (!mapping_) {  // localization only: the map is a fixed prior
     result.associated = static_cast<int>(matched.size());
+    if (pointwise) {  // p(z | s) of eq. 36 without updating the landmarks
+      for (const auto& [k, index] : matched) {
+        const Landmark& lm = map[index];
+        const Prediction p = lm.type == LandmarkType::kLine
+                                 ? predictLine(particle->pose, lm.mean, observations[k].z.y())
+                                 : predictPoint(particle->pose, lm.mean);
+        Eigen::Matrix2d s_inv;
+        const double ll = logGaussian2(
+            innovation(observations[k].z, p.z),
+            p.h_landmark * lm.covariance * p.h_landmark.transpose() + observations[k].noise,
+            &s_inv);
+        if (std::isfinite(ll)) particle->log_weight += ll;
+      }
+    }
     return result;
   }
   if (matched.empty() && fresh.empty()) return result;
@@ -344,7 +358,7 @@ UpdateStats FastSlam2::update(const FeatureSet& features) {
     const Pose2 predicted = motion_model_->mean(p.pose, motion);
     const Eigen::Matrix3d motion_cov = motion_model_->covariance(p.pose, motion);
     results[i] = updateParticle(&p, predicted, motion_cov, observations);
-    results[i].removed = manageExistence(options_.existence, &p.map, p.pose, step_);
+    if (mapping_) results[i].removed = manageExistence(options_.existence, &p.map, p.pose, step_);
     stats.fallbacks += results[i].fallbacks;
   }
   stats_.fallbacks += stats.fallbacks;
