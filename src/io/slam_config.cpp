@@ -121,12 +121,56 @@ void readScanMatching(YamlSection section, core::ScanMatcherOptions* o) {
   section.finish();
 }
 
+void readSonar(YamlSection section, core::SonarExtractorOptions* o) {
+  // Ranges are checked by core::validate (one place for the limits).
+  section.read("min_range_m", &o->min_range_m);
+  section.read("max_range_m", &o->max_range_m);
+  section.read("max_range_margin_m", &o->max_range_margin_m);
+  section.read("cone_rad", &o->cone_rad);
+  section.read("sigma_range_m", &o->sigma_range_m);
+  section.read("reject_isolated", &o->reject_isolated);
+  section.read("isolated_jump_m", &o->isolated_jump_m);
+  section.read("window_distance_m", &o->window_distance_m);
+  section.read("window_time_s", &o->window_time_s);
+  section.read("max_echoes", &o->max_echoes);
+  section.read("extract_distance_m", &o->extract_distance_m);
+  section.read("extract_angle_rad", &o->extract_angle_rad);
+  section.read("extract_lines", &o->extract_lines);
+  section.read("hough_rho_step_m", &o->hough_rho_step_m);
+  section.read("hough_theta_step_rad", &o->hough_theta_step_rad);
+  section.read("min_line_echoes", &o->min_line_echoes);
+  section.read("min_line_length_m", &o->min_line_length_m);
+  section.read("line_inlier_m", &o->line_inlier_m);
+  section.read("cone_margin_rad", &o->cone_margin_rad);
+  section.read("line_max_incidence_rad", &o->line_max_incidence_rad);
+  section.read("max_line_sigma_rho_m", &o->max_line_sigma_rho_m);
+  section.read("max_line_sigma_theta_rad", &o->max_line_sigma_theta_rad);
+  section.read("line_sigma_rho_m", &o->line_sigma_rho_m);
+  section.read("line_sigma_theta_rad", &o->line_sigma_theta_rad);
+  section.read("extract_points", &o->extract_points);
+  section.read("point_cell_m", &o->point_cell_m);
+  section.read("min_point_echoes", &o->min_point_echoes);
+  section.read("min_point_baseline_m", &o->min_point_baseline_m);
+  section.read("point_inlier_m", &o->point_inlier_m);
+  section.read("max_point_sigma_m", &o->max_point_sigma_m);
+  section.read("max_contradiction_ratio", &o->max_contradiction_ratio);
+  section.read("point_sigma_range_m", &o->point_sigma_range_m);
+  section.read("point_sigma_bearing_rad", &o->point_sigma_bearing_rad);
+  section.finish();
+}
+
 void readRos(YamlSection& top, RosOptions* o) {
   top.read("map_frame", &o->map_frame);
   top.read("odom_frame", &o->odom_frame);
   top.read("base_frame", &o->base_frame);
   top.read("scan_topic", &o->scan_topic);
   top.read("features_topic", &o->features_topic);
+  top.read("sonar_topic", &o->sonar_topic);
+  top.read("sonar_cloud_topic", &o->sonar_cloud_topic);
+  top.read("sonar_source", &o->sonar_source, {"range", "cloud"});
+  top.read("sonar_frame_prefix", &o->sonar_frame_prefix);
+  top.read("sonar_cloud_fov", &o->sonar_cloud_fov, 1e-3, 3.0);
+  top.read("sonar_cloud_max_range", &o->sonar_cloud_max_range, 0.1, 100.0);
   top.read("transform_publish_period", &o->transform_publish_period, 0.0, 10.0);
   top.read("transform_tolerance", &o->transform_tolerance, 0.0, 10.0);
   top.read("tf_wait_timeout", &o->tf_wait_timeout, 0.0, 10.0);
@@ -153,7 +197,7 @@ void validateAs(const Options& options, const std::string& source) {
 SlamConfig parseSlamConfig(const YAML::Node& root, const std::string& source) {
   SlamConfig config;
   YamlSection top(root, source);
-  top.read("frontend", &config.frontend, {"laser", "features"});
+  top.read("frontend", &config.frontend, {"laser", "sonar", "features"});
   core::FilterOptions& f = config.filter;
   top.read("variant", &f.variant, core::availableVariants());
   top.read("particles", &f.particles, 1, 100000);
@@ -170,6 +214,7 @@ SlamConfig parseSlamConfig(const YAML::Node& root, const std::string& source) {
   readHinf(top.section("hinf"), &f.hinf);
   readLaser(top.section("laser_features"), &config.laser);
   readScanMatching(top.section("scan_matching"), &config.scan_matching);
+  readSonar(top.section("sonar_features"), &config.sonar);
   core::SessionOptions& s = config.session;
   top.read("linear_update", &s.linear_update_m, 0.0, 100.0);
   top.read("angular_update", &s.angular_update_rad, 0.0, 10.0);
@@ -187,6 +232,7 @@ SlamConfig parseSlamConfig(const YAML::Node& root, const std::string& source) {
   validateAs(config.session, source);
   validateAs(config.laser, source);
   validateAs(config.scan_matching, source);
+  validateAs(config.sonar, source);
   return config;
 }
 

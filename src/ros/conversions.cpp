@@ -105,6 +105,34 @@ bool toRangeScan(const sensor_msgs::LaserScan& msg, const core::Pose2& sensor_in
   return true;
 }
 
+bool toConeReading(const sensor_msgs::Range& msg, const core::Pose2& sensor_in_base,
+                   core::ConeReading* reading, std::string* error) {
+  if (!std::isfinite(msg.field_of_view) || msg.field_of_view <= 0.0f ||
+      msg.field_of_view >= static_cast<float>(M_PI)) {
+    *error = "field_of_view " + std::to_string(msg.field_of_view) + " is not in (0, pi)";
+    return false;
+  }
+  reading->stamp = msg.header.stamp.toSec();
+  reading->range = msg.range;
+  reading->min_range = std::isfinite(msg.min_range) ? msg.min_range : 0.0;
+  reading->max_range = std::isfinite(msg.max_range) && msg.max_range > 0.0f
+                           ? msg.max_range
+                           : std::numeric_limits<double>::infinity();
+  reading->field_of_view = msg.field_of_view;
+  reading->sensor_pose = sensor_in_base;
+  return true;
+}
+
+std::vector<Eigen::Vector2d> toBasePoints(const sensor_msgs::PointCloud& msg,
+                                          const core::Pose2& frame_in_base) {
+  std::vector<Eigen::Vector2d> points;
+  points.reserve(msg.points.size());
+  for (const auto& p : msg.points) {
+    points.push_back(core::transformPoint(frame_in_base, Eigen::Vector2d(p.x, p.y)));
+  }
+  return points;
+}
+
 core::FeatureSet toFeatureSet(const FeatureArray& msg, const core::Pose2& frame_in_base,
                               int* dropped) {
   core::FeatureSet set;

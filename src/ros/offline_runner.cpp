@@ -26,6 +26,8 @@ namespace rbpf_slam {
 namespace rosbridge {
 namespace {
 
+constexpr double kCloudAxisTolerance = 0.05;  // m: a cloud point lies on its transducer's axis
+
 std::string stripSlash(const std::string& s) {
   return !s.empty() && s[0] == '/' ? s.substr(1) : s;
 }
@@ -88,6 +90,23 @@ long loadTransforms(const rosbag::Bag& bag, tf2::BufferCore* buffer) {
   return skipped;
 }
 
+/// Transducer poses in the base frame from tf frames PREFIX0, PREFIX1, ... (until one is
+/// missing); empty when there is none.
+std::vector<core::Pose2> lookupTransducers(const tf2::BufferCore& tf, const std::string& base,
+                                           const std::string& prefix, const ros::Time& stamp) {
+  constexpr int kMaxTransducers = 64;
+  std::vector<core::Pose2> poses;
+  for (int i = 0; i < kMaxTransducers; ++i) {
+    try {
+      poses.push_back(
+          toPose2(tf.lookupTransform(base, prefix + std::to_string(i), stamp).transform));
+    } catch (const tf2::TransformException&) {
+      break;
+    }
+  }
+  return poses;
+}
+
 }  // namespace
 
 OfflineRunner::OfflineRunner(const io::SlamConfig& config, const OfflineOptions& options)
@@ -112,19 +131,25 @@ OfflineSummary OfflineRunner::run() {
   summary.skipped_transforms = loadTransforms(bag, &tf);
 
   const io::RosOptions& ros_options = config_.ros;
-  const bool use_scans = config_.frontend == "laser";
+  std::string sensor_topic;  // the raw sensor topic of the front end, if any
+  if (config_.frontend == "laser") sensor_topic = ros_options.scan_topic;
+  if (config_.frontend == "sonar") {
+    sensor_topic = ros_options.sonar_source == "cloud" ? ros_options.sonar_cloud_topic
+                                                       : ros_options.sonar_topic;
+  }
   std::vector<std::string> topics{"/" + stripSlash(ros_options.features_topic),
                                   stripSlash(ros_options.features_topic)};
-  if (use_scans) {
-    topics.push_back("/" + stripSlash(ros_options.scan_topic));
-    topics.push_back(stripSlash(ros_options.scan_topic));
+  if (!sensor_topic.empty()) {
+    topics.push_back("/" + stripSlash(sensor_topic));
+    topics.push_back(stripSlash(sensor_topic));
   }
   rosbag::View view(bag, rosbag::TopicQuery(topics));
   if (view.size() == 0) {
     throw std::runtime_error(options_.bag_path + ": no messages on " +
-                             (use_scans ? "'" + ros_options.scan_topic + "' or " : "") + "'" +
+                             (sensor_topic.empty() ? "" : "'" + sensor_topic + "' or ") + "'" +
                              ros_options.features_topic + "'");
   }
+  std::vector<core::Pose2> transducers;  // sonar_cloud: found in tf at the first cloud
   std::vector<double> update_ms;
   ProgressBar progress(options_.progress);
   for (const rosbag::MessageInstance& m : view) {
@@ -132,10 +157,18 @@ OfflineSummary OfflineRunner::run() {
     std::string frame;
     ros::Time stamp;
     sensor_msgs::LaserScan::ConstPtr scan;
+    sensor_msgs::Range::ConstPtr range;
+    sensor_msgs::PointCloud::ConstPtr cloud;
     FeatureArray::ConstPtr features;
     if ((scan = m.instantiate<sensor_msgs::LaserScan>())) {
       frame = scan->header.frame_id;
       stamp = scan->header.stamp;
+    } else if ((range = m.instantiate<sensor_msgs::Range>())) {
+      frame = range->header.frame_id;
+      stamp = range->header.stamp;
+    } else if ((cloud = m.instantiate<sensor_msgs::PointCloud>())) {
+      frame = cloud->header.frame_id;
+      stamp = cloud->header.stamp;
     } else if ((features = m.instantiate<FeatureArray>())) {
       frame = features->header.frame_id;
       stamp = features->header.stamp;
@@ -167,6 +200,31 @@ OfflineSummary OfflineRunner::run() {
         continue;
       }
       result = pipeline_.processScan(range_scan, odom_pose);
+    } else if (range) {
+      core::ConeReading reading;
+      std::string error;
+      if (!toConeReading(*range, sensor_in_base, &reading, &error)) {
+        ++summary.dropped_bad_message;
+        continue;
+      }
+      result = pipeline_.processSonar({reading}, odom_pose, stamp.toSec());
+    } else if (cloud) {
+      if (transducers.empty()) {
+        transducers = lookupTransducers(tf, ros_options.base_frame, ros_options.sonar_frame_prefix,
+                                        stamp);
+        if (transducers.empty()) {
+          throw std::runtime_error(options_.bag_path + ": " + ros_options.sonar_cloud_topic +
+                                   " needs the transducer poses, but tf has no frame " +
+                                   ros_options.sonar_frame_prefix + "0 under " +
+                                   ros_options.base_frame);
+        }
+      }
+      int unmatched = 0;
+      const std::vector<core::ConeReading> readings = core::coneReadingsFromCloud(
+          toBasePoints(*cloud, sensor_in_base), transducers, ros_options.sonar_cloud_fov, 0.0,
+          ros_options.sonar_cloud_max_range, stamp.toSec(), kCloudAxisTolerance, &unmatched);
+      summary.dropped_cloud_points += unmatched;
+      result = pipeline_.processSonar(readings, odom_pose, stamp.toSec());
     } else {
       int dropped = 0;
       result = pipeline_.processFeatures(toFeatureSet(*features, sensor_in_base, &dropped),
@@ -283,6 +341,15 @@ OfflineSummary OfflineRunner::writeOutputs(const OfflineSummary& in) const {
        << "  \"update_ms_max\": " << summary.update_ms_max << ",\n"
        << "  \"scans_matched\": " << pipeline_.scansMatched() << ",\n"
        << "  \"scans_unmatched\": " << pipeline_.scansUnmatched();
+  if (config_.frontend == "sonar") {
+    const core::SonarExtractorStats& sonar = pipeline_.sonarExtractor().stats();
+    json << ",\n  \"sonar_readings\": " << sonar.readings << ",\n  \"sonar_echoes\": " << sonar.echoes
+         << ",\n  \"sonar_no_echo\": " << sonar.no_echo << ",\n  \"sonar_too_close\": "
+         << sonar.too_close << ",\n  \"sonar_invalid\": " << sonar.invalid
+         << ",\n  \"sonar_extractions\": " << sonar.extractions << ",\n  \"sonar_lines\": "
+         << sonar.lines << ",\n  \"sonar_points\": " << sonar.points
+         << ",\n  \"dropped_cloud_points\": " << summary.dropped_cloud_points;
+  }
   if (summary.has_reference) {
     json << ",\n  \"ate_rmse_m\": " << summary.ate_rmse_m
          << ",\n  \"final_position_error_m\": " << summary.final_position_error_m;

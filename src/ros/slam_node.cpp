@@ -64,25 +64,18 @@ SlamNode::SlamNode(ros::NodeHandle nh, ros::NodeHandle private_nh)
       tf_buffer_(ros::Duration(kTfCacheS)),
       tf_listener_(tf_buffer_, nh) {
   const io::RosOptions& ros_options = config_.ros;
-  const uint32_t queue = static_cast<uint32_t>(ros_options.queue_size);
   if (config_.frontend == "laser") {
-    scan_subscriber_.subscribe(nh_, ros_options.scan_topic, queue);
-    scan_filter_ = std::make_unique<tf2_ros::MessageFilter<sensor_msgs::LaserScan>>(
-        scan_subscriber_, tf_buffer_, ros_options.odom_frame, queue, nh_);
-    scan_filter_->registerCallback(&SlamNode::scanCallback, this);
-    scan_filter_->registerFailureCallback(
-        [this](const sensor_msgs::LaserScan::ConstPtr& msg, tf2_ros::FilterFailureReason r) {
-          messageDropped(msg->header, r);
-        });
+    subscribeFiltered(ros_options.scan_topic, &scan_subscriber_, &scan_filter_,
+                      &SlamNode::scanCallback);
+  } else if (config_.frontend == "sonar" && ros_options.sonar_source == "cloud") {
+    subscribeFiltered(ros_options.sonar_cloud_topic, &sonar_cloud_subscriber_,
+                      &sonar_cloud_filter_, &SlamNode::sonarCloudCallback);
+  } else if (config_.frontend == "sonar") {
+    subscribeFiltered(ros_options.sonar_topic, &sonar_subscriber_, &sonar_filter_,
+                      &SlamNode::sonarCallback);
   }
-  features_subscriber_.subscribe(nh_, ros_options.features_topic, queue);
-  features_filter_ = std::make_unique<tf2_ros::MessageFilter<FeatureArray>>(
-      features_subscriber_, tf_buffer_, ros_options.odom_frame, queue, nh_);
-  features_filter_->registerCallback(&SlamNode::featuresCallback, this);
-  features_filter_->registerFailureCallback(
-      [this](const FeatureArray::ConstPtr& msg, tf2_ros::FilterFailureReason r) {
-        messageDropped(msg->header, r);
-      });
+  subscribeFiltered(ros_options.features_topic, &features_subscriber_, &features_filter_,
+                    &SlamNode::featuresCallback);
 
   pose_publisher_ = private_nh_.advertise<geometry_msgs::PoseWithCovarianceStamped>("pose", 10);
   trajectory_publisher_ = private_nh_.advertise<nav_msgs::Path>("trajectory", 1, true);
@@ -116,6 +109,88 @@ SlamNode::SlamNode(ros::NodeHandle nh, ros::NodeHandle private_nh)
                                      << config_.frontend << ", frames " << ros_options.map_frame
                                      << " -> " << ros_options.odom_frame << " -> "
                                      << ros_options.base_frame);
+}
+
+template <typename Message>
+void SlamNode::subscribeFiltered(
+    const std::string& topic, message_filters::Subscriber<Message>* subscriber,
+    std::unique_ptr<tf2_ros::MessageFilter<Message>>* filter,
+    void (SlamNode::*callback)(const boost::shared_ptr<const Message>&)) {
+  const uint32_t queue = static_cast<uint32_t>(config_.ros.queue_size);
+  subscriber->subscribe(nh_, topic, queue);
+  *filter = std::make_unique<tf2_ros::MessageFilter<Message>>(*subscriber, tf_buffer_,
+                                                               config_.ros.odom_frame, queue, nh_);
+  (*filter)->registerCallback(callback, this);
+  (*filter)->registerFailureCallback(
+      [this](const boost::shared_ptr<const Message>& msg, tf2_ros::FilterFailureReason r) {
+        messageDropped(msg->header, r);
+      });
+}
+
+void SlamNode::sonarCallback(const sensor_msgs::Range::ConstPtr& msg) {
+  if (!checkClock()) return;
+  if (paused_) {
+    ++frames_while_paused_;
+    return;
+  }
+  core::Pose2 odom_pose, sensor_in_base;
+  if (!lookupPoses(msg->header, &odom_pose, &sensor_in_base)) return;
+  core::ConeReading reading;
+  std::string error;
+  if (!toConeReading(*msg, sensor_in_base, &reading, &error)) {
+    warnThrottled("sonar " + msg->header.frame_id,
+                  "Dropping a sonar reading from " + msg->header.frame_id + ": " + error);
+    diagnostics_.recordDrop("bad sonar reading");
+    return;
+  }
+  if (!std::isfinite(reading.range)) {
+    warnThrottled("sonar range " + msg->header.frame_id,
+                  "Sonar " + msg->header.frame_id +
+                      " sent a non-finite range (counted as no echo)");
+  }
+  const auto t0 = std::chrono::steady_clock::now();
+  const core::FrameResult result =
+      pipeline_.processSonar({reading}, odom_pose, msg->header.stamp.toSec());
+  handleResult(result, msg->header.stamp, millisecondsSince(t0));
+}
+
+void SlamNode::sonarCloudCallback(const sensor_msgs::PointCloud::ConstPtr& msg) {
+  constexpr double kAxisTolerance = 0.05;  // m: a cloud point lies on its transducer's axis
+  constexpr int kMaxTransducers = 64;
+  if (!checkClock()) return;
+  if (paused_) {
+    ++frames_while_paused_;
+    return;
+  }
+  core::Pose2 odom_pose, frame_in_base;
+  if (!lookupPoses(msg->header, &odom_pose, &frame_in_base)) return;
+  const io::RosOptions& o = config_.ros;
+  for (int i = 0; sonar_transducers_.empty() && i < kMaxTransducers; ++i) {
+    const std::string frame = o.sonar_frame_prefix + std::to_string(i);
+    try {
+      const auto t = tf_buffer_.lookupTransform(o.base_frame, frame, ros::Time(0));
+      sonar_transducers_.push_back(toPose2(t.transform));
+    } catch (const tf2::TransformException&) {
+      if (i == 0) {
+        warnThrottled("sonar transducers", "sonar_cloud needs the transducer poses, but tf has "
+                                           "no frame " + frame + " under " + o.base_frame);
+        return;
+      }
+      break;
+    }
+  }
+  int unmatched = 0;
+  const std::vector<core::ConeReading> readings = core::coneReadingsFromCloud(
+      toBasePoints(*msg, frame_in_base), sonar_transducers_, o.sonar_cloud_fov, 0.0,
+      o.sonar_cloud_max_range, msg->header.stamp.toSec(), kAxisTolerance, &unmatched);
+  if (unmatched > 0) {
+    warnThrottled("sonar cloud points", std::to_string(unmatched) +
+                                            " sonar_cloud point(s) lie on no transducer's axis");
+  }
+  const auto t0 = std::chrono::steady_clock::now();
+  const core::FrameResult result =
+      pipeline_.processSonar(readings, odom_pose, msg->header.stamp.toSec());
+  handleResult(result, msg->header.stamp, millisecondsSince(t0));
 }
 
 void SlamNode::scanCallback(const sensor_msgs::LaserScan::ConstPtr& msg) {
@@ -402,6 +477,8 @@ void SlamNode::resetAll(const std::string& why) {
   pipeline_.reset();  // filter, history and the scan matcher's reference
   tf_buffer_.clear();
   if (scan_filter_) scan_filter_->clear();
+  if (sonar_filter_) sonar_filter_->clear();
+  if (sonar_cloud_filter_) sonar_cloud_filter_->clear();
   features_filter_->clear();
   last_transform_stamp_ = ros::Time();
   updates_ = 0;

@@ -64,6 +64,23 @@ TEST(SlamConfig, ErrorsNameTheKeyValueAndRange) {
             std::string::npos);
 }
 
+TEST(SlamConfig, SonarConfigSelectsTheSonarFrontEnd) {
+  const SlamConfig c =
+      loadSlamConfig(std::string(RBPF_SOURCE_DIR) + "/config/sonar_fastslam2.yaml");
+  EXPECT_EQ(c.frontend, "sonar");
+  EXPECT_EQ(c.ros.sonar_topic, "sonar");
+  EXPECT_EQ(c.ros.sonar_source, "range");
+  EXPECT_FALSE(c.scan_matching.enabled);
+  EXPECT_DOUBLE_EQ(c.sonar.line_sigma_rho_m, 0.2);
+  EXPECT_DOUBLE_EQ(c.sonar.point_sigma_range_m, 0.15);
+  EXPECT_EQ(c.pipeline().sonar.min_line_echoes, c.sonar.min_line_echoes);
+  EXPECT_NE(errorOf("sonar_features: {min_line_echoes: 1}").find("sonar_features.min_line_echoes"),
+            std::string::npos);
+  EXPECT_NE(errorOf("sonar_features: {min_line_echos: 6}").find("min_line_echos"),
+            std::string::npos);
+  EXPECT_NE(errorOf("sonar_source: both").find("not one of: range, cloud"), std::string::npos);
+}
+
 TEST(SlamConfig, OverridesApplyDottedKeys) {
   YAML::Node root = YAML::Load("particles: 5");
   applyOverride(&root, "association.gate_chi2=4.5");

@@ -22,6 +22,12 @@ struct RosOptions {
   std::string base_frame = "base_link";
   std::string scan_topic = "scan";
   std::string features_topic = "features";
+  std::string sonar_topic = "sonar";              // sensor_msgs/Range, one per transducer
+  std::string sonar_cloud_topic = "sonar_cloud";  // sensor_msgs/PointCloud (RosAria)
+  std::string sonar_source = "range";             // range | cloud: which of the two to use
+  std::string sonar_frame_prefix = "sonar_";      // cloud: transducers are PREFIX0, PREFIX1...
+  double sonar_cloud_fov = 0.5236;                // cloud: cone of each transducer, rad
+  double sonar_cloud_max_range = 5.0;             // cloud: the transducers' maximum range, m
   double transform_publish_period = 0.05;  // s; 0 disables tf publishing
   double transform_tolerance = 0.1;        // s, how far map -> odom is post-dated
   double tf_wait_timeout = 0.2;            // s the offline runner and node wait for tf
@@ -32,16 +38,19 @@ struct RosOptions {
 
 /// Everything a config file configures.
 struct SlamConfig {
-  std::string frontend = "laser";  // laser | features (range-bearing landmark data)
+  std::string frontend = "laser";  // laser | sonar | features (range-bearing landmark data)
   core::FilterOptions filter;
   core::SessionOptions session;
   core::LaserExtractorOptions laser;
   core::ScanMatcherOptions scan_matching;
+  core::SonarExtractorOptions sonar;
   RosOptions ros;
   std::string map_file;            // landmarks YAML to start from ("" = empty map)
   bool localization_only = false;  // true: track the robot on map_file, add no landmarks
 
-  core::PipelineOptions pipeline() const { return {filter, session, laser, scan_matching}; }
+  core::PipelineOptions pipeline() const {
+    return {filter, session, laser, scan_matching, sonar};
+  }
 };
 
 /// Parses a whole config tree; `source` names it in errors (a file name or "~ parameters").

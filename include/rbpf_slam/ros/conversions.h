@@ -7,9 +7,12 @@
 #include <nav_msgs/Odometry.h>
 #include <rbpf_slam/FeatureArray.h>
 #include <sensor_msgs/LaserScan.h>
+#include <sensor_msgs/PointCloud.h>
+#include <sensor_msgs/Range.h>
 #include <std_msgs/Header.h>
 
 #include <string>
+#include <vector>
 
 #include "rbpf_slam/core/features/feature_types.h"
 #include "rbpf_slam/core/geometry.h"
@@ -33,6 +36,16 @@ nav_msgs::Odometry toOdometryMsg(const core::Pose2& pose, const Eigen::Vector3d&
 /// when the header of the scan cannot describe a scan (zero or non-finite increment, ...).
 bool toRangeScan(const sensor_msgs::LaserScan& msg, const core::Pose2& sensor_in_base,
                  core::RangeScan* scan, std::string* error);
+
+/// One sonar (or infrared) reading with its transducer pose in the base frame. Returns false
+/// and sets error when the message cannot describe a cone (field_of_view not in (0, pi)); a
+/// NaN or infinite range is kept, the extractor counts it as no echo.
+bool toConeReading(const sensor_msgs::Range& msg, const core::Pose2& sensor_in_base,
+                   core::ConeReading* reading, std::string* error);
+
+/// The points of a cloud whose frame is at frame_in_base, in the base frame (z dropped).
+std::vector<Eigen::Vector2d> toBasePoints(const sensor_msgs::PointCloud& msg,
+                                          const core::Pose2& frame_in_base);
 
 /// Features from a message whose frame is at frame_in_base; features with non-finite values
 /// are dropped and counted in *dropped.

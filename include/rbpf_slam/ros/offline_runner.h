@@ -1,5 +1,5 @@
 #pragma once
-// Runs the SLAM pipeline over a bag file without a roscore: reads tf, scans and features
+// Runs the SLAM pipeline over a bag file without a roscore: reads tf, scans, sonar and features
 // straight from the bag, feeds the same SlamPipeline as rbpf_slam_node, writes the results.
 
 #include <string>
@@ -31,6 +31,7 @@ struct OfflineSummary {
   long dropped_no_tf = 0;
   long dropped_bad_message = 0;
   long skipped_transforms = 0;  // repeated or malformed tf in the bag
+  long dropped_cloud_points = 0;  // sonar_cloud points on no transducer's axis
   int landmarks = 0;
   int particles = 0;
   long fallbacks = 0;  // H-infinity steps that fell back to the EKF (since the last reset)

@@ -1,7 +1,7 @@
 #pragma once
-// Wires ROS topics and tf to one SlamPipeline: scans and features in, map -> odom, pose,
-// trajectory, landmarks and particles out; services ~reset, ~pause, ~resume, ~save_map,
-// ~load_map and the `initialpose` topic.
+// Wires ROS topics and tf to one SlamPipeline: scans, sonar readings and features in,
+// map -> odom, pose, trajectory, landmarks and particles out; services ~reset, ~pause, ~resume,
+// ~save_map, ~load_map and the `initialpose` topic.
 
 #include <geometry_msgs/PoseWithCovarianceStamped.h>
 #include <message_filters/subscriber.h>
@@ -9,6 +9,8 @@
 #include <rbpf_slam/MapFile.h>
 #include <ros/ros.h>
 #include <sensor_msgs/LaserScan.h>
+#include <sensor_msgs/PointCloud.h>
+#include <sensor_msgs/Range.h>
 #include <std_srvs/Empty.h>
 #include <tf2_ros/buffer.h>
 #include <tf2_ros/message_filter.h>
@@ -39,6 +41,14 @@ class SlamNode {
  private:
   void scanCallback(const sensor_msgs::LaserScan::ConstPtr& msg);
   void featuresCallback(const FeatureArray::ConstPtr& msg);
+  void sonarCallback(const sensor_msgs::Range::ConstPtr& msg);
+  void sonarCloudCallback(const sensor_msgs::PointCloud::ConstPtr& msg);
+  /// Subscribes to topic through a tf MessageFilter on the odometry frame.
+  template <typename Message>
+  void subscribeFiltered(const std::string& topic,
+                         message_filters::Subscriber<Message>* subscriber,
+                         std::unique_ptr<tf2_ros::MessageFilter<Message>>* filter,
+                         void (SlamNode::*callback)(const boost::shared_ptr<const Message>&));
   void messageDropped(const std_msgs::Header& header, tf2_ros::FilterFailureReason reason);
   /// The odometry pose of the base and the pose of the message frame in the base frame at
   /// the header's stamp; false (with a throttled warning) if tf cannot give them.
@@ -75,6 +85,11 @@ class SlamNode {
   std::unique_ptr<tf2_ros::MessageFilter<sensor_msgs::LaserScan>> scan_filter_;
   message_filters::Subscriber<FeatureArray> features_subscriber_;
   std::unique_ptr<tf2_ros::MessageFilter<FeatureArray>> features_filter_;
+  message_filters::Subscriber<sensor_msgs::Range> sonar_subscriber_;
+  std::unique_ptr<tf2_ros::MessageFilter<sensor_msgs::Range>> sonar_filter_;
+  message_filters::Subscriber<sensor_msgs::PointCloud> sonar_cloud_subscriber_;
+  std::unique_ptr<tf2_ros::MessageFilter<sensor_msgs::PointCloud>> sonar_cloud_filter_;
+  std::vector<core::Pose2> sonar_transducers_;  // sonar_cloud: from tf, found once
 
   ros::Publisher pose_publisher_;
   ros::Publisher trajectory_publisher_;

@@ -6,11 +6,13 @@ namespace core {
 SlamPipeline::SlamPipeline(const PipelineOptions& options)
     : extractor_(options.laser),
       matcher_(options.scan_matching),
+      sonar_extractor_(options.sonar),
       session_(createFilter(options.filter), options.session) {}
 
 void SlamPipeline::reset() {
   session_.reset();
   reference_points_.clear();
+  sonar_extractor_.reset();
   last_features_ = FeatureSet();
 }
 
@@ -48,6 +50,20 @@ FrameResult SlamPipeline::processScan(const RangeScan& scan, const Pose2& odom_p
     reference_odom_pose_ = odom_pose;
   }
   return result;
+}
+
+FrameResult SlamPipeline::processSonar(const std::vector<ConeReading>& readings,
+                                       const Pose2& odom_pose, double stamp) {
+  sonar_extractor_.addReadings(readings, odom_pose, stamp);
+  if (session_.trajectory().empty()) {
+    // The first frame anchors the map; the window has nothing to extract from yet.
+    last_features_ = FeatureSet();
+    last_features_.stamp = stamp;
+    return session_.process(stamp, odom_pose, last_features_);
+  }
+  if (!sonar_extractor_.extractionDue(odom_pose)) return FrameResult::kSkippedNoMotion;
+  last_features_ = sonar_extractor_.extract(odom_pose, stamp);
+  return session_.process(stamp, odom_pose, last_features_);
 }
 
 FrameResult SlamPipeline::processFeatures(const FeatureSet& features, const Pose2& odom_pose) {

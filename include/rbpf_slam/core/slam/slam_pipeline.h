@@ -1,12 +1,13 @@
 #pragma once
 // The whole per-frame path from raw sensor data to a filter update: feature extraction
-// (laser) then the session. rbpf_slam_node and offline_slam both call exactly this.
+// (laser scans, or sonar echoes accumulated over a window of motion) then the session. rbpf_slam_node and offline_slam both call exactly this.
 
 #include <memory>
 #include <string>
 
 #include "rbpf_slam/core/features/laser_line_extractor.h"
 #include "rbpf_slam/core/features/scan_matcher.h"
+#include "rbpf_slam/core/features/sonar_feature_extractor.h"
 #include "rbpf_slam/core/filters/filter_options.h"
 #include "rbpf_slam/core/slam/slam_session.h"
 
@@ -18,6 +19,7 @@ struct PipelineOptions {
   SessionOptions session;
   LaserExtractorOptions laser;
   ScanMatcherOptions scan_matching;
+  SonarExtractorOptions sonar;
 };
 
 /// Extraction plus filtering for one robot.
@@ -27,13 +29,19 @@ class SlamPipeline {
 
   /// A laser scan taken with the robot at odom_pose (odom frame).
   FrameResult processScan(const RangeScan& scan, const Pose2& odom_pose);
-  /// Features already extracted (sonar node, landmark sensors), in the base frame.
+  /// Sonar (or other cone sensor) readings taken at stamp with the robot at odom_pose: they
+  /// join the echo window; the filter is updated with the window's lines and points once the
+  /// robot moved enough since the last extraction (else kSkippedNoMotion).
+  FrameResult processSonar(const std::vector<ConeReading>& readings, const Pose2& odom_pose,
+                           double stamp);
+  /// Features already extracted (feature nodes, landmark sensors), in the base frame.
   FrameResult processFeatures(const FeatureSet& features, const Pose2& odom_pose);
 
   const FeatureSet& lastFeatures() const { return last_features_; }
   SlamSession& session() { return session_; }
   const SlamSession& session() const { return session_; }
   const LaserLineExtractor& laserExtractor() const { return extractor_; }
+  const SonarFeatureExtractor& sonarExtractor() const { return sonar_extractor_; }
   /// Scans whose laser-corrected increment was used / fell back to odometry.
   long scansMatched() const { return scans_matched_; }
   long scansUnmatched() const { return scans_unmatched_; }
@@ -45,6 +53,7 @@ class SlamPipeline {
  private:
   LaserLineExtractor extractor_;
   ScanMatcher matcher_;
+  SonarFeatureExtractor sonar_extractor_;
   SlamSession session_;
   FeatureSet last_features_;
   std::vector<Eigen::Vector2d> reference_points_;  // last scan the filter used, base frame
