@@ -71,8 +71,8 @@ TEST(SlamConfig, SonarConfigSelectsTheSonarFrontEnd) {
   EXPECT_EQ(c.ros.sonar_topic, "sonar");
   EXPECT_EQ(c.ros.sonar_source, "range");
   EXPECT_FALSE(c.scan_matching.enabled);
-  EXPECT_DOUBLE_EQ(c.sonar.line_sigma_rho_m, 0.2);
   EXPECT_DOUBLE_EQ(c.sonar.point_sigma_range_m, 0.15);
+  EXPECT_DOUBLE_EQ(core::SonarExtractorOptions().line_sigma_rho_m, 0.2);  // the seed's
   EXPECT_EQ(c.pipeline().sonar.min_line_echoes, c.sonar.min_line_echoes);
   EXPECT_NE(errorOf("sonar_features: {min_line_echoes: 1}").find("sonar_features.min_line_echoes"),
             std::string::npos);
