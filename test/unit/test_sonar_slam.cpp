@@ -1,0 +1,107 @@
+// Sonar-only SLAM through SlamPipeline::processSonar with the shipped config/sonar_fastslam2.yaml
+// on simulated runs of worlds/test_small.yaml (8-sonar Pioneer front ring).
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "rbpf_slam/core/sim/simulator.h"
+#include "rbpf_slam/core/slam/slam_pipeline.h"
+#include "rbpf_slam/io/evaluation.h"
+#include "rbpf_slam/io/slam_config.h"
+#include "rbpf_slam/io/world_yaml.h"
+
+namespace rbpf_slam {
+namespace {
+
+struct SonarRun {
+  double rms_error_m = 0.0;           // ATE of the estimate (rigidly aligned to the truth)
+  double odometry_rms_error_m = 0.0;  // ATE of odometry at the same frames
+  long updates = 0;
+  int line_landmarks = 0;
+};
+
+SonarRun runSonar(std::uint64_t seed, const std::vector<std::string>& overrides) {
+  const std::string root = RBPF_SOURCE_DIR;
+  std::vector<std::string> all = overrides;
+  all.push_back("seed=" + std::to_string(seed));
+  const io::SlamConfig config = io::loadSlamConfig(root + "/config/sonar_fastslam2.yaml", all);
+  core::SlamPipeline pipeline(config.pipeline());
+  core::sim::SimulatorOptions options;
+  options.seed = seed;
+  core::sim::Simulator simulator(io::loadWorld(root + "/worlds/test_small.yaml"), options);
+
+  std::vector<io::StampedPose> truth, odometry;
+  core::sim::SimEvent event;
+  while (simulator.next(&event)) {
+    if (event.type != core::sim::SimEventType::kSonar) continue;
+    // One reading at a time, as sensor_msgs/Range messages arrive.
+    bool updated = false;
+    for (const auto& t : event.cones) {
+      const core::FrameResult frame =
+          pipeline.processSonar({t.reading}, event.odom_pose, event.stamp + 1.0);
+      updated |= frame == core::FrameResult::kUpdated || frame == core::FrameResult::kFirstFrame;
+    }
+    if (!updated) continue;
+    truth.push_back({event.stamp + 1.0, event.true_pose});
+    odometry.push_back({event.stamp + 1.0, event.odom_pose});
+  }
+  SonarRun run;
+  const auto& trajectory = pipeline.session().trajectory();
+  EXPECT_EQ(trajectory.size(), truth.size());
+  if (trajectory.empty() || trajectory.size() != truth.size()) return run;
+  std::vector<io::StampedPose> estimate;
+  for (const auto& p : trajectory) estimate.push_back({p.stamp, p.pose});
+  run.rms_error_m = io::evaluateTrajectory(estimate, truth, io::EvaluationOptions()).ate_rmse_m;
+  run.odometry_rms_error_m =
+      io::evaluateTrajectory(odometry, truth, io::EvaluationOptions()).ate_rmse_m;
+  run.updates = static_cast<long>(truth.size());
+  for (const auto& l : pipeline.session().filter().landmarks()) {
+    run.line_landmarks += l.type == core::LandmarkType::kLine ? 1 : 0;
+  }
+  return run;
+}
+
+TEST(SonarSlam, ShippedConfigMapsTheWallsAndStaysNearTheTruth) {
+  for (std::uint64_t seed : {1u, 2u}) {
+    const SonarRun r = runSonar(seed, {});
+    SCOPED_TRACE(::testing::Message() << "seed " << seed << ": ATE " << r.rms_error_m
+                                      << " m, odometry " << r.odometry_rms_error_m << " m");
+    EXPECT_GT(r.updates, 100);
+    EXPECT_GE(r.line_landmarks, 5);  // four outer walls, the free wall, the box
+    EXPECT_LT(r.rms_error_m, 0.3);   // issue 4's bound on the simulated sonar worlds
+    EXPECT_LT(r.rms_error_m, 1.2 * r.odometry_rms_error_m);
+  }
+}
+
+TEST(SonarSlam, WithPointLandmarksTheErrorStaysBounded) {
+  for (std::uint64_t seed : {1u, 2u}) {
+    const SonarRun r =
+        runSonar(seed, {"use_points=true", "sonar_features.max_point_sigma_m=0.03"});
+    SCOPED_TRACE(::testing::Message() << "seed " << seed << ": ATE " << r.rms_error_m
+                                      << " m, odometry " << r.odometry_rms_error_m << " m");
+    EXPECT_LT(r.rms_error_m, 0.3);
+  }
+}
+
+TEST(SonarSlam, BadReadingsAreSkippedNotFatal) {
+  const io::SlamConfig config =
+      io::loadSlamConfig(std::string(RBPF_SOURCE_DIR) + "/config/sonar_fastslam2.yaml");
+  core::SlamPipeline pipeline(config.pipeline());
+  core::ConeReading bad;
+  bad.range = std::numeric_limits<double>::quiet_NaN();
+  bad.field_of_view = 0.5;
+  EXPECT_EQ(pipeline.processSonar({bad}, core::Pose2::Zero(), 1.0), core::FrameResult::kFirstFrame);
+  EXPECT_EQ(pipeline.processSonar({}, core::Pose2(0.5, 0, 0), 2.0), core::FrameResult::kUpdated);
+  EXPECT_EQ(pipeline.sonarExtractor().stats().invalid, 1);
+  EXPECT_EQ(pipeline.processSonar({bad}, core::Pose2(0.6, 0, 0), 3.0),
+            core::FrameResult::kSkippedNoMotion);
+  pipeline.reset();
+  EXPECT_EQ(pipeline.sonarExtractor().stats().readings, 0);
+}
+
+}  // namespace
+}  // namespace rbpf_slam
