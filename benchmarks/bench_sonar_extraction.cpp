@@ -2,8 +2,8 @@
 // Chung (worlds/lee_sonar_room.yaml) with a 16-sonar ring firing at 25 Hz while the robot
 // drives at 0.3 m/s. Reports the time per ring update (adding the ring to the window, plus the
 // extraction whenever it is due, as the pipeline does) and features per second, and the time
-// of one extraction over the busiest window of the run. Budget (issue 4): a ring update under 2 ms, i.e. 5% of
-// one core at 25 Hz. Not a pass/fail test: ./scripts/bench.sh runs it.
+// of one extraction over the busiest window of the run. Budget (issue 4): a ring update under 2 ms,
+// i.e. 5% of one core at 25 Hz. Not a pass/fail test: ./scripts/bench.sh runs it.
 
 #include <benchmark/benchmark.h>
 
@@ -30,8 +30,8 @@ struct Ring {
 /// Two minutes of a 16-sonar ring at 25 Hz in the Lee-Kim-Chung rooms.
 const std::vector<Ring>& rings() {
   static const std::vector<Ring> recorded = [] {
-    sim::World world = rbpf_slam::io::loadWorld(std::string(RBPF_SOURCE_DIR) +
-                                                "/worlds/lee_sonar_room.yaml");
+    sim::World world =
+        rbpf_slam::io::loadWorld(std::string(RBPF_SOURCE_DIR) + "/worlds/lee_sonar_room.yaml");
     world.robot.speed_mps = 0.3;
     world.robot.max_turn_rate_deg_s = 60.0;
     world.robot.control_rate_hz = 25.0;

@@ -343,11 +343,14 @@ OfflineSummary OfflineRunner::writeOutputs(const OfflineSummary& in) const {
        << "  \"scans_unmatched\": " << pipeline_.scansUnmatched();
   if (config_.frontend == "sonar") {
     const core::SonarExtractorStats& sonar = pipeline_.sonarExtractor().stats();
-    json << ",\n  \"sonar_readings\": " << sonar.readings << ",\n  \"sonar_echoes\": " << sonar.echoes
-         << ",\n  \"sonar_no_echo\": " << sonar.no_echo << ",\n  \"sonar_too_close\": "
-         << sonar.too_close << ",\n  \"sonar_invalid\": " << sonar.invalid
-         << ",\n  \"sonar_extractions\": " << sonar.extractions << ",\n  \"sonar_lines\": "
-         << sonar.lines << ",\n  \"sonar_points\": " << sonar.points
+    json << ",\n  \"sonar_readings\": " << sonar.readings
+         << ",\n  \"sonar_echoes\": " << sonar.echoes
+         << ",\n  \"sonar_no_echo\": " << sonar.no_echo
+         << ",\n  \"sonar_too_close\": " << sonar.too_close
+         << ",\n  \"sonar_invalid\": " << sonar.invalid
+         << ",\n  \"sonar_extractions\": " << sonar.extractions
+         << ",\n  \"sonar_lines\": " << sonar.lines
+         << ",\n  \"sonar_points\": " << sonar.points
          << ",\n  \"dropped_cloud_points\": " << summary.dropped_cloud_points;
   }
   if (summary.has_reference) {

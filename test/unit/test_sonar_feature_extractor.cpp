@@ -91,7 +91,8 @@ TEST(SonarFeatureExtractor, WindowKeepsOnlyRecentTravel) {
   o.window_distance_m = 1.0;
   SonarFeatureExtractor extractor(o);
   const Pose2 mount(0.0, 0.2, M_PI_2);
-  for (int i = 0; i <= 30; ++i) extractor.addReadings({reading(1.0, mount)}, Pose2(0.1 * i, 0, 0), i);
+  for (int i = 0; i <= 30; ++i)
+    extractor.addReadings({reading(1.0, mount)}, Pose2(0.1 * i, 0, 0), i);
   // Travel 3 m; the window spans 1 m of it: 11 readings (0.1 m apart, both ends included).
   EXPECT_EQ(extractor.echoes().size(), 11u);
   EXPECT_TRUE(extractor.extractionDue(Pose2(3.0, 0, 0)));  // never extracted
@@ -161,10 +162,10 @@ TEST(SonarFeatureExtractor, PostPassedByIsTriangulated) {
 TEST(SonarFeatureExtractor, CloudPointsGoToTheTransducerWhoseAxisTheyLieOn) {
   const std::vector<Pose2> ring = {Pose2(0.1, 0.1, M_PI_2), Pose2(0.15, 0.0, 0.0)};
   int unmatched = -1;
-  const std::vector<ConeReading> r = coneReadingsFromCloud(
-      {Eigen::Vector2d(1.15, 0.0), Eigen::Vector2d(0.1, 2.1), Eigen::Vector2d(-3, -3),
-       Eigen::Vector2d(NAN, 0)},
-      ring, 0.5, 0.1, 5.0, 7.0, 0.05, &unmatched);
+  const std::vector<ConeReading> r =
+      coneReadingsFromCloud({Eigen::Vector2d(1.15, 0.0), Eigen::Vector2d(0.1, 2.1),
+                             Eigen::Vector2d(-3, -3), Eigen::Vector2d(NAN, 0)},
+                            ring, 0.5, 0.1, 5.0, 7.0, 0.05, &unmatched);
   ASSERT_EQ(r.size(), 2u);
   EXPECT_EQ(unmatched, 2);
   EXPECT_NEAR(r[0].range, 1.0, 1e-9);
@@ -261,8 +262,10 @@ Score runWorld(const std::string& world_file, std::uint64_t seed) {
     for (const LineFeature& line : f.lines) {
       ++score.lines;
       const int wall = matchLine(truth, event.true_pose, line);
-      if (wall < 0) ++score.false_lines;
-      else score.walls_seen.insert(wall);
+      if (wall < 0)
+        ++score.false_lines;
+      else
+        score.walls_seen.insert(wall);
     }
     for (const PointFeature& point : f.points) {
       ++score.points;
@@ -273,10 +276,10 @@ Score runWorld(const std::string& world_file, std::uint64_t seed) {
 }
 
 void expectAccurate(const Score& s, int min_lines, int min_points, int min_walls) {
-  SCOPED_TRACE(::testing::Message() << s.lines << " lines (" << s.false_lines << " false), "
-                                    << s.points << " points (" << s.false_points << " false), "
-                                    << s.walls_seen.size() << " walls seen, " << s.extractions
-                                    << " extractions");
+  SCOPED_TRACE(::testing::Message()
+               << s.lines << " lines (" << s.false_lines << " false), " << s.points << " points ("
+               << s.false_points << " false), " << s.walls_seen.size() << " walls seen, "
+               << s.extractions << " extractions");
   EXPECT_GE(s.lines, min_lines);
   EXPECT_GE(s.points, min_points);
   EXPECT_GE(static_cast<int>(s.walls_seen.size()), min_walls);

@@ -79,8 +79,7 @@ TEST(SonarSlam, ShippedConfigMapsTheWallsAndStaysNearTheTruth) {
 
 TEST(SonarSlam, WithPointLandmarksTheErrorStaysBounded) {
   for (std::uint64_t seed : {1u, 2u}) {
-    const SonarRun r =
-        runSonar(seed, {"use_points=true", "sonar_features.max_point_sigma_m=0.03"});
+    const SonarRun r = runSonar(seed, {"use_points=true", "sonar_features.max_point_sigma_m=0.03"});
     SCOPED_TRACE(::testing::Message() << "seed " << seed << ": ATE " << r.rms_error_m
                                       << " m, odometry " << r.odometry_rms_error_m << " m");
     EXPECT_LT(r.rms_error_m, 0.3);

@@ -140,10 +140,9 @@ int SonarFeatureExtractor::addReadings(const std::vector<ConeReading>& readings,
 }
 
 void SonarFeatureExtractor::prune(double stamp) {
-  while (!echoes_.empty() &&
-         (travel_ - echoes_.front().travel > options_.window_distance_m ||
-          stamp - echoes_.front().stamp > options_.window_time_s ||
-          static_cast<int>(echoes_.size()) > options_.max_echoes)) {
+  while (!echoes_.empty() && (travel_ - echoes_.front().travel > options_.window_distance_m ||
+                              stamp - echoes_.front().stamp > options_.window_time_s ||
+                              static_cast<int>(echoes_.size()) > options_.max_echoes)) {
     echoes_.pop_front();
   }
 }
@@ -188,8 +187,7 @@ FeatureSet SonarFeatureExtractor::extract(const Pose2& odom_pose, double stamp) 
   for (int i = 0; i < n; ++i) {
     const SonarEcho& e = echoes_[i];
     const bool has_neighbour = previous[i] >= 0 || next[i] >= 0;
-    if (options_.reject_isolated && has_neighbour && unlike(i, previous[i]) &&
-        unlike(i, next[i])) {
+    if (options_.reject_isolated && has_neighbour && unlike(i, previous[i]) && unlike(i, next[i])) {
       ++isolated;
       continue;
     }

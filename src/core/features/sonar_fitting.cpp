@@ -216,7 +216,8 @@ int lineContradictions(const SonarExtractorOptions& o, const std::vector<LocalEc
     const double along = e.sensor.dot(tangent);
     if (along < lo || along > hi) continue;
     const double distance = fit.rho - e.sensor.dot(normal);
-    if (distance > 0.0 && e.range > distance + std::max(3.0 * o.line_inlier_m, 3.0 * o.sigma_range_m)) {
+    if (distance > 0.0 &&
+        e.range > distance + std::max(3.0 * o.line_inlier_m, 3.0 * o.sigma_range_m)) {
       ++count;
     }
   }
@@ -242,7 +243,8 @@ bool lineFeature(const SonarExtractorOptions& o, const std::vector<LocalEcho>& e
   line->start = fit.rho * normal + lo * tangent;
   line->end = fit.rho * normal + hi * tangent;
   line->covariance = fit.covariance;
-  line->covariance(0, 0) = std::max(line->covariance(0, 0), o.line_sigma_rho_m * o.line_sigma_rho_m);
+  line->covariance(0, 0) =
+      std::max(line->covariance(0, 0), o.line_sigma_rho_m * o.line_sigma_rho_m);
   line->covariance(1, 1) =
       std::max(line->covariance(1, 1), o.line_sigma_theta_rad * o.line_sigma_theta_rad);
   line->rho = fit.rho;
@@ -321,8 +323,7 @@ double sensorBaseline(const std::vector<LocalEcho>& echoes, const std::vector<in
   double baseline = 0.0;
   for (size_t a = 0; a < inliers.size(); ++a) {
     for (size_t b = a + 1; b < inliers.size(); ++b) {
-      baseline =
-          std::max(baseline, (echoes[inliers[a]].sensor - echoes[inliers[b]].sensor).norm());
+      baseline = std::max(baseline, (echoes[inliers[a]].sensor - echoes[inliers[b]].sensor).norm());
     }
   }
   return baseline;
@@ -425,10 +426,10 @@ bool fitPointAt(const SonarExtractorOptions& o, const std::vector<LocalEcho>& ec
   const int support = static_cast<int>(fit->inliers.size());
   if (support < o.min_point_echoes) return false;
   if (sensorBaseline(echoes, fit->inliers) < o.min_point_baseline_m) return false;
-  const double largest = Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(fit->covariance,
-                                                                        Eigen::EigenvaluesOnly)
-                             .eigenvalues()
-                             .maxCoeff();
+  const double largest =
+      Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(fit->covariance, Eigen::EigenvaluesOnly)
+          .eigenvalues()
+          .maxCoeff();
   if (!(std::sqrt(std::max(largest, 0.0)) <= o.max_point_sigma_m)) return false;
   if (contradictions(o, echoes, fit->position) > o.max_contradiction_ratio * support) return false;
   return !(o.extract_lines && lineExplains(o, echoes, *fit));

@@ -34,29 +34,29 @@ struct SonarExtractorOptions {
   // Lines (walls).
   bool extract_lines = true;
   double hough_rho_step_m = 0.05;
-  double hough_theta_step_rad = 0.0349;  // 2 deg
-  int min_line_echoes = 6;               // never a line from fewer echoes
-  double min_line_length_m = 0.6;        // reflection points must spread this far along it
-  double line_inlier_m = 0.08;           // |range - distance to the line| for an inlier
-  double cone_margin_rad = 0.05;         // normal may leave the cone by this much
-  double line_max_incidence_rad = 0.44;  // a wall also echoes along the cone's edge when its
-                                         // normal is up to this far past it (critical angle,
-                                         // 25 deg): point candidates such a wall explains are
-                                         // dropped; lines themselves need the normal inside
-  double max_line_sigma_rho_m = 0.08;    // reject fits worse determined than this ...
+  double hough_theta_step_rad = 0.0349;    // 2 deg
+  int min_line_echoes = 6;                 // never a line from fewer echoes
+  double min_line_length_m = 0.6;          // reflection points must spread this far along it
+  double line_inlier_m = 0.08;             // |range - distance to the line| for an inlier
+  double cone_margin_rad = 0.05;           // normal may leave the cone by this much
+  double line_max_incidence_rad = 0.44;    // a wall also echoes along the cone's edge when its
+                                           // normal is up to this far past it (critical angle,
+                                           // 25 deg): point candidates such a wall explains are
+                                           // dropped; lines themselves need the normal inside
+  double max_line_sigma_rho_m = 0.08;      // reject fits worse determined than this ...
   double max_line_sigma_theta_rad = 0.04;  // ... (too few poses, too short a baseline)
   double line_sigma_rho_m = 0.2;           // covariance floor (Lee, Kim, Chung 2010)
   double line_sigma_theta_rad = 0.0873;    // 5 deg
   // Points (corners, edges, posts).
   bool extract_points = true;
-  double point_cell_m = 0.1;        // vote grid resolution
-  int min_point_echoes = 4;         // never a point from fewer echoes
-  double min_point_baseline_m = 0.2;  // the supporting sensors must spread this far
-  double point_inlier_m = 0.06;     // |range - distance to the point| for an inlier
-  double max_point_sigma_m = 0.03;  // reject triangulations worse determined than this
-  double max_contradiction_ratio = 0.5;  // reject when this many echoes per supporting one
-                                         // passed through the point without seeing it
-  double point_sigma_range_m = 0.15;     // covariance floor (Lee, Kim, Chung 2010)
+  double point_cell_m = 0.1;                // vote grid resolution
+  int min_point_echoes = 4;                 // never a point from fewer echoes
+  double min_point_baseline_m = 0.2;        // the supporting sensors must spread this far
+  double point_inlier_m = 0.06;             // |range - distance to the point| for an inlier
+  double max_point_sigma_m = 0.03;          // reject triangulations worse determined than this
+  double max_contradiction_ratio = 0.5;     // reject when this many echoes per supporting one
+                                            // passed through the point without seeing it
+  double point_sigma_range_m = 0.15;        // covariance floor (Lee, Kim, Chung 2010)
   double point_sigma_bearing_rad = 0.0698;  // 4 deg
 };
 
@@ -66,11 +66,11 @@ void validate(const SonarExtractorOptions& options);
 /// Counters over the extractor's life (reset() clears them).
 struct SonarExtractorStats {
   long readings = 0;
-  long echoes = 0;             // accepted into the window
-  long no_echo = 0;            // at or beyond the maximum range
-  long too_close = 0;          // below the minimum range
-  long invalid = 0;            // NaN / inf range, bad cone or mount
-  long isolated = 0;           // rejected as cross-talk (last extraction)
+  long echoes = 0;     // accepted into the window
+  long no_echo = 0;    // at or beyond the maximum range
+  long too_close = 0;  // below the minimum range
+  long invalid = 0;    // NaN / inf range, bad cone or mount
+  long isolated = 0;   // rejected as cross-talk (last extraction)
   long extractions = 0;
   long lines = 0;
   long points = 0;

@@ -1,6 +1,7 @@
 #pragma once
 // The whole per-frame path from raw sensor data to a filter update: feature extraction
-// (laser scans, or sonar echoes accumulated over a window of motion) then the session. rbpf_slam_node and offline_slam both call exactly this.
+// (laser scans, or sonar echoes accumulated over a window of motion) then the session.
+// rbpf_slam_node and offline_slam both call exactly this.
 
 #include <memory>
 #include <string>
