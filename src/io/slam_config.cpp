@@ -133,6 +133,7 @@ void readSonar(YamlSection section, core::SonarExtractorOptions* o) {
   section.read("window_distance_m", &o->window_distance_m);
   section.read("window_time_s", &o->window_time_s);
   section.read("max_echoes", &o->max_echoes);
+  section.read("min_echo_spacing_m", &o->min_echo_spacing_m);
   section.read("extract_distance_m", &o->extract_distance_m);
   section.read("extract_angle_rad", &o->extract_angle_rad);
   section.read("extract_lines", &o->extract_lines);

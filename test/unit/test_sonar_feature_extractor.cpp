@@ -102,6 +102,20 @@ TEST(SonarFeatureExtractor, WindowKeepsOnlyRecentTravel) {
   EXPECT_TRUE(extractor.extractionDue(Pose2(3.0, 0, 0.35)));
 }
 
+TEST(SonarFeatureExtractor, SpacingSkipsRepeatedEchoesOfAStandingTransducer) {
+  SonarExtractorOptions o;
+  o.min_echo_spacing_m = 0.05;
+  SonarFeatureExtractor extractor(o);
+  const Pose2 mount(0.0, 0.2, M_PI_2);
+  for (int i = 0; i < 10; ++i) extractor.addReadings({reading(1.0, mount)}, Pose2::Zero(), i);
+  EXPECT_EQ(extractor.echoes().size(), 1u);
+  EXPECT_EQ(extractor.stats().decimated, 9);
+  extractor.addReadings({reading(1.0, mount)}, Pose2(0.06, 0, 0), 10);    // moved: kept
+  extractor.addReadings({reading(1.2, mount)}, Pose2(0.07, 0, 0), 11);    // new range: kept
+  extractor.addReadings({reading(1.2, mount)}, Pose2(0.07, 0, 0.1), 12);  // turned: kept
+  EXPECT_EQ(extractor.echoes().size(), 4u);
+}
+
 TEST(SonarFeatureExtractor, WallBesideAStraightDriveIsOneLine) {
   // A wall at y = 1.5 parallel to the drive; a side sonar at 90 deg, 2 cm noise-free.
   SonarFeatureExtractor extractor{SonarExtractorOptions()};

@@ -43,6 +43,7 @@ void validate(const SonarExtractorOptions& o) {
   requireRange("window_distance_m", o.window_distance_m, 0.0, 1000.0, true);
   requireRange("window_time_s", o.window_time_s, 0.0, 1e6, true);
   requireRange("max_echoes", o.max_echoes, 1, 100000);
+  requireRange("min_echo_spacing_m", o.min_echo_spacing_m, 0.0, 10.0);
   requireRange("extract_distance_m", o.extract_distance_m, 0.0, 1000.0);
   requireRange("extract_angle_rad", o.extract_angle_rad, 0.0, 10.0);
   requireRange("hough_rho_step_m", o.hough_rho_step_m, 0.005, 1.0);
@@ -74,6 +75,7 @@ SonarFeatureExtractor::SonarFeatureExtractor(const SonarExtractorOptions& option
 void SonarFeatureExtractor::reset() {
   echoes_.clear();
   mounts_.clear();
+  last_kept_.clear();
   has_pose_ = false;
   travel_ = 0.0;
   has_extracted_ = false;
@@ -88,6 +90,9 @@ int SonarFeatureExtractor::transducerIndex(const Pose2& mount) {
     }
   }
   mounts_.push_back(mount);
+  SonarEcho none;
+  none.range = -1.0;
+  last_kept_.push_back(none);
   return static_cast<int>(mounts_.size()) - 1;
 }
 
@@ -131,12 +136,26 @@ int SonarFeatureExtractor::addReadings(const std::vector<ConeReading>& readings,
     echo.stamp = stamp;
     echo.travel = travel_;
     echo.transducer = transducerIndex(reading.sensor_pose);
+    if (redundant(echo)) {
+      ++stats_.decimated;
+      continue;
+    }
+    last_kept_[echo.transducer] = echo;
     echoes_.push_back(echo);
     ++kept;
   }
   stats_.echoes += kept;
   prune(stamp);
   return kept;
+}
+
+bool SonarFeatureExtractor::redundant(const SonarEcho& echo) const {
+  constexpr double kSameHeadingRad = 0.035;
+  const double spacing = options_.min_echo_spacing_m;
+  const SonarEcho& last = last_kept_[echo.transducer];
+  return spacing > 0.0 && last.range >= 0.0 && echo.travel - last.travel < spacing &&
+         std::abs(echo.range - last.range) < spacing &&
+         std::abs(wrapAngle(echo.axis - last.axis)) < kSameHeadingRad;
 }
 
 void SonarFeatureExtractor::prune(double stamp) {

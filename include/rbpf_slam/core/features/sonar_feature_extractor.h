@@ -25,9 +25,12 @@ struct SonarExtractorOptions {
   bool reject_isolated = true;       // drop echoes unlike both neighbours of their transducer
   double isolated_jump_m = 0.3;      // ... (range jump plus distance moved) beyond this
   // The window of recent echoes, in the odometry frame.
-  double window_distance_m = 1.5;  // drop echoes taken more than this much travel ago
-  double window_time_s = 20.0;     // ... or longer ago than this
-  int max_echoes = 600;            // ... or beyond this many (oldest first)
+  double window_distance_m = 1.5;   // drop echoes taken more than this much travel ago
+  double window_time_s = 20.0;      // ... or longer ago than this
+  int max_echoes = 600;             // ... or beyond this many (oldest first)
+  double min_echo_spacing_m = 0.0;  // fast rings: skip an echo when its transducer's last kept
+                                    // one is closer than this in travel and range (and
+                                    // heading within 2 deg); 0: keep every echo
   // When to extract: after this much motion since the last extraction.
   double extract_distance_m = 0.3;
   double extract_angle_rad = 0.3;
@@ -71,6 +74,7 @@ struct SonarExtractorStats {
   long too_close = 0;  // below the minimum range
   long invalid = 0;    // NaN / inf range, bad cone or mount
   long isolated = 0;   // rejected as cross-talk (last extraction)
+  long decimated = 0;  // skipped by min_echo_spacing_m
   long extractions = 0;
   long lines = 0;
   long points = 0;
@@ -108,11 +112,14 @@ class SonarFeatureExtractor {
 
  private:
   int transducerIndex(const Pose2& mount);
+  /// True when echo adds little to its transducer's last kept echo (min_echo_spacing_m).
+  bool redundant(const SonarEcho& echo) const;
   void prune(double stamp);
 
   const SonarExtractorOptions options_;
   std::deque<SonarEcho> echoes_;
   std::vector<Pose2> mounts_;
+  std::vector<SonarEcho> last_kept_;  // per transducer (range < 0: none yet)
   bool has_pose_ = false;
   Pose2 last_pose_ = Pose2::Zero();
   double travel_ = 0.0;
