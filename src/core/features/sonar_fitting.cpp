@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <utility>
 
 namespace rbpf_slam {
 namespace core {
@@ -22,25 +23,39 @@ constexpr int kRefinements = 3;
 class Accumulator {
  public:
   explicit Accumulator(size_t cells) : votes_(cells, 0), blocked_(cells, 0) {}
+  /// Votes may only go down once peak() has been called.
   void add(size_t cell, int delta) { votes_[cell] += delta; }
   void block(size_t cell) { blocked_[cell] = 1; }
-  /// The unblocked cell with the most votes; false when none has at least min_votes.
-  bool peak(int min_votes, size_t* cell) const {
-    int best = min_votes - 1;
-    bool found = false;
-    for (size_t i = 0; i < votes_.size(); ++i) {
-      if (votes_[i] > best && !blocked_[i]) {
-        best = votes_[i];
-        *cell = i;
-        found = true;
+  /// The unblocked cell with the most votes (the lowest index among ties); false when none has
+  /// at least min_votes. A lazy max-heap: entries whose count went down are re-queued.
+  bool peak(int min_votes, size_t* cell) {
+    if (!heap_built_) {
+      for (size_t i = 0; i < votes_.size(); ++i) {
+        if (votes_[i] >= min_votes) heap_.emplace_back(votes_[i], -static_cast<long>(i));
       }
+      std::make_heap(heap_.begin(), heap_.end());
+      heap_built_ = true;
     }
-    return found;
+    while (!heap_.empty()) {
+      std::pop_heap(heap_.begin(), heap_.end());
+      const auto top = heap_.back();
+      heap_.pop_back();
+      const size_t index = static_cast<size_t>(-top.second);
+      if (blocked_[index] || votes_[index] < min_votes) continue;
+      heap_.emplace_back(votes_[index], top.second);
+      std::push_heap(heap_.begin(), heap_.end());
+      if (votes_[index] != top.first) continue;  // stale: re-queued with its current count
+      *cell = index;
+      return true;
+    }
+    return false;
   }
 
  private:
   std::vector<int32_t> votes_;
   std::vector<uint8_t> blocked_;
+  std::vector<std::pair<int32_t, long>> heap_;
+  bool heap_built_ = false;
 };
 
 // ---------------------------------------------------------------------------------------------
@@ -165,7 +180,7 @@ class LineVotes {
       }
     }
   }
-  bool peak(int min_votes, double* rho, double* theta, size_t* cell_index) const {
+  bool peak(int min_votes, double* rho, double* theta, size_t* cell_index) {
     if (!accumulator_.peak(min_votes, cell_index)) return false;
     *theta = wrapAngle(-M_PI + static_cast<double>(*cell_index / rho_bins_) *
                                    options_.hough_theta_step_rad);
@@ -356,7 +371,7 @@ class PointVotes {
       last = c;
     }
   }
-  bool peak(int min_votes, Eigen::Vector2d* center, size_t* cell_index) const {
+  bool peak(int min_votes, Eigen::Vector2d* center, size_t* cell_index) {
     if (!accumulator_.peak(min_votes, cell_index)) return false;
     const double x = (static_cast<double>(*cell_index % side_) + 0.5) * cell_m_ - half_size_m_;
     const double y = (static_cast<double>(*cell_index / side_) + 0.5) * cell_m_ - half_size_m_;
