@@ -104,6 +104,11 @@ TEST(SlamConfig, RobustConfigsLoadWithTheirSections) {
   EXPECT_EQ(laser.frontend, "laser");
   EXPECT_EQ(laser.filter.particles, 50);
   EXPECT_TRUE(laser.filter.robust.intermediate_path);
+  const SlamConfig sonar = loadSlamConfig(dir + "sonar_robust.yaml");
+  EXPECT_EQ(sonar.filter.variant, "robust_fastslam2");
+  EXPECT_EQ(sonar.frontend, "sonar");
+  EXPECT_EQ(sonar.sonar.min_line_echoes,
+            loadSlamConfig(dir + "sonar_fastslam2.yaml").sonar.min_line_echoes);
   EXPECT_NE(errorOf("robust: {ancestor_set: 3}").find("in robust: ancestor_set"),
             std::string::npos);
   EXPECT_NE(errorOf("tracker: {forget_after: 3}").find("in tracker: forget_after"),
