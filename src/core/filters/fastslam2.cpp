@@ -143,25 +143,59 @@ std::vector<Observation> FastSlam2::prepare(const FeatureSet& features, int* rej
 FastSlam2::Match FastSlam2::associate(const LandmarkMap& map, const Pose2& pose,
                                       const Eigen::Matrix3d& pose_cov,
                                       const Observation& observation) const {
+  // Only the landmarks the spatial index offers: a superset of those passing the pre-gate,
+  // in ascending index order, so the result is the scan's (associateByScan).
+  std::vector<int> candidates;
+  candidates.reserve(16);
+  if (observation.known_id >= 0) {
+    map.idCandidates(observation.known_id, &candidates);
+  } else if (observation.type == LandmarkType::kLine) {
+    LineQuery query;
+    query.line = lineFromObservation(pose, observation.z, nullptr);
+    query.start = transformPoint(pose, observation.start);
+    query.end = transformPoint(pose, observation.end);
+    query.max_angle_rad = kLinePregateAngleRad;
+    query.max_rho_m = kLinePregateRhoM;
+    query.overlap_margin_m = options_.association.line_overlap_margin_m;
+    map.lineCandidates(query, &candidates);
+  } else {
+    map.pointCandidates(pointFromObservation(pose, observation.z, nullptr),
+                        pointPregateRadius(observation), &candidates);
+  }
+  return associateAmong(map, pose, pose_cov, observation, &candidates);
+}
+
+FastSlam2::Match FastSlam2::associateByScan(const LandmarkMap& map, const Pose2& pose,
+                                            const Eigen::Matrix3d& pose_cov,
+                                            const Observation& observation) const {
+  return associateAmong(map, pose, pose_cov, observation, nullptr);
+}
+
+FastSlam2::Match FastSlam2::associateAmong(const LandmarkMap& map, const Pose2& pose,
+                                           const Eigen::Matrix3d& pose_cov,
+                                           const Observation& observation,
+                                           const std::vector<int>* candidates) const {
   Match best;
   const bool is_line = observation.type == LandmarkType::kLine;
   // The observation in the map frame at the current pose estimate, for a cheap pre-gate.
   const Eigen::Vector2d in_map = is_line ? lineFromObservation(pose, observation.z, nullptr)
                                          : pointFromObservation(pose, observation.z, nullptr);
-  const double point_pregate = 1.5 + 0.2 * observation.z.x();
+  const double point_pregate = pointPregateRadius(observation);
   Eigen::Vector2d seg_a, seg_b;
   if (is_line) {
     seg_a = transformPoint(pose, observation.start);
     seg_b = transformPoint(pose, observation.end);
   }
-  for (int i = 0; i < map.size(); ++i) {
+  const int count = candidates ? static_cast<int>(candidates->size()) : map.size();
+  for (int c = 0; c < count; ++c) {
+    const int i = candidates ? (*candidates)[c] : c;
     const Landmark& lm = map[i];
     if (lm.type != observation.type) continue;
     if (observation.known_id >= 0) {
       if (lm.id != observation.known_id) continue;
     } else if (is_line) {
       const Eigen::Vector2d d = lineDifference(in_map, lm.mean);
-      if (std::fabs(d.y()) > 0.5 || std::fabs(d.x()) > 1.5) continue;
+      if (std::fabs(d.y()) > kLinePregateAngleRad || std::fabs(d.x()) > kLinePregateRhoM) continue;
       // Collinear walls of different rooms share (rho, alpha): require the segments to meet.
       const double a = alongLine(lm.mean, seg_a), b = alongLine(lm.mean, seg_b);
       const double gap = std::max({std::min(a, b) - lm.extent_max, lm.extent_min - std::max(a, b), 0.0});

@@ -80,8 +80,21 @@ class FastSlam2 : public SlamFilter {
     Prediction prediction;
     Eigen::Matrix2d landmark_innovation_cov = Eigen::Matrix2d::Identity();
   };
+  /// Maximum-likelihood landmark for an observation among those the map's spatial index
+  /// offers near it.
   Match associate(const LandmarkMap& map, const Pose2& pose, const Eigen::Matrix3d& pose_cov,
                   const Observation& observation) const;
+  /// The same by a scan of every landmark, O(N): the reference associate() must equal.
+  Match associateByScan(const LandmarkMap& map, const Pose2& pose,
+                        const Eigen::Matrix3d& pose_cov, const Observation& observation) const;
+  /// Pre-gate (cheap geometric test) before the Mahalanobis distance: a line's normal angle
+  /// and rho within these of the observed line's, a point within this radius.
+  static constexpr double kLinePregateAngleRad = 0.5;
+  static constexpr double kLinePregateRhoM = 1.5;
+  static double pointPregateRadius(const Observation& o) { return 1.5 + 0.2 * o.z.x(); }
+  /// The maximum-likelihood match among `candidates` (every landmark when null).
+  Match associateAmong(const LandmarkMap& map, const Pose2& pose, const Eigen::Matrix3d& pose_cov,
+                       const Observation& observation, const std::vector<int>* candidates) const;
   void addLandmark(LandmarkMap* map, const Pose2& pose, const Observation& observation);
   /// Returns false when the correction fell back to the EKF.
   bool updateLandmark(LandmarkMap* map, const Match& match, const Pose2& pose,

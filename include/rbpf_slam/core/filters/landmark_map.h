@@ -1,11 +1,14 @@
 #pragma once
-// A particle's landmark map, shared copy-on-write: resampling copies one pointer, and a
-// write copies only the pointer table and the one landmark that changes.
+// A particle's landmark map, shared between particles as a persistent trie: resampling
+// copies one pointer, a write copies O(log N) nodes, and a persistent grid index finds the
+// landmarks near an observation without visiting the others.
 
 #include <Eigen/Core>
+#include <cmath>
 #include <memory>
 #include <vector>
 
+#include "rbpf_slam/core/filters/persistent_array.h"
 #include "rbpf_slam/core/filters/slam_filter.h"
 
 namespace rbpf_slam {
@@ -25,18 +28,61 @@ struct Landmark {
   int existence = 1;  // existence counter (landmark_existence.h)
 };
 
-/// The landmarks of one particle. Value semantics through shared, immutable landmarks.
+/// Pre-gate of a line observation against map lines (FastSlam2::associate): normals within
+/// max_angle_rad and rho within max_rho_m of each other (after flipping to the same normal
+/// half-plane), and the observed segment, projected on the map line, within
+/// overlap_margin_m of the map line's extent.
+struct LineQuery {
+  Eigen::Vector2d line = Eigen::Vector2d::Zero();  // observed (rho >= 0, alpha), map frame
+  Eigen::Vector2d start = Eigen::Vector2d::Zero();  // observed extent, map frame
+  Eigen::Vector2d end = Eigen::Vector2d::Zero();
+  double max_angle_rad = 0.5;
+  double max_rho_m = 1.5;
+  double overlap_margin_m = 1.0;
+};
+
+/// The landmarks of one particle, with value semantics: a copy is O(1) and shares every
+/// node (persistent trie); a write copies O(log N) nodes. A spatial index of the same kind
+/// (grid cell -> landmark indices) lets association visit only the landmarks near an
+/// observation instead of all N.
 class LandmarkMap {
  public:
-  int size() const { return static_cast<int>(landmarks_.size()); }
-  const Landmark& operator[](int i) const { return *landmarks_[i]; }
+  int size() const { return landmarks_.size(); }
+  const Landmark& operator[](int i) const { return landmarks_[i]; }
   /// Replaces landmark i; only this map sees the change.
-  void set(int i, const Landmark& landmark) { landmarks_[i] = std::make_shared<const Landmark>(landmark); }
-  void add(const Landmark& landmark) { landmarks_.push_back(std::make_shared<const Landmark>(landmark)); }
-  void remove(int i) { landmarks_.erase(landmarks_.begin() + i); }
+  void set(int i, const Landmark& landmark);
+  /// Appends a landmark with index size().
+  void add(const Landmark& landmark);
+
+  /// Ascending, distinct indices that include every point landmark within radius_m of
+  /// center (and possibly others: callers apply their exact test).
+  void pointCandidates(const Eigen::Vector2d& center, double radius_m, std::vector<int>* out) const;
+  /// Ascending, distinct indices that include every line landmark passing `query`'s pre-gate
+  /// (and possibly others).
+  void lineCandidates(const LineQuery& query, std::vector<int>* out) const;
+  /// Ascending indices of every landmark with this id.
+  void idCandidates(int id, std::vector<int>* out) const;
 
  private:
-  std::vector<std::shared_ptr<const Landmark>> landmarks_;
+  /// The grid cells a landmark is filed under: a point in one (x, y) cell; a line in the
+  /// cells of its normal-angle bin and rho cell that its extent crosses along the line.
+  struct CellBox {
+    int tag = 0, bin = 0, first_a = 0, last_a = 0, first_b = 0, last_b = 0;
+    bool operator==(const CellBox& o) const {
+      return tag == o.tag && bin == o.bin && first_a == o.first_a && last_a == o.last_a &&
+             first_b == o.first_b && last_b == o.last_b;
+    }
+  };
+  static CellBox cellsOf(const Landmark& landmark);
+  void file(const CellBox& box, int index, bool insert);
+  /// Looks up every cell of the box; false (nothing added) when the box has more cells than
+  /// the map has landmarks, so that callers scan the map instead.
+  bool collect(const CellBox& box, std::vector<int>* out) const;
+  void allIndices(std::vector<int>* out) const;
+
+  PersistentArray<Landmark> landmarks_;
+  PersistentMultimap cells_;  // cell key -> landmark indices
+  PersistentMultimap ids_;    // landmark id -> landmark indices
 };
 
 /// Writable access to a map that may be shared: copies the table on first write.

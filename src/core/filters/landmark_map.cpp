@@ -1,0 +1,246 @@
+#include "rbpf_slam/core/filters/landmark_map.h"
+
+#include <algorithm>
+#include <cstdint>
+
+namespace rbpf_slam {
+namespace core {
+namespace {
+
+// Grid of the spatial index. Points: square cells of the map frame. Lines: the normal
+// angle folded into [0, pi) (rho then signed) in kLineAngleBins bins; within a bin, cells
+// of the frame rotated to the bin's lines: rho across the line, position along it.
+constexpr double kPointCellM = 3.0;
+constexpr int kLineAngleBins = 8;
+constexpr double kLineAngleBinRad = M_PI / kLineAngleBins;
+constexpr double kLineRhoCellM = 3.0;
+constexpr double kLineAlongCellM = 8.0;
+// Queries are widened by these so that rounding never drops a landmark on a cell border.
+constexpr double kSlackM = 1e-3;
+constexpr double kSlackRad = 1e-4;
+
+constexpr int kPointTag = 1, kLineTag = 2;
+
+int cellOf(double v, double size, int limit) {
+  const double c = std::floor(v / size);
+  if (!(c > -limit)) return std::isnan(c) ? 0 : -limit;
+  return c < limit - 1 ? static_cast<int>(c) : limit - 1;
+}
+constexpr int kPointLimit = 1 << 30;  // cells per axis: 31 bits each in the key
+constexpr int kLineLimit = 1 << 28;   // 29 bits each
+
+uint64_t pointKey(int x, int y) {
+  return (uint64_t{kPointTag} << 62) | (static_cast<uint64_t>(x + kPointLimit) << 31) |
+         static_cast<uint64_t>(y + kPointLimit);
+}
+
+uint64_t lineKey(int bin, int rho, int along) {
+  return (uint64_t{kLineTag} << 62) | (static_cast<uint64_t>(bin) << 58) |
+         (static_cast<uint64_t>(rho + kLineLimit) << 29) | static_cast<uint64_t>(along + kLineLimit);
+}
+
+/// A line in the folded form: normal angle in [0, pi), rho signed, extent along the folded
+/// direction.
+struct FoldedLine {
+  double rho, angle, extent_min, extent_max;
+};
+
+FoldedLine fold(const Eigen::Vector2d& line, double extent_min, double extent_max) {
+  FoldedLine f{line.x(), wrapAngle(line.y()), std::min(extent_min, extent_max),
+               std::max(extent_min, extent_max)};
+  if (f.angle < 0.0) {
+    f = {-f.rho, f.angle + M_PI, -f.extent_max, -f.extent_min};
+  }
+  return f;
+}
+
+int angleBinOf(double folded_angle) {
+  return std::clamp(static_cast<int>(std::floor(folded_angle / kLineAngleBinRad)), 0,
+                    kLineAngleBins - 1);
+}
+
+/// Range of p . (-sin a, cos a), p's position along a line of normal angle a, for a in
+/// [a0, a1] (a1 - a0 < pi): |p| cos(a - b) with b = atan2(-p.x, p.y).
+void alongRange(const Eigen::Vector2d& p, double a0, double a1, double* lo, double* hi) {
+  const double v0 = -std::sin(a0) * p.x() + std::cos(a0) * p.y();
+  const double v1 = -std::sin(a1) * p.x() + std::cos(a1) * p.y();
+  *lo = std::min({*lo, v0, v1});
+  *hi = std::max({*hi, v0, v1});
+  const double r = p.norm(), b = std::atan2(-p.x(), p.y());
+  // Extremes inside the interval: the maximum at b + 2 pi n, the minimum at b + pi + 2 pi n.
+  const auto inside = [&](double at) {
+    const double shifted = at + 2.0 * M_PI * std::ceil((a0 - at) / (2.0 * M_PI));
+    return shifted <= a1;
+  };
+  if (inside(b)) *hi = std::max(*hi, r);
+  if (inside(b + M_PI)) *lo = std::min(*lo, -r);
+}
+
+}  // namespace
+
+LandmarkMap::CellBox LandmarkMap::cellsOf(const Landmark& landmark) {
+  CellBox box;
+  if (landmark.type == LandmarkType::kPoint) {
+    box.tag = kPointTag;
+    box.first_a = box.last_a = cellOf(landmark.mean.x(), kPointCellM, kPointLimit);
+    box.first_b = box.last_b = cellOf(landmark.mean.y(), kPointCellM, kPointLimit);
+    return box;
+  }
+  const FoldedLine f = fold(landmark.mean, landmark.extent_min, landmark.extent_max);
+  box.tag = kLineTag;
+  box.bin = angleBinOf(f.angle);
+  box.first_a = box.last_a = cellOf(f.rho, kLineRhoCellM, kLineLimit);
+  box.first_b = cellOf(f.extent_min, kLineAlongCellM, kLineLimit);
+  box.last_b = cellOf(f.extent_max, kLineAlongCellM, kLineLimit);
+  return box;
+}
+
+void LandmarkMap::file(const CellBox& box, int index, bool insert) {
+  for (int a = box.first_a; a <= box.last_a; ++a) {
+    for (int b = box.first_b; b <= box.last_b; ++b) {
+      const uint64_t key = box.tag == kPointTag ? pointKey(a, b) : lineKey(box.bin, a, b);
+      if (insert) {
+        cells_.insert(key, index);
+      } else {
+        cells_.erase(key, index);
+      }
+    }
+  }
+}
+
+void LandmarkMap::add(const Landmark& landmark) {
+  const int index = landmarks_.size();
+  landmarks_.push_back(landmark);
+  file(cellsOf(landmark), index, true);
+  ids_.insert(static_cast<uint32_t>(landmark.id), index);
+}
+
+void LandmarkMap::set(int i, const Landmark& landmark) {
+  const Landmark& old = landmarks_[i];
+  const CellBox before = cellsOf(old), after = cellsOf(landmark);
+  if (!(before == after)) {
+    file(before, i, false);
+    file(after, i, true);
+  }
+  if (old.id != landmark.id) {
+    ids_.erase(static_cast<uint32_t>(old.id), i);
+    ids_.insert(static_cast<uint32_t>(landmark.id), i);
+  }
+  landmarks_.set(i, landmark);
+}
+
+bool LandmarkMap::collect(const CellBox& box, std::vector<int>* out) const {
+  for (int a = box.first_a; a <= box.last_a; ++a) {
+    for (int b = box.first_b; b <= box.last_b; ++b) {
+      const uint64_t key = box.tag == kPointTag ? pointKey(a, b) : lineKey(box.bin, a, b);
+      cells_.forEach(key, [out](int index) { out->push_back(index); });
+    }
+  }
+  return true;
+}
+
+void LandmarkMap::allIndices(std::vector<int>* out) const {
+  out->resize(size());
+  for (int i = 0; i < size(); ++i) (*out)[i] = i;
+}
+
+namespace {
+
+double cellCount(int first_a, int last_a, int first_b, int last_b) {
+  return (static_cast<double>(last_a) - first_a + 1.0) * (static_cast<double>(last_b) - first_b + 1.0);
+}
+
+void sortUnique(std::vector<int>* v) {
+  std::sort(v->begin(), v->end());
+  v->erase(std::unique(v->begin(), v->end()), v->end());
+}
+
+}  // namespace
+
+void LandmarkMap::pointCandidates(const Eigen::Vector2d& center, double radius_m,
+                                  std::vector<int>* out) const {
+  out->clear();
+  const double r = radius_m + kSlackM;
+  CellBox box;
+  box.tag = kPointTag;
+  box.first_a = cellOf(center.x() - r, kPointCellM, kPointLimit);
+  box.last_a = cellOf(center.x() + r, kPointCellM, kPointLimit);
+  box.first_b = cellOf(center.y() - r, kPointCellM, kPointLimit);
+  box.last_b = cellOf(center.y() + r, kPointCellM, kPointLimit);
+  if (!(r >= 0.0) || !center.allFinite() ||
+      cellCount(box.first_a, box.last_a, box.first_b, box.last_b) > size()) {
+    allIndices(out);  // a scan is cheaper (or the query is not a disc)
+    return;
+  }
+  for (int a = box.first_a; a <= box.last_a; ++a) {
+    for (int b = box.first_b; b <= box.last_b; ++b) {
+      // Skip cells of the box that the disc does not reach.
+      const double dx = std::max({a * kPointCellM - center.x(), center.x() - (a + 1) * kPointCellM, 0.0});
+      const double dy = std::max({b * kPointCellM - center.y(), center.y() - (b + 1) * kPointCellM, 0.0});
+      if (dx * dx + dy * dy > r * r) continue;
+      cells_.forEach(pointKey(a, b), [out](int index) { out->push_back(index); });
+    }
+  }
+  sortUnique(out);
+}
+
+void LandmarkMap::lineCandidates(const LineQuery& query, std::vector<int>* out) const {
+  out->clear();
+  const FoldedLine f = fold(query.line, 0.0, 0.0);
+  const double lo_angle = f.angle - query.max_angle_rad - kSlackRad;
+  const double hi_angle = f.angle + query.max_angle_rad + kSlackRad;
+  const int first_bin = static_cast<int>(std::floor(lo_angle / kLineAngleBinRad));
+  const int last_bin = static_cast<int>(std::floor(hi_angle / kLineAngleBinRad));
+  const double reach = query.max_rho_m + kSlackM;
+  std::vector<CellBox> boxes;
+  double cells = 0.0;
+  const bool finite = query.line.allFinite() && query.start.allFinite() && query.end.allFinite() &&
+                      std::isfinite(reach) && std::isfinite(query.overlap_margin_m) &&
+                      query.max_angle_rad < M_PI / 4.0;
+  for (int bin = first_bin; finite && bin <= last_bin; ++bin) {
+    // This virtual bin's angles, and how the landmarks there are filed: a bin beyond
+    // [0, pi) holds lines folded with the opposite normal (rho and extent negated).
+    const double a0 = std::max(bin * kLineAngleBinRad, lo_angle);
+    const double a1 = std::min((bin + 1) * kLineAngleBinRad, hi_angle);
+    const int folded_bin = ((bin % kLineAngleBins) + kLineAngleBins) % kLineAngleBins;
+    const bool flipped = ((bin - folded_bin) / kLineAngleBins) % 2 != 0;
+    double along_lo = INFINITY, along_hi = -INFINITY;
+    alongRange(query.start, a0, a1, &along_lo, &along_hi);
+    alongRange(query.end, a0, a1, &along_lo, &along_hi);
+    along_lo -= query.overlap_margin_m + kSlackM;
+    along_hi += query.overlap_margin_m + kSlackM;
+    double rho_lo = f.rho - reach, rho_hi = f.rho + reach;
+    if (flipped) {
+      std::swap(along_lo, along_hi);
+      along_lo = -along_lo;
+      along_hi = -along_hi;
+      std::swap(rho_lo, rho_hi);
+      rho_lo = -rho_lo;
+      rho_hi = -rho_hi;
+    }
+    CellBox box;
+    box.tag = kLineTag;
+    box.bin = folded_bin;
+    box.first_a = cellOf(rho_lo, kLineRhoCellM, kLineLimit);
+    box.last_a = cellOf(rho_hi, kLineRhoCellM, kLineLimit);
+    box.first_b = cellOf(along_lo, kLineAlongCellM, kLineLimit);
+    box.last_b = cellOf(along_hi, kLineAlongCellM, kLineLimit);
+    cells += cellCount(box.first_a, box.last_a, box.first_b, box.last_b);
+    boxes.push_back(box);
+  }
+  if (!finite || cells > size()) {
+    allIndices(out);
+    return;
+  }
+  for (const CellBox& box : boxes) collect(box, out);
+  sortUnique(out);
+}
+
+void LandmarkMap::idCandidates(int id, std::vector<int>* out) const {
+  out->clear();
+  ids_.forEach(static_cast<uint32_t>(id), [out](int index) { out->push_back(index); });
+  std::sort(out->begin(), out->end());
+}
+
+}  // namespace core
+}  // namespace rbpf_slam
