@@ -1,7 +1,7 @@
 // Google Benchmark: FastSlam2::update against the number of particles (map of 100 point
-// landmarks) and against the number of landmarks in the map (100 particles), with the same
-// ten range-bearing observations every step; and resampleLowVariance against the particle
-// count. Not a pass/fail test: ./scripts/bench.sh runs it and writes docs/benchmarks.md.
+// landmarks) and against the number of landmarks in the map (100 particles, up to 50,000),
+// with the same ten range-bearing observations every step; and resampleLowVariance against
+// the particle count. Not a pass/fail test: ./scripts/bench.sh runs it and writes docs/benchmarks.md.
 
 #include <benchmark/benchmark.h>
 
@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "rbpf_slam/core/filters/fastslam2.h"
+#include "rbpf_slam/core/filters/measurement_models.h"
 #include "rbpf_slam/core/filters/resampling.h"
 #include "rbpf_slam/core/random.h"
 
@@ -20,7 +21,6 @@ namespace core = rbpf_slam::core;
 
 constexpr int kObservedLandmarks = 10;  // features per update
 constexpr double kGridSpacingM = 2.0;   // landmarks far apart compared with their noise
-constexpr int kBuildBatch = 200;        // features per map-building update
 
 /// Options shared by the map builder and the benchmarked filters: tight noise, so that the
 /// grid landmarks stay distinct even 100 m away.
@@ -37,8 +37,8 @@ core::FilterOptions benchOptions(int particles) {
   return options;
 }
 
-/// FastSlam2 with every particle's map replaceable by a prebuilt one (shared, copy-on-write,
-/// exactly as after resampling).
+/// FastSlam2 with every particle's map replaceable by a prebuilt one (shared, path-copied on
+/// write, exactly as after resampling).
 class BenchFastSlam2 : public core::FastSlam2 {
  public:
   using core::FastSlam2::FastSlam2;
@@ -70,18 +70,26 @@ core::PointFeature observe(const Eigen::Vector2d& p, double range_error, double 
   return f;
 }
 
-/// A map of `count` distinct point landmarks, built by feeding their exact observations from
-/// the origin to a one-particle filter in batches (every feature starts a new landmark).
+/// A map of `count` distinct point landmarks on the grid, each with the covariance its first
+/// exact observation from the origin gives (what the filter itself would create).
 std::shared_ptr<core::LandmarkMap> buildMap(int count) {
-  core::FastSlam2 builder(benchOptions(1));
+  const core::FilterOptions options = benchOptions(1);
+  const Eigen::Matrix2d noise =
+      Eigen::Vector2d(std::pow(options.measurement.sigma_range_m, 2),
+                      std::pow(options.measurement.sigma_bearing_rad, 2))
+          .asDiagonal();
+  auto map = std::make_shared<core::LandmarkMap>();
   const std::vector<Eigen::Vector2d> positions = gridPositions(count);
-  for (size_t begin = 0; begin < positions.size(); begin += kBuildBatch) {
-    core::FeatureSet batch;
-    const size_t end = std::min(positions.size(), begin + kBuildBatch);
-    for (size_t i = begin; i < end; ++i) batch.points.push_back(observe(positions[i], 0.0, 0.0));
-    builder.update(batch);
+  for (size_t i = 0; i < positions.size(); ++i) {
+    const core::PointFeature f = observe(positions[i], 0.0, 0.0);
+    core::Landmark lm;
+    lm.id = static_cast<int>(i);
+    Eigen::Matrix2d g;
+    lm.mean = core::pointFromObservation(core::Pose2::Zero(), Eigen::Vector2d(f.range, f.bearing), &g);
+    lm.covariance = g * noise * g.transpose();
+    map->add(lm);
   }
-  return std::make_shared<core::LandmarkMap>(*builder.particleSet()[0].map);
+  return map;
 }
 
 /// The nearest kObservedLandmarks landmarks, observed with small fixed errors.
@@ -140,6 +148,7 @@ BENCHMARK(BM_FastSlam2UpdateVsLandmarks)
     ->Arg(100)
     ->Arg(1000)
     ->Arg(10000)
+    ->Arg(50000)
     ->Unit(benchmark::kMillisecond);
 
 void BM_ResampleLowVariance(benchmark::State& state) {
