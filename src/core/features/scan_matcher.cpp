@@ -1,6 +1,7 @@
 #include "rbpf_slam/core/features/scan_matcher.h"
 
 #include <Eigen/Dense>
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -10,29 +11,64 @@ namespace rbpf_slam {
 namespace core {
 namespace {
 
-/// A uniform hash grid over the reference points for nearest-neighbour queries.
+/// A uniform grid over the reference points for nearest-neighbour queries: a dense array of
+/// cells over their bounding box (each cell's points contiguous, in index order), or a hash
+/// map when the box is too sparse for an array.
 class PointGrid {
  public:
   PointGrid(const std::vector<Eigen::Vector2d>& points, double cell)
       : points_(points), cell_(cell) {
-    for (size_t i = 0; i < points.size(); ++i) cells_[key(cellOf(points[i].x()), cellOf(points[i].y()))].push_back(static_cast<int>(i));
+    if (points.empty()) return;
+    min_x_ = max_x_ = cellOf(points[0].x());
+    min_y_ = max_y_ = cellOf(points[0].y());
+    for (const Eigen::Vector2d& p : points) {
+      min_x_ = std::min(min_x_, cellOf(p.x()));
+      max_x_ = std::max(max_x_, cellOf(p.x()));
+      min_y_ = std::min(min_y_, cellOf(p.y()));
+      max_y_ = std::max(max_y_, cellOf(p.y()));
+    }
+    const double cells = (static_cast<double>(max_x_) - min_x_ + 1) * (static_cast<double>(max_y_) - min_y_ + 1);
+    dense_ = cells <= 16.0 * points.size() + 4096.0;
+    if (!dense_) {
+      for (size_t i = 0; i < points.size(); ++i) cells_[key(cellOf(points[i].x()), cellOf(points[i].y()))].push_back(static_cast<int>(i));
+      return;
+    }
+    // Counting sort into contiguous cells; a stable pass keeps each cell in index order.
+    width_ = max_x_ - min_x_ + 1;
+    start_.assign(static_cast<size_t>(cells) + 1, 0);
+    for (const Eigen::Vector2d& p : points) ++start_[denseIndex(cellOf(p.x()), cellOf(p.y())) + 1];
+    for (size_t c = 1; c < start_.size(); ++c) start_[c] += start_[c - 1];
+    order_.resize(points.size());
+    std::vector<int> fill(start_.begin(), start_.end() - 1);
+    for (size_t i = 0; i < points.size(); ++i) {
+      order_[fill[denseIndex(cellOf(points[i].x()), cellOf(points[i].y()))]++] = static_cast<int>(i);
+    }
   }
-  /// Index of the nearest point within radius (at most one cell), or -1.
+  /// Index of the nearest point within radius (at most one cell), or -1; among equally near
+  /// points, the first by cell (x then y offset) and index.
   int nearest(const Eigen::Vector2d& q, double radius, double* distance2) const {
     const long cx = cellOf(q.x()), cy = cellOf(q.y());
     int best = -1;
     double best_d2 = radius * radius;
+    const auto visit = [&](int i) {
+      const double d2 = (points_[i] - q).squaredNorm();
+      if (d2 < best_d2) {
+        best_d2 = d2;
+        best = i;
+      }
+    };
     for (long dx = -1; dx <= 1; ++dx) {
       for (long dy = -1; dy <= 1; ++dy) {
-        const auto it = cells_.find(key(cx + dx, cy + dy));
-        if (it == cells_.end()) continue;
-        for (int i : it->second) {
-          const double d2 = (points_[i] - q).squaredNorm();
-          if (d2 < best_d2) {
-            best_d2 = d2;
-            best = i;
-          }
+        const long x = cx + dx, y = cy + dy;
+        if (dense_) {
+          if (x < min_x_ || x > max_x_ || y < min_y_ || y > max_y_) continue;
+          const long c = denseIndex(x, y);
+          for (int k = start_[c]; k < start_[c + 1]; ++k) visit(order_[k]);
+          continue;
         }
+        const auto it = cells_.find(key(x, y));
+        if (it == cells_.end()) continue;
+        for (int i : it->second) visit(i);
       }
     }
     *distance2 = best_d2;
@@ -41,13 +77,18 @@ class PointGrid {
 
  private:
   long cellOf(double v) const { return static_cast<long>(std::floor(v / cell_)); }
+  long denseIndex(long x, long y) const { return (y - min_y_) * width_ + (x - min_x_); }
   static long long key(long x, long y) {
     return static_cast<long long>((static_cast<unsigned long long>(x) << 32) ^
                                   (static_cast<unsigned long long>(y) & 0xffffffffULL));
   }
   const std::vector<Eigen::Vector2d>& points_;
   const double cell_;
-  std::unordered_map<long long, std::vector<int>> cells_;
+  bool dense_ = true;
+  long min_x_ = 0, max_x_ = -1, min_y_ = 0, max_y_ = -1, width_ = 0;
+  std::vector<int> start_;  // dense: cell c holds order_[start_[c] .. start_[c + 1])
+  std::vector<int> order_;
+  std::unordered_map<long long, std::vector<int>> cells_;  // sparse
 };
 
 /// Unit normals of the reference from each point's neighbours (zero where undefined).
