@@ -7,6 +7,7 @@
 #   BENCH_MIN_TIME=1 ./scripts/bench.sh     # steadier figures, slower
 #   BENCH_SKIP_BUILD=1 BUILD_DIR=/tmp/b ./scripts/bench.sh   # use an existing build
 #   BENCH_OFFLINE_ARGS="--set particles=30" ./scripts/bench.sh  # extra offline_slam arguments
+#   BENCH_SEEDS="1" ./scripts/bench.sh      # filter seeds of the end-to-end runs (default 1 2 3)
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 
@@ -17,6 +18,7 @@ REPORT=${BENCH_REPORT:-$ROOT/docs/benchmarks.md}
 BUILD=${BUILD_DIR:-$BUILD}
 OUT=$BUILD/bench
 read -r -a OFFLINE_ARGS <<<"${BENCH_OFFLINE_ARGS:-}"
+read -r -a SEEDS <<<"${BENCH_SEEDS:-1 2 3}"
 
 if [ -z "${BENCH_SKIP_BUILD:-}" ]; then
   install_missing
@@ -24,7 +26,7 @@ if [ -z "${BENCH_SKIP_BUILD:-}" ]; then
 fi
 BIN=$BUILD/devel/lib/rbpf_slam
 mkdir -p "$OUT"
-rm -f "$OUT"/*.json
+rm -rf "$OUT"/*.json "$OUT"/offline_*
 
 mapfile -t BENCHES < <(find "$BIN" "$BUILD" -maxdepth 1 -type f -executable -name 'bench_*' \
   2>/dev/null | sort -u)
@@ -49,11 +51,14 @@ for bag in intel aces; do
     echo "bench.sh: $DATA/$bag.bag missing, skipping the end-to-end run" >&2
     continue
   fi
-  cmd=("$BIN/offline_slam" --bag "$DATA/$bag.bag" --config "$CONFIG" --output "$OUT/offline_$bag"
-       --reference "$DATA/$bag.ref.tum" --no-progress "${OFFLINE_ARGS[@]}")
-  echo "== offline_slam $bag"
-  "${cmd[@]}" || echo "bench.sh: offline_slam on $bag failed" >&2
-  COMMANDS+=("${cmd[*]}")
+  for seed in "${SEEDS[@]}"; do
+    cmd=("$BIN/offline_slam" --bag "$DATA/$bag.bag" --config "$CONFIG"
+         --output "$OUT/offline_${bag}_seed$seed" --seed "$seed" --reference "$DATA/$bag.ref.tum"
+         --no-progress "${OFFLINE_ARGS[@]}")
+    echo "== offline_slam $bag seed $seed"
+    "${cmd[@]}" || echo "bench.sh: offline_slam on $bag (seed $seed) failed" >&2
+    COMMANDS+=("${cmd[*]}")
+  done
 done
 ELAPSED=$(( $(date +%s) - START ))
 
@@ -105,19 +110,53 @@ for path in sorted(out.glob("bench_*.json")):
         lines.append("| " + " | ".join(cells) + " |")
     lines.append("")
 
-rows = []
-for bag in ("intel", "aces"):
-    summary = out / ("offline_" + bag) / "summary.json"
-    if summary.exists():
-        s = json.load(open(summary))
-        rows.append("| %s | %.1f | %.1f | %.0fx | %d | %.2f | %.2f | %s | %d |" % (
-            bag, s["wall_s"], s["bag_duration_s"], s["bag_duration_s"] / max(s["wall_s"], 1e-9),
-            s["updates"], s["update_ms_mean"], s["update_ms_p99"],
-            "%.3f" % s["ate_rmse_m"] if "ate_rmse_m" in s else "n/a", s["landmarks"]))
+rows, factors = [], {}
+for summary in sorted(out.glob("offline_*/summary.json")):
+    s = json.load(open(summary))
+    bag = summary.parent.name[len("offline_"):].split("_seed")[0]
+    factor = s["bag_duration_s"] / max(s["wall_s"], 1e-9)
+    factors.setdefault(bag, []).append(factor)
+    rows.append("| %s | %s | %.2f | %.1f | %.0fx | %d | %.2f | %.2f | %s | %d |" % (
+        bag, s.get("seed", "?"), s["wall_s"], s["bag_duration_s"], factor,
+        s["updates"], s["update_ms_mean"], s["update_ms_p99"],
+        "%.3f" % s["ate_rmse_m"] if "ate_rmse_m" in s else "n/a", s["landmarks"]))
 if rows:
     lines += ["## offline_slam end to end (config/laser_fastslam2.yaml)", "",
-              "| bag | wall_s | bag_duration_s | real-time factor | updates | update_ms_mean | "
-              "update_ms_p99 | ATE [m] | landmarks |", "|---" * 9 + "|"] + rows + [""]
+              "real-time factor = bag_duration_s / wall_s (one process, one core).", "",
+              "| bag | seed | wall_s | bag_duration_s | real-time factor | updates | update_ms_mean | "
+              "update_ms_p99 | ATE [m] | landmarks |", "|---" * 10 + "|"] + rows + [""]
+
+# The targets of issue 12, read off the figures above.
+def case(name):
+    for path in out.glob("bench_*.json"):
+        for b in json.load(open(path))["benchmarks"]:
+            if b["name"] == name and not b.get("error_occurred"):
+                return b
+    return None
+checks = []
+small, large = case("BM_FastSlam2UpdateVsLandmarks/100"), case("BM_FastSlam2UpdateVsLandmarks/10000")
+if small and large:
+    checks.append("- update cost, 100 particles, 10,000 vs 100 landmarks: %.2fx cpu time "
+                  "(%.3g -> %.3g %s; target at most 3x)" % (
+                      large["cpu_time"] / small["cpu_time"], small["cpu_time"], large["cpu_time"],
+                      small["time_unit"]))
+memory = next((b for b in [case("BM_MapMemory/50000/100/iterations:1")] if b), None)
+if memory:
+    checks.append("- 100 particles x 50,000 landmarks after %d updates: peak resident set %.0f MB "
+                  "(map %.1f MB, %.0f MB after the updates)" % (
+                      memory["updates"], memory["peak_rss_MB"], memory["map_MB"],
+                      memory["after_updates_MB"]))
+extraction = [case("BM_LaserExtraction/%s/361" % m) for m in ("incremental", "split_and_merge")]
+for b in extraction:
+    if b:
+        checks.append("- laser extraction, 361 beams, %s: %.3g %s per scan (target under 50 us)" % (
+            b["name"].split("/")[1], b["real_time"], b["time_unit"]))
+for bag, f in sorted(factors.items()):
+    f = sorted(f)
+    checks.append("- %s end to end: real-time factor median %.0fx over %d seeds (min %.0fx; "
+                  "target at least 300x for intel)" % (bag, f[len(f) // 2], len(f), f[0]))
+if checks:
+    lines += ["## Issue 12 targets", ""] + checks + [""]
 
 lines += ["## Commands", "", "```", os.environ.get("BENCH_INVOCATION", "./scripts/bench.sh")]
 lines += [rel(c) for c in (out / "commands.txt").read_text().splitlines()]

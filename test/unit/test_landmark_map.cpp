@@ -12,7 +12,7 @@
 #include "rbpf_slam/core/filters/fastslam2.h"
 #include "rbpf_slam/core/filters/landmark_map.h"
 #include "rbpf_slam/core/filters/measurement_models.h"
-#include "rbpf_slam/core/filters/persistent_array.h"
+#include "rbpf_slam/core/filters/persistent_containers.h"
 #include "rbpf_slam/core/random.h"
 
 namespace rbpf_slam {

@@ -145,47 +145,54 @@ FastSlam2::Match FastSlam2::associate(const LandmarkMap& map, const Pose2& pose,
                                       const Observation& observation) const {
   // Only the landmarks the spatial index offers: a superset of those passing the pre-gate,
   // in ascending index order, so the result is the scan's (associateByScan).
+  const ObservationInMap seen = inMap(pose, observation);
   std::vector<int> candidates;
-  candidates.reserve(16);
   if (observation.known_id >= 0) {
     map.idCandidates(observation.known_id, &candidates);
   } else if (observation.type == LandmarkType::kLine) {
     LineQuery query;
-    query.line = lineFromObservation(pose, observation.z, nullptr);
-    query.start = transformPoint(pose, observation.start);
-    query.end = transformPoint(pose, observation.end);
+    query.line = seen.value;
+    query.start = seen.start;
+    query.end = seen.end;
     query.max_angle_rad = kLinePregateAngleRad;
     query.max_rho_m = kLinePregateRhoM;
     query.overlap_margin_m = options_.association.line_overlap_margin_m;
     map.lineCandidates(query, &candidates);
   } else {
-    map.pointCandidates(pointFromObservation(pose, observation.z, nullptr),
-                        pointPregateRadius(observation), &candidates);
+    map.pointCandidates(seen.value, pointPregateRadius(observation), &candidates);
   }
-  return associateAmong(map, pose, pose_cov, observation, &candidates);
+  return associateAmong(map, pose, pose_cov, observation, seen, &candidates);
 }
 
 FastSlam2::Match FastSlam2::associateByScan(const LandmarkMap& map, const Pose2& pose,
                                             const Eigen::Matrix3d& pose_cov,
                                             const Observation& observation) const {
-  return associateAmong(map, pose, pose_cov, observation, nullptr);
+  return associateAmong(map, pose, pose_cov, observation, inMap(pose, observation), nullptr);
+}
+
+FastSlam2::ObservationInMap FastSlam2::inMap(const Pose2& pose, const Observation& observation) {
+  ObservationInMap seen;
+  if (observation.type == LandmarkType::kLine) {
+    seen.value = lineFromObservation(pose, observation.z, nullptr);
+    seen.start = transformPoint(pose, observation.start);
+    seen.end = transformPoint(pose, observation.end);
+  } else {
+    seen.value = pointFromObservation(pose, observation.z, nullptr);
+  }
+  return seen;
 }
 
 FastSlam2::Match FastSlam2::associateAmong(const LandmarkMap& map, const Pose2& pose,
                                            const Eigen::Matrix3d& pose_cov,
                                            const Observation& observation,
+                                           const ObservationInMap& seen,
                                            const std::vector<int>* candidates) const {
   Match best;
   const bool is_line = observation.type == LandmarkType::kLine;
   // The observation in the map frame at the current pose estimate, for a cheap pre-gate.
-  const Eigen::Vector2d in_map = is_line ? lineFromObservation(pose, observation.z, nullptr)
-                                         : pointFromObservation(pose, observation.z, nullptr);
+  const Eigen::Vector2d& in_map = seen.value;
   const double point_pregate = pointPregateRadius(observation);
-  Eigen::Vector2d seg_a, seg_b;
-  if (is_line) {
-    seg_a = transformPoint(pose, observation.start);
-    seg_b = transformPoint(pose, observation.end);
-  }
+  const Eigen::Vector2d &seg_a = seen.start, &seg_b = seen.end;
   const int count = candidates ? static_cast<int>(candidates->size()) : map.size();
   for (int c = 0; c < count; ++c) {
     const int i = candidates ? (*candidates)[c] : c;

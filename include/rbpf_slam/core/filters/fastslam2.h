@@ -92,9 +92,17 @@ class FastSlam2 : public SlamFilter {
   static constexpr double kLinePregateAngleRad = 0.5;
   static constexpr double kLinePregateRhoM = 1.5;
   static double pointPregateRadius(const Observation& o) { return 1.5 + 0.2 * o.z.x(); }
+  /// An observation in the map frame at a pose: the point or line, and a line's extent.
+  struct ObservationInMap {
+    Eigen::Vector2d value = Eigen::Vector2d::Zero();
+    Eigen::Vector2d start = Eigen::Vector2d::Zero();
+    Eigen::Vector2d end = Eigen::Vector2d::Zero();
+  };
+  static ObservationInMap inMap(const Pose2& pose, const Observation& observation);
   /// The maximum-likelihood match among `candidates` (every landmark when null).
   Match associateAmong(const LandmarkMap& map, const Pose2& pose, const Eigen::Matrix3d& pose_cov,
-                       const Observation& observation, const std::vector<int>* candidates) const;
+                       const Observation& observation, const ObservationInMap& seen,
+                       const std::vector<int>* candidates) const;
   void addLandmark(LandmarkMap* map, const Pose2& pose, const Observation& observation);
   /// Returns false when the correction fell back to the EKF.
   bool updateLandmark(LandmarkMap* map, const Match& match, const Pose2& pose,

@@ -8,7 +8,7 @@
 #include <memory>
 #include <vector>
 
-#include "rbpf_slam/core/filters/persistent_array.h"
+#include "rbpf_slam/core/filters/persistent_containers.h"
 #include "rbpf_slam/core/filters/slam_filter.h"
 
 namespace rbpf_slam {
