@@ -317,6 +317,86 @@ TEST(FastSlam2Association, IndexedLookupEqualsFullScanOnRandomMaps) {
   EXPECT_GT(matched, compared / 4);  // not a comparison of two empty results
 }
 
+/// Walls and posts of three rooms along a corridor, 100 m from the map origin.
+FeatureSet observeRooms(const Pose2& pose, Rng& rng) {
+  const Eigen::Vector2d o(100.0, 60.0);
+  std::vector<std::pair<Eigen::Vector2d, Eigen::Vector2d>> walls;
+  for (int room = 0; room < 3; ++room) {
+    const Eigen::Vector2d c = o + Eigen::Vector2d(8.0 * room, 0.0);
+    walls.push_back({c + Eigen::Vector2d(0, 0), c + Eigen::Vector2d(7, 0)});
+    walls.push_back({c + Eigen::Vector2d(7, 0), c + Eigen::Vector2d(7, 5)});
+    walls.push_back({c + Eigen::Vector2d(0, 5), c + Eigen::Vector2d(7, 5)});
+    walls.push_back({c + Eigen::Vector2d(2, 2), c + Eigen::Vector2d(3, 3)});  // slanted cabinet
+  }
+  FeatureSet set;
+  const Pose2 inv = inverse(pose);
+  for (const auto& [a, b] : walls) {
+    const Eigen::Vector2d ra = transformPoint(inv, a), rb = transformPoint(inv, b);
+    if (std::min(ra.norm(), rb.norm()) > 12.0) continue;
+    const Landmark seen = lineLandmark(-1, ra, rb);
+    LineFeature f;
+    f.rho = seen.mean.x() + sampleGaussian(rng, 0.02);
+    f.theta = seen.mean.y() + sampleGaussian(rng, 0.01);
+    f.covariance = Eigen::Vector2d(0.02 * 0.02, 0.01 * 0.01).asDiagonal();
+    f.start = ra;
+    f.end = rb;
+    set.lines.push_back(f);
+  }
+  for (int room = 0; room < 3; ++room) {
+    const Eigen::Vector2d r = transformPoint(inv, o + Eigen::Vector2d(8.0 * room + 5.0, 1.5));
+    if (r.norm() > 10.0) continue;
+    PointFeature f;
+    f.range = r.norm() + sampleGaussian(rng, 0.03);
+    f.bearing = std::atan2(r.y(), r.x()) + sampleGaussian(rng, 0.01);
+    f.covariance = Eigen::Vector2d(0.03 * 0.03, 0.01 * 0.01).asDiagonal();
+    set.points.push_back(f);
+  }
+  return set;
+}
+
+/// A filter whose association can be checked against the full scan on its own maps.
+class CheckedFastSlam2 : public FastSlam2 {
+ public:
+  using FastSlam2::FastSlam2;
+  /// Compares associate() with associateByScan() for every particle and observation.
+  int check(const FeatureSet& features, int* mismatches) const {
+    int rejected = 0, compared = 0;
+    for (const Observation& o : prepare(features, &rejected)) {
+      for (const Particle& p : particles_) {
+        const Eigen::Matrix3d cov = Eigen::Vector3d(0.02, 0.02, 0.005).asDiagonal();
+        const Match a = associate(*p.map, p.pose, cov, o), b = associateByScan(*p.map, p.pose, cov, o);
+        *mismatches += a.index != b.index || a.distance2 != b.distance2;
+        compared += b.index >= 0;
+      }
+    }
+    return compared;
+  }
+};
+
+TEST(FastSlam2Association, IndexedLookupEqualsFullScanOnTheFiltersOwnMaps) {
+  FilterOptions options;
+  options.particles = 20;
+  options.seed = 3;
+  CheckedFastSlam2 filter(options);
+  Rng rng(8);
+  Pose2 truth(101.0, 62.5, 0.0);
+  filter.reset(truth);
+  int mismatches = 0, compared = 0;
+  for (int step = 0; step < 120; ++step) {
+    MotionInput motion;
+    motion.delta << ((step / 60) % 2 == 0 ? 0.2 : -0.2), 0.0, 0.05 * std::sin(step * 0.3);
+    truth = compose(truth, motion.delta);
+    motion.delta.x() *= 1.0 + sampleGaussian(rng, 0.05);
+    filter.predict(motion);
+    const FeatureSet features = observeRooms(truth, rng);
+    compared += filter.check(features, &mismatches);
+    filter.update(features);
+  }
+  EXPECT_EQ(mismatches, 0) << compared;
+  EXPECT_GT(compared, 10000);
+  EXPECT_GT(filter.landmarks().size(), 8u);
+}
+
 }  // namespace
 }  // namespace core
 }  // namespace rbpf_slam
