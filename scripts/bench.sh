@@ -8,10 +8,12 @@
 #   BENCH_SKIP_BUILD=1 BUILD_DIR=/tmp/b ./scripts/bench.sh   # use an existing build
 #   BENCH_OFFLINE_ARGS="--set particles=30" ./scripts/bench.sh  # extra offline_slam arguments
 #   BENCH_SEEDS="1" ./scripts/bench.sh      # filter seeds of the end-to-end runs (default 1 2 3)
+#   BENCH_REPETITIONS=5 ./scripts/bench.sh  # runs per benchmark case, median reported (default 3)
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 
 MIN_TIME=${BENCH_MIN_TIME:-0.5}  # seconds per benchmark case (google benchmark min_time)
+REPETITIONS=${BENCH_REPETITIONS:-3}  # runs per case; the report gives their median
 DATA=${BENCH_DATA:-$ROOT/../shared/data}
 CONFIG=$ROOT/config/laser_fastslam2.yaml
 REPORT=${BENCH_REPORT:-$ROOT/docs/benchmarks.md}
@@ -39,7 +41,8 @@ COMMANDS=()
 START=$(date +%s)
 for bench in "${BENCHES[@]}"; do
   name=$(basename "$bench")
-  cmd=("$bench" "--benchmark_min_time=$MIN_TIME" "--benchmark_out=$OUT/$name.json"
+  cmd=("$bench" "--benchmark_min_time=$MIN_TIME" "--benchmark_repetitions=$REPETITIONS"
+       "--benchmark_report_aggregates_only=true" "--benchmark_out=$OUT/$name.json"
        "--benchmark_out_format=json")
   echo "== $name"
   "${cmd[@]}"
@@ -87,17 +90,28 @@ def fmt(v):
         return str(int(v))
     return "%.3g" % v if abs(v) < 1000 else "%.4g" % v if abs(v) < 1e4 else "%.3e" % v
 
+def medians(data):
+    """The median of each case's repetitions (named as the case), or the single runs."""
+    rows = [dict(b, name=b["run_name"]) for b in data["benchmarks"]
+            if b.get("run_type") == "aggregate" and b.get("aggregate_name") == "median"]
+    return rows or [b for b in data["benchmarks"] if b.get("run_type", "iteration") == "iteration"]
+
+repetitions = os.environ.get("BENCH_REPETITIONS", "3")
+lines += ["Benchmark figures are the median of %s repetitions of each case." % repetitions, ""]
 for path in sorted(out.glob("bench_*.json")):
     data = json.load(open(path))
     lines += ["## " + path.stem, ""]
-    benches = [b for b in data["benchmarks"] if b.get("run_type", "iteration") == "iteration"]
+    benches = medians(data)
     skip = {"name", "run_name", "run_type", "repetitions", "repetition_index", "threads",
             "iterations", "real_time", "cpu_time", "time_unit", "family_index",
-            "per_family_instance_index", "aggregate_name", "error_occurred", "error_message"}
+            "per_family_instance_index", "aggregate_name", "aggregate_unit", "error_occurred",
+            "error_message"}
     counters = []
     for b in benches:
         counters += [k for k in b if k not in skip and k not in counters]
-    lines.append("| case | time/iter (real) | cpu | iterations | " + " | ".join(counters) + " |")
+    aggregated = any(b.get("run_type") == "aggregate" for b in benches)
+    lines.append("| case | time/iter (real) | cpu | %s | " % ("runs" if aggregated else "iterations")
+                 + " | ".join(counters) + " |")
     lines.append("|---" * (4 + len(counters)) + "|")
     for b in benches:
         if b.get("error_occurred"):
@@ -129,8 +143,8 @@ if rows:
 # The targets of issue 12, read off the figures above.
 def case(name):
     for path in out.glob("bench_*.json"):
-        for b in json.load(open(path))["benchmarks"]:
-            if b["name"] == name and not b.get("error_occurred"):
+        for b in medians(json.load(open(path))):
+            if (b["name"] == name or b["name"].startswith(name + "/")) and not b.get("error_occurred"):
                 return b
     return None
 checks = []
@@ -140,7 +154,7 @@ if small and large:
                   "(%.3g -> %.3g %s; target at most 3x)" % (
                       large["cpu_time"] / small["cpu_time"], small["cpu_time"], large["cpu_time"],
                       small["time_unit"]))
-memory = next((b for b in [case("BM_MapMemory/50000/100/iterations:1")] if b), None)
+memory = case("BM_MapMemory/50000/100")
 if memory:
     checks.append("- 100 particles x 50,000 landmarks after %d updates: peak resident set %.0f MB "
                   "(map %.1f MB, %.0f MB after the updates)" % (
