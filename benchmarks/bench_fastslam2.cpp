@@ -1,7 +1,8 @@
 // Google Benchmark: FastSlam2::update against the number of particles (map of 100 point
 // landmarks) and against the number of landmarks in the map (100 particles, up to 50,000),
 // with the same ten range-bearing observations every step; and resampleLowVariance against
-// the particle count. Not a pass/fail test: ./scripts/bench.sh runs it and writes docs/benchmarks.md.
+// the particle count. Not a pass/fail test: ./scripts/bench.sh runs it and writes
+// docs/benchmarks.md.
 
 #include <benchmark/benchmark.h>
 
@@ -74,10 +75,9 @@ core::PointFeature observe(const Eigen::Vector2d& p, double range_error, double 
 /// exact observation from the origin gives (what the filter itself would create).
 std::shared_ptr<core::LandmarkMap> buildMap(int count) {
   const core::FilterOptions options = benchOptions(1);
-  const Eigen::Matrix2d noise =
-      Eigen::Vector2d(std::pow(options.measurement.sigma_range_m, 2),
-                      std::pow(options.measurement.sigma_bearing_rad, 2))
-          .asDiagonal();
+  const Eigen::Matrix2d noise = Eigen::Vector2d(std::pow(options.measurement.sigma_range_m, 2),
+                                                std::pow(options.measurement.sigma_bearing_rad, 2))
+                                    .asDiagonal();
   auto map = std::make_shared<core::LandmarkMap>();
   const std::vector<Eigen::Vector2d> positions = gridPositions(count);
   for (size_t i = 0; i < positions.size(); ++i) {
@@ -85,7 +85,8 @@ std::shared_ptr<core::LandmarkMap> buildMap(int count) {
     core::Landmark lm;
     lm.id = static_cast<int>(i);
     Eigen::Matrix2d g;
-    lm.mean = core::pointFromObservation(core::Pose2::Zero(), Eigen::Vector2d(f.range, f.bearing), &g);
+    lm.mean =
+        core::pointFromObservation(core::Pose2::Zero(), Eigen::Vector2d(f.range, f.bearing), &g);
     lm.covariance = g * noise * g.transpose();
     map->add(lm);
   }

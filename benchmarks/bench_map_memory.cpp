@@ -131,7 +131,11 @@ void BM_MapMemory(benchmark::State& state) {
   }
 }
 // One run only: a repetition in the same process would reuse the memory the first one freed.
-BENCHMARK(BM_MapMemory)->Args({50000, 100})->Iterations(1)->Repetitions(1)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_MapMemory)
+    ->Args({50000, 100})
+    ->Iterations(1)
+    ->Repetitions(1)
+    ->Unit(benchmark::kMillisecond);
 
 }  // namespace
 

@@ -20,7 +20,9 @@ namespace core {
 namespace {
 
 double uniform(Rng& rng, double lo, double hi) { return lo + (hi - lo) * sampleUniform(rng); }
-int uniformInt(Rng& rng, int n) { return std::min(n - 1, static_cast<int>(sampleUniform(rng) * n)); }
+int uniformInt(Rng& rng, int n) {
+  return std::min(n - 1, static_cast<int>(sampleUniform(rng) * n));
+}
 
 TEST(PersistentArray, VersionsMatchVectorModelsUnderRandomWrites) {
   Rng rng(1);
@@ -44,7 +46,8 @@ TEST(PersistentArray, VersionsMatchVectorModelsUnderRandomWrites) {
   int largest = 0;
   for (size_t v = 0; v < versions.size(); ++v) {
     ASSERT_EQ(versions[v].size(), static_cast<int>(models[v].size()));
-    for (size_t i = 0; i < models[v].size(); ++i) ASSERT_EQ(versions[v][i], models[v][i]) << v << " " << i;
+    for (size_t i = 0; i < models[v].size(); ++i)
+      ASSERT_EQ(versions[v][i], models[v][i]) << v << " " << i;
     largest = std::max(largest, versions[v].size());
   }
   EXPECT_GT(largest, 2048);  // deep enough for two branch levels above the leaves
@@ -77,7 +80,8 @@ TEST(PersistentMultimap, VersionsMatchSetModelsUnderRandomInsertsAndErases) {
       const uint64_t key = k * 0x9e3779b97f4a7c15ULL;
       std::vector<int> got, want;
       versions[v].forEach(key, [&](int value) { got.push_back(value); });
-      for (auto it = models[v].lower_bound({key, -1}); it != models[v].end() && it->first == key; ++it) {
+      for (auto it = models[v].lower_bound({key, -1}); it != models[v].end() && it->first == key;
+           ++it) {
         want.push_back(it->second);
       }
       std::sort(got.begin(), got.end());
@@ -151,7 +155,8 @@ bool passesLinePregate(const Landmark& lm, const LineQuery& q) {
   const Eigen::Vector2d d = lineDifference(q.line, lm.mean);
   if (std::fabs(d.y()) > q.max_angle_rad || std::fabs(d.x()) > q.max_rho_m) return false;
   const double a = alongLine(lm.mean, q.start), b = alongLine(lm.mean, q.end);
-  const double gap = std::max({std::min(a, b) - lm.extent_max, lm.extent_min - std::max(a, b), 0.0});
+  const double gap =
+      std::max({std::min(a, b) - lm.extent_max, lm.extent_min - std::max(a, b), 0.0});
   return gap <= q.overlap_margin_m;
 }
 
@@ -166,7 +171,8 @@ LandmarkMap randomMap(Rng& rng, int count, const Eigen::Vector2d& center, double
       map.add(pointLandmark(i, a.x(), a.y()));
     } else {
       const double heading = uniform(rng, -M_PI, M_PI), length = uniform(rng, 0.3, 20.0);
-      map.add(lineLandmark(i, a, a + length * Eigen::Vector2d(std::cos(heading), std::sin(heading))));
+      map.add(
+          lineLandmark(i, a, a + length * Eigen::Vector2d(std::cos(heading), std::sin(heading))));
     }
   }
   LandmarkMap fork = map;
@@ -192,7 +198,8 @@ TEST(LandmarkMap, PointLookupFindsEveryPointBruteForceFinds) {
   for (const Eigen::Vector2d& center : {Eigen::Vector2d(0, 0), Eigen::Vector2d(-90, 140)}) {
     const LandmarkMap map = randomMap(rng, 3000, center, 60.0);
     for (int q = 0; q < 2000; ++q) {
-      const Eigen::Vector2d at = center + Eigen::Vector2d(uniform(rng, -70, 70), uniform(rng, -70, 70));
+      const Eigen::Vector2d at =
+          center + Eigen::Vector2d(uniform(rng, -70, 70), uniform(rng, -70, 70));
       const double radius = q % 100 == 0 ? uniform(rng, 20, 200) : uniform(rng, 0.5, 8.0);
       std::vector<int> found;
       map.pointCandidates(at, radius, &found);
@@ -209,8 +216,8 @@ TEST(LandmarkMap, PointLookupFindsEveryPointBruteForceFinds) {
       total += map.size();
     }
   }
-  EXPECT_GT(hits, 1000);                 // the queries do find points
-  EXPECT_LT(offered, total / 20);        // and the index offers far fewer than all
+  EXPECT_GT(hits, 1000);           // the queries do find points
+  EXPECT_LT(offered, total / 20);  // and the index offers far fewer than all
 }
 
 TEST(LandmarkMap, LineLookupFindsEveryLineBruteForceFinds) {
@@ -225,14 +232,16 @@ TEST(LandmarkMap, LineLookupFindsEveryLineBruteForceFinds) {
       if (q % 2 == 0 && map[i].type == LandmarkType::kLine) {
         const Landmark& lm = map[i];
         const double s = uniform(rng, lm.extent_min - 2, lm.extent_max + 2);
-        const Eigen::Vector2d mid = pointOnLine(lm.mean, s) +
-                                    uniform(rng, -2, 2) * Eigen::Vector2d(std::cos(lm.mean.y()), std::sin(lm.mean.y()));
+        const Eigen::Vector2d mid =
+            pointOnLine(lm.mean, s) +
+            uniform(rng, -2, 2) * Eigen::Vector2d(std::cos(lm.mean.y()), std::sin(lm.mean.y()));
         const double heading = lm.mean.y() + M_PI / 2 + uniform(rng, -0.6, 0.6);
         const double half = uniform(rng, 0.2, 5.0);
         query.start = mid - half * Eigen::Vector2d(std::cos(heading), std::sin(heading));
         query.end = mid + half * Eigen::Vector2d(std::cos(heading), std::sin(heading));
       } else {
-        const Eigen::Vector2d mid = center + Eigen::Vector2d(uniform(rng, -70, 70), uniform(rng, -70, 70));
+        const Eigen::Vector2d mid =
+            center + Eigen::Vector2d(uniform(rng, -70, 70), uniform(rng, -70, 70));
         const double heading = uniform(rng, -M_PI, M_PI), half = uniform(rng, 0.2, 8.0);
         query.start = mid - half * Eigen::Vector2d(std::cos(heading), std::sin(heading));
         query.end = mid + half * Eigen::Vector2d(std::cos(heading), std::sin(heading));
@@ -247,8 +256,8 @@ TEST(LandmarkMap, LineLookupFindsEveryLineBruteForceFinds) {
         if (map[k].type != LandmarkType::kLine || !passesLinePregate(map[k], query)) continue;
         ++hits;
         ASSERT_TRUE(std::binary_search(found.begin(), found.end(), k))
-            << "line " << k << " (" << map[k].mean.transpose() << " [" << map[k].extent_min
-            << ", " << map[k].extent_max << "]) missed by query " << query.line.transpose();
+            << "line " << k << " (" << map[k].mean.transpose() << " [" << map[k].extent_min << ", "
+            << map[k].extent_max << "]) missed by query " << query.line.transpose();
       }
       offered += static_cast<long>(found.size());
       total += map.size();
@@ -261,9 +270,9 @@ TEST(LandmarkMap, LineLookupFindsEveryLineBruteForceFinds) {
 /// Exposes FastSlam2's association to compare the indexed lookup with the full scan.
 class AssociationProbe : public FastSlam2 {
  public:
-  using FastSlam2::FastSlam2;
   using FastSlam2::associate;
   using FastSlam2::associateByScan;
+  using FastSlam2::FastSlam2;
   using FastSlam2::Match;
 };
 
@@ -290,10 +299,13 @@ TEST(FastSlam2Association, IndexedLookupEqualsFullScanOnRandomMaps) {
       }
       ASSERT_NE(target, nullptr);
       if (o.type == LandmarkType::kPoint) {
-        const Pose2 seen(target->mean.x() - uniform(rng, 1, 10), target->mean.y() + uniform(rng, -5, 5), pose.z());
-        const Prediction p = predictPoint(seen, target->mean + Eigen::Vector2d(uniform(rng, -0.3, 0.3), uniform(rng, -0.3, 0.3)));
+        const Pose2 seen(target->mean.x() - uniform(rng, 1, 10),
+                         target->mean.y() + uniform(rng, -5, 5), pose.z());
+        const Prediction p = predictPoint(
+            seen, target->mean + Eigen::Vector2d(uniform(rng, -0.3, 0.3), uniform(rng, -0.3, 0.3)));
         o.z = p.z;
-        const AssociationProbe::Match m = probe.associate(map, seen, pose_cov, o), s = probe.associateByScan(map, seen, pose_cov, o);
+        const AssociationProbe::Match m = probe.associate(map, seen, pose_cov, o),
+                                      s = probe.associateByScan(map, seen, pose_cov, o);
         ASSERT_EQ(m.index, s.index);
         ASSERT_EQ(m.distance2, s.distance2);
         matched += m.index >= 0 && m.distance2 < options.association.gate_chi2;
@@ -302,11 +314,16 @@ TEST(FastSlam2Association, IndexedLookupEqualsFullScanOnRandomMaps) {
         const Eigen::Vector2d a = pointOnLine(target->mean, s0);
         const Eigen::Vector2d b = pointOnLine(target->mean, s0 + uniform(rng, 0.5, 4.0));
         const Pose2 seen = pose;
-        o.z = predictLine(seen, target->mean + Eigen::Vector2d(uniform(rng, -0.1, 0.1), uniform(rng, -0.03, 0.03)), NAN).z;
+        o.z = predictLine(seen,
+                          target->mean +
+                              Eigen::Vector2d(uniform(rng, -0.1, 0.1), uniform(rng, -0.03, 0.03)),
+                          NAN)
+                  .z;
         const Pose2 inv = inverse(seen);
         o.start = transformPoint(inv, a);
         o.end = transformPoint(inv, b);
-        const AssociationProbe::Match m = probe.associate(map, seen, pose_cov, o), s = probe.associateByScan(map, seen, pose_cov, o);
+        const AssociationProbe::Match m = probe.associate(map, seen, pose_cov, o),
+                                      s = probe.associateByScan(map, seen, pose_cov, o);
         ASSERT_EQ(m.index, s.index) << "query " << q;
         ASSERT_EQ(m.distance2, s.distance2);
         matched += m.index >= 0 && m.distance2 < options.association.gate_chi2;
@@ -364,7 +381,8 @@ class CheckedFastSlam2 : public FastSlam2 {
     for (const Observation& o : prepare(features, &rejected)) {
       for (const Particle& p : particles_) {
         const Eigen::Matrix3d cov = Eigen::Vector3d(0.02, 0.02, 0.005).asDiagonal();
-        const Match a = associate(*p.map, p.pose, cov, o), b = associateByScan(*p.map, p.pose, cov, o);
+        const Match a = associate(*p.map, p.pose, cov, o),
+                    b = associateByScan(*p.map, p.pose, cov, o);
         *mismatches += a.index != b.index || a.distance2 != b.distance2;
         compared += b.index >= 0;
       }

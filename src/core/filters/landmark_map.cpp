@@ -39,7 +39,8 @@ uint64_t pointKey(int x, int y) {
 
 uint64_t lineKey(int bin, int rho, int along) {
   return (uint64_t{kLineTag} << 62) | (static_cast<uint64_t>(bin) << 58) |
-         (static_cast<uint64_t>(rho + kLineLimit) << 29) | static_cast<uint64_t>(along + kLineLimit);
+         (static_cast<uint64_t>(rho + kLineLimit) << 29) |
+         static_cast<uint64_t>(along + kLineLimit);
 }
 
 /// A line in the folded form: normal angle in [0, pi), rho signed, extent along the folded
@@ -149,7 +150,8 @@ void LandmarkMap::allIndices(std::vector<int>* out) const {
 namespace {
 
 double cellCount(int first_a, int last_a, int first_b, int last_b) {
-  return (static_cast<double>(last_a) - first_a + 1.0) * (static_cast<double>(last_b) - first_b + 1.0);
+  return (static_cast<double>(last_a) - first_a + 1.0) *
+         (static_cast<double>(last_b) - first_b + 1.0);
 }
 
 void sortUnique(std::vector<int>* v) {
@@ -177,8 +179,10 @@ void LandmarkMap::pointCandidates(const Eigen::Vector2d& center, double radius_m
   for (int a = box.first_a; a <= box.last_a; ++a) {
     for (int b = box.first_b; b <= box.last_b; ++b) {
       // Skip cells of the box that the disc does not reach.
-      const double dx = std::max({a * kPointCellM - center.x(), center.x() - (a + 1) * kPointCellM, 0.0});
-      const double dy = std::max({b * kPointCellM - center.y(), center.y() - (b + 1) * kPointCellM, 0.0});
+      const double dx =
+          std::max({a * kPointCellM - center.x(), center.x() - (a + 1) * kPointCellM, 0.0});
+      const double dy =
+          std::max({b * kPointCellM - center.y(), center.y() - (b + 1) * kPointCellM, 0.0});
       if (dx * dx + dy * dy > r * r) continue;
       cells_.forEach(pointKey(a, b), [out](int index) { out->push_back(index); });
     }

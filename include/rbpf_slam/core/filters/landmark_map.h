@@ -33,7 +33,7 @@ struct Landmark {
 /// half-plane), and the observed segment, projected on the map line, within
 /// overlap_margin_m of the map line's extent.
 struct LineQuery {
-  Eigen::Vector2d line = Eigen::Vector2d::Zero();  // observed (rho >= 0, alpha), map frame
+  Eigen::Vector2d line = Eigen::Vector2d::Zero();   // observed (rho >= 0, alpha), map frame
   Eigen::Vector2d start = Eigen::Vector2d::Zero();  // observed extent, map frame
   Eigen::Vector2d end = Eigen::Vector2d::Zero();
   double max_angle_rad = 0.5;

@@ -2,7 +2,7 @@
 // Persistent (path-copying) containers shared between particles: copying one is O(1) (a root
 // pointer), reading is O(log N), and a write copies only the O(log N) nodes on its path, so
 // that the copies made by resampling share every landmark none of them has changed
-// (the log(N) FastSLAM of Montemerlo et al. 2002, section 4.1, as a fixed-fanout trie).
+// (the O(M log N) landmark tree of FastSLAM, Montemerlo et al. 2002, as a fixed-fanout trie).
 
 #include <array>
 #include <cstdint>
@@ -61,7 +61,9 @@ class PersistentArray {
     std::array<T, 1 << kLeafBits> item{};
   };
 
-  long capacity() const { return root_ ? 1L << (shift_ == 0 ? kLeafBits : shift_ + kBranchBits) : 0; }
+  long capacity() const {
+    return root_ ? 1L << (shift_ == 0 ? kLeafBits : shift_ + kBranchBits) : 0;
+  }
 
   /// The node `slot` points to, made exclusively ours (copied when shared, created if absent).
   template <typename N>
@@ -143,7 +145,9 @@ class PersistentMultimap {
     x *= 0x94d049bb133111ebULL;
     return x ^ (x >> 31);
   }
-  static int childOf(uint64_t h, int depth) { return static_cast<int>((h >> (kBits * depth)) & kMask); }
+  static int childOf(uint64_t h, int depth) {
+    return static_cast<int>((h >> (kBits * depth)) & kMask);
+  }
 
   /// The node `slot` points to, made exclusively ours (copied when shared).
   template <typename N>
@@ -186,8 +190,7 @@ class PersistentMultimap {
     *slot = std::move(branch);
   }
 
-  static bool eraseAt(std::shared_ptr<Node>* slot, int depth, uint64_t h, uint64_t key,
-                      int value) {
+  static bool eraseAt(std::shared_ptr<Node>* slot, int depth, uint64_t h, uint64_t key, int value) {
     if (!contains(slot->get(), depth, h, key, value)) return false;  // copy nothing
     for (; !(*slot)->leaf; ++depth) slot = &own<Branch>(slot)->child[childOf(h, depth)];
     auto& entries = own<Leaf>(slot)->entries;
