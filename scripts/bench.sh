@@ -124,21 +124,28 @@ for path in sorted(out.glob("bench_*.json")):
         lines.append("| " + " | ".join(cells) + " |")
     lines.append("")
 
-rows, factors = [], {}
+rows, factors, cpu_factors = [], {}, {}
 for summary in sorted(out.glob("offline_*/summary.json")):
     s = json.load(open(summary))
     bag = summary.parent.name[len("offline_"):].split("_seed")[0]
     factor = s["bag_duration_s"] / max(s["wall_s"], 1e-9)
     factors.setdefault(bag, []).append(factor)
-    rows.append("| %s | %s | %.2f | %.1f | %.0fx | %d | %.2f | %.2f | %s | %d |" % (
-        bag, s.get("seed", "?"), s["wall_s"], s["bag_duration_s"], factor,
-        s["updates"], s["update_ms_mean"], s["update_ms_p99"],
+    cpu = s.get("cpu_s")
+    if cpu:
+        cpu_factors.setdefault(bag, []).append(s["bag_duration_s"] / max(cpu, 1e-9))
+    rows.append("| %s | %s | %.2f | %s | %.1f | %.0fx | %s | %d | %.2f | %.2f | %s | %d |" % (
+        bag, s.get("seed", "?"), s["wall_s"], "%.2f" % cpu if cpu else "n/a", s["bag_duration_s"],
+        factor, "%.0fx" % (s["bag_duration_s"] / cpu) if cpu else "n/a", s["updates"],
+        s["update_ms_mean"], s["update_ms_p99"],
         "%.3f" % s["ate_rmse_m"] if "ate_rmse_m" in s else "n/a", s["landmarks"]))
 if rows:
     lines += ["## offline_slam end to end (config/laser_fastslam2.yaml)", "",
-              "real-time factor = bag_duration_s / wall_s (one process, one core).", "",
-              "| bag | seed | wall_s | bag_duration_s | real-time factor | updates | update_ms_mean | "
-              "update_ms_p99 | ATE [m] | landmarks |", "|---" * 10 + "|"] + rows + [""]
+              "real-time factor = bag_duration_s / wall_s of one single-threaded process; "
+              "cpu factor = bag_duration_s / cpu_s (the same with the time other jobs took "
+              "from it removed).", "",
+              "| bag | seed | wall_s | cpu_s | bag_duration_s | real-time factor | cpu factor | "
+              "updates | update_ms_mean | update_ms_p99 | ATE [m] | landmarks |",
+              "|---" * 12 + "|"] + rows + [""]
 
 # The targets of issue 12, read off the figures above.
 def case(name):
@@ -166,9 +173,11 @@ for b in extraction:
         checks.append("- laser extraction, 361 beams, %s: %.3g %s per scan (target under 50 us)" % (
             b["name"].split("/")[1], b["real_time"], b["time_unit"]))
 for bag, f in sorted(factors.items()):
-    f = sorted(f)
-    checks.append("- %s end to end: real-time factor median %.0fx over %d seeds (min %.0fx; "
-                  "target at least 300x for intel)" % (bag, f[len(f) // 2], len(f), f[0]))
+    f, c = sorted(f), sorted(cpu_factors.get(bag, []))
+    checks.append("- %s end to end: real-time factor median %.0fx over %d seeds (min %.0fx)%s%s" % (
+        bag, f[len(f) // 2], len(f), f[0],
+        "; by cpu time median %.0fx (min %.0fx)" % (c[len(c) // 2], c[0]) if c else "",
+        "; target at least 300x" if bag == "intel" else ""))
 if checks:
     lines += ["## Issue 12 targets", ""] + checks + [""]
 

@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <ctime>
 #include <cstdio>
 #include <fstream>
 #include <iomanip>
@@ -123,6 +124,7 @@ OfflineSummary OfflineRunner::run() {
     throw std::runtime_error(options_.bag_path + ": cannot open bag: " + e.what());
   }
   const auto wall_start = std::chrono::steady_clock::now();
+  const std::clock_t cpu_start = std::clock();
   rosbag::View full(bag);
   const ros::Time bag_begin = full.getBeginTime(), bag_end = full.getEndTime();
   summary.bag_duration_s = (bag_end - bag_begin).toSec();
@@ -265,6 +267,7 @@ OfflineSummary OfflineRunner::run() {
   progress.done();
   summary.wall_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
+  summary.cpu_s = static_cast<double>(std::clock() - cpu_start) / CLOCKS_PER_SEC;
   summary.updates = static_cast<long>(update_ms.size());
   summary.resets = pipeline_.session().resets();
   if (!update_ms.empty()) {
@@ -325,6 +328,7 @@ OfflineSummary OfflineRunner::writeOutputs(const OfflineSummary& in) const {
        << "  \"bag_duration_s\": " << summary.bag_duration_s << ",\n"
        << "  \"realtime_factor\": "
        << (summary.wall_s > 0.0 ? summary.bag_duration_s / summary.wall_s : 0.0) << ",\n"
+       << "  \"cpu_s\": " << summary.cpu_s << ",\n"
        << "  \"frames\": " << summary.frames << ",\n"
        << "  \"updates\": " << summary.updates << ",\n"
        << "  \"skipped_no_motion\": " << summary.skipped << ",\n"

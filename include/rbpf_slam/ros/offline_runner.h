@@ -22,6 +22,7 @@ struct OfflineOptions {
 /// Counts and timings of one offline run.
 struct OfflineSummary {
   double wall_s = 0.0;
+  double cpu_s = 0.0;  // this process's CPU time over the same span (wall_s less other jobs' share)
   double bag_duration_s = 0.0;
   long frames = 0;
   long updates = 0;

@@ -57,8 +57,15 @@ class PointGrid {
         best = i;
       }
     };
+    // Cells entirely beyond the radius cannot hold a nearer point (a margin covers points
+    // that rounding filed in a neighbouring cell): skipping them changes no result.
+    const double margin = 1e-9 * (1.0 + std::fabs(q.x()) + std::fabs(q.y())) + 1e-12;
+    const double reach2 = (radius + margin) * (radius + margin);
     for (long dx = -1; dx <= 1; ++dx) {
+      const double gap_x = std::max({(cx + dx) * cell_ - q.x(), q.x() - (cx + dx + 1) * cell_, 0.0});
       for (long dy = -1; dy <= 1; ++dy) {
+        const double gap_y = std::max({(cy + dy) * cell_ - q.y(), q.y() - (cy + dy + 1) * cell_, 0.0});
+        if (gap_x * gap_x + gap_y * gap_y > reach2) continue;
         const long x = cx + dx, y = cy + dy;
         if (dense_) {
           if (x < min_x_ || x > max_x_ || y < min_y_ || y > max_y_) continue;
