@@ -192,17 +192,18 @@ void LandmarkMap::pointCandidates(const Eigen::Vector2d& center, double radius_m
 
 void LandmarkMap::lineCandidates(const LineQuery& query, std::vector<int>* out) const {
   out->clear();
-  const FoldedLine f = fold(query.line, 0.0, 0.0);
-  const double lo_angle = f.angle - query.max_angle_rad - kSlackRad;
-  const double hi_angle = f.angle + query.max_angle_rad + kSlackRad;
-  const int first_bin = static_cast<int>(std::floor(lo_angle / kLineAngleBinRad));
-  const int last_bin = static_cast<int>(std::floor(hi_angle / kLineAngleBinRad));
   const double reach = query.max_rho_m + kSlackM;
-  std::vector<CellBox> boxes;
-  double cells = 0.0;
+  // Otherwise (not a line, or a pre-gate too wide for the bins): a scan.
   const bool finite = query.line.allFinite() && query.start.allFinite() && query.end.allFinite() &&
                       std::isfinite(reach) && std::isfinite(query.overlap_margin_m) &&
-                      query.max_angle_rad < M_PI / 4.0;
+                      query.max_angle_rad >= 0.0 && query.max_angle_rad < M_PI / 4.0;
+  const FoldedLine f = fold(finite ? query.line : Eigen::Vector2d::Zero(), 0.0, 0.0);
+  const double lo_angle = f.angle - (finite ? query.max_angle_rad : 0.0) - kSlackRad;
+  const double hi_angle = f.angle + (finite ? query.max_angle_rad : 0.0) + kSlackRad;
+  const int first_bin = static_cast<int>(std::floor(lo_angle / kLineAngleBinRad));
+  const int last_bin = static_cast<int>(std::floor(hi_angle / kLineAngleBinRad));
+  std::vector<CellBox> boxes;
+  double cells = 0.0;
   Eigen::Vector2d cs1_previous = Eigen::Vector2d::Zero();
   for (int bin = first_bin; finite && bin <= last_bin; ++bin) {
     // This virtual bin's angles, and how the landmarks there are filed: a bin beyond
