@@ -150,6 +150,49 @@ TEST(LandmarkMap, CopiesAreIndependentIncludingTheSpatialIndex) {
   EXPECT_EQ(original[3].type, LandmarkType::kLine);
 }
 
+TEST(LandmarkMap, RemoveKeepsOrderIndexAndOtherCopies) {
+  Rng rng(9);
+  LandmarkMap map;
+  std::vector<Landmark> model;
+  for (int i = 0; i < 300; ++i) {
+    const Landmark lm = i % 3 ? pointLandmark(i, uniform(rng, -30, 30), uniform(rng, -30, 30))
+                              : lineLandmark(i, {uniform(rng, -30, 30), uniform(rng, -30, 30)},
+                                             {uniform(rng, -30, 30), uniform(rng, -30, 30)});
+    map.add(lm);
+    model.push_back(lm);
+  }
+  const LandmarkMap before = map;
+  for (int k = 0; k < 120; ++k) {
+    // Mostly recent landmarks (existence management's usual case), sometimes any.
+    const int n = static_cast<int>(model.size());
+    const int i = k % 4 ? n - 1 - uniformInt(rng, 5) : uniformInt(rng, n);
+    map.remove(i);
+    model.erase(model.begin() + i);
+    if (k % 10 == 0) {  // new landmarks after removals reuse the freed slots
+      const Landmark lm = pointLandmark(1000 + k, uniform(rng, -30, 30), uniform(rng, -30, 30));
+      map.add(lm);
+      model.push_back(lm);
+    }
+  }
+  ASSERT_EQ(map.size(), static_cast<int>(model.size()));
+  for (int i = 0; i < map.size(); ++i) {
+    ASSERT_EQ(map[i].id, model[i].id);
+    std::vector<int> found;
+    map.idCandidates(model[i].id, &found);
+    ASSERT_EQ(found, std::vector<int>{i});
+    if (model[i].type == LandmarkType::kPoint) {
+      map.pointCandidates(model[i].mean, 0.1, &found);
+      ASSERT_TRUE(std::binary_search(found.begin(), found.end(), i));
+    }
+  }
+  // Nothing stale: every point the index offers is a current point near the query.
+  std::vector<int> found;
+  map.pointCandidates(Eigen::Vector2d(0, 0), 50.0, &found);
+  for (int i : found) EXPECT_LT(i, map.size());
+  EXPECT_EQ(before.size(), 300);  // the copy taken before the removals is untouched
+  for (int i = 0; i < 300; ++i) ASSERT_EQ(before[i].id, i);
+}
+
 /// FastSlam2::associate's pre-gate, written out independently: the brute-force reference.
 bool passesLinePregate(const Landmark& lm, const LineQuery& q) {
   const Eigen::Vector2d d = lineDifference(q.line, lm.mean);

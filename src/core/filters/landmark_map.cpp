@@ -132,6 +132,22 @@ void LandmarkMap::set(int i, const Landmark& landmark) {
   landmarks_.set(i, landmark);
 }
 
+void LandmarkMap::remove(int i) {
+  if (i < 0 || i >= size()) return;
+  const int last = size() - 1;
+  for (int j = i; j <= last; ++j) {  // unfile every landmark whose index changes
+    file(cellsOf(landmarks_[j]), j, false);
+    ids_.erase(static_cast<uint32_t>(landmarks_[j].id), j);
+  }
+  for (int j = i; j < last; ++j) {
+    const Landmark moved = landmarks_[j + 1];
+    landmarks_.set(j, moved);
+    file(cellsOf(moved), j, true);
+    ids_.insert(static_cast<uint32_t>(moved.id), j);
+  }
+  landmarks_.pop_back();
+}
+
 bool LandmarkMap::collect(const CellBox& box, std::vector<int>* out) const {
   for (int a = box.first_a; a <= box.last_a; ++a) {
     for (int b = box.first_b; b <= box.last_b; ++b) {

@@ -53,6 +53,9 @@ class LandmarkMap {
   void set(int i, const Landmark& landmark);
   /// Appends a landmark with index size().
   void add(const Landmark& landmark);
+  /// Erases landmark i; those after it move down one index (order kept, as in a vector).
+  /// O((size - i) log N): cheap for the recent landmarks at the end that are usually dropped.
+  void remove(int i);
 
   /// Ascending, distinct indices that include every point landmark within radius_m of
   /// center (and possibly others: callers apply their exact test).

@@ -31,6 +31,11 @@ class PersistentArray {
   /// Replaces element i (0 <= i < size); copies its path when it is shared.
   void set(int i, const T& value) { *mutableSlot(i) = value; }
 
+  /// Drops the last element (its slot is reused by the next push_back).
+  void pop_back() {
+    if (size_ > 0) --size_;
+  }
+
   void push_back(const T& value) {
     if (!root_) {
       root_ = std::make_shared<Leaf>();
