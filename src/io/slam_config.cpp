@@ -193,9 +193,7 @@ void validateAs(const Options& options, const std::string& source) {
   }
 }
 
-}  // namespace
-
-SlamConfig parseSlamConfig(const YAML::Node& root, const std::string& source) {
+SlamConfig parseSlamConfigTree(const YAML::Node& root, const std::string& source) {
   SlamConfig config;
   YamlSection top(root, source);
   top.read("frontend", &config.frontend, {"laser", "sonar", "features"});
@@ -235,6 +233,16 @@ SlamConfig parseSlamConfig(const YAML::Node& root, const std::string& source) {
   validateAs(config.scan_matching, source);
   validateAs(config.sonar, source);
   return config;
+}
+
+}  // namespace
+
+SlamConfig parseSlamConfig(const YAML::Node& root, const std::string& source) {
+  try {
+    return parseSlamConfigTree(root, source);
+  } catch (const YAML::Exception& e) {  // a shape the readers did not expect (fuzzing found some)
+    throw ConfigError(source + ": malformed config: " + e.what());
+  }
 }
 
 SlamConfig loadSlamConfig(const std::string& path, const std::vector<std::string>& overrides) {

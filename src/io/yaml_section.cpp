@@ -143,7 +143,11 @@ void YamlSection::finish() const {
   if (!node_ || !node_.IsMap()) return;
   std::string unknown;
   for (const auto& item : node_) {
-    const std::string key = item.first.as<std::string>();
+    if (!item.first.IsScalar()) {
+      throw ConfigError(source_ + ": a key that is not a plain name " +
+                        (path_.empty() ? std::string("at the top level") : "in " + path_));
+    }
+    const std::string key = item.first.Scalar();
     if (!read_.count(key)) unknown += (unknown.empty() ? "" : ", ") + key;
   }
   if (!unknown.empty()) {

@@ -41,7 +41,7 @@ echo "compiling $(echo "$sources" | wc -l) sources with clang (sanitizers on) ..
 echo "$sources" | xargs -P "$(nproc)" -I{} bash -c 'compile "$1"' _ {}
 library=$(find "$out/obj" -name 'src_*.o' | sort)
 status=0
-for target in fuzz_laser fuzz_config fuzz_landmarks; do
+for target in fuzz_laser fuzz_sonar fuzz_config fuzz_landmarks; do
   # shellcheck disable=SC2086
   clang++ -fsanitize=fuzzer,address,undefined "$out/obj/test_fuzz_$target.cpp.o" $library \
     -lyaml-cpp -lz -o "$out/$target"

@@ -17,6 +17,8 @@ namespace {
 
 constexpr double kMountTolerance = 1e-3;  // m and rad: the same transducer
 constexpr double kClockJumpBackS = 1.0;   // stamps going back more than this clear the window
+constexpr double kMaxOdomCoordinateM = 1e6;  // beyond: a broken odometry pose, readings dropped
+constexpr double kMaxEchoDistanceM = 100.0;  // echoes taken farther away are not extracted from
 
 void requireRange(const char* name, double value, double lo, double hi, bool lo_open = false) {
   const bool above = lo_open ? value > lo : value >= lo;
@@ -99,7 +101,8 @@ int SonarFeatureExtractor::transducerIndex(const Pose2& mount) {
 int SonarFeatureExtractor::addReadings(const std::vector<ConeReading>& readings,
                                        const Pose2& odom_pose, double stamp) {
   stats_.readings += static_cast<long>(readings.size());
-  if (!odom_pose.allFinite() || !std::isfinite(stamp)) {
+  if (!odom_pose.allFinite() || !std::isfinite(stamp) ||
+      odom_pose.head<2>().cwiseAbs().maxCoeff() > kMaxOdomCoordinateM) {
     stats_.invalid += static_cast<long>(readings.size());
     return 0;
   }
@@ -212,6 +215,9 @@ FeatureSet SonarFeatureExtractor::extract(const Pose2& odom_pose, double stamp) 
     }
     sonar::LocalEcho l;
     l.sensor = transformPoint(to_base, e.sensor);
+    // An echo taken far from here (odometry jumped inside the window) would blow up the vote
+    // grids: it cannot describe anything near the robot.
+    if (!l.sensor.allFinite() || l.sensor.norm() > kMaxEchoDistanceM) continue;
     l.axis = wrapAngle(e.axis - odom_pose.z());
     l.half_cone = e.half_cone;
     l.range = e.range;
