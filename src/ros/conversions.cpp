@@ -54,6 +54,15 @@ geometry_msgs::Pose toPoseMsg(const core::Pose2& pose) {
   return p;
 }
 
+boost::array<double, 36> toPoseCovariance(const Eigen::Matrix3d& c) {
+  boost::array<double, 36> out{};
+  const int index[3] = {0, 1, 5};
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) out[index[i] * 6 + index[j]] = c(i, j);
+  }
+  return out;
+}
+
 geometry_msgs::TransformStamped toTransformStamped(const core::Pose2& pose, const std::string& parent,
                                                    const std::string& child, const ros::Time& stamp) {
   geometry_msgs::TransformStamped t;

@@ -5,16 +5,19 @@
 #include <sys/stat.h>
 #include <tf2/buffer_core.h>
 #include <tf2/exceptions.h>
+#include <geometry_msgs/PoseWithCovarianceStamped.h>
 #include <tf2_msgs/TFMessage.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <chrono>
 #include <ctime>
+#include <filesystem>
 #include <cstdio>
 #include <fstream>
 #include <iomanip>
 #include <map>
+#include <memory>
 #include <sstream>
 
 #include "rbpf_slam/io/landmark_file.h"
@@ -22,6 +25,7 @@
 #include "rbpf_slam/io/map_image.h"
 #include "rbpf_slam/io/trajectory.h"
 #include "rbpf_slam/ros/conversions.h"
+#include "rbpf_slam/ros/markers.h"
 
 namespace rbpf_slam {
 namespace rosbridge {
@@ -108,6 +112,64 @@ std::vector<core::Pose2> lookupTransducers(const tf2::BufferCore& tf, const std:
   return poses;
 }
 
+/// --output-bag: the input's tf and sensor messages plus what rbpf_slam_node would have
+/// published (map -> odom on /tf, ~pose, ~landmarks, and ~trajectory at the end), for rviz.
+class ResultBag {
+ public:
+  ResultBag(const std::string& path, const io::RosOptions& ros) : ros_(ros) {
+    const std::filesystem::path parent = std::filesystem::path(path).parent_path();
+    std::error_code ignored;  // an unwritable place is reported by open below
+    if (!parent.empty()) std::filesystem::create_directories(parent, ignored);
+    try {
+      bag_.open(path, rosbag::bagmode::Write);
+    } catch (const rosbag::BagException& e) {
+      throw std::runtime_error(path + ": cannot write the output bag: " + e.what());
+    }
+  }
+
+  void update(const ros::Time& stamp, const core::SlamSession& session) {
+    std_msgs::Header header;
+    header.stamp = stamp;
+    header.frame_id = ros_.map_frame;
+    const core::Pose2 map_to_odom = session.mapToOdom();
+    if (map_to_odom.allFinite()) {
+      tf2_msgs::TFMessage tf;
+      tf.transforms.push_back(toTransformStamped(map_to_odom, ros_.map_frame, ros_.odom_frame, stamp));
+      bag_.write("/tf", stamp, tf);
+    }
+    const core::PoseEstimate estimate = session.filter().estimate();
+    if (estimate.mean.allFinite() && estimate.covariance.allFinite()) {
+      geometry_msgs::PoseWithCovarianceStamped pose;
+      pose.header = header;
+      pose.pose.pose = toPoseMsg(estimate.mean);
+      pose.pose.covariance = toPoseCovariance(estimate.covariance);
+      bag_.write("/rbpf_slam_node/pose", stamp, pose);
+    }
+    bag_.write("/rbpf_slam_node/landmarks", stamp, markers_.update(session.filter().landmarks(), header));
+  }
+
+  /// Copies the input's tf and sensor topics and closes the bag.
+  void finish(const rosbag::Bag& input, const std::vector<std::string>& sensor_topics,
+              const core::SlamSession& session) {
+    std::vector<std::string> topics{"/tf", "tf", "/tf_static", "tf_static"};
+    topics.insert(topics.end(), sensor_topics.begin(), sensor_topics.end());
+    ros::Time last;
+    for (const rosbag::MessageInstance& m : rosbag::View(input, rosbag::TopicQuery(topics))) {
+      bag_.write(m.getTopic(), m.getTime(), m);
+      last = std::max(last, m.getTime());
+    }
+    if (!session.trajectory().empty() && !last.isZero()) {
+      bag_.write("/rbpf_slam_node/trajectory", last, toPath(session.trajectory(), ros_.map_frame));
+    }
+    bag_.close();
+  }
+
+ private:
+  const io::RosOptions ros_;
+  rosbag::Bag bag_;
+  LandmarkMarkers markers_;
+};
+
 }  // namespace
 
 OfflineRunner::OfflineRunner(const io::SlamConfig& config, const OfflineOptions& options)
@@ -144,6 +206,10 @@ OfflineSummary OfflineRunner::run() {
   if (!sensor_topic.empty()) {
     topics.push_back("/" + stripSlash(sensor_topic));
     topics.push_back(stripSlash(sensor_topic));
+  }
+  std::unique_ptr<ResultBag> result_bag;
+  if (!options_.output_bag.empty()) {
+    result_bag = std::make_unique<ResultBag>(options_.output_bag, ros_options);
   }
   rosbag::View view(bag, rosbag::TopicQuery(topics));
   if (view.size() == 0) {
@@ -238,6 +304,7 @@ OfflineSummary OfflineRunner::run() {
       case core::FrameResult::kUpdated:
       case core::FrameResult::kFirstFrame:
         update_ms.push_back(ms);
+        if (result_bag) result_bag->update(stamp, pipeline_.session());
         break;
       case core::FrameResult::kSkippedNoMotion:
         ++summary.skipped;
@@ -265,6 +332,7 @@ OfflineSummary OfflineRunner::run() {
                   wall, (m.getTime() - bag_begin).toSec());
   }
   progress.done();
+  if (result_bag) result_bag->finish(bag, topics, pipeline_.session());
   summary.wall_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
   summary.cpu_s = static_cast<double>(std::clock() - cpu_start) / CLOCKS_PER_SEC;

@@ -44,16 +44,6 @@ const char* describe(core::FrameResult result) {
   return "unknown";
 }
 
-/// (x, y, yaw) covariance into the 6x6 row-major (x, y, z, roll, pitch, yaw) of a ROS pose.
-boost::array<double, 36> toPoseCovariance(const Eigen::Matrix3d& c) {
-  boost::array<double, 36> out{};
-  const int index[3] = {0, 1, 5};
-  for (int i = 0; i < 3; ++i) {
-    for (int j = 0; j < 3; ++j) out[index[i] * 6 + index[j]] = c(i, j);
-  }
-  return out;
-}
-
 }  // namespace
 
 SlamNode::SlamNode(ros::NodeHandle nh, ros::NodeHandle private_nh)

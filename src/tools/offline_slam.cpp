@@ -1,6 +1,7 @@
 // offline_slam: runs a config over a bag as fast as the CPU allows (no roscore needed).
 //   offline_slam --bag IN.bag --config config/NAME.yaml --output DIR [--seed N]
 //                [--set key=value ...] [--reference REF.tum] [--no-progress]
+//                [--output-bag OUT.bag]  (tf, pose, landmarks, trajectory for rviz)
 
 #include <cstdio>
 #include <cstring>
@@ -17,7 +18,7 @@ int usage(const char* message) {
   std::fprintf(stderr,
                "offline_slam: %s\nusage: offline_slam --bag IN.bag --config CONFIG.yaml "
                "--output DIR [--seed N] [--set key=value ...] [--reference REF.tum] "
-               "[--no-progress] [--verbose]\n",
+               "[--no-progress] [--verbose] [--output-bag OUT.bag]\n",
                message);
   return 2;
 }
@@ -43,6 +44,7 @@ int main(int argc, char** argv) {
       else if (arg == "--set") overrides.push_back(value("--set"));
       else if (arg == "--no-progress") options.progress = false;
       else if (arg == "--verbose") options.verbose = true;
+      else if (arg == "--output-bag") options.output_bag = value("--output-bag");
       else return usage(("unknown argument '" + arg + "'").c_str());
     } catch (const std::invalid_argument& e) {
       return usage(e.what());

@@ -3,7 +3,9 @@
 # a second simulated run (another seed) in localization-only mode on the saved landmarks
 # (map_file + localization_only). Fails unless the second run tracks the robot (ATE under
 # 0.15 m against the ground truth) without adding a landmark, and unless a missing map_file
-# and localization_only without map_file are refused with a message naming the key.
+# and localization_only without map_file are refused with a message naming the key. The
+# mapping run also writes --output-bag, which must hold a pose per update, markers, the
+# trajectory and the input's tf and scans.
 set -euo pipefail
 
 here=$(cd "$(dirname "$0")" && pwd)
@@ -19,7 +21,7 @@ world="$root/worlds/test_small.yaml"
 
 "$bin/simulate" --world "$world" --output "$work/a.bag" --seed 11 >/dev/null
 "$bin/offline_slam" --bag "$work/a.bag" --config "$config" --output "$work/map" --no-progress \
-  --reference "$work/a.ref.tum" >/dev/null
+  --reference "$work/a.ref.tum" --output-bag "$work/map/results.bag" >/dev/null
 "$bin/simulate" --world "$world" --output "$work/b.bag" --seed 12 >/dev/null
 "$bin/offline_slam" --bag "$work/b.bag" --config "$config" --output "$work/loc" --no-progress \
   --reference "$work/b.ref.tum" --set "map_file=$work/map/landmarks.yaml" \
@@ -42,6 +44,17 @@ if not summary["ate_rmse_m"] < 0.15:
     print("FAIL: ATE %.3f m >= 0.15 m" % summary["ate_rmse_m"]); ok = False
 if summary["updates"] < 100:
     print("FAIL: only %d updates" % summary["updates"]); ok = False
+import rosbag
+mapping = json.load(open(work + "/map/summary.json"))
+with rosbag.Bag(work + "/map/results.bag") as bag:
+    counts = {t: i.message_count for t, i in bag.get_type_and_topic_info().topics.items()}
+print("--output-bag topics:", counts)
+if counts.get("/rbpf_slam_node/pose") != mapping["updates"]:
+    print("FAIL: --output-bag has %s poses for %d updates"
+          % (counts.get("/rbpf_slam_node/pose"), mapping["updates"])); ok = False
+for topic in ("/rbpf_slam_node/landmarks", "/rbpf_slam_node/trajectory", "/tf", "/tf_static", "/scan"):
+    if not counts.get(topic):
+        print("FAIL: --output-bag has no " + topic); ok = False
 sys.exit(0 if ok else 1)
 PY
 

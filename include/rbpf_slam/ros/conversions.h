@@ -24,6 +24,8 @@ core::Pose2 toPose2(const geometry_msgs::Transform& transform);
 core::Pose2 toPose2(const geometry_msgs::Pose& pose);
 geometry_msgs::Transform toTransform(const core::Pose2& pose);
 geometry_msgs::Pose toPoseMsg(const core::Pose2& pose);
+/// (x, y, yaw) covariance into the 6x6 row-major (x, y, z, roll, pitch, yaw) of a ROS pose.
+boost::array<double, 36> toPoseCovariance(const Eigen::Matrix3d& covariance);
 /// The transform parent -> child (child's pose in parent) at stamp.
 geometry_msgs::TransformStamped toTransformStamped(const core::Pose2& pose, const std::string& parent,
                                                    const std::string& child, const ros::Time& stamp);

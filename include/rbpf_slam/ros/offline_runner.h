@@ -17,6 +17,7 @@ struct OfflineOptions {
   std::string reference_path;  // optional TUM reference for the summary's ATE
   bool progress = true;        // a progress bar on stderr when it is a terminal
   bool verbose = false;        // one line per update on stderr
+  std::string output_bag;      // optional: a bag of the results (tf, pose, markers) for rviz
 };
 
 /// Counts and timings of one offline run.
