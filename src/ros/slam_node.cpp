@@ -118,11 +118,7 @@ void SlamNode::subscribeFiltered(
 }
 
 void SlamNode::sonarCallback(const sensor_msgs::Range::ConstPtr& msg) {
-  if (!checkClock()) return;
-  if (paused_) {
-    ++frames_while_paused_;
-    return;
-  }
+  if (!readyForFrame()) return;
   core::Pose2 odom_pose, sensor_in_base;
   if (!lookupPoses(msg->header, &odom_pose, &sensor_in_base)) return;
   core::ConeReading reading;
@@ -147,11 +143,7 @@ void SlamNode::sonarCallback(const sensor_msgs::Range::ConstPtr& msg) {
 void SlamNode::sonarCloudCallback(const sensor_msgs::PointCloud::ConstPtr& msg) {
   constexpr double kAxisTolerance = 0.05;  // m: a cloud point lies on its transducer's axis
   constexpr int kMaxTransducers = 64;
-  if (!checkClock()) return;
-  if (paused_) {
-    ++frames_while_paused_;
-    return;
-  }
+  if (!readyForFrame()) return;
   core::Pose2 odom_pose, frame_in_base;
   if (!lookupPoses(msg->header, &odom_pose, &frame_in_base)) return;
   const io::RosOptions& o = config_.ros;
@@ -184,11 +176,7 @@ void SlamNode::sonarCloudCallback(const sensor_msgs::PointCloud::ConstPtr& msg) 
 }
 
 void SlamNode::scanCallback(const sensor_msgs::LaserScan::ConstPtr& msg) {
-  if (!checkClock()) return;
-  if (paused_) {
-    ++frames_while_paused_;
-    return;
-  }
+  if (!readyForFrame()) return;
   core::Pose2 odom_pose, sensor_in_base;
   if (!lookupPoses(msg->header, &odom_pose, &sensor_in_base)) return;
   core::RangeScan scan;
@@ -205,11 +193,7 @@ void SlamNode::scanCallback(const sensor_msgs::LaserScan::ConstPtr& msg) {
 }
 
 void SlamNode::featuresCallback(const FeatureArray::ConstPtr& msg) {
-  if (!checkClock()) return;
-  if (paused_) {
-    ++frames_while_paused_;
-    return;
-  }
+  if (!readyForFrame()) return;
   core::Pose2 odom_pose, frame_in_base;
   if (!lookupPoses(msg->header, &odom_pose, &frame_in_base)) return;
   int dropped = 0;
@@ -439,6 +423,15 @@ void SlamNode::initialPoseCallback(const geometry_msgs::PoseWithCovarianceStampe
                                                   << pose.z() << " rad) from initialpose");
   const ros::Time now = ros::Time::now();
   publishState(now.isZero() ? msg->header.stamp : now);
+}
+
+bool SlamNode::readyForFrame() {
+  if (!checkClock()) return false;
+  if (paused_) {
+    ++frames_while_paused_;
+    return false;
+  }
+  return true;
 }
 
 bool SlamNode::checkClock() {

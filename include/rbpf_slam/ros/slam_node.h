@@ -69,6 +69,8 @@ class SlamNode {
   /// Resets everything when ros::Time::now() went backwards (a bag played again); returns
   /// false while there is no clock yet.
   bool checkClock();
+  /// checkClock() and not paused (a paused frame is counted); false: ignore the frame.
+  bool readyForFrame();
   void resetAll(const std::string& why);
   /// Warns about cause at most once every few seconds.
   void warnThrottled(const std::string& cause, const std::string& message);
