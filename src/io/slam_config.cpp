@@ -116,6 +116,7 @@ void readScanMatching(YamlSection section, core::ScanMatcherOptions* o) {
   section.read("max_correction_m", &o->max_correction_m, 0.0, 100.0);
   section.read("max_correction_rad", &o->max_correction_rad, 0.0, 3.2);
   section.read("noise_scale", &o->noise_scale, 1e-3, 10.0);
+  section.read("submap_scans", &o->submap_scans, 1, 100);
   section.read("prior_weight_xy", &o->prior_weight_xy, 0.0, 1e6);
   section.read("prior_weight_theta", &o->prior_weight_theta, 0.0, 1e6);
   section.finish();

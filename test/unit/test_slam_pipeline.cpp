@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <string>
+#include <vector>
 
 #include "rbpf_slam/core/sim/simulator.h"
 #include "rbpf_slam/core/slam/slam_pipeline.h"
@@ -23,10 +24,12 @@ struct RunResult {
 /// Drives test_small once and feeds scans (and, if asked, the range-bearing features of the
 /// same run) to a pipeline built from the laser config; compares the final pose with the
 /// ground truth after aligning the first frame.
-RunResult runTestSmall(std::uint64_t seed, bool with_features) {
+RunResult runTestSmall(std::uint64_t seed, bool with_features,
+                       std::vector<std::string> overrides = {}) {
   const std::string root = RBPF_SOURCE_DIR;
-  const io::SlamConfig config = io::loadSlamConfig(root + "/config/laser_fastslam2.yaml",
-                                                   {"seed=" + std::to_string(seed)});
+  overrides.push_back("seed=" + std::to_string(seed));
+  const io::SlamConfig config =
+      io::loadSlamConfig(root + "/config/laser_fastslam2.yaml", overrides);
   core::SlamPipeline pipeline(config.pipeline());
   core::sim::SimulatorOptions options;
   options.seed = seed;
@@ -83,6 +86,31 @@ TEST(SlamPipeline, LaserOnlyRunEndsNearTheTruth) { expectEndsNearTheTruth(false,
 // (reference scan -> this scan) count the motion up to the feature frame twice.
 TEST(SlamPipeline, ScanMatchingStaysCorrectWithFeatureFramesInBetween) {
   expectEndsNearTheTruth(true, 200);
+}
+
+// Scan-matched dead reckoning (one particle, no motion noise, observations ignored) against a
+// submap of the last 1 or 4 scans: each older scan must be carried into the newest scan's frame
+// through the chain of matches, or the matcher is pulled away and the path drifts off.
+TEST(SlamPipeline, SubmapMatchingDeadReckonsAccurately) {
+  const std::vector<std::string> dead_reckoning = {
+      "particles=1", "motion.alpha1=0", "motion.alpha2=0", "motion.alpha3=0",
+      "motion.alpha4=0", "motion.min_sigma_xy_m=0", "motion.min_sigma_theta_rad=0",
+      "measurement.covariance_inflation=1000"};
+  double mean_error[2] = {0.0, 0.0};
+  for (std::uint64_t seed : {1u, 2u, 3u, 4u, 5u}) {
+    for (int k = 0; k < 2; ++k) {
+      const int scans = k == 0 ? 1 : 4;
+      std::vector<std::string> overrides = dead_reckoning;
+      overrides.push_back("scan_matching.submap_scans=" + std::to_string(scans));
+      const RunResult r = runTestSmall(seed, false, overrides);
+      EXPECT_GT(r.frames, 100) << "seed " << seed << ", " << scans << " scans";
+      EXPECT_LT(r.final_position_error_m, 0.35) << "seed " << seed << ", " << scans << " scans";
+      EXPECT_LT(r.final_yaw_error_rad, 0.07) << "seed " << seed << ", " << scans << " scans";
+      mean_error[k] += r.final_position_error_m / 5.0;
+    }
+  }
+  // Measured: 0.138 m (last scan) against 0.087 m (four scans).
+  EXPECT_LT(mean_error[1], mean_error[0]);
 }
 
 }  // namespace

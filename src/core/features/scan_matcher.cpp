@@ -132,6 +132,7 @@ void validate(const ScanMatcherOptions& o) {
   require("max_correction_m", o.max_correction_m, 0.0, 100.0);
   require("max_correction_rad", o.max_correction_rad, 0.0, 3.2);
   require("noise_scale", o.noise_scale, 1e-3, 10.0);
+  require("submap_scans", o.submap_scans, 1, 100);
   require("prior_weight_xy", o.prior_weight_xy, 0.0, 1e6);
   require("prior_weight_theta", o.prior_weight_theta, 0.0, 1e6);
 }

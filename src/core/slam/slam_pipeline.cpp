@@ -12,6 +12,7 @@ SlamPipeline::SlamPipeline(const PipelineOptions& options)
 void SlamPipeline::reset() {
   session_.reset();
   reference_points_.clear();
+  submap_.clear();
   sonar_extractor_.reset();
   last_features_ = FeatureSet();
 }
@@ -26,6 +27,7 @@ FrameResult SlamPipeline::processScan(const RangeScan& scan, const Pose2& odom_p
   MotionInput measured;
   const MotionInput* override_motion = nullptr;
   last_match_ = ScanMatchResult();
+  Pose2 chain_delta = Pose2::Zero();
   if (!reference_points_.empty() && session_.trajectory().size() > 0) {
     // The match spans reference scan -> this scan; frames from other sources (features) may
     // have been processed in between, so the filter's increment is the part after the last
@@ -33,6 +35,7 @@ FrameResult SlamPipeline::processScan(const RangeScan& scan, const Pose2& odom_p
     const Pose2 odometry_delta = between(reference_odom_pose_, odom_pose);
     const ScanMatchResult match = matcher_.match(reference_points_, points, odometry_delta);
     last_match_ = match;
+    chain_delta = match.ok ? match.delta : odometry_delta;
     if (match.ok) {
       const Pose2 reference_to_last = between(reference_odom_pose_, session_.lastOdomPose());
       measured.delta = compose(inverse(reference_to_last), match.delta);
@@ -46,10 +49,30 @@ FrameResult SlamPipeline::processScan(const RangeScan& scan, const Pose2& odom_p
   }
   const FrameResult result = session_.process(scan.stamp, odom_pose, last_features_, override_motion);
   if (result == FrameResult::kUpdated || result == FrameResult::kFirstFrame) {
-    reference_points_ = std::move(points);
+    if (result == FrameResult::kFirstFrame) submap_.clear();
+    addToSubmap(std::move(points), chain_delta);
     reference_odom_pose_ = odom_pose;
   }
   return result;
+}
+
+void SlamPipeline::addToSubmap(std::vector<Eigen::Vector2d> points, const Pose2& chain_delta) {
+  const Pose2 pose = submap_.empty() ? Pose2::Zero() : compose(submap_.back().pose, chain_delta);
+  submap_.push_back(SubmapScan{pose, std::move(points)});
+  while (static_cast<int>(submap_.size()) > matcher_.options().submap_scans) submap_.pop_front();
+  // The reference for the next match: every kept scan seen from the newest one. Scans stay
+  // contiguous in the list so the matcher's neighbour normals never span two scans' points
+  // (it skips neighbours more than 0.5 m apart, and a seam pair counts as one skipped point).
+  const Pose2 newest_inverse = inverse(pose);
+  reference_points_.clear();
+  for (const SubmapScan& scan : submap_) {
+    const Pose2 to_newest = compose(newest_inverse, scan.pose);
+    const double c = std::cos(to_newest.z()), s = std::sin(to_newest.z());
+    for (const Eigen::Vector2d& p : scan.points) {
+      reference_points_.emplace_back(c * p.x() - s * p.y() + to_newest.x(),
+                                     s * p.x() + c * p.y() + to_newest.y());
+    }
+  }
 }
 
 FrameResult SlamPipeline::processSonar(const std::vector<ConeReading>& readings,

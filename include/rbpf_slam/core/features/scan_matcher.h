@@ -26,6 +26,8 @@ struct ScanMatcherOptions {
   double max_correction_m = 1.0;       // reject results this far from the odometry ...
   double max_correction_rad = 0.6;     // ... or turned this much from it
   double noise_scale = 0.3;            // motion noise multiplier for matched increments
+  int submap_scans = 1;                // match against the union of this many recent scans
+                                       // (chained by their matches); 1 = the last scan only
 };
 
 void validate(const ScanMatcherOptions& options);

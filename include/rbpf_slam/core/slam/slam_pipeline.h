@@ -3,6 +3,7 @@
 // (laser scans, or sonar echoes accumulated over a window of motion) then the session.
 // rbpf_slam_node and offline_slam both call exactly this.
 
+#include <deque>
 #include <memory>
 #include <string>
 
@@ -57,8 +58,17 @@ class SlamPipeline {
   SonarFeatureExtractor sonar_extractor_;
   SlamSession session_;
   FeatureSet last_features_;
-  std::vector<Eigen::Vector2d> reference_points_;  // last scan the filter used, base frame
-  Pose2 reference_odom_pose_ = Pose2::Zero();      // odometry pose of that scan
+  /// Adds a scan the filter used to the matching submap; chain_delta is its pose in the
+  /// previous such scan's base frame (the match, or odometry when matching failed).
+  void addToSubmap(std::vector<Eigen::Vector2d> points, const Pose2& chain_delta);
+
+  struct SubmapScan {
+    Pose2 pose = Pose2::Zero();  // in the submap's frame (the chain of increments)
+    std::vector<Eigen::Vector2d> points;  // base frame of that scan
+  };
+  std::deque<SubmapScan> submap_;                  // the last scans the filter used, oldest first
+  std::vector<Eigen::Vector2d> reference_points_;  // the submap in the last scan's base frame
+  Pose2 reference_odom_pose_ = Pose2::Zero();      // odometry pose of the last scan
   ScanMatchResult last_match_;
   long scans_matched_ = 0;
   long scans_unmatched_ = 0;
