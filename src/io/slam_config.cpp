@@ -220,6 +220,7 @@ SlamConfig parseSlamConfigTree(const YAML::Node& root, const std::string& source
   top.read("angular_update", &s.angular_update_rad, 0.0, 10.0);
   top.read("max_time_gap", &s.max_time_gap_s, 0.0, 1e6);
   top.read("reset_on_time_jump_back", &s.reset_on_time_jump_back_s, 0.0, 1e6);
+  top.read("reset_after_frames_back", &s.reset_after_frames_back, 1, 1000);
   top.read("map_file", &config.map_file);
   top.read("localization_only", &config.localization_only);
   readRos(top, &config.ros);

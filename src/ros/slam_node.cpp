@@ -108,8 +108,15 @@ void SlamNode::subscribeFiltered(
     void (SlamNode::*callback)(const boost::shared_ptr<const Message>&)) {
   const uint32_t queue = static_cast<uint32_t>(config_.ros.queue_size);
   subscriber->subscribe(nh_, topic, queue);
-  *filter = std::make_unique<tf2_ros::MessageFilter<Message>>(*subscriber, tf_buffer_,
-                                                               config_.ros.odom_frame, queue, nh_);
+  *filter = std::make_unique<tf2_ros::MessageFilter<Message>>(tf_buffer_, config_.ros.odom_frame,
+                                                               queue, nh_);
+  // A message in a frame tf does not connect to the base would wait in the queue silently
+  // until pushed out; it is dropped (and named) before it gets there.
+  tf2_ros::MessageFilter<Message>* tf_filter = filter->get();
+  subscriber->registerCallback(boost::function<void(const boost::shared_ptr<const Message>&)>(
+      [this, tf_filter](const boost::shared_ptr<const Message>& msg) {
+        if (frameConnected(msg->header)) tf_filter->add(msg);
+      }));
   (*filter)->registerCallback(callback, this);
   (*filter)->registerFailureCallback(
       [this](const boost::shared_ptr<const Message>& msg, tf2_ros::FilterFailureReason r) {
@@ -206,6 +213,21 @@ void SlamNode::featuresCallback(const FeatureArray::ConstPtr& msg) {
   const auto t0 = std::chrono::steady_clock::now();
   const core::FrameResult result = pipeline_.processFeatures(features, odom_pose);
   handleResult(result, msg->header.stamp, millisecondsSince(t0));
+}
+
+bool SlamNode::frameConnected(const std_msgs::Header& header) {
+  const std::string& base = config_.ros.base_frame;
+  // An empty frame is the MessageFilter's to report; before tf has the base frame at all
+  // (start-up), every message waits in the bounded queue.
+  if (header.frame_id.empty() || !tf_buffer_._frameExists(base)) return true;
+  std::string error;
+  if (tf_buffer_.canTransform(base, header.frame_id, ros::Time(0), &error)) return true;
+  diagnostics_.recordDrop("frame not in tf");
+  warnThrottled("frame " + header.frame_id,
+                "Dropping a message in frame '" + header.frame_id + "': tf has no transform " +
+                    base + " -> " + header.frame_id + " (" + error +
+                    "); is the frame name right and its transform published?");
+  return false;
 }
 
 void SlamNode::messageDropped(const std_msgs::Header& header, tf2_ros::FilterFailureReason reason) {

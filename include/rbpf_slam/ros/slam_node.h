@@ -50,6 +50,9 @@ class SlamNode {
                          std::unique_ptr<tf2_ros::MessageFilter<Message>>* filter,
                          void (SlamNode::*callback)(const boost::shared_ptr<const Message>&));
   void messageDropped(const std_msgs::Header& header, tf2_ros::FilterFailureReason reason);
+  /// False (dropped, counted, warned) when tf has the base frame but no path from it to the
+  /// message's frame, which would otherwise wait in the queue until pushed out.
+  bool frameConnected(const std_msgs::Header& header);
   /// The odometry pose of the base and the pose of the message frame in the base frame at
   /// the header's stamp; false (with a throttled warning) if tf cannot give them.
   bool lookupPoses(const std_msgs::Header& header, core::Pose2* odom_pose,

@@ -17,6 +17,11 @@ void validate(const SessionOptions& o) {
   check("angular_update", o.angular_update_rad);
   check("max_time_gap", o.max_time_gap_s);
   check("reset_on_time_jump_back", o.reset_on_time_jump_back_s);
+  if (o.reset_after_frames_back < 1 || o.reset_after_frames_back > 1000) {
+    throw std::invalid_argument("reset_after_frames_back = " +
+                                std::to_string(o.reset_after_frames_back) +
+                                " is out of range [1, 1000]");
+  }
 }
 
 SlamSession::SlamSession(std::unique_ptr<SlamFilter> filter, const SessionOptions& options)
@@ -56,6 +61,7 @@ void SlamSession::reset() {
   last_stamp_ = 0.0;
   map_to_odom_ = Pose2::Zero();
   trajectory_.clear();
+  frames_back_ = 0;
   ++resets_;
 }
 
@@ -64,15 +70,18 @@ FrameResult SlamSession::process(double stamp, const Pose2& odom_pose,
   if (!std::isfinite(stamp) || stamp <= 0.0) return FrameResult::kRejectedStamp;
   if (!odom_pose.allFinite()) return FrameResult::kRejectedPose;
   if (has_previous_ && stamp <= last_stamp_) {
-    // A large jump back is a restarted clock (a looping bag): start a new map.
-    if (last_stamp_ - stamp > options_.reset_on_time_jump_back_s &&
-        options_.reset_on_time_jump_back_s > 0.0) {
-      reset();
-      // fall through: this frame becomes the first of the new run
-    } else {
+    // A large jump back in several frames in a row is a restarted clock (a looping bag):
+    // start a new map. One late message (a slow driver) must not wipe the map: it is rejected.
+    const bool far_back = options_.reset_on_time_jump_back_s > 0.0 &&
+                          last_stamp_ - stamp > options_.reset_on_time_jump_back_s;
+    frames_back_ = far_back ? frames_back_ + 1 : 0;
+    if (!far_back || frames_back_ < options_.reset_after_frames_back) {
       return FrameResult::kRejectedStamp;
     }
+    reset();
+    // fall through: this frame becomes the first of the new run
   }
+  frames_back_ = 0;
   if (!has_previous_) {
     has_previous_ = true;
     last_stamp_ = stamp;

@@ -17,7 +17,9 @@ struct SessionOptions {
   double linear_update_m = 0.0;     // update only after moving this far (0: every frame)
   double angular_update_rad = 0.0;  // ... or turning this much
   double max_time_gap_s = 30.0;     // a larger gap between frames inflates the motion
-  double reset_on_time_jump_back_s = 1.0;  // stamps going back more than this: reset
+  double reset_on_time_jump_back_s = 1.0;  // stamps going back more than this ...
+  int reset_after_frames_back = 3;  // ... in this many frames in a row: reset (a looping bag);
+                                    // fewer are stale messages, rejected
 };
 
 void validate(const SessionOptions& options);
@@ -75,6 +77,7 @@ class SlamSession {
   std::vector<TrajectoryPoint> trajectory_;
   UpdateStats last_stats_;
   long resets_ = 0;
+  int frames_back_ = 0;  // consecutive frames far behind last_stamp_
   std::optional<std::vector<LandmarkEstimate>> prior_map_;
   std::optional<std::pair<Pose2, Eigen::Matrix3d>> start_pose_;  // for the first frame
   bool mapping_ = true;

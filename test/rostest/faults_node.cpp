@@ -1,0 +1,441 @@
+// Fault injection against a running rbpf_slam_node (faults.test). This node is the robot: it
+// owns /clock, broadcasts odom -> base_link and base_link -> laser, and publishes scans of a
+// rectangular room computed exactly. Between stretches of good data it injects one fault
+// class at a time and checks the named outcome: the message is dropped with its cause counted
+// in /diagnostics, or processed without harm; afterwards the node keeps updating. Throughout,
+// nothing non-finite may be published and map -> odom never repeats a stamp within one run
+// of the clock. Finally the clock jumps back (a bag loop): the node must clear its map, count
+// a reset and map again.
+
+#include <diagnostic_msgs/DiagnosticArray.h>
+#include <geometry_msgs/PoseWithCovarianceStamped.h>
+#include <gtest/gtest.h>
+#include <ros/ros.h>
+#include <rosgraph_msgs/Clock.h>
+#include <sensor_msgs/LaserScan.h>
+#include <tf2_msgs/TFMessage.h>
+#include <tf2_ros/static_transform_broadcaster.h>
+#include <tf2_ros/transform_broadcaster.h>
+#include <visualization_msgs/MarkerArray.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <mutex>
+#include <set>
+#include <string>
+#include <utility>
+
+#include "rbpf_slam/core/geometry.h"
+#include "rbpf_slam/ros/conversions.h"
+
+namespace rbpf_slam {
+namespace {
+
+constexpr double kHalfX = 5.0, kHalfY = 4.0;  // the room: [-5, 5] x [-4, 4] m
+constexpr int kBeams = 181;
+constexpr double kStep = 0.5;  // s of simulated time per scan
+
+/// Distance from (x, y) along heading a to the room's walls.
+double rangeToWall(double x, double y, double a) {
+  const double c = std::cos(a), s = std::sin(a);
+  double best = std::numeric_limits<double>::infinity();
+  if (c > 1e-9) best = std::min(best, (kHalfX - x) / c);
+  if (c < -1e-9) best = std::min(best, (-kHalfX - x) / c);
+  if (s > 1e-9) best = std::min(best, (kHalfY - y) / s);
+  if (s < -1e-9) best = std::min(best, (-kHalfY - y) / s);
+  return best;
+}
+
+/// Everything the node publishes that the checks need, with running fault flags.
+class Observer {
+ public:
+  Observer() {
+    ros::NodeHandle nh;
+    pose_sub_ = nh.subscribe("/rbpf_slam_node/pose", 100, &Observer::onPose, this);
+    markers_sub_ = nh.subscribe("/rbpf_slam_node/landmarks", 100, &Observer::onMarkers, this);
+    tf_sub_ = nh.subscribe("/tf", 1000, &Observer::onTf, this);
+    diag_sub_ = nh.subscribe("/diagnostics", 10, &Observer::onDiagnostics, this);
+  }
+  long poses() { std::lock_guard<std::mutex> l(m_); return poses_; }
+  double lastPoseStamp() { std::lock_guard<std::mutex> l(m_); return last_pose_stamp_; }
+  size_t landmarks() { std::lock_guard<std::mutex> l(m_); return shown_.size(); }
+  long nonFinite() { std::lock_guard<std::mutex> l(m_); return non_finite_; }
+  long repeatedTf() { std::lock_guard<std::mutex> l(m_); return repeated_tf_; }
+  long mapToOdom() { std::lock_guard<std::mutex> l(m_); return map_to_odom_; }
+  /// A value of the latest /diagnostics report, or -1 when absent.
+  long diagnostic(const std::string& key) {
+    std::lock_guard<std::mutex> l(m_);
+    auto it = diagnostics_.find(key);
+    return it == diagnostics_.end() ? -1 : std::stol(it->second);
+  }
+  ros::WallTime lastDiagnostics() { std::lock_guard<std::mutex> l(m_); return diag_time_; }
+  /// After a clock jump the map -> odom stamps start over.
+  void newClockEpoch() { std::lock_guard<std::mutex> l(m_); last_tf_stamp_ = 0.0; }
+
+ private:
+  void onPose(const geometry_msgs::PoseWithCovarianceStamped::ConstPtr& msg) {
+    std::lock_guard<std::mutex> l(m_);
+    ++poses_;
+    last_pose_stamp_ = msg->header.stamp.toSec();
+    const auto& p = msg->pose.pose;
+    bool ok = std::isfinite(p.position.x) && std::isfinite(p.position.y) &&
+              std::isfinite(p.orientation.z) && std::isfinite(p.orientation.w);
+    for (double c : msg->pose.covariance) ok = ok && std::isfinite(c);
+    if (!ok) ++non_finite_;
+  }
+  void onMarkers(const visualization_msgs::MarkerArray::ConstPtr& msg) {
+    std::lock_guard<std::mutex> l(m_);
+    for (const auto& m : msg->markers) {
+      const auto key = std::make_pair(m.ns, m.id);
+      if (m.action == visualization_msgs::Marker::DELETEALL) {
+        shown_.clear();
+      } else if (m.action == visualization_msgs::Marker::DELETE) {
+        shown_.erase(key);
+      } else {
+        shown_.insert(key);
+        bool ok = std::isfinite(m.pose.position.x) && std::isfinite(m.pose.position.y) &&
+                  std::isfinite(m.scale.x) && std::isfinite(m.scale.y);
+        for (const auto& p : m.points) ok = ok && std::isfinite(p.x) && std::isfinite(p.y);
+        if (!ok) ++non_finite_;
+      }
+    }
+  }
+  void onTf(const tf2_msgs::TFMessage::ConstPtr& msg) {
+    std::lock_guard<std::mutex> l(m_);
+    for (const auto& t : msg->transforms) {
+      if (t.header.frame_id != "map" || t.child_frame_id != "odom") continue;
+      ++map_to_odom_;
+      const auto& v = t.transform.translation;
+      const auto& q = t.transform.rotation;
+      if (!std::isfinite(v.x) || !std::isfinite(v.y) || !std::isfinite(q.z) ||
+          !std::isfinite(q.w)) {
+        ++non_finite_;
+      }
+      const double stamp = t.header.stamp.toSec();
+      if (stamp <= last_tf_stamp_) ++repeated_tf_;
+      last_tf_stamp_ = stamp;
+    }
+  }
+  void onDiagnostics(const diagnostic_msgs::DiagnosticArray::ConstPtr& msg) {
+    std::lock_guard<std::mutex> l(m_);
+    for (const auto& status : msg->status) {
+      if (status.name.find("rbpf_slam") == std::string::npos) continue;
+      diagnostics_.clear();
+      for (const auto& kv : status.values) {
+        try {
+          (void)std::stod(kv.value);
+          diagnostics_[kv.key] = kv.value;
+        } catch (const std::exception&) {  // "true"/"false" and text values are not counts
+        }
+      }
+      diag_time_ = ros::WallTime::now();
+    }
+  }
+
+  std::mutex m_;
+  ros::Subscriber pose_sub_, markers_sub_, tf_sub_, diag_sub_;
+  long poses_ = 0, non_finite_ = 0, repeated_tf_ = 0, map_to_odom_ = 0;
+  double last_pose_stamp_ = 0.0, last_tf_stamp_ = 0.0;
+  std::set<std::pair<std::string, int>> shown_;
+  std::map<std::string, std::string> diagnostics_;
+  ros::WallTime diag_time_;
+};
+
+/// The robot: drives a circle of radius 1.5 m at 0.3 m/s in the room, with exact odometry.
+class Robot {
+ public:
+  Robot() {
+    ros::NodeHandle nh;
+    clock_pub_ = nh.advertise<rosgraph_msgs::Clock>("/clock", 10);
+    scan_pub_ = nh.advertise<sensor_msgs::LaserScan>("/scan", 10);
+    geometry_msgs::TransformStamped laser =
+        rosbridge::toTransformStamped(core::Pose2(0.1, 0.0, 0.0), "base_link", "laser", ros::Time(0.0));
+    static_broadcaster_.sendTransform(laser);
+  }
+  double time() const { return t_; }
+  core::Pose2 truth(double t) const {
+    const double w = 0.3 / 1.5;  // rad/s
+    return core::Pose2(1.5 * std::sin(w * t), 1.5 - 1.5 * std::cos(w * t), core::wrapAngle(w * t));
+  }
+  /// Advances the clock one step and publishes odometry (unless tf is off) at the new time.
+  void tick(bool with_tf = true) {
+    t_ += kStep;
+    publishClock(t_);
+    if (with_tf) {
+      core::Pose2 odom = truth(t_);
+      odom.x() += odom_offset_x_;
+      broadcaster_.sendTransform(rosbridge::toTransformStamped(odom, "odom", "base_link", ros::Time(t_)));
+    }
+    ros::WallDuration(0.03).sleep();
+  }
+  /// A correct scan at the current time.
+  sensor_msgs::LaserScan scan() const {
+    sensor_msgs::LaserScan msg;
+    msg.header.stamp = ros::Time(t_);
+    msg.header.frame_id = "laser";
+    msg.angle_min = -M_PI / 2;
+    msg.angle_max = M_PI / 2;
+    msg.angle_increment = M_PI / (kBeams - 1);
+    msg.range_min = 0.05;
+    msg.range_max = 30.0;
+    const core::Pose2 base = truth(t_);
+    const core::Pose2 laser = core::compose(base, core::Pose2(0.1, 0.0, 0.0));
+    for (int i = 0; i < kBeams; ++i) {
+      msg.ranges.push_back(static_cast<float>(
+          rangeToWall(laser.x(), laser.y(), laser.z() + msg.angle_min + i * msg.angle_increment)));
+    }
+    return msg;
+  }
+  void publish(const sensor_msgs::LaserScan& msg) {
+    scan_pub_.publish(msg);
+    ros::WallDuration(0.05).sleep();
+  }
+  /// n ordinary steps.
+  void drive(int n) {
+    for (int i = 0; i < n; ++i) {
+      tick();
+      publish(scan());
+    }
+  }
+  void jumpOdometry(double dx) { odom_offset_x_ += dx; }
+  /// The clock goes back (rosbag play -l): the route starts over at t.
+  void restartClockAt(double t) {
+    t_ = t;
+    odom_offset_x_ = 0.0;
+    publishClock(t_);
+    ros::WallDuration(0.1).sleep();
+  }
+  bool subscribed() const {
+    return scan_pub_.getNumSubscribers() > 0 && clock_pub_.getNumSubscribers() > 0;
+  }
+
+ private:
+  void publishClock(double t) {
+    rosgraph_msgs::Clock clock;
+    clock.clock = ros::Time(t);
+    clock_pub_.publish(clock);
+  }
+  ros::Publisher clock_pub_, scan_pub_;
+  tf2_ros::TransformBroadcaster broadcaster_;
+  tf2_ros::StaticTransformBroadcaster static_broadcaster_;
+  double t_ = 1.0;
+  double odom_offset_x_ = 0.0;
+};
+
+class FaultsTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    observer_ = new Observer();
+    robot_ = new Robot();
+    const ros::WallTime deadline = ros::WallTime::now() + ros::WallDuration(30.0);
+    while (!robot_->subscribed() && ros::WallTime::now() < deadline) {
+      ros::WallDuration(0.1).sleep();
+    }
+  }
+  /// Waits for a /diagnostics report produced after everything sent so far was handled.
+  static void settle() {
+    ros::WallDuration(0.3).sleep();
+    const ros::WallTime since = ros::WallTime::now();
+    const ros::WallTime deadline = since + ros::WallDuration(5.0);
+    while (observer_->lastDiagnostics() <= since && ros::WallTime::now() < deadline) {
+      ros::WallDuration(0.05).sleep();
+    }
+  }
+  /// Waits (up to 20 s of wall time, for a loaded machine) until the node has published a
+  /// pose stamped at the robot's current time; true if it did.
+  static bool caughtUp() {
+    const ros::WallTime deadline = ros::WallTime::now() + ros::WallDuration(20.0);
+    while (ros::WallTime::now() < deadline) {
+      if (std::fabs(observer_->lastPoseStamp() - robot_->time()) < 1e-6) return true;
+      ros::WallDuration(0.05).sleep();
+    }
+    return false;
+  }
+  /// Good data after a fault: the node updates again (a pose stamped at the newest time).
+  static void expectRecovers(const std::string& after) {
+    robot_->drive(6);
+    EXPECT_TRUE(caughtUp()) << "no update on good data after " << after << " (last pose at "
+                            << observer_->lastPoseStamp() << ", now " << robot_->time() << ")";
+    settle();
+  }
+  static Observer* observer_;
+  static Robot* robot_;
+};
+Observer* FaultsTest::observer_ = nullptr;
+Robot* FaultsTest::robot_ = nullptr;
+
+// The tests run in declaration order on one node (gtest keeps the order within a suite).
+
+TEST_F(FaultsTest, A_MapsTheRoomFromGoodData) {
+  ASSERT_TRUE(robot_->subscribed()) << "rbpf_slam_node did not subscribe to /scan and /clock";
+  robot_->drive(30);
+  EXPECT_TRUE(caughtUp());
+  settle();
+  EXPECT_GE(observer_->poses(), 20);
+  EXPECT_GE(observer_->landmarks(), 4u) << "the four walls";
+  EXPECT_GT(observer_->mapToOdom(), 0);
+}
+
+TEST_F(FaultsTest, B_InvalidBeamsAreSkippedNotFitted) {
+  const long bad_before = observer_->diagnostic("dropped: bad scan");
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const float inf = std::numeric_limits<float>::infinity();
+  for (float value : {nan, inf, -inf, 0.0f, 0.01f /* < range_min */, 50.0f /* > range_max */}) {
+    robot_->tick();
+    sensor_msgs::LaserScan msg = robot_->scan();
+    for (size_t i = 0; i < msg.ranges.size(); i += 2) msg.ranges[i] = value;  // half the beams
+    robot_->publish(msg);
+    robot_->tick();
+    msg = robot_->scan();
+    for (float& r : msg.ranges) r = value;  // all of them
+    robot_->publish(msg);
+  }
+  settle();
+  // Processed (no features from the invalid beams), not dropped as malformed.
+  EXPECT_EQ(observer_->diagnostic("dropped: bad scan"), bad_before);
+  EXPECT_EQ(observer_->nonFinite(), 0);
+  expectRecovers("invalid beams");
+}
+
+TEST_F(FaultsTest, C_MalformedScanHeadersAreDroppedAndCounted) {
+  const long bad_before = std::max(0L, observer_->diagnostic("dropped: bad scan"));
+  int malformed = 0;
+  for (int kind = 0; kind < 3; ++kind) {
+    robot_->tick();
+    sensor_msgs::LaserScan msg = robot_->scan();
+    if (kind == 0) msg.angle_increment = 0.0f;
+    if (kind == 1) msg.angle_increment = std::numeric_limits<float>::quiet_NaN();
+    if (kind == 2) msg.angle_min = std::numeric_limits<float>::infinity();
+    robot_->publish(msg);
+    ++malformed;
+  }
+  // Usable oddities: an empty scan, a changed beam count, a zero range_max (unbounded), an
+  // increment inconsistent with angle_max (warned, bearings from angle_min + i * increment),
+  // and a reversed scan.
+  for (int kind = 0; kind < 5; ++kind) {
+    robot_->tick();
+    sensor_msgs::LaserScan msg = robot_->scan();
+    if (kind == 0) msg.ranges.clear();
+    if (kind == 1) {
+      sensor_msgs::LaserScan half = msg;
+      half.ranges.clear();
+      for (size_t i = 0; i < msg.ranges.size(); i += 2) half.ranges.push_back(msg.ranges[i]);
+      half.angle_increment = 2.0f * msg.angle_increment;
+      msg = half;
+    }
+    if (kind == 2) msg.range_max = 0.0f;
+    if (kind == 3) msg.angle_max = msg.angle_min + 0.5f;
+    if (kind == 4) {
+      std::reverse(msg.ranges.begin(), msg.ranges.end());
+      std::swap(msg.angle_min, msg.angle_max);
+      msg.angle_increment = -msg.angle_increment;
+    }
+    robot_->publish(msg);
+  }
+  settle();
+  EXPECT_EQ(observer_->diagnostic("dropped: bad scan"), bad_before + malformed);
+  EXPECT_EQ(observer_->nonFinite(), 0);
+  expectRecovers("malformed scans");
+}
+
+TEST_F(FaultsTest, D_DuplicateOldAndZeroStampsAreDropped) {
+  const long stale_before = std::max(0L, observer_->diagnostic("dropped: stamp not after the last"));
+  robot_->tick();
+  const sensor_msgs::LaserScan good = robot_->scan();
+  robot_->publish(good);
+  robot_->publish(good);  // the same stamp again
+  EXPECT_TRUE(caughtUp());
+  settle();
+  const double last = observer_->lastPoseStamp();
+  sensor_msgs::LaserScan old = robot_->scan();
+  old.header.stamp = ros::Time(robot_->time() - 3.0 * kStep);  // older, but tf still has it
+  robot_->publish(old);
+  settle();
+  EXPECT_GE(observer_->diagnostic("dropped: stamp not after the last"), stale_before + 2);
+  sensor_msgs::LaserScan zero = robot_->scan();
+  zero.header.stamp = ros::Time(0.0);
+  robot_->publish(zero);
+  settle();
+  EXPECT_DOUBLE_EQ(observer_->lastPoseStamp(), last) << "an old or zero stamp made an update";
+  EXPECT_EQ(observer_->nonFinite(), 0);
+  expectRecovers("out-of-order stamps");
+}
+
+TEST_F(FaultsTest, E_UnknownAndEmptyFramesAreDropped) {
+  const long empty_before = std::max(0L, observer_->diagnostic("dropped: empty frame_id"));
+  const long updates_before = observer_->poses();
+  robot_->tick();
+  sensor_msgs::LaserScan msg = robot_->scan();
+  msg.header.frame_id = "";
+  robot_->publish(msg);
+  msg.header.frame_id = "no_such_laser";
+  for (int i = 0; i < 3; ++i) {
+    robot_->tick();
+    msg.header.stamp = ros::Time(robot_->time());
+    robot_->publish(msg);
+  }
+  settle();
+  EXPECT_EQ(observer_->diagnostic("dropped: empty frame_id"), empty_before + 1);
+  EXPECT_EQ(observer_->poses(), updates_before) << "a scan in an unknown frame was used";
+  expectRecovers("unknown frames");
+  EXPECT_EQ(observer_->diagnostic("dropped: frame not in tf"), 3)
+      << "the scans in frame no_such_laser";
+}
+
+TEST_F(FaultsTest, F_MissingOdometryTfIsWaitedForThenDropped) {
+  const long map_to_odom_before = observer_->mapToOdom();
+  const double pose_before = observer_->lastPoseStamp();
+  for (int i = 0; i < 8; ++i) {  // 4 s of scans without odom -> base_link
+    robot_->tick(false);
+    robot_->publish(robot_->scan());
+  }
+  settle();
+  EXPECT_DOUBLE_EQ(observer_->lastPoseStamp(), pose_before) << "updated without odometry";
+  EXPECT_GT(observer_->mapToOdom(), map_to_odom_before)
+      << "map -> odom must keep being published through a tf outage";
+  expectRecovers("a tf outage");
+}
+
+TEST_F(FaultsTest, G_OdometryJumpIsSurvived) {
+  robot_->jumpOdometry(5.0);  // the wheel odometry jumps 5 m at once (as in intel.bag)
+  robot_->drive(10);
+  EXPECT_TRUE(caughtUp());
+  settle();
+  EXPECT_EQ(observer_->nonFinite(), 0);
+}
+
+TEST_F(FaultsTest, H_ClockJumpBackClearsTheMapAndMappingRestarts) {
+  const long resets_before = std::max(0L, observer_->diagnostic("resets"));
+  ASSERT_GE(observer_->landmarks(), 4u);
+  robot_->restartClockAt(1.0);
+  observer_->newClockEpoch();
+  robot_->drive(2);  // the first scan after the jump triggers the reset
+  EXPECT_TRUE(caughtUp());
+  settle();
+  EXPECT_EQ(observer_->diagnostic("resets"), resets_before + 1);
+  robot_->drive(20);
+  EXPECT_TRUE(caughtUp()) << "no mapping after the loop";
+  settle();
+  EXPECT_GE(observer_->landmarks(), 4u) << "the walls were not mapped again";
+}
+
+TEST_F(FaultsTest, Z_NothingNonFiniteAndNoRepeatedTransformStamps) {
+  EXPECT_EQ(observer_->nonFinite(), 0);
+  EXPECT_EQ(observer_->repeatedTf(), 0) << "map -> odom published twice with one stamp";
+}
+
+}  // namespace
+}  // namespace rbpf_slam
+
+int main(int argc, char** argv) {
+  testing::InitGoogleTest(&argc, argv);
+  ros::init(argc, argv, "faults_test");
+  ros::AsyncSpinner spinner(2);
+  spinner.start();
+  const int result = RUN_ALL_TESTS();
+  spinner.stop();
+  ros::shutdown();
+  return result;
+}
