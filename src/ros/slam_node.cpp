@@ -240,12 +240,25 @@ void SlamNode::messageDropped(const std_msgs::Header& header, tf2_ros::FilterFai
     case tf2_ros::filter_failure_reasons::EmptyFrameID:
       warnThrottled("empty frame_id", "Dropping a message with an empty header.frame_id");
       break;
-    case tf2_ros::filter_failure_reasons::OutTheBack:
+    case tf2_ros::filter_failure_reasons::OutTheBack: {
       warnThrottled("too old " + header.frame_id,
                     "Dropping a message in " + header.frame_id + " stamped " +
                         std::to_string(header.stamp.toSec()) +
                         ": older than the tf cache (is the node too slow, or the clock wrong?)");
+      // Sensor stamps that went back while the clock did not (a restarted driver, two logs in
+      // one bag): tf refuses the old-stamped odometry too, so nothing would ever be processed
+      // again. As for a clock jump, several such frames in a row start a new map.
+      const core::SessionOptions& session = config_.session;
+      const double behind = pipeline_.session().lastStamp() - header.stamp.toSec();
+      if (session.reset_on_time_jump_back_s > 0.0 && !pipeline_.session().trajectory().empty() &&
+          behind > session.reset_on_time_jump_back_s &&
+          ++stale_drops_in_a_row_ >= session.reset_after_frames_back) {
+        std::ostringstream why;
+        why << "sensor stamps went back by " << behind << " s while the clock did not";
+        resetAll(why.str());
+      }
       break;
+    }
     default:
       warnThrottled("no tf " + header.frame_id,
                     "Dropping a message: no transform " + odom + " -> " + header.frame_id +
@@ -296,6 +309,7 @@ void SlamNode::handleResult(core::FrameResult result, const ros::Time& stamp, do
   }
   diagnostics_.recordUpdate(update_ms);
   ++updates_;
+  stale_drops_in_a_row_ = 0;
   const core::FilterStats stats = pipeline_.session().filter().stats();
   ROS_INFO_STREAM_THROTTLE(kSummaryPeriodS,
                            "rbpf_slam_node: " << updates_ << " updates, " << stats.landmarks
@@ -487,6 +501,7 @@ void SlamNode::resetAll(const std::string& why) {
   features_filter_->clear();
   last_transform_stamp_ = ros::Time();
   updates_ = 0;
+  stale_drops_in_a_row_ = 0;
   publishLandmarks(ros::Time::now());  // DELETE for every landmark shown
   trajectory_publisher_.publish(toPath(pipeline_.session().trajectory(), config_.ros.map_frame));
 }

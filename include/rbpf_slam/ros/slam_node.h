@@ -113,6 +113,7 @@ class SlamNode {
   LandmarkMarkers landmark_markers_;
   ros::Time last_transform_stamp_;
   ros::Time last_now_;
+  int stale_drops_in_a_row_ = 0;  // "older than the tf cache" drops since the last good frame
   std::map<std::string, ros::WallTime> last_warning_;
   long updates_ = 0;
 };

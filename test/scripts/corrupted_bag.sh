@@ -1,0 +1,158 @@
+#!/usr/bin/env bash
+# A corrupted copy of the bundled Intel slice (test/tools/corrupt_bag.py: invalid beams, stale
+# and duplicate stamps, a 30 s tf gap, empty and unknown frames, a malformed header, a 3 m
+# odometry jump, then the bag's start again with its own stamps) through offline_slam and
+# through rbpf_slam_node (rosbag play --clock). Fails if either crashes, writes or publishes
+# anything non-finite, stops updating after any fault window, or does not start a new map at
+# the loop.
+set -euo pipefail
+
+here=$(cd "$(dirname "$0")" && pwd)
+root=$(cd "$here/../.." && pwd)
+bin="${RBPF_BIN:-$root/build/devel/lib/rbpf_slam}"
+[ -x "$bin/offline_slam" ] && [ -x "$bin/rbpf_slam_node" ] || { echo "FAIL: not built ($bin)"; exit 1; }
+work=$(mktemp -d)
+launch=""
+cleanup() {
+  if [ -n "$launch" ] && kill -0 "$launch" 2>/dev/null; then
+    kill -INT "$launch" 2>/dev/null || true
+    for _ in $(seq 1 20); do kill -0 "$launch" 2>/dev/null || break; sleep 0.5; done
+    kill -KILL "$launch" 2>/dev/null || true
+  fi
+  rm -rf "$work"
+}
+trap cleanup EXIT
+[ -n "${KEEP_WORK:-}" ] && trap - EXIT
+config="$root/config/laser_fastslam2.yaml"
+
+/usr/bin/python3 "$root/test/tools/corrupt_bag.py" "$root/test/data/intel_head.bag" \
+  "$work/corrupt.bag" >"$work/windows.json"
+
+# 1. The offline runner.
+"$bin/offline_slam" --bag "$work/corrupt.bag" --config "$config" --output "$work/offline" \
+  --no-progress --verbose >"$work/offline.log" 2>&1 || { echo "FAIL: offline_slam exited non-zero"; tail "$work/offline.log"; exit 1; }
+
+# 2. The node, with the bag played at 10x and its outputs recorded.
+port=$((20000 + ($$ + 7) % 20000))
+export ROS_MASTER_URI="http://localhost:$port" ROS_LOG_DIR="$work/log" ROS_HOME="$work/home"
+cat >"$work/run.launch" <<LAUNCH
+<launch>
+  <param name="use_sim_time" value="true"/>
+  <node pkg="rbpf_slam" type="rbpf_slam_node" name="rbpf_slam_node" output="screen">
+    <rosparam command="load" file="$config"/>
+  </node>
+  <node pkg="rosbag" type="record" name="recorder"
+        args="-O $work/node_out.bag /rbpf_slam_node/pose /tf"/>
+  <node pkg="rosbag" type="play" name="player" required="true"
+        args="--clock --quiet --delay=4 --rate=10 $work/corrupt.bag"/>
+</launch>
+LAUNCH
+roslaunch -p "$port" --screen "$work/run.launch" >"$work/node.log" 2>&1 &
+launch=$!
+node=""
+for _ in $(seq 1 60); do
+  node=$(pgrep -P "$launch" -f "rbpf_slam_node" | head -n 1 || true)
+  [ -n "$node" ] && break
+  sleep 0.5
+done
+[ -n "$node" ] || { echo "FAIL: rbpf_slam_node did not start"; tail -n 30 "$work/node.log"; exit 1; }
+for _ in $(seq 1 240); do  # the player is required: roslaunch ends when it does
+  kill -0 "$launch" 2>/dev/null || break
+  sleep 0.5
+done
+wait "$launch" 2>/dev/null || true
+launch=""
+# roslaunch reports a node that crashed (or exited) before shutdown as "process has died".
+node_alive=1
+grep -q "rbpf_slam_node-[0-9]*\] process has died" "$work/node.log" && node_alive=0
+node_resets=$(grep -c "stamps went back\|time jumped back" "$work/node.log" || true)
+
+/usr/bin/python3 - "$work" "$node_alive" "$node_resets" <<'PY'
+import json, math, sys
+import rosbag, yaml
+work, node_alive, node_resets = sys.argv[1], int(sys.argv[2]), int(sys.argv[3])
+windows = json.load(open(work + "/windows.json"))
+ok = True
+def fail(why):
+    global ok
+    ok = False
+    print("FAIL: " + why)
+
+# Offline runner outputs.
+for line in open(work + "/offline/trajectory.tum"):
+    if line.startswith("#") or not line.strip():
+        continue
+    v = [float(x) for x in line.split()]
+    if not all(math.isfinite(x) for x in v):
+        fail("non-finite pose in trajectory.tum: " + line.strip())
+# Every update of every run (trajectory.tum holds the last run only, after the loop's reset).
+stamps = []
+for line in open(work + "/offline.log"):
+    if line.startswith("t=") and "pose=(" in line:
+        stamps.append(float(line.split()[0][2:]))
+        pose = line.split("pose=(")[1].split(")")[0].replace("deg", "").split()
+        if not all(math.isfinite(float(x)) for x in pose):
+            fail("offline: non-finite pose: " + line.strip())
+summary = json.load(open(work + "/offline/summary.json"))
+def numbers(value):
+    if isinstance(value, dict):
+        for v in value.values():
+            yield from numbers(v)
+    elif isinstance(value, list):
+        for v in value:
+            yield from numbers(v)
+    elif isinstance(value, float):
+        yield value
+landmarks = yaml.safe_load(open(work + "/offline/landmarks.yaml"))["landmarks"] or []
+for lm in landmarks:
+    if not all(math.isfinite(x) for x in numbers(lm)):
+        fail("offline: non-finite landmark %s" % lm)
+if not landmarks:
+    fail("offline: no landmarks at the end")
+for name, (lo, hi) in windows.items():
+    if name == "loop":
+        continue
+    if not any(s > hi for s in stamps):
+        fail("offline: no update after the %s window" % name)
+if summary["resets"] < 1:
+    fail("offline: no new map at the loop (resets = %d)" % summary["resets"])
+print("offline: %d updates, %d resets, %d rejected, %d malformed, %d without tf, %d landmarks"
+      % (summary["updates"], summary["resets"], summary["rejected"],
+         summary["dropped_bad_message"], summary["dropped_no_tf"], summary["landmarks"]))
+
+# Node outputs.
+if not node_alive:
+    fail("rbpf_slam_node died")
+poses, map_odom = [], []
+with rosbag.Bag(work + "/node_out.bag") as bag:
+    for topic, msg, _ in bag.read_messages():
+        if topic.endswith("/pose"):
+            p = msg.pose.pose
+            vals = [p.position.x, p.position.y, p.orientation.z, p.orientation.w] + list(msg.pose.covariance)
+            if not all(math.isfinite(x) for x in vals):
+                fail("node published a non-finite pose at %.2f" % msg.header.stamp.to_sec())
+            poses.append(msg.header.stamp.to_sec())
+        else:
+            for t in msg.transforms:
+                if t.header.frame_id == "map" and t.child_frame_id == "odom":
+                    q = t.transform
+                    if not all(math.isfinite(x) for x in (q.translation.x, q.translation.y, q.rotation.z, q.rotation.w)):
+                        fail("node published a non-finite map -> odom")
+                    map_odom.append(t.header.stamp.to_sec())
+for name, (lo, hi) in windows.items():
+    if name == "loop":
+        continue
+    if not any(lo < s and s > hi for s in poses):
+        fail("node: no update after the %s window" % name)
+# After the loop the stamps start over: updates must come again with the loop's own stamps.
+loop_start = windows["loop"][0]
+after_loop = [s for i, s in enumerate(poses) if i > 0 and s < poses[i - 1] - 10.0]
+if node_resets < 1 or not after_loop:
+    fail("node: no new map at the loop (%d clock resets, %d updates after it)" % (node_resets, len(after_loop)))
+repeated = sum(1 for a, b in zip(map_odom, map_odom[1:]) if b == a)
+if repeated:
+    fail("node: %d map -> odom transforms repeated the previous stamp" % repeated)
+print("node: %d poses, %d map -> odom, %d clock resets" % (len(poses), len(map_odom), node_resets))
+print("PASS" if ok else "FAIL")
+sys.exit(0 if ok else 1)
+PY
