@@ -219,6 +219,9 @@ SlamConfig parseSlamConfigTree(const YAML::Node& root, const std::string& source
   top.read("linear_update", &s.linear_update_m, 0.0, 100.0);
   top.read("angular_update", &s.angular_update_rad, 0.0, 10.0);
   top.read("max_time_gap", &s.max_time_gap_s, 0.0, 1e6);
+  top.read("max_odometry_jump", &s.max_odometry_jump_m, 0.0, 1e6);
+  top.read("gap_action", &s.gap_action, {"inflate", "reset"});
+  top.read("gap_noise_inflation", &s.gap_noise_inflation, 1.0, 1000.0);
   top.read("reset_on_time_jump_back", &s.reset_on_time_jump_back_s, 0.0, 1e6);
   top.read("reset_after_frames_back", &s.reset_after_frames_back, 1, 1000);
   top.read("map_file", &config.map_file);

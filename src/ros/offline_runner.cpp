@@ -338,6 +338,7 @@ OfflineSummary OfflineRunner::run() {
   summary.cpu_s = static_cast<double>(std::clock() - cpu_start) / CLOCKS_PER_SEC;
   summary.updates = static_cast<long>(update_ms.size());
   summary.resets = pipeline_.session().resets();
+  summary.gaps = pipeline_.session().gaps();
   if (!update_ms.empty()) {
     double sum = 0.0;
     for (double v : update_ms) sum += v;
@@ -402,6 +403,7 @@ OfflineSummary OfflineRunner::writeOutputs(const OfflineSummary& in) const {
        << "  \"skipped_no_motion\": " << summary.skipped << ",\n"
        << "  \"rejected\": " << summary.rejected << ",\n"
        << "  \"resets\": " << summary.resets << ",\n"
+       << "  \"gaps\": " << summary.gaps << ",\n"
        << "  \"dropped_no_tf\": " << summary.dropped_no_tf << ",\n"
        << "  \"dropped_bad_message\": " << summary.dropped_bad_message << ",\n"
        << "  \"skipped_transforms\": " << summary.skipped_transforms << ",\n"

@@ -3,7 +3,9 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <memory>
+#include <string>
 
 #include "rbpf_slam/core/filters/slam_filter.h"
 #include "rbpf_slam/core/slam/slam_session.h"
@@ -70,6 +72,56 @@ TEST(SlamSession, BadOptionsAreNamed) {
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("reset_after_frames_back"), std::string::npos);
   }
+}
+
+}  // namespace
+}  // namespace rbpf_slam
+
+namespace rbpf_slam {
+namespace {
+
+/// Spread (RMS distance from the mean) of the particles after one 0.5 m step taken `gap_s`
+/// after the first frame.
+double spreadAfterGap(const std::string& action, double gap_s, long* gaps, long* resets) {
+  core::FilterOptions filter;
+  filter.particles = 200;
+  filter.seed = 3;
+  core::SessionOptions options;
+  options.max_time_gap_s = 30.0;
+  options.gap_action = action;
+  core::SlamSession session(core::createFilter(filter), options);
+  session.process(1.0, core::Pose2(0.0, 0.0, 0.0), core::FeatureSet());
+  session.process(1.0 + gap_s, core::Pose2(0.5, 0.0, 0.0), core::FeatureSet());
+  *gaps = session.gaps();
+  *resets = session.resets();
+  const auto particles = session.filter().particles();
+  Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+  for (const auto& p : particles) mean += p.pose.head<2>() / particles.size();
+  double sum = 0.0;
+  for (const auto& p : particles) sum += (p.pose.head<2>() - mean).squaredNorm();
+  return std::sqrt(sum / particles.size());
+}
+
+TEST(SlamSession, ATimeGapInflatesTheMotionNoiseOrResets) {
+  long gaps = 0, resets = 0;
+  const double normal = spreadAfterGap("inflate", 1.0, &gaps, &resets);
+  EXPECT_EQ(gaps, 0);
+  const double inflated = spreadAfterGap("inflate", 60.0, &gaps, &resets);
+  EXPECT_EQ(gaps, 1);
+  EXPECT_EQ(resets, 0);
+  EXPECT_GT(inflated, 2.0 * normal) << "normal " << normal << ", after the gap " << inflated;
+  spreadAfterGap("reset", 60.0, &gaps, &resets);
+  EXPECT_EQ(gaps, 1);
+  EXPECT_EQ(resets, 1);
+}
+
+TEST(SlamSession, GapOptionsAreValidated) {
+  core::SessionOptions options;
+  options.gap_action = "explode";
+  EXPECT_THROW(core::validate(options), std::invalid_argument);
+  options.gap_action = "reset";
+  options.gap_noise_inflation = 0.5;
+  EXPECT_THROW(core::validate(options), std::invalid_argument);
 }
 
 }  // namespace

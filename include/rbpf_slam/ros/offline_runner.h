@@ -30,6 +30,7 @@ struct OfflineSummary {
   long skipped = 0;
   long rejected = 0;
   long resets = 0;
+  long gaps = 0;  // steps across a time gap or odometry jump (max_time_gap, max_odometry_jump)
   long dropped_no_tf = 0;
   long dropped_bad_message = 0;
   long skipped_transforms = 0;  // repeated or malformed tf in the bag

@@ -16,6 +16,15 @@ void validate(const SessionOptions& o) {
   check("linear_update", o.linear_update_m);
   check("angular_update", o.angular_update_rad);
   check("max_time_gap", o.max_time_gap_s);
+  check("max_odometry_jump", o.max_odometry_jump_m);
+  if (o.gap_action != "inflate" && o.gap_action != "reset") {
+    throw std::invalid_argument("gap_action = '" + o.gap_action +
+                                "' is not one of: inflate, reset");
+  }
+  if (!(o.gap_noise_inflation >= 1.0 && o.gap_noise_inflation <= 1000.0)) {
+    throw std::invalid_argument("gap_noise_inflation = " + std::to_string(o.gap_noise_inflation) +
+                                " is out of range [1, 1000]");
+  }
   check("reset_on_time_jump_back", o.reset_on_time_jump_back_s);
   if (o.reset_after_frames_back < 1 || o.reset_after_frames_back > 1000) {
     throw std::invalid_argument("reset_after_frames_back = " +
@@ -116,6 +125,22 @@ FrameResult SlamSession::process(double stamp, const Pose2& odom_pose,
   if (measured_motion && measured_motion->delta.allFinite()) {
     motion.delta = measured_motion->delta;
     motion.noise_scale = measured_motion->noise_scale;
+  }
+  // A long silence or an odometry jump: the increment is not to be trusted as usual.
+  const bool gap = (options_.max_time_gap_s > 0.0 && motion.dt > options_.max_time_gap_s) ||
+                   (options_.max_odometry_jump_m > 0.0 &&
+                    std::hypot(delta.x(), delta.y()) > options_.max_odometry_jump_m);
+  if (gap) {
+    ++gaps_;
+    if (options_.gap_action == "reset") {
+      const long gaps = gaps_;
+      reset();
+      gaps_ = gaps;
+      return process(stamp, odom_pose, features);  // the first frame of a new map
+    }
+    // A measured (scan-matched) increment that was accepted is kept as it is; odometry alone
+    // across a gap gets its noise inflated.
+    if (!measured_motion) motion.noise_scale = options_.gap_noise_inflation;
   }
   filter_->predict(motion);
   last_stats_ = filter_->update(features);

@@ -16,7 +16,11 @@ namespace core {
 struct SessionOptions {
   double linear_update_m = 0.0;     // update only after moving this far (0: every frame)
   double angular_update_rad = 0.0;  // ... or turning this much
-  double max_time_gap_s = 30.0;     // a larger gap between frames inflates the motion
+  double max_time_gap_s = 30.0;     // a longer gap between two frames (s) ...
+  double max_odometry_jump_m = 0.0;  // ... or a longer odometry increment (m; 0: unchecked)
+  std::string gap_action = "inflate";  // ... is a gap: "inflate" the motion noise of that step
+                                       // by gap_noise_inflation, or "reset" (a new map)
+  double gap_noise_inflation = 5.0;
   double reset_on_time_jump_back_s = 1.0;  // stamps going back more than this ...
   int reset_after_frames_back = 3;  // ... in this many frames in a row: reset (a looping bag);
                                     // fewer are stale messages, rejected
@@ -66,6 +70,8 @@ class SlamSession {
   SlamFilter& filter() { return *filter_; }
   double lastStamp() const { return last_stamp_; }
   long resets() const { return resets_; }
+  /// Steps taken across a gap (max_time_gap_s, max_odometry_jump_m).
+  long gaps() const { return gaps_; }
 
  private:
   std::unique_ptr<SlamFilter> filter_;
@@ -77,7 +83,8 @@ class SlamSession {
   std::vector<TrajectoryPoint> trajectory_;
   UpdateStats last_stats_;
   long resets_ = 0;
-  int frames_back_ = 0;  // consecutive frames far behind last_stamp_
+  int frames_back_ = 0;
+  long gaps_ = 0;  // consecutive frames far behind last_stamp_
   std::optional<std::vector<LandmarkEstimate>> prior_map_;
   std::optional<std::pair<Pose2, Eigen::Matrix3d>> start_pose_;  // for the first frame
   bool mapping_ = true;
