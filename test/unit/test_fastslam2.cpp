@@ -3,6 +3,8 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/LU>
+
 #include <cmath>
 
 #include "rbpf_slam/core/filters/fastslam2.h"
@@ -222,6 +224,69 @@ TEST(FastSlam2, NonFiniteFeaturesAreRejectedNotFused) {
   EXPECT_EQ(stats.features_rejected, 2);
   EXPECT_TRUE(filter.landmarks().empty());
   EXPECT_TRUE(filter.estimate().mean.allFinite());
+}
+
+
+// Covariances that are zero, indefinite or asymmetric fall back to the configured noise
+// floors; a line given with rho < 0 is the same line as (-rho, theta + pi); thousands of
+// features in one frame are taken without harm.
+TEST(FastSlam2, DegenerateCovariancesNegativeRhoAndHugeFrames) {
+  FilterOptions options;
+  options.particles = 5;
+  FastSlam2 filter(options);
+  FeatureSet set;
+  LineFeature zero_cov;
+  zero_cov.rho = 2.0;
+  zero_cov.theta = 0.0;
+  zero_cov.covariance.setZero();
+  zero_cov.start << 2.0, -1.0;
+  zero_cov.end << 2.0, 1.0;
+  set.lines.push_back(zero_cov);
+  LineFeature negative_rho = zero_cov;  // the wall y = 3 given as (-3, -pi/2)
+  negative_rho.rho = -3.0;
+  negative_rho.theta = -M_PI / 2;
+  negative_rho.covariance << -1.0, 0.0, 0.0, 0.01;  // indefinite
+  negative_rho.start << -1.0, 3.0;
+  negative_rho.end << 1.0, 3.0;
+  set.lines.push_back(negative_rho);
+  PointFeature asymmetric;
+  asymmetric.range = 4.0;
+  asymmetric.bearing = 1.0;
+  asymmetric.covariance << 0.01, 5.0, -5.0, 0.01;
+  set.points.push_back(asymmetric);
+  const UpdateStats stats = filter.update(set);
+  EXPECT_EQ(stats.features_rejected, 0);
+  const std::vector<LandmarkEstimate> landmarks = filter.landmarks();
+  ASSERT_EQ(landmarks.size(), 3u);
+  bool found_y3 = false;
+  for (const LandmarkEstimate& lm : landmarks) {
+    EXPECT_TRUE(lm.mean.allFinite());
+    EXPECT_TRUE(lm.covariance.allFinite());
+    EXPECT_GT(lm.covariance.determinant(), 0.0) << "landmark " << lm.id;
+    if (lm.type == LandmarkType::kLine && std::fabs(lm.mean.x() - 3.0) < 0.05) {
+      found_y3 = std::fabs(wrapAngle(lm.mean.y() - M_PI / 2)) < 0.02;
+    }
+  }
+  std::string seen;
+  for (const LandmarkEstimate& lm : landmarks) {
+    seen += " (" + std::to_string(lm.mean.x()) + ", " + std::to_string(lm.mean.y()) + ")";
+  }
+  EXPECT_TRUE(found_y3) << "rho < 0 was not normalised to (3, pi/2):" << seen;
+
+  FeatureSet huge;
+  for (int i = 0; i < 20000; ++i) {
+    PointFeature p;
+    p.range = 1.0 + 0.001 * i;
+    p.bearing = -3.0 + 0.0003 * i;
+    p.covariance = Eigen::Matrix2d::Identity() * 0.01;
+    huge.points.push_back(p);
+  }
+  MotionInput still;
+  filter.predict(still);
+  const UpdateStats huge_stats = filter.update(huge);
+  EXPECT_EQ(huge_stats.features_in, 20000);
+  EXPECT_TRUE(filter.estimate().mean.allFinite());
+  EXPECT_TRUE(filter.estimate().covariance.allFinite());
 }
 
 }  // namespace
