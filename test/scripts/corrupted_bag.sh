@@ -11,18 +11,7 @@ here=$(cd "$(dirname "$0")" && pwd)
 root=$(cd "$here/../.." && pwd)
 bin="${RBPF_BIN:-$root/build/devel/lib/rbpf_slam}"
 [ -x "$bin/offline_slam" ] && [ -x "$bin/rbpf_slam_node" ] || { echo "FAIL: not built ($bin)"; exit 1; }
-work=$(mktemp -d)
-launch=""
-cleanup() {
-  if [ -n "$launch" ] && kill -0 "$launch" 2>/dev/null; then
-    kill -INT "$launch" 2>/dev/null || true
-    for _ in $(seq 1 20); do kill -0 "$launch" 2>/dev/null || break; sleep 0.5; done
-    kill -KILL "$launch" 2>/dev/null || true
-  fi
-  rm -rf "$work"
-}
-trap cleanup EXIT
-[ -n "${KEEP_WORK:-}" ] && trap - EXIT
+source "$here/lib/launch.sh"
 config="$root/config/laser_fastslam2.yaml"
 
 /usr/bin/python3 "$root/test/tools/corrupt_bag.py" "$root/test/data/intel_head.bag" \
@@ -33,8 +22,6 @@ config="$root/config/laser_fastslam2.yaml"
   --no-progress --verbose >"$work/offline.log" 2>&1 || { echo "FAIL: offline_slam exited non-zero"; tail "$work/offline.log"; exit 1; }
 
 # 2. The node, with the bag played at 10x and its outputs recorded.
-port=$((20000 + ($$ + 7) % 20000))
-export ROS_MASTER_URI="http://localhost:$port" ROS_LOG_DIR="$work/log" ROS_HOME="$work/home"
 cat >"$work/run.launch" <<LAUNCH
 <launch>
   <param name="use_sim_time" value="true"/>
@@ -47,14 +34,8 @@ cat >"$work/run.launch" <<LAUNCH
         args="--clock --quiet --delay=4 --rate=10 $work/corrupt.bag"/>
 </launch>
 LAUNCH
-roslaunch -p "$port" --screen "$work/run.launch" >"$work/node.log" 2>&1 &
-launch=$!
-node=""
-for _ in $(seq 1 60); do
-  node=$(pgrep -P "$launch" -f "rbpf_slam_node" | head -n 1 || true)
-  [ -n "$node" ] && break
-  sleep 0.5
-done
+start_launch "$work/run.launch" "$work/node.log"
+node=$(child_pid rbpf_slam_node)
 [ -n "$node" ] || { echo "FAIL: rbpf_slam_node did not start"; tail -n 30 "$work/node.log"; exit 1; }
 for _ in $(seq 1 240); do  # the player is required: roslaunch ends when it does
   kill -0 "$launch" 2>/dev/null || break

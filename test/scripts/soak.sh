@@ -14,17 +14,7 @@ bin="${RBPF_BIN:-$root/build/devel/lib/rbpf_slam}"
 [ -x "$bin/simulate" ] && [ -x "$bin/rbpf_slam_node" ] || { echo "FAIL: not built ($bin)"; exit 1; }
 sim_minutes=${SOAK_SIM_MINUTES:-30}
 rate=${SOAK_RATE:-20}
-work=$(mktemp -d)
-launch=""
-cleanup() {
-  if [ -n "$launch" ] && kill -0 "$launch" 2>/dev/null; then
-    kill -INT "$launch" 2>/dev/null || true
-    for _ in $(seq 1 20); do kill -0 "$launch" 2>/dev/null || break; sleep 0.5; done
-    kill -KILL "$launch" 2>/dev/null || true
-  fi
-  rm -rf "$work"
-}
-trap cleanup EXIT
+source "$here/lib/launch.sh"
 
 "$bin/simulate" --world "$root/worlds/test_small.yaml" --output "$work/loop.bag" --seed 5 >/dev/null
 bag_s=$(/usr/bin/python3 -c "
@@ -41,16 +31,8 @@ cat >"$work/soak.launch" <<LAUNCH
 </launch>
 LAUNCH
 
-port=$((20000 + $$ % 20000))
-export ROS_MASTER_URI="http://localhost:$port" ROS_LOG_DIR="$work/log" ROS_HOME="$work/home"
-roslaunch -p "$port" --screen "$work/soak.launch" >"$work/launch.log" 2>&1 &
-launch=$!
-node=""
-for _ in $(seq 1 60); do
-  node=$(pgrep -P "$launch" -f "rbpf_slam_node" | head -n 1 || true)  # ours, not a namesake
-  [ -n "$node" ] && break
-  sleep 0.5
-done
+start_launch "$work/soak.launch" "$work/launch.log"
+node=$(child_pid rbpf_slam_node)
 [ -n "$node" ] || { echo "FAIL: rbpf_slam_node did not start"; tail -n 30 "$work/launch.log"; exit 1; }
 
 wall_s=$(/usr/bin/python3 -c "print(int($sim_minutes * 60 / $rate) + 5)")
