@@ -164,6 +164,10 @@ core::FeatureSet toFeatureSet(const FeatureArray& msg, const core::Pose2& frame_
       const Eigen::Vector2d in_base = core::transformPoint(frame_in_base, in_frame);
       f.range = in_base.norm();
       f.bearing = std::atan2(in_base.y(), in_base.x());
+      if (!std::isfinite(f.range)) {  // a finite but absurd range can overflow on the way
+        ++*dropped;
+        continue;
+      }
     }
     set.points.push_back(f);
   }
@@ -185,6 +189,10 @@ core::FeatureSet toFeatureSet(const FeatureArray& msg, const core::Pose2& frame_
       f.theta = theta;
       f.start = core::transformPoint(frame_in_base, f.start);
       f.end = core::transformPoint(frame_in_base, f.end);
+      if (!std::isfinite(f.rho) || !f.start.allFinite() || !f.end.allFinite()) {
+        ++*dropped;  // a finite but absurd value overflowed in the transform
+        continue;
+      }
     }
     core::normalizeLine(f.rho, f.theta);
     set.lines.push_back(f);

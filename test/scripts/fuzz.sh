@@ -36,15 +36,25 @@ compile() {
   fi
 }
 export -f compile
-sources=$(find "$root/src/core" "$root/src/io" "$root/test/fuzz" -name '*.cpp' | sort)
+sources=$(find "$root/src/core" "$root/src/io" "$root/test/fuzz" -name '*.cpp' ! -name fuzz_conversions.cpp | sort)
 echo "compiling $(echo "$sources" | wc -l) sources with clang (sanitizers on) ..."
 echo "$sources" | xargs -P "$(nproc)" -I{} bash -c 'compile "$1"' _ {}
 library=$(find "$out/obj" -name 'src_*.o' | sort)
+# The ROS message conversions (fuzz_conversions): compiled apart, with the ROS headers and
+# the package's generated messages, and linked into that target only.
+ros_flags="-I$root/devel/include -I$root/build/devel/include"
+# shellcheck disable=SC2086
+clang++ $FUZZ_FLAGS $ros_flags -c "$root/src/ros/conversions.cpp" -o "$out/obj/ros_conversions.o"
+# shellcheck disable=SC2086
+clang++ $FUZZ_FLAGS $ros_flags -c "$root/test/fuzz/fuzz_conversions.cpp" \
+  -o "$out/obj/test_fuzz_fuzz_conversions.cpp.o"
 status=0
-for target in fuzz_laser fuzz_sonar fuzz_config fuzz_landmarks; do
+for target in fuzz_laser fuzz_sonar fuzz_config fuzz_landmarks fuzz_conversions; do
+  extra=""
+  [ "$target" = fuzz_conversions ] && extra="$out/obj/ros_conversions.o -lrostime -lcpp_common -lroscpp_serialization"
   # shellcheck disable=SC2086
   clang++ -fsanitize=fuzzer,address,undefined "$out/obj/test_fuzz_$target.cpp.o" $library \
-    -lyaml-cpp -lz -o "$out/$target"
+    $extra -lyaml-cpp -lz -o "$out/$target"
   mkdir -p "$out/corpus_$target"
   seeds=()
   [ -d "$root/test/fuzz/seeds_$target" ] && seeds=("$root/test/fuzz/seeds_$target")

@@ -74,8 +74,11 @@ class Extraction {
     FeatureSet features;
     features.stamp = scan_.stamp;
     const int n = static_cast<int>(scan_.ranges.size());
+    // A sensor mounted more than a kilometre from the base is a broken transform, not a robot.
+    constexpr double kMaxMountDistanceM = 1000.0;
     if (n == 0 || !std::isfinite(scan_.angle_min) || !std::isfinite(scan_.angle_increment) ||
-        !scan_.sensor_pose.allFinite()) {
+        !scan_.sensor_pose.allFinite() ||
+        scan_.sensor_pose.head<2>().norm() > kMaxMountDistanceM) {
       return features;
     }
     if (!computePoints()) return features;
@@ -345,7 +348,10 @@ class Extraction {
         options_.sigma_point_bearing_rad * options_.sigma_point_bearing_rad;
     f.id = -1;
     PointFeature base = transformPointFeature(scan_.sensor_pose, f);
-    if (!(base.range > 1e-9)) return;
+    if (!(base.range > 1e-9) || !std::isfinite(base.range) || !std::isfinite(base.bearing) ||
+        !base.covariance.allFinite()) {
+      return;
+    }
     features->points.push_back(base);
   }
 
