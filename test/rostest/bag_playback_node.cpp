@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "rbpf_slam/core/geometry.h"
+#include "rbpf_slam/io/evaluation.h"
 #include "rbpf_slam/ros/conversions.h"
 
 namespace rbpf_slam {
@@ -193,6 +194,7 @@ class BagPlaybackTest : public ::testing::Test {
     ros::NodeHandle private_nh("~");
     private_nh.param<std::string>("reference", reference_path_, "");
     private_nh.param("position_tolerance", position_tolerance_, 1.0);
+    private_nh.param("ate_tolerance", ate_tolerance_, 0.0);
     private_nh.param("yaw_tolerance", yaw_tolerance_, 0.3);
     double end_margin = 1.0, settle = 10.0, timeout = 600.0;
     private_nh.param("end_margin", end_margin, end_margin);
@@ -223,6 +225,7 @@ class BagPlaybackTest : public ::testing::Test {
   static std::string reference_path_;
   static std::vector<StampedPose> reference_;
   static double position_tolerance_, yaw_tolerance_;
+  static double ate_tolerance_;  // 0: the ~trajectory's ATE is not checked
   static bool ended_;
   static std::unique_ptr<PlaybackObserver> observer_;
   static std::unique_ptr<ros::AsyncSpinner> spinner_;
@@ -231,6 +234,7 @@ class BagPlaybackTest : public ::testing::Test {
 std::string BagPlaybackTest::reference_path_;
 std::vector<StampedPose> BagPlaybackTest::reference_;
 double BagPlaybackTest::position_tolerance_ = 1.0;
+double BagPlaybackTest::ate_tolerance_ = 0.0;
 double BagPlaybackTest::yaw_tolerance_ = 0.3;
 bool BagPlaybackTest::ended_ = false;
 std::unique_ptr<PlaybackObserver> BagPlaybackTest::observer_;
@@ -333,6 +337,32 @@ TEST_F(BagPlaybackTest, FinalPoseMatchesReference) {
   RecordProperty("odometry_position_error_m", std::to_string(odom_position_error));
   EXPECT_LE(position_error, position_tolerance_) << summary.str();
   EXPECT_LE(yaw_error, yaw_tolerance_) << summary.str();
+}
+
+// The whole ~trajectory against the reference (ATE after a rigid 2D alignment): one final
+// pose says less than the path, and wanders more from run to run.
+TEST_F(BagPlaybackTest, TrajectoryAteWithinTolerance) {
+  if (ate_tolerance_ <= 0.0) return;  // not asked for by this launch file
+  ASSERT_FALSE(reference_.empty());
+  nav_msgs::Path path;
+  {
+    std::lock_guard<std::mutex> lock(observer_->mutex_);
+    path = observer_->last_path_;
+  }
+  ASSERT_FALSE(path.poses.empty()) << "nothing on ~trajectory";
+  std::vector<io::StampedPose> estimate, reference;
+  for (const auto& p : path.poses) {
+    estimate.push_back({p.header.stamp.toSec(), rosbridge::toPose2(p.pose)});
+  }
+  for (const auto& r : reference_) reference.push_back({r.stamp, r.pose});
+  io::EvaluationOptions options;
+  const io::EvaluationResult result = io::evaluateTrajectory(estimate, reference, options);
+  std::cout << "[bag_playback] trajectory ATE " << result.ate_rmse_m << " m over "
+            << result.matched_poses << " poses (tolerance " << ate_tolerance_ << " m)"
+            << std::endl;
+  RecordProperty("ate_rmse_m", std::to_string(result.ate_rmse_m));
+  EXPECT_GE(result.matched_poses, estimate.size() / 2);
+  EXPECT_LE(result.ate_rmse_m, ate_tolerance_);
 }
 
 // Runs last (gtest keeps the order of definition): it clears the node's map.
