@@ -30,6 +30,18 @@ TEST(LineAssociation, WadOnHandComputedCases) {
   EXPECT_DOUBLE_EQ(weightedAbsoluteDifference({1.2, -0.7}, {1.2, -0.7}, 1.0, 1.5), 0.0);
 }
 
+TEST(LineAssociation, LineWadTreatsBothNormalFormsAsOneLine) {
+  // y = 0.05 and y = -0.03 seen with opposite normals: (0.05, pi/2) and (0.03, -pi/2) are
+  // (0.05, pi/2) and (-0.03, pi/2): 0.08 apart, where the plain WAD says 0.02 + 1.5 pi.
+  const Eigen::Vector2d a(0.05, M_PI / 2), b(0.03, -M_PI / 2);
+  EXPECT_NEAR(weightedAbsoluteDifference(a, b, 1.0, 1.5), 0.02 + 1.5 * M_PI, 1e-12);
+  EXPECT_NEAR(lineWad(a, b, 1.0, 1.5), 0.08, 1e-12);
+  // Far from the origin the two agree.
+  EXPECT_NEAR(lineWad({2.0, 0.3}, {1.5, 0.1}, 1.0, 1.5), 0.8, 1e-12);
+  EXPECT_NEAR(featureDissimilarity(LandmarkType::kPoint, {1.0, 1.0}, {4.0, 5.0}, kPaper), 5.0,
+              1e-12);
+}
+
 TEST(LineAssociation, HausdorffOnHandComputedCases) {
   auto wad = [](const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
     return weightedAbsoluteDifference(a, b, 1.0, 1.5);

@@ -68,6 +68,13 @@ double weightedAbsoluteDifference(const Eigen::Vector2d& line1, const Eigen::Vec
   return c_w1 * std::fabs(line1.x() - line2.x()) + c_w2 * angleDifference(line1.y(), line2.y());
 }
 
+double lineWad(const Eigen::Vector2d& line1, const Eigen::Vector2d& line2, double c_w1,
+               double c_w2) {
+  const Eigen::Vector2d flipped(-line2.x(), line2.y() + M_PI);
+  return std::min(weightedAbsoluteDifference(line1, line2, c_w1, c_w2),
+                  weightedAbsoluteDifference(line1, flipped, c_w1, c_w2));
+}
+
 double hausdorffDistance(const std::vector<Eigen::Vector2d>& a,
                          const std::vector<Eigen::Vector2d>& b,
                          const std::function<double(const Eigen::Vector2d&,
@@ -84,7 +91,7 @@ double hausdorffDistance(const std::vector<Eigen::Vector2d>& a,
 double featureDissimilarity(LandmarkType type, const Eigen::Vector2d& a, const Eigen::Vector2d& b,
                             const WadAssociationOptions& options) {
   if (type == LandmarkType::kLine) {
-    return weightedAbsoluteDifference(a, b, options.c_w1, options.c_w2);
+    return lineWad(a, b, options.c_w1, options.c_w2);
   }
   return (a - b).norm();
 }

@@ -42,10 +42,11 @@ LandmarkParticleFilter::LandmarkParticleFilter(int id, LandmarkType type,
                                                const Eigen::Vector2d& sigma, int particles,
                                                Rng& rng)
     : id_(id), type_(type) {
+  // Line particles keep the detection's normal direction (theta within pi/2 of it) and a
+  // signed rho, so that a line through the origin does not split into two normal forms.
   particles_.resize(std::max(particles, 1));
   for (auto& p : particles_) {
     p = detection + Eigen::Vector2d(sampleGaussian(rng, sigma.x()), sampleGaussian(rng, sigma.y()));
-    if (type_ == LandmarkType::kLine) normalizeLine(p.x(), p.y());
   }
   computeCentroid();
 }
@@ -68,7 +69,6 @@ bool LandmarkParticleFilter::update(const Eigen::Vector2d& observed,
   for (int i = 0; i < n; ++i) {
     next[i] = particles_[drawn[i]] + Eigen::Vector2d(sampleGaussian(rng, options.roughening_m),
                                                      sampleGaussian(rng, jitter_b));
-    if (type_ == LandmarkType::kLine) normalizeLine(next[i].x(), next[i].y());
   }
   particles_.swap(next);
   computeCentroid();
@@ -84,20 +84,29 @@ void LandmarkParticleFilter::computeCentroid() {
     centroid_ = sum / n;
     return;
   }
-  double rho = 0.0, c = 0.0, s = 0.0;
+  // Signed form around the first particle's normal, averaged, then brought to rho >= 0.
+  const double reference = particles_.front().y();
+  double rho = 0.0, theta = 0.0;
   for (const auto& p : particles_) {
-    rho += p.x();
-    c += std::cos(p.y());
-    s += std::sin(p.y());
+    double d = wrapAngle(p.y() - reference), r = p.x();
+    if (std::fabs(d) > M_PI / 2) {
+      d = wrapAngle(d + M_PI);
+      r = -r;
+    }
+    rho += r;
+    theta += d;
   }
-  centroid_ << rho / n, std::atan2(s, c);
+  rho /= n;
+  theta = reference + theta / n;
+  normalizeLine(rho, theta);
+  centroid_ << rho, theta;
 }
 
 Eigen::Matrix2d LandmarkParticleFilter::covariance() const {
   Eigen::Matrix2d cov = Eigen::Matrix2d::Zero();
   for (const auto& p : particles_) {
-    Eigen::Vector2d d = p - centroid_;
-    if (type_ == LandmarkType::kLine) d.y() = wrapAngle(d.y());
+    const Eigen::Vector2d d =
+        type_ == LandmarkType::kLine ? lineDifference(p, centroid_) : Eigen::Vector2d(p - centroid_);
     cov += d * d.transpose();
   }
   return cov / particles_.size() + 1e-9 * Eigen::Matrix2d::Identity();
@@ -272,7 +281,8 @@ void MultiFilterSmc::updateRobot(const std::vector<LocalFeature>& features, Upda
       sum += best;
     }
     // Laplace likelihood of the mean WAD, parameter c_m1; the prior weight carries over.
-    log_weights[p] = std::log(std::max(weights_[p], 1e-300)) - sum / observed.size() / options_.c_m1;
+    log_weights[p] = std::log(std::max(weights_[p], 1e-300)) -
+                     sum / observed.size() / options_.multifilter.c_m1;
   }
   if (!normalizeLogWeights(log_weights, &weights_)) ++stats->weight_resets;
   stats->neff = effectiveSampleSize(weights_);

@@ -44,7 +44,13 @@ struct GlobalFeature {
   int source = -1;  // index into the caller's observation list
 };
 
-/// WAD for lines, Euclidean distance for points, +inf between different types.
+/// WAD between two lines as sets of points: the smaller of the WAD to (rho2, theta2) and to
+/// its other normal form (-rho2, theta2 + pi). They differ only for lines passing near the
+/// origin, where rho ~ 0 and the normal's direction flips between sightings.
+double lineWad(const Eigen::Vector2d& line1, const Eigen::Vector2d& line2, double c_w1,
+               double c_w2);
+
+/// lineWad for lines, Euclidean distance for points.
 double featureDissimilarity(LandmarkType type, const Eigen::Vector2d& a, const Eigen::Vector2d& b,
                             const WadAssociationOptions& options);
 
