@@ -270,7 +270,10 @@ SimulatedRun runTestSmall(const std::string& config, std::uint64_t seed,
 TEST(LineSlam, BothVariantsBeatOdometryOnTestSmall) {
   for (const std::string config : {"laser_multifilter.yaml", "laser_ekf.yaml"}) {
     for (std::uint64_t seed : {1u, 7u}) {
-      const SimulatedRun r = runTestSmall(config, seed, {"particles=500"});
+      // The EKF with the WAD association alone mismatches on this run (it ends worse than
+      // odometry, see docs/results.md); with the innovation gate it is a working EKF-SLAM.
+      const SimulatedRun r =
+          runTestSmall(config, seed, {"particles=500", "ekf.innovation_gate_chi2=13.8"});
       EXPECT_GT(r.frames, 100) << config << " seed " << seed;
       EXPECT_LT(r.filter_final_m, 0.3) << config << " seed " << seed;
       EXPECT_LT(r.filter_final_m, r.odometry_final_m) << config << " seed " << seed;
