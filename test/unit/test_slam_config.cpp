@@ -171,7 +171,7 @@ TEST(SlamConfig, LineSlamConfigsCarryThePapersDefaults) {
   EXPECT_EQ(core::createFilter(ekf.filter)->variant(), "ekf_slam");
   EXPECT_NE(errorOf("multifilter: {c_m3: 1}").find("in multifilter: c_m3"), std::string::npos);
   const std::string range = errorOf("multifilter: {line_particles: 0}");
-  EXPECT_NE(range.find("multifilter.line_particles = 0 is out of range"), std::string::npos)
+  EXPECT_NE(range.find("multifilter.line_particles = 0"), std::string::npos)
       << range;
   EXPECT_NE(errorOf("line_association: {h_similar_feature: -1}")
                 .find("line_association.h_similar_feature"),
