@@ -107,7 +107,7 @@ TEST(LineAssociation, AssociationAndNewObstacleDetection) {
   features[0].value << 2.05, 0.02;  // WAD 0.08 to map 0
   features[1].value << 6.0, 1.0;    // far from everything: new
   features[2].type = LandmarkType::kPoint;
-  features[2].value << 1.0, 1.0;    // 0.5 m from map point 2
+  features[2].value << 1.0, 1.0;  // 0.5 m from map point 2
   const std::vector<LandmarkType> types = {LandmarkType::kLine, LandmarkType::kLine,
                                            LandmarkType::kPoint};
   const std::vector<Eigen::Vector2d> map = {{2.0, 0.0}, {4.0, -1.5}, {1.3, 1.4}};
@@ -140,8 +140,8 @@ TEST(LandmarkParticleFilter, ConvergesOnASyntheticLine) {
                                   options.line_particles, rng);
     const double initial_wad = weightedAbsoluteDifference(filter.centroid(), truth, 1.0, 1.5);
     for (int k = 0; k < 40; ++k) {
-      const Eigen::Vector2d z = truth + Eigen::Vector2d(sampleGaussian(rng, 0.03),
-                                                        sampleGaussian(rng, 0.01));
+      const Eigen::Vector2d z =
+          truth + Eigen::Vector2d(sampleGaussian(rng, 0.03), sampleGaussian(rng, 0.01));
       ASSERT_TRUE(filter.update(z, kPaper, options, rng));
     }
     const Eigen::Vector2d c = filter.centroid();

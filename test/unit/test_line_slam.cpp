@@ -5,7 +5,6 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
-
 #include <cmath>
 #include <limits>
 #include <string>
@@ -259,10 +258,10 @@ SimulatedRun runTestSmall(const std::string& config, std::uint64_t seed,
   }
   const auto& trajectory = pipeline.session().trajectory();
   if (trajectory.empty()) return run;
-  const Pose2 expected =
-      compose(compose(trajectory.front().pose, inverse(first_true)), last_true);
+  const Pose2 expected = compose(compose(trajectory.front().pose, inverse(first_true)), last_true);
   run.filter_final_m = (trajectory.back().pose.head<2>() - expected.head<2>()).norm();
-  const Pose2 odom_in_map = compose(compose(trajectory.front().pose, inverse(first_odom)), last_odom);
+  const Pose2 odom_in_map =
+      compose(compose(trajectory.front().pose, inverse(first_odom)), last_odom);
   run.odometry_final_m = (odom_in_map.head<2>() - expected.head<2>()).norm();
   return run;
 }

@@ -67,7 +67,7 @@ void EkfSlam::applyMotion() {
 }
 
 std::vector<EkfSlam::Observation> EkfSlam::prepare(const FeatureSet& features,
-                                                    int* rejected) const {
+                                                   int* rejected) const {
   std::vector<Observation> out;
   *rejected = 0;
   const MeasurementOptions& m = options_.measurement;
@@ -160,9 +160,9 @@ UpdateStats EkfSlam::update(const FeatureSet& features) {
     bool duplicate = false;
     for (const auto& other : added) {
       duplicate = duplicate ||
-                  (other.type == g.type && featureDissimilarity(g.type, g.value, other.value,
-                                                                options_.line_association) <
-                                               options_.line_association.h_similar_feature);
+                  (other.type == g.type &&
+                   featureDissimilarity(g.type, g.value, other.value, options_.line_association) <
+                       options_.line_association.h_similar_feature);
     }
     if (duplicate) continue;
     augment(observations[j], g);
@@ -320,9 +320,9 @@ bool EkfSlam::loadMap(const std::vector<LandmarkEstimate>& landmarks) {
   info_.clear();
   for (const auto& l : landmarks) {
     if (!l.mean.allFinite()) continue;
-    const Eigen::Matrix2d cov =
-        usableCovariance(symmetric(l.covariance)) ? symmetric(l.covariance)
-                                                  : Eigen::Matrix2d::Identity() * 1e-4;
+    const Eigen::Matrix2d cov = usableCovariance(symmetric(l.covariance))
+                                    ? symmetric(l.covariance)
+                                    : Eigen::Matrix2d::Identity() * 1e-4;
     appendLandmark(l.mean, cov, Eigen::Matrix<double, 2, 3>::Zero(), false);
     LandmarkInfo info;
     info.id = l.id;

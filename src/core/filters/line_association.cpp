@@ -75,10 +75,9 @@ double lineWad(const Eigen::Vector2d& line1, const Eigen::Vector2d& line2, doubl
                   weightedAbsoluteDifference(line1, flipped, c_w1, c_w2));
 }
 
-double hausdorffDistance(const std::vector<Eigen::Vector2d>& a,
-                         const std::vector<Eigen::Vector2d>& b,
-                         const std::function<double(const Eigen::Vector2d&,
-                                                    const Eigen::Vector2d&)>& distance) {
+double hausdorffDistance(
+    const std::vector<Eigen::Vector2d>& a, const std::vector<Eigen::Vector2d>& b,
+    const std::function<double(const Eigen::Vector2d&, const Eigen::Vector2d&)>& distance) {
   double worst = 0.0;
   for (const auto& x : a) {
     double nearest = std::numeric_limits<double>::infinity();

@@ -58,14 +58,15 @@ bool LandmarkParticleFilter::update(const Eigen::Vector2d& observed,
   std::vector<double> log_weights(n);
   for (int i = 0; i < n; ++i) {
     // Laplace likelihood of the dissimilarity (the paper's perceptual model, parameter c_m2).
-    log_weights[i] = -featureDissimilarity(type_, particles_[i], observed, association) /
-                     options.c_m2;
+    log_weights[i] =
+        -featureDissimilarity(type_, particles_[i], observed, association) / options.c_m2;
   }
   std::vector<double> weights;
   if (!normalizeLogWeights(log_weights, &weights)) return false;
   const std::vector<int> drawn = resampleLowVariance(weights, n, rng);
   std::vector<Eigen::Vector2d> next(n);
-  const double jitter_b = type_ == LandmarkType::kLine ? options.roughening_rad : options.roughening_m;
+  const double jitter_b =
+      type_ == LandmarkType::kLine ? options.roughening_rad : options.roughening_m;
   for (int i = 0; i < n; ++i) {
     next[i] = particles_[drawn[i]] + Eigen::Vector2d(sampleGaussian(rng, options.roughening_m),
                                                      sampleGaussian(rng, jitter_b));
@@ -105,8 +106,8 @@ void LandmarkParticleFilter::computeCentroid() {
 Eigen::Matrix2d LandmarkParticleFilter::covariance() const {
   Eigen::Matrix2d cov = Eigen::Matrix2d::Zero();
   for (const auto& p : particles_) {
-    const Eigen::Vector2d d =
-        type_ == LandmarkType::kLine ? lineDifference(p, centroid_) : Eigen::Vector2d(p - centroid_);
+    const Eigen::Vector2d d = type_ == LandmarkType::kLine ? lineDifference(p, centroid_)
+                                                           : Eigen::Vector2d(p - centroid_);
     cov += d * d.transpose();
   }
   return cov / particles_.size() + 1e-9 * Eigen::Matrix2d::Identity();
@@ -175,7 +176,7 @@ void MultiFilterSmc::predict(const MotionInput& motion) {
 }
 
 std::vector<MultiFilterSmc::LocalFeature> MultiFilterSmc::prepare(const FeatureSet& features,
-                                                                   int* rejected) const {
+                                                                  int* rejected) const {
   std::vector<LocalFeature> out;
   *rejected = 0;
   if (options_.use_lines) {
@@ -257,8 +258,8 @@ void MultiFilterSmc::updateRobot(const std::vector<LocalFeature>& features, Upda
     std::vector<int> near;
     for (int i = 0; i < static_cast<int>(filters_.size()); ++i) {
       if (filters_[i].type() != g.type) continue;
-      if (featureDissimilarity(g.type, g.value, filters_[i].centroid(),
-                               options_.line_association) < 2.0 * h) {
+      if (featureDissimilarity(g.type, g.value, filters_[i].centroid(), options_.line_association) <
+          2.0 * h) {
         near.push_back(i);
       }
     }
@@ -281,8 +282,8 @@ void MultiFilterSmc::updateRobot(const std::vector<LocalFeature>& features, Upda
       sum += best;
     }
     // Laplace likelihood of the mean WAD, parameter c_m1; the prior weight carries over.
-    log_weights[p] = std::log(std::max(weights_[p], 1e-300)) -
-                     sum / observed.size() / options_.multifilter.c_m1;
+    log_weights[p] =
+        std::log(std::max(weights_[p], 1e-300)) - sum / observed.size() / options_.multifilter.c_m1;
   }
   if (!normalizeLogWeights(log_weights, &weights_)) ++stats->weight_resets;
   stats->neff = effectiveSampleSize(weights_);

@@ -30,10 +30,9 @@ double weightedAbsoluteDifference(const Eigen::Vector2d& line1, const Eigen::Vec
 
 /// Eq. 15: max over a in A of min over b in B of d(a, b). 0 when A is empty, +inf when A is
 /// not empty and B is.
-double hausdorffDistance(const std::vector<Eigen::Vector2d>& a,
-                         const std::vector<Eigen::Vector2d>& b,
-                         const std::function<double(const Eigen::Vector2d&,
-                                                    const Eigen::Vector2d&)>& distance);
+double hausdorffDistance(
+    const std::vector<Eigen::Vector2d>& a, const std::vector<Eigen::Vector2d>& b,
+    const std::function<double(const Eigen::Vector2d&, const Eigen::Vector2d&)>& distance);
 
 /// A feature of the current scan in the map frame (one robot pose), ready to associate.
 struct GlobalFeature {

@@ -18,8 +18,8 @@ struct WadAssociationOptions {
 /// 2000) and one small SIR filter per landmark.
 struct MultiFilterOptions {
   int line_particles = 200;  // particles of each landmark filter
-  double c_m1 = 0.2;  // Laplace scale of the robot filter's likelihood of the mean WAD
-  double c_m2 = 0.2;  // Laplace scale of a landmark filter's likelihood of its WAD
+  double c_m1 = 0.2;         // Laplace scale of the robot filter's likelihood of the mean WAD
+  double c_m2 = 0.2;         // Laplace scale of a landmark filter's likelihood of its WAD
   // Landmark filters start as N(detection, sigma^2) around the first sighting.
   double init_sigma_m = 0.1;     // rho (lines) or x, y (points), m
   double init_sigma_rad = 0.03;  // theta (lines), rad
