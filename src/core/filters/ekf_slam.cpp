@@ -144,8 +144,10 @@ UpdateStats EkfSlam::update(const FeatureSet& features) {
   }
   const WadAssociation a = associateByWad(global, types, means, options_.line_association);
   for (int i = 0; i < static_cast<int>(a.map_to_feature.size()); ++i) {
+    // M_phi_z may give one feature to several landmarks; the EKF uses each feature once, on
+    // the landmark it is most similar to, or it would count the same measurement twice.
     const int j = a.map_to_feature[i];
-    if (j < 0) continue;
+    if (j < 0 || a.feature_to_map[j] != i) continue;
     if (correct(i, observations[j])) {
       ++stats.associated;
       extendLine(i, inMap(observations[j], pose(), j));

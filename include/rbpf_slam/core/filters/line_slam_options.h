@@ -24,7 +24,9 @@ struct MultiFilterOptions {
   double init_sigma_m = 0.1;     // rho (lines) or x, y (points), m
   double init_sigma_rad = 0.03;  // theta (lines), rad
   // Jitter added after a landmark filter resamples (regularised SIR): without it the
-  // time-invariant parameter's particles collapse onto a few values and can no longer move.
+  // time-invariant parameter's particles collapse onto a few values and can no longer move,
+  // which is the paper's plain SIR (config/laser_multifilter.yaml sets 0: with jitter the
+  // lines follow the robot's drift).
   double roughening_m = 0.005;
   double roughening_rad = 0.002;
 };
