@@ -153,6 +153,29 @@ TEST(LandmarkParticleFilter, ConvergesOnASyntheticLine) {
   }
 }
 
+TEST(LandmarkParticleFilter, PlainSirSettlesNearTheLineWithoutRoughening) {
+  // The shipped config's plain SIR (no jitter): the particles can only be resampled, so the
+  // centroid moves from the detection towards the truth within the first draws' spread.
+  const Eigen::Vector2d truth(-2.0, 0.3);  // a line with its normal flipped: rho < 0
+  MultiFilterOptions options;
+  options.roughening_m = 0.0;
+  options.roughening_rad = 0.0;
+  Rng rng(11);
+  const Eigen::Vector2d detection(2.08, 0.3 + M_PI + 0.03);  // the same line, rho >= 0
+  LandmarkParticleFilter filter(0, LandmarkType::kLine, detection,
+                                Eigen::Vector2d(options.init_sigma_m, options.init_sigma_rad),
+                                options.line_particles, rng);
+  for (int k = 0; k < 30; ++k) {
+    const Eigen::Vector2d z(2.0 + sampleGaussian(rng, 0.02),
+                            wrapAngle(0.3 + M_PI + sampleGaussian(rng, 0.01)));
+    ASSERT_TRUE(filter.update(z, kPaper, options, rng));
+  }
+  const double before = lineWad(detection, truth, 1.0, 1.5);
+  const double after = lineWad(filter.centroid(), truth, 1.0, 1.5);
+  EXPECT_LT(after, 0.5 * before);
+  EXPECT_GE(filter.centroid().x(), 0.0);  // reported in normal form
+}
+
 }  // namespace
 }  // namespace core
 }  // namespace rbpf_slam
