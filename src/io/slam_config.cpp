@@ -80,6 +80,27 @@ void readHinf(YamlSection section, core::HinfOptions* o) {
   section.finish();
 }
 
+// Multi-filter SMC and EKF-SLAM (Yuen and MacDonald); ranges are checked by core::validate.
+void readLineSlam(YamlSection& top, core::FilterOptions* f) {
+  YamlSection association = top.section("line_association");
+  association.read("h_similar_feature", &f->line_association.h_similar_feature);
+  association.read("c_w1", &f->line_association.c_w1);
+  association.read("c_w2", &f->line_association.c_w2);
+  association.finish();
+  YamlSection multifilter = top.section("multifilter");
+  multifilter.read("line_particles", &f->multifilter.line_particles);
+  multifilter.read("c_m1", &f->multifilter.c_m1);
+  multifilter.read("c_m2", &f->multifilter.c_m2);
+  multifilter.read("init_sigma_m", &f->multifilter.init_sigma_m);
+  multifilter.read("init_sigma_rad", &f->multifilter.init_sigma_rad);
+  multifilter.read("roughening_m", &f->multifilter.roughening_m);
+  multifilter.read("roughening_rad", &f->multifilter.roughening_rad);
+  multifilter.finish();
+  YamlSection ekf = top.section("ekf");
+  ekf.read("innovation_gate_chi2", &f->ekf.innovation_gate_chi2);
+  ekf.finish();
+}
+
 void readLaser(YamlSection section, core::LaserExtractorOptions* o) {
   section.read("method", &o->method, {"incremental", "split_and_merge"});
   section.read("sigma_range_m", &o->sigma_range_m, 1e-6, 1.0);
@@ -212,6 +233,7 @@ SlamConfig parseSlamConfigTree(const YAML::Node& root, const std::string& source
   readTracker(top.section("tracker"), &f.tracker);
   readExistence(top.section("existence"), &f.existence);
   readHinf(top.section("hinf"), &f.hinf);
+  readLineSlam(top, &f);
   readLaser(top.section("laser_features"), &config.laser);
   readScanMatching(top.section("scan_matching"), &config.scan_matching);
   readSonar(top.section("sonar_features"), &config.sonar);

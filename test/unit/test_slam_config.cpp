@@ -148,6 +148,38 @@ TEST(SlamConfig, HinfAndExistenceErrorsNameTheKey) {
       << errorOf("hinf: {gamma_landmark: .inf}");
 }
 
+TEST(SlamConfig, LineSlamConfigsCarryThePapersDefaults) {
+  const std::string dir = std::string(RBPF_SOURCE_DIR) + "/config/";
+  const SlamConfig smc = loadSlamConfig(dir + "laser_multifilter.yaml");
+  EXPECT_EQ(smc.filter.variant, "multifilter_smc");
+  EXPECT_EQ(smc.frontend, "laser");
+  EXPECT_EQ(smc.filter.particles, 2000);  // Yuen and MacDonald, section 4
+  EXPECT_EQ(smc.filter.multifilter.line_particles, 200);
+  EXPECT_DOUBLE_EQ(smc.filter.multifilter.c_m1, 0.2);
+  EXPECT_DOUBLE_EQ(smc.filter.multifilter.c_m2, 0.2);
+  EXPECT_DOUBLE_EQ(smc.filter.line_association.h_similar_feature, 1.0);
+  EXPECT_DOUBLE_EQ(smc.filter.line_association.c_w1, 1.0);
+  EXPECT_DOUBLE_EQ(smc.filter.line_association.c_w2, 1.5);
+  EXPECT_TRUE(smc.scan_matching.enabled);
+  EXPECT_EQ(core::createFilter(smc.filter)->variant(), "multifilter_smc");
+  const SlamConfig ekf = loadSlamConfig(dir + "laser_ekf.yaml");
+  EXPECT_EQ(ekf.filter.variant, "ekf_slam");
+  EXPECT_DOUBLE_EQ(ekf.filter.line_association.h_similar_feature,
+                   smc.filter.line_association.h_similar_feature);
+  EXPECT_DOUBLE_EQ(ekf.filter.line_association.c_w2, smc.filter.line_association.c_w2);
+  EXPECT_TRUE(ekf.scan_matching.enabled);
+  EXPECT_EQ(core::createFilter(ekf.filter)->variant(), "ekf_slam");
+  EXPECT_NE(errorOf("multifilter: {c_m3: 1}").find("in multifilter: c_m3"), std::string::npos);
+  const std::string range = errorOf("multifilter: {line_particles: 0}");
+  EXPECT_NE(range.find("multifilter.line_particles = 0"), std::string::npos)
+      << range;
+  EXPECT_NE(errorOf("line_association: {h_similar_feature: -1}")
+                .find("line_association.h_similar_feature"),
+            std::string::npos);
+  EXPECT_NE(errorOf("ekf: {innovation_gate_chi2: -1}").find("ekf.innovation_gate_chi2"),
+            std::string::npos);
+}
+
 TEST(SlamConfig, MissingFileIsNamed) {
   try {
     loadSlamConfig("/nonexistent/x.yaml");

@@ -2,9 +2,11 @@
 #include <stdexcept>
 #include <string>
 
+#include "rbpf_slam/core/filters/ekf_slam.h"
 #include "rbpf_slam/core/filters/fastslam2.h"
 #include "rbpf_slam/core/filters/hinf_fastslam.h"
 #include "rbpf_slam/core/filters/landmark_existence.h"
+#include "rbpf_slam/core/filters/multifilter_smc.h"
 #include "rbpf_slam/core/filters/robust_fastslam2.h"
 #include "rbpf_slam/core/filters/slam_filter.h"
 
@@ -22,7 +24,7 @@ void requireRange(const std::string& name, double value, double min, double max)
 }  // namespace
 
 std::vector<std::string> availableVariants() {
-  return {"fastslam2", "robust_fastslam2", "hinf_fastslam"};
+  return {"fastslam2", "robust_fastslam2", "hinf_fastslam", "multifilter_smc", "ekf_slam"};
 }
 
 void validate(const RobustOptions& o) {
@@ -55,6 +57,9 @@ void validate(const FilterOptions& o) {
   validate(o.tracker);
   validate(o.existence);
   validate(o.hinf);
+  validate(o.line_association);
+  validate(o.multifilter);
+  validate(o.ekf);
 }
 
 std::unique_ptr<SlamFilter> createFilter(const FilterOptions& options) {
@@ -62,6 +67,8 @@ std::unique_ptr<SlamFilter> createFilter(const FilterOptions& options) {
   if (options.variant == "fastslam2") return std::make_unique<FastSlam2>(options);
   if (options.variant == "robust_fastslam2") return std::make_unique<RobustFastSlam2>(options);
   if (options.variant == "hinf_fastslam") return std::make_unique<HinfFastSlam>(options);
+  if (options.variant == "multifilter_smc") return std::make_unique<MultiFilterSmc>(options);
+  if (options.variant == "ekf_slam") return std::make_unique<EkfSlam>(options);
   throw std::invalid_argument("variant = '" + options.variant + "' is not implemented");
 }
 

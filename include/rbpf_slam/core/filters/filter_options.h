@@ -4,6 +4,7 @@
 #include <string>
 
 #include "rbpf_slam/core/filters/estimator_rule.h"
+#include "rbpf_slam/core/filters/line_slam_options.h"
 #include "rbpf_slam/core/motion/motion_model.h"
 #include "rbpf_slam/core/tracking/landmark_tracker_options.h"
 
@@ -63,6 +64,9 @@ struct FilterOptions {
   bool use_lines = true;
   RobustOptions robust;            // variant robust_fastslam2 (particles = M per set)
   LandmarkTrackerOptions tracker;  // variant robust_fastslam2
+  WadAssociationOptions line_association;  // variants multifilter_smc and ekf_slam
+  MultiFilterOptions multifilter;          // variant multifilter_smc
+  EkfSlamOptions ekf;                      // variant ekf_slam
 };
 
 /// Throws std::invalid_argument naming the first out-of-range field and its allowed range.

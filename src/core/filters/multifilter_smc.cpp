@@ -1,0 +1,411 @@
+#include "rbpf_slam/core/filters/multifilter_smc.h"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "rbpf_slam/core/filters/landmark_map.h"
+#include "rbpf_slam/core/filters/measurement_models.h"
+#include "rbpf_slam/core/filters/resampling.h"
+
+namespace rbpf_slam {
+namespace core {
+
+PoseEstimate weightedPoseMean(const std::vector<Pose2>& poses, const std::vector<double>& weights) {
+  PoseEstimate e;
+  double sx = 0.0, sy = 0.0, sc = 0.0, ss = 0.0, total = 0.0;
+  for (size_t i = 0; i < poses.size(); ++i) {
+    const double w = weights[i];
+    sx += w * poses[i].x();
+    sy += w * poses[i].y();
+    sc += w * std::cos(poses[i].z());
+    ss += w * std::sin(poses[i].z());
+    total += w;
+  }
+  if (!(total > 0.0)) return e;
+  e.mean << sx / total, sy / total, std::atan2(ss, sc);
+  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+  for (size_t i = 0; i < poses.size(); ++i) {
+    Eigen::Vector3d d = poses[i] - e.mean;
+    d.z() = wrapAngle(d.z());
+    cov += weights[i] / total * d * d.transpose();
+  }
+  e.covariance = cov + 1e-9 * Eigen::Matrix3d::Identity();
+  return e;
+}
+
+// ---------------------------------------------------------------- landmark filter (Psi_i)
+
+LandmarkParticleFilter::LandmarkParticleFilter(int id, LandmarkType type,
+                                               const Eigen::Vector2d& detection,
+                                               const Eigen::Vector2d& sigma, int particles,
+                                               Rng& rng)
+    : id_(id), type_(type) {
+  // Line particles keep the detection's normal direction (theta within pi/2 of it) and a
+  // signed rho, so that a line through the origin does not split into two normal forms.
+  particles_.resize(std::max(particles, 1));
+  for (auto& p : particles_) {
+    p = detection + Eigen::Vector2d(sampleGaussian(rng, sigma.x()), sampleGaussian(rng, sigma.y()));
+  }
+  computeCentroid();
+}
+
+bool LandmarkParticleFilter::update(const Eigen::Vector2d& observed,
+                                    const WadAssociationOptions& association,
+                                    const MultiFilterOptions& options, Rng& rng) {
+  const int n = particles_.size();
+  std::vector<double> log_weights(n);
+  for (int i = 0; i < n; ++i) {
+    // Laplace likelihood of the dissimilarity (the paper's perceptual model, parameter c_m2).
+    log_weights[i] =
+        -featureDissimilarity(type_, particles_[i], observed, association) / options.c_m2;
+  }
+  std::vector<double> weights;
+  if (!normalizeLogWeights(log_weights, &weights)) return false;
+  const std::vector<int> drawn = resampleLowVariance(weights, n, rng);
+  std::vector<Eigen::Vector2d> next(n);
+  const double jitter_b =
+      type_ == LandmarkType::kLine ? options.roughening_rad : options.roughening_m;
+  for (int i = 0; i < n; ++i) {
+    next[i] = particles_[drawn[i]] + Eigen::Vector2d(sampleGaussian(rng, options.roughening_m),
+                                                     sampleGaussian(rng, jitter_b));
+  }
+  particles_.swap(next);
+  computeCentroid();
+  ++observations_;
+  return true;
+}
+
+void LandmarkParticleFilter::computeCentroid() {
+  const double n = particles_.size();
+  if (type_ == LandmarkType::kPoint) {
+    Eigen::Vector2d sum = Eigen::Vector2d::Zero();
+    for (const auto& p : particles_) sum += p;
+    centroid_ = sum / n;
+    return;
+  }
+  // Signed form around the first particle's normal, averaged, then brought to rho >= 0.
+  const double reference = particles_.front().y();
+  double rho = 0.0, theta = 0.0;
+  for (const auto& p : particles_) {
+    double d = wrapAngle(p.y() - reference), r = p.x();
+    if (std::fabs(d) > M_PI / 2) {
+      d = wrapAngle(d + M_PI);
+      r = -r;
+    }
+    rho += r;
+    theta += d;
+  }
+  rho /= n;
+  theta = reference + theta / n;
+  normalizeLine(rho, theta);
+  centroid_ << rho, theta;
+}
+
+Eigen::Matrix2d LandmarkParticleFilter::covariance() const {
+  Eigen::Matrix2d cov = Eigen::Matrix2d::Zero();
+  for (const auto& p : particles_) {
+    const Eigen::Vector2d d = type_ == LandmarkType::kLine ? lineDifference(p, centroid_)
+                                                           : Eigen::Vector2d(p - centroid_);
+    cov += d * d.transpose();
+  }
+  return cov / particles_.size() + 1e-9 * Eigen::Matrix2d::Identity();
+}
+
+void LandmarkParticleFilter::extendBy(const Eigen::Vector2d& start, const Eigen::Vector2d& end) {
+  if (type_ != LandmarkType::kLine) return;
+  const double a = alongLine(centroid_, start), b = alongLine(centroid_, end);
+  if (!has_extent_) {
+    extent_min_ = std::min(a, b);
+    extent_max_ = std::max(a, b);
+    has_extent_ = true;
+    return;
+  }
+  extent_min_ = std::min({extent_min_, a, b});
+  extent_max_ = std::max({extent_max_, a, b});
+}
+
+LandmarkEstimate LandmarkParticleFilter::toEstimate() const {
+  LandmarkEstimate e;
+  e.id = id_;
+  e.type = type_;
+  e.mean = centroid_;
+  e.covariance = covariance();
+  e.observations = observations_;
+  if (type_ == LandmarkType::kLine) {
+    e.start = pointOnLine(centroid_, extent_min_);
+    e.end = pointOnLine(centroid_, extent_max_);
+  } else {
+    e.start = e.end = centroid_;
+  }
+  return e;
+}
+
+// ---------------------------------------------------------------- the multi-filter SLAM
+
+MultiFilterSmc::MultiFilterSmc(const FilterOptions& options)
+    : options_(options), motion_model_(createMotionModel(options.motion)), rng_(options.seed) {
+  reset(Pose2::Zero());
+}
+
+void MultiFilterSmc::reset(const Pose2& initial_pose) {
+  // All particles at the start pose: SLAM fixes the map frame there (the paper's "arbitrary
+  // starting point").
+  robot_.assign(options_.particles, initial_pose);
+  weights_.assign(robot_.size(), 1.0 / robot_.size());
+  filters_.clear();
+  pending_motion_ = MotionInput();
+  has_pending_motion_ = false;
+  next_landmark_id_ = 0;
+  stats_ = FilterStats();
+}
+
+void MultiFilterSmc::predict(const MotionInput& motion) {
+  ++stats_.predictions;
+  if (!motion.delta.allFinite()) return;
+  if (!has_pending_motion_) {
+    pending_motion_ = motion;
+    has_pending_motion_ = true;
+    return;
+  }
+  pending_motion_.delta = compose(pending_motion_.delta, motion.delta);
+  pending_motion_.dt += motion.dt;
+  pending_motion_.stamp = motion.stamp;
+  pending_motion_.noise_scale = std::max(pending_motion_.noise_scale, motion.noise_scale);
+}
+
+std::vector<MultiFilterSmc::LocalFeature> MultiFilterSmc::prepare(const FeatureSet& features,
+                                                                  int* rejected) const {
+  std::vector<LocalFeature> out;
+  *rejected = 0;
+  if (options_.use_lines) {
+    for (const auto& line : features.lines) {
+      if (!std::isfinite(line.rho) || !std::isfinite(line.theta) || !line.start.allFinite() ||
+          !line.end.allFinite()) {
+        ++*rejected;
+        continue;
+      }
+      LocalFeature f;
+      f.type = LandmarkType::kLine;
+      f.line = line;
+      out.push_back(f);
+    }
+  }
+  if (options_.use_points) {
+    for (const auto& point : features.points) {
+      if (!std::isfinite(point.range) || !std::isfinite(point.bearing) || point.range <= 0.0) {
+        ++*rejected;
+        continue;
+      }
+      LocalFeature f;
+      f.type = LandmarkType::kPoint;
+      f.range_bearing << point.range, point.bearing;
+      out.push_back(f);
+    }
+  }
+  return out;
+}
+
+GlobalFeature MultiFilterSmc::inMap(const LocalFeature& feature, const Pose2& pose,
+                                    int source) const {
+  GlobalFeature g;
+  g.type = feature.type;
+  g.source = source;
+  if (feature.type == LandmarkType::kLine) {
+    g.value = toGlobalFrame(feature.line, pose);
+    g.start = transformPoint(pose, feature.line.start);
+    g.end = transformPoint(pose, feature.line.end);
+  } else {
+    g.value = pointFromObservation(pose, feature.range_bearing, nullptr);
+    g.start = g.end = g.value;
+  }
+  return g;
+}
+
+UpdateStats MultiFilterSmc::update(const FeatureSet& features) {
+  UpdateStats stats;
+  stats.features_in = features.lines.size() + features.points.size();
+  const std::vector<LocalFeature> local = prepare(features, &stats.features_rejected);
+  updateRobot(local, &stats);
+  updateMap(local, &stats);
+  ++stats_.updates;
+  stats_.last_neff = stats.neff;
+  stats_.weight_resets += stats.weight_resets;
+  stats_.landmarks = filters_.size();
+  return stats;
+}
+
+void MultiFilterSmc::updateRobot(const std::vector<LocalFeature>& features, UpdateStats* stats) {
+  const int n = robot_.size();
+  if (has_pending_motion_) {
+    for (auto& pose : robot_) pose = motion_model_->sample(pose, pending_motion_, rng_);
+    has_pending_motion_ = false;
+  }
+  stats->neff = effectiveSampleSize(weights_);
+  if (features.empty() || filters_.empty()) return;
+
+  // Candidate landmarks per feature at the predicted mean pose: those within twice the
+  // similarity threshold. Each particle then takes the nearest candidate, its dissimilarity
+  // capped at the threshold, so a feature that no landmark explains costs every particle the
+  // same. Only features with a candidate count (the paper's "observed line obstacles").
+  const Pose2 predicted = weightedPoseMean(robot_, weights_).mean;
+  const double h = options_.line_association.h_similar_feature;
+  std::vector<int> observed;
+  std::vector<std::vector<int>> candidates;
+  for (int j = 0; j < static_cast<int>(features.size()); ++j) {
+    const GlobalFeature g = inMap(features[j], predicted, j);
+    std::vector<int> near;
+    for (int i = 0; i < static_cast<int>(filters_.size()); ++i) {
+      if (filters_[i].type() != g.type) continue;
+      if (featureDissimilarity(g.type, g.value, filters_[i].centroid(), options_.line_association) <
+          2.0 * h) {
+        near.push_back(i);
+      }
+    }
+    if (near.empty()) continue;
+    observed.push_back(j);
+    candidates.push_back(std::move(near));
+  }
+  if (observed.empty()) return;
+
+  std::vector<double> log_weights(n);
+  for (int p = 0; p < n; ++p) {
+    double sum = 0.0;
+    for (size_t k = 0; k < observed.size(); ++k) {
+      const GlobalFeature g = inMap(features[observed[k]], robot_[p], observed[k]);
+      double best = h;
+      for (int i : candidates[k]) {
+        best = std::min(best, featureDissimilarity(g.type, g.value, filters_[i].centroid(),
+                                                   options_.line_association));
+      }
+      sum += best;
+    }
+    // Laplace likelihood of the mean WAD, parameter c_m1; the prior weight carries over.
+    log_weights[p] =
+        std::log(std::max(weights_[p], 1e-300)) - sum / observed.size() / options_.multifilter.c_m1;
+  }
+  if (!normalizeLogWeights(log_weights, &weights_)) ++stats->weight_resets;
+  stats->neff = effectiveSampleSize(weights_);
+  if (stats->neff < options_.resample_threshold * n) {
+    const std::vector<int> drawn = resampleLowVariance(weights_, n, rng_);
+    std::vector<Pose2> next(n);
+    for (int p = 0; p < n; ++p) next[p] = robot_[drawn[p]];
+    robot_.swap(next);
+    weights_.assign(n, 1.0 / n);
+    stats->resampled = true;
+    ++stats_.resamples;
+  }
+}
+
+void MultiFilterSmc::updateMap(const std::vector<LocalFeature>& features, UpdateStats* stats) {
+  if (features.empty()) return;
+  const Pose2 mean = weightedPoseMean(robot_, weights_).mean;
+  std::vector<GlobalFeature> global;
+  for (int j = 0; j < static_cast<int>(features.size()); ++j) {
+    global.push_back(inMap(features[j], mean, j));
+  }
+  std::vector<LandmarkType> types;
+  std::vector<Eigen::Vector2d> centroids;
+  for (const auto& f : filters_) {
+    types.push_back(f.type());
+    centroids.push_back(f.centroid());
+  }
+  const WadAssociation a = associateByWad(global, types, centroids, options_.line_association);
+  for (int i = 0; i < static_cast<int>(a.map_to_feature.size()); ++i) {
+    if (a.map_to_feature[i] >= 0) ++stats->associated;
+  }
+  if (!mapping_) return;
+
+  // Obstacle filters matched by a feature, updated in random order (the paper's section 3.4).
+  std::vector<int> order;
+  for (int i = 0; i < static_cast<int>(filters_.size()); ++i) {
+    if (a.map_to_feature[i] >= 0) order.push_back(i);
+  }
+  std::shuffle(order.begin(), order.end(), rng_);
+  for (int i : order) {
+    const GlobalFeature& g = global[a.map_to_feature[i]];
+    if (!filters_[i].update(g.value, options_.line_association, options_.multifilter, rng_)) {
+      ++stats->weight_resets;
+    }
+    filters_[i].extendBy(g.start, g.end);
+  }
+
+  // New obstacles (Hausdorff test): one filter each, unless a feature of this same scan
+  // already started a similar one.
+  std::vector<GlobalFeature> added;
+  for (int j : a.new_features) {
+    bool duplicate = false;
+    for (const auto& other : added) {
+      duplicate = duplicate || (other.type == global[j].type &&
+                                featureDissimilarity(other.type, other.value, global[j].value,
+                                                     options_.line_association) <
+                                    options_.line_association.h_similar_feature);
+    }
+    if (duplicate) continue;
+    addFilter(global[j]);
+    added.push_back(global[j]);
+    ++stats->new_landmarks;
+  }
+}
+
+void MultiFilterSmc::addFilter(const GlobalFeature& feature) {
+  const MultiFilterOptions& m = options_.multifilter;
+  const Eigen::Vector2d sigma = feature.type == LandmarkType::kLine
+                                    ? Eigen::Vector2d(m.init_sigma_m, m.init_sigma_rad)
+                                    : Eigen::Vector2d(m.init_sigma_m, m.init_sigma_m);
+  filters_.emplace_back(next_landmark_id_++, feature.type, feature.value, sigma, m.line_particles,
+                        rng_);
+  filters_.back().extendBy(feature.start, feature.end);
+}
+
+PoseEstimate MultiFilterSmc::estimate() const { return weightedPoseMean(robot_, weights_); }
+
+std::vector<LandmarkEstimate> MultiFilterSmc::landmarks() const {
+  std::vector<LandmarkEstimate> out;
+  out.reserve(filters_.size());
+  for (const auto& f : filters_) out.push_back(f.toEstimate());
+  return out;
+}
+
+std::vector<WeightedPose> MultiFilterSmc::particles() const {
+  std::vector<WeightedPose> out(robot_.size());
+  for (size_t i = 0; i < robot_.size(); ++i) out[i] = {robot_[i], weights_[i]};
+  return out;
+}
+
+FilterStats MultiFilterSmc::stats() const { return stats_; }
+
+bool MultiFilterSmc::resetPose(const Pose2& pose, const Eigen::Matrix3d& covariance) {
+  if (!pose.allFinite() || !covariance.allFinite()) return false;
+  for (auto& p : robot_) {
+    p = sampleMultivariate<3>(rng_, pose, covariance);
+    p.z() = wrapAngle(p.z());
+  }
+  weights_.assign(robot_.size(), 1.0 / robot_.size());
+  has_pending_motion_ = false;
+  return true;
+}
+
+bool MultiFilterSmc::loadMap(const std::vector<LandmarkEstimate>& landmarks) {
+  filters_.clear();
+  for (const auto& l : landmarks) {
+    if (!l.mean.allFinite()) continue;
+    const Eigen::Vector2d sigma(std::sqrt(std::max(l.covariance(0, 0), 0.0)),
+                                std::sqrt(std::max(l.covariance(1, 1), 0.0)));
+    filters_.emplace_back(l.id, l.type, l.mean, sigma.allFinite() ? sigma : Eigen::Vector2d::Zero(),
+                          options_.multifilter.line_particles, rng_);
+    filters_.back().extendBy(l.start, l.end);
+    next_landmark_id_ = std::max(next_landmark_id_, l.id + 1);
+  }
+  stats_.landmarks = filters_.size();
+  return true;
+}
+
+bool MultiFilterSmc::setMapping(bool enabled) {
+  mapping_ = enabled;
+  return true;
+}
+
+}  // namespace core
+}  // namespace rbpf_slam
