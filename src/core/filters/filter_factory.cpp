@@ -7,6 +7,7 @@
 #include "rbpf_slam/core/filters/landmark_existence.h"
 #include "rbpf_slam/core/filters/robust_fastslam2.h"
 #include "rbpf_slam/core/filters/slam_filter.h"
+#include "rbpf_slam/core/grid/grid_pf.h"
 
 namespace rbpf_slam {
 namespace core {
@@ -22,7 +23,7 @@ void requireRange(const std::string& name, double value, double min, double max)
 }  // namespace
 
 std::vector<std::string> availableVariants() {
-  return {"fastslam2", "robust_fastslam2", "hinf_fastslam"};
+  return {"fastslam2", "robust_fastslam2", "hinf_fastslam", "grid_pf"};
 }
 
 void validate(const RobustOptions& o) {
@@ -55,6 +56,7 @@ void validate(const FilterOptions& o) {
   validate(o.tracker);
   validate(o.existence);
   validate(o.hinf);
+  validate(o.grid);
 }
 
 std::unique_ptr<SlamFilter> createFilter(const FilterOptions& options) {
@@ -62,6 +64,7 @@ std::unique_ptr<SlamFilter> createFilter(const FilterOptions& options) {
   if (options.variant == "fastslam2") return std::make_unique<FastSlam2>(options);
   if (options.variant == "robust_fastslam2") return std::make_unique<RobustFastSlam2>(options);
   if (options.variant == "hinf_fastslam") return std::make_unique<HinfFastSlam>(options);
+  if (options.variant == "grid_pf") return std::make_unique<GridParticleFilter>(options);
   throw std::invalid_argument("variant = '" + options.variant + "' is not implemented");
 }
 
