@@ -1,9 +1,11 @@
 // render_grid --bag IN.bag --reference REF.tum --config CONFIG.yaml --output PREFIX
-//             [--set key=value ...] [--max-dt S]
+//             [--set key=value ...] [--max-dt S] [--align-to ESTIMATE.tum]
 // Renders the bag's laser scans at the reference poses into one occupancy grid with the
 // inverse sensor model and grid options of CONFIG (variant grid_pf's), writes PREFIX.pgm +
 // PREFIX.yaml (map_server conventions) and prints cell counts as JSON: the map a perfect
-// trajectory would give, to compare offline_slam's map.pgm with.
+// trajectory would give, to compare offline_slam's map.pgm with. --align-to moves the reference
+// so that its pose at the estimate's first stamp is the estimate's first pose (offline_slam's
+// map frame starts at the first odometry pose): both maps are then in the same frame.
 // Exit status: 0 on success, 2 on bad usage or unreadable input.
 
 #include <rosbag/bag.h>
@@ -32,7 +34,7 @@ constexpr int kUsageError = 2;
 
 const char kUsage[] =
     "usage: render_grid --bag IN.bag --reference REF.tum --config CONFIG.yaml --output PREFIX\n"
-    "                   [--set key=value ...] [--max-dt S]\n"
+    "                   [--set key=value ...] [--max-dt S] [--align-to ESTIMATE.tum]\n"
     "  renders the laser scans at the reference poses (nearest within --max-dt, default\n"
     "  0.05 s) with the config's grid options; writes PREFIX.pgm, PREFIX.yaml; prints JSON\n";
 
@@ -61,7 +63,7 @@ bool referenceAt(const std::vector<rbpf_slam::io::StampedPose>& reference, doubl
 int main(int argc, char** argv) {
   namespace core = rbpf_slam::core;
   namespace io = rbpf_slam::io;
-  std::string bag_path, reference_path, config_path, output;
+  std::string bag_path, reference_path, config_path, output, align_path;
   std::vector<std::string> overrides;
   double max_dt = 0.05;
   try {
@@ -84,6 +86,8 @@ int main(int argc, char** argv) {
         output = next();
       } else if (arg == "--set") {
         overrides.push_back(next());
+      } else if (arg == "--align-to") {
+        align_path = next();
       } else if (arg == "--max-dt") {
         max_dt = std::stod(next());
       } else {
@@ -105,6 +109,15 @@ int main(int argc, char** argv) {
     if (reference.empty()) throw std::runtime_error(reference_path + ": no poses");
     std::sort(reference.begin(), reference.end(),
               [](const auto& a, const auto& b) { return a.stamp < b.stamp; });
+    if (!align_path.empty()) {
+      const std::vector<io::StampedPose> estimate = io::readTum(align_path);
+      core::Pose2 at_start;
+      if (estimate.empty() || !referenceAt(reference, estimate.front().stamp, max_dt, &at_start)) {
+        throw std::runtime_error(align_path + ": no first pose with a reference within --max-dt");
+      }
+      const core::Pose2 to_estimate = core::compose(estimate.front().pose, core::inverse(at_start));
+      for (auto& p : reference) p.pose = core::compose(to_estimate, p.pose);
+    }
     rosbag::Bag bag(bag_path, rosbag::bagmode::Read);
     // Static sensor mounts: base -> sensor frame from tf_static (identity if the same frame).
     std::vector<std::pair<std::string, core::Pose2>> mounts;
