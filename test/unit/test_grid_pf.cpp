@@ -4,6 +4,7 @@
 // landmark rasterisation every other variant's map uses.
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
@@ -15,6 +16,8 @@
 #include "rbpf_slam/core/grid/inverse_sensor_model.h"
 #include "rbpf_slam/core/grid/tiled_grid.h"
 #include "rbpf_slam/core/slam/slam_pipeline.h"
+#include "rbpf_slam/io/grid_map_file.h"
+#include "rbpf_slam/io/slam_config.h"
 
 namespace rbpf_slam {
 namespace core {
@@ -393,6 +396,64 @@ TEST(LandmarkRaster, LinesAndPointsBecomeOccupiedCells) {
   EXPECT_EQ(g.at(15, 15), 100); // (1.05, 1.05): the post
   EXPECT_EQ(g.at(15, 10), -1);
   EXPECT_EQ(g.count(-1, -1) + occupied, static_cast<long>(g.cells.size()));
+}
+
+TEST(GridConfig, ShippedGridConfigsSelectTheVariantAndItsSensors) {
+  const std::string dir = std::string(RBPF_SOURCE_DIR) + "/config/";
+  const io::SlamConfig ir = io::loadSlamConfig(dir + "grid_pf.yaml");
+  EXPECT_EQ(ir.filter.variant, "grid_pf");
+  EXPECT_EQ(ir.frontend, "sonar");
+  EXPECT_EQ(ir.ros.sonar_topic, "ir");  // the simulator's infrared topic
+  EXPECT_EQ(ir.filter.motion.model, "diff_drive");
+  EXPECT_DOUBLE_EQ(ir.filter.motion.wheel_base_m, 0.053);
+  EXPECT_DOUBLE_EQ(ir.filter.grid.resolution_m, 0.01);
+  EXPECT_DOUBLE_EQ(ir.filter.grid.match_f, 100.0);
+  EXPECT_EQ(io::loadSlamConfig(dir + "grid_pf_sonar.yaml").ros.sonar_topic, "sonar");
+  const io::SlamConfig laser = io::loadSlamConfig(dir + "grid_pf_laser.yaml");
+  EXPECT_EQ(laser.frontend, "laser");
+  EXPECT_TRUE(laser.scan_matching.enabled);
+  EXPECT_NO_THROW(createFilter(laser.filter));
+}
+
+TEST(GridConfig, ErrorsNameTheGridKey) {
+  auto error = [](const std::string& yaml) -> std::string {
+    try {
+      io::parseSlamConfig(YAML::Load(yaml), "t.yaml");
+    } catch (const io::ConfigError& e) {
+      return e.what();
+    }
+    return "";
+  };
+  EXPECT_NE(error("variant: grid_pf\ngrid: {resolution_m: 0}").find("grid.resolution_m"),
+            std::string::npos);
+  EXPECT_NE(error("variant: grid_pf\ngrid: {match_f: -1}").find("grid.match_f"),
+            std::string::npos);
+  EXPECT_NE(error("grid: {resolutoin_m: 0.1}").find("resolutoin_m"), std::string::npos);
+  EXPECT_NE(error("map_update_period: -1").find("map_update_period"), std::string::npos);
+}
+
+TEST(GridMapFile, WritesAndReadsMapServerFiles) {
+  GridMapData g;
+  g.resolution_m = 0.1;
+  g.origin_x_m = -1.5;
+  g.origin_y_m = 2.0;
+  g.width = 3;
+  g.height = 2;
+  g.cells = {100, 0, -1, 70, 19, 50};  // row 0 is the bottom
+  char dir[] = "/tmp/grid_map_fileXXXXXX";
+  ASSERT_NE(mkdtemp(dir), nullptr);
+  const std::vector<std::string> files = io::writeGridMap(std::string(dir) + "/m", g);
+  ASSERT_EQ(files.size(), 2u);
+  const GridMapData back = io::readGridMap(files[1]);
+  EXPECT_EQ(back.width, 3);
+  EXPECT_EQ(back.height, 2);
+  EXPECT_DOUBLE_EQ(back.resolution_m, 0.1);
+  EXPECT_DOUBLE_EQ(back.origin_x_m, -1.5);
+  EXPECT_DOUBLE_EQ(back.origin_y_m, 2.0);
+  // Trinary: >= 65 occupied, 0..19 free, the rest unknown.
+  EXPECT_EQ(back.cells, (std::vector<int8_t>{100, 0, -1, 100, 0, -1}));
+  for (const auto& f : files) std::remove(f.c_str());
+  rmdir(dir);
 }
 
 }  // namespace
