@@ -134,7 +134,13 @@ def main():
     parser.add_argument("--particles", default="100,300,500")
     parser.add_argument("--set", action="append", default=[])
     parser.add_argument("--output", default=os.path.join(ROOT, "docs", "grid_pf_study"))
+    parser.add_argument("--from-json", help="re-plot and re-print a previous run's JSON")
     args = parser.parse_args()
+    if args.from_json:
+        with open(args.from_json) as f:
+            results = json.load(f)
+        report(results, args.output)
+        return
     os.makedirs(args.work, exist_ok=True)
     worlds = args.worlds.split(",")
     counts = [int(p) for p in args.particles.split(",")]
@@ -166,8 +172,18 @@ def main():
                for p in counts}
         results[world] = {"series": series, "wall_s_mean": wall, "peak_rss_mb_max": rss,
                           "seeds": len(seeds)}
+    for world in results:  # 0.1 mm is plenty
+        results[world]["series"] = {n: [[round(v, 5) for v in axis] for axis in xy]
+                                    for n, xy in results[world]["series"].items()}
     with open(args.output + ".json", "w") as f:
         json.dump(results, f)
+    report(results, args.output)
+
+
+def report(results, output):
+    worlds = list(results)
+    names = list(results[worlds[0]]["series"])
+    counts = [n for n in names if n != "odometry"]
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -180,33 +196,39 @@ def main():
                 label = name if name == "odometry" else name + " particles"
                 ax.plot(rx if row == 0 else ry, label=label, color=colours.get(name),
                         linestyle="--" if name == "odometry" else "-")
-            ax.set_title("%s: RMSE of %s (%d seeds)" % (world, axis, len(seeds)))
+            ax.set_title("%s: RMSE of %s (%d seeds)" % (world, axis, results[world]["seeds"]))
             ax.set_xlabel("filter step")
             ax.set_ylabel("RMSE %s [m]" % axis)
             ax.grid(alpha=0.3)
             ax.legend()
     fig.tight_layout()
-    fig.savefig(args.output + ".png", dpi=90)
-    # Table.
+    fig.savefig(output + ".png", dpi=90)
+    # Tables.
     for world in worlds:
-        print("\n%s (%d seeds): RMSE x / y [m] at filter step" % (world, len(seeds)))
-        steps = [k for k in REPORT_STEPS]
-        names = [str(p) for p in counts] + ["odometry"]
-        n_last = min(len(results[world]["series"][n][0]) for n in names)
-        print("| | " + " | ".join("step %d" % k for k in steps) + " | step %d (last) | mean over steps |" % n_last)
-        print("|---" * (len(steps) + 3) + "|")
-        for name in names:
-            rx, ry = results[world]["series"][name]
+        series = results[world]["series"]
+        print("\n%s (%d seeds): RMSE x / y [m] at filter step" % (world, results[world]["seeds"]))
+        n_last = min(len(series[n][0]) for n in names)
+        print("| | " + " | ".join("step %d" % k for k in REPORT_STEPS) +
+              " | step %d (last) | mean over steps >= 600 | steps >= 600 below odometry (x / y) |" % n_last)
+        print("|---" * (len(REPORT_STEPS) + 4) + "|")
+        ox, oy = series["odometry"]
+        for name in counts + ["odometry"]:
+            rx, ry = series[name]
             cells = []
-            for k in steps + [n_last]:
+            for k in REPORT_STEPS + [n_last]:
                 k = min(k, len(rx)) - 1
-                cells.append("%.3f / %.3f" % (rx[k], ry[k]))
-            cells.append("%.3f / %.3f" % (sum(rx) / len(rx), sum(ry) / len(ry)))
+                cells.append("%.4f / %.4f" % (rx[k], ry[k]))
+            late = range(600, min(len(rx), len(ox)))
+            cells.append("%.4f / %.4f" % (sum(rx[k] for k in late) / len(late),
+                                          sum(ry[k] for k in late) / len(late)))
+            below = ("%.0f%% / %.0f%%" % (100.0 * sum(rx[k] < ox[k] for k in late) / len(late),
+                                          100.0 * sum(ry[k] < oy[k] for k in late) / len(late))
+                     if name != "odometry" else "")
+            cells.append(below)
             label = name if name == "odometry" else name + " particles"
             print("| %s | %s |" % (label, " | ".join(cells)))
-        print("wall s per run: %s; peak RSS MB: %s" % (results[world]["wall_s_mean"],
-                                                     results[world]["peak_rss_mb_max"]))
-
+        print("wall s per run (mean): %s; peak RSS MB (max): %s" % (
+            results[world]["wall_s_mean"], results[world]["peak_rss_mb_max"]))
 
 if __name__ == "__main__":
     main()
