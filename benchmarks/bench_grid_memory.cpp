@@ -67,7 +67,8 @@ core::FeatureSet scanAt(const core::Pose2& pose) {
   scan->range_min = 0.05;
   scan->range_max = kMaxRangeM;
   for (int i = 0; i < 180; ++i) {
-    const double r = castRay(pose.head<2>(), pose.z() + scan->angle_min + i * scan->angle_increment);
+    const double angle = pose.z() + scan->angle_min + i * scan->angle_increment;
+    const double r = castRay(pose.head<2>(), angle);
     scan->ranges.push_back(r > kMaxRangeM ? INFINITY : static_cast<float>(r));
   }
   core::FeatureSet f;

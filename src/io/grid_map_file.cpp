@@ -104,7 +104,8 @@ core::GridMapData readGridMap(const std::string& yaml_path) {
   grid.cells.assign(pixels.size(), -1);
   for (int y = 0; y < grid.height; ++y) {
     for (int x = 0; x < grid.width; ++x) {
-      const double occupancy = (255 - pixels[static_cast<size_t>(grid.height - 1 - y) * grid.width + x]) / 255.0;
+      const size_t pixel = static_cast<size_t>(grid.height - 1 - y) * grid.width + x;
+      const double occupancy = (255 - pixels[pixel]) / 255.0;
       int8_t& cell = grid.cells[static_cast<size_t>(y) * grid.width + x];
       if (occupancy > 0.65) cell = 100;
       else if (occupancy < 0.196) cell = 0;

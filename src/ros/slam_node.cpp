@@ -12,6 +12,7 @@
 #include <sstream>
 
 #include "rbpf_slam/core/grid/grid_map_data.h"
+#include "rbpf_slam/io/grid_map_file.h"
 #include "rbpf_slam/io/landmark_file.h"
 #include "rbpf_slam/ros/conversions.h"
 #include "rbpf_slam/ros/param_loader.h"
@@ -432,7 +433,11 @@ bool SlamNode::saveMapService(MapFile::Request& request, MapFile::Response& resp
   try {
     const std::vector<core::LandmarkEstimate> landmarks = pipeline_.session().filter().landmarks();
     io::writeLandmarksYaml(prefix + ".landmarks.yaml", landmarks);
-    const std::vector<std::string> grid = io::writeLandmarkGrid(prefix, landmarks);
+    core::GridMapData occupancy;  // grid variants save their own grid, not the landmarks'
+    const std::vector<std::string> grid =
+        pipeline_.session().filter().occupancyGrid(occupancy)
+            ? io::writeGridMap(prefix, occupancy)
+            : io::writeLandmarkGrid(prefix, landmarks);
     response.success = true;
     response.message = "wrote " + std::to_string(landmarks.size()) + " landmarks to " + prefix +
                        ".landmarks.yaml and the picture to " + grid[0] + " + " + grid[1];

@@ -121,8 +121,8 @@ int main(int argc, char** argv) {
     rosbag::Bag bag(bag_path, rosbag::bagmode::Read);
     // Static sensor mounts: base -> sensor frame from tf_static (identity if the same frame).
     std::vector<std::pair<std::string, core::Pose2>> mounts;
-    for (const rosbag::MessageInstance& m :
-         rosbag::View(bag, rosbag::TopicQuery(std::vector<std::string>{"/tf_static", "tf_static"}))) {
+    const std::vector<std::string> static_topics{"/tf_static", "tf_static"};
+    for (const rosbag::MessageInstance& m : rosbag::View(bag, rosbag::TopicQuery(static_topics))) {
       const auto msg = m.instantiate<tf2_msgs::TFMessage>();
       if (!msg) continue;
       for (const auto& t : msg->transforms) {
@@ -135,9 +135,10 @@ int main(int argc, char** argv) {
     const int width = static_cast<int>(std::ceil(options.size_x_m / options.resolution_m));
     const int height = static_cast<int>(std::ceil(options.size_y_m / options.resolution_m));
     const core::Pose2& start = reference.front().pose;
-    core::TiledLogOddsGrid grid(options.resolution_m, start.x() - 0.5 * width * options.resolution_m,
-                                start.y() - 0.5 * height * options.resolution_m, width, height,
-                                options.tile_cells);
+    const double half_x = 0.5 * width * options.resolution_m;
+    const double half_y = 0.5 * height * options.resolution_m;
+    core::TiledLogOddsGrid grid(options.resolution_m, start.x() - half_x, start.y() - half_y,
+                                width, height, options.tile_cells);
     long scans = 0, unmatched = 0, bad = 0;
     const std::string topic = stripSlash(config.ros.scan_topic);
     for (const rosbag::MessageInstance& m : rosbag::View(
