@@ -80,17 +80,18 @@ class OdometryMotionModel : public MotionModel {
 
 /// Differential-drive wheel model (Yatim & Buniyamin eqs. 11, 12): left and right wheel
 /// travel recovered from the increment and perturbed with
-/// sigma^2 = (alpha1 * d)^2 + (alpha2 * (l - r))^2.
+/// sigma_l^2 = (alpha1 * l)^2 + (alpha2 * (l - r))^2 and likewise for r (wheelTravelSigmas).
 class DiffDriveMotionModel : public MotionModel {
  public:
   explicit DiffDriveMotionModel(const MotionOptions& options) : options_(options) {}
 
   Pose2 sample(const Pose2& previous, const MotionInput& motion, Rng& rng) const override {
-    double left, right;
-    wheels(motion.delta, &left, &right);
-    const double sigma = motion.noise_scale * wheelSigma(left, right);
-    const double l = left + sampleGaussian(rng, sigma);
-    const double r = right + sampleGaussian(rng, sigma);
+    double left, right, sigma_left, sigma_right;
+    wheelTravel(motion.delta, options_.wheel_base_m, &left, &right);
+    wheelTravelSigmas(left, right, options_.wheel_alpha1, options_.wheel_alpha2, &sigma_left,
+                      &sigma_right);
+    const double l = left + sampleGaussian(rng, motion.noise_scale * sigma_left);
+    const double r = right + sampleGaussian(rng, motion.noise_scale * sigma_right);
     Pose2 next = integrate(previous, l, r);
     next.x() += sampleGaussian(rng, motion.noise_scale * options_.min_sigma_xy_m);
     next.y() += sampleGaussian(rng, motion.noise_scale * options_.min_sigma_xy_m);
@@ -99,9 +100,10 @@ class DiffDriveMotionModel : public MotionModel {
   }
 
   Eigen::Matrix3d covariance(const Pose2& previous, const MotionInput& motion) const override {
-    double left, right;
-    wheels(motion.delta, &left, &right);
-    const double sigma = motion.noise_scale * wheelSigma(left, right);
+    double left, right, sigma_left, sigma_right;
+    wheelTravel(motion.delta, options_.wheel_base_m, &left, &right);
+    wheelTravelSigmas(left, right, options_.wheel_alpha1, options_.wheel_alpha2, &sigma_left,
+                      &sigma_right);
     // Numerical Jacobian of the pose with respect to (l, r).
     Eigen::Matrix<double, 3, 2> j;
     const double h = 1e-6;
@@ -112,7 +114,9 @@ class DiffDriveMotionModel : public MotionModel {
     j.col(1) = (dr - base) / h;
     j(2, 0) = wrapAngle(dl.z() - base.z()) / h;
     j(2, 1) = wrapAngle(dr.z() - base.z()) / h;
-    Eigen::Matrix3d cov = j * (sigma * sigma) * j.transpose();
+    const Eigen::Vector2d variances(sigma_left * sigma_left, sigma_right * sigma_right);
+    Eigen::Matrix3d cov = motion.noise_scale * motion.noise_scale * j *
+                          variances.asDiagonal() * j.transpose();
     cov(0, 0) += options_.min_sigma_xy_m * options_.min_sigma_xy_m;
     cov(1, 1) += options_.min_sigma_xy_m * options_.min_sigma_xy_m;
     cov(2, 2) += options_.min_sigma_theta_rad * options_.min_sigma_theta_rad;
@@ -120,17 +124,6 @@ class DiffDriveMotionModel : public MotionModel {
   }
 
  private:
-  void wheels(const Pose2& delta, double* left, double* right) const {
-    const double d = std::hypot(delta.x(), delta.y()) * (delta.x() < 0.0 ? -1.0 : 1.0);
-    const double half = 0.5 * options_.wheel_base_m * delta.z();
-    *left = d - half;
-    *right = d + half;
-  }
-  double wheelSigma(double left, double right) const {
-    const double d = 0.5 * (std::fabs(left) + std::fabs(right));
-    const double a = options_.wheel_alpha1 * d, b = options_.wheel_alpha2 * (left - right);
-    return std::sqrt(a * a + b * b);
-  }
   Pose2 integrate(const Pose2& previous, double l, double r) const {
     const double d = 0.5 * (l + r), dtheta = (r - l) / options_.wheel_base_m;
     const double heading = previous.z() + 0.5 * dtheta;
@@ -142,6 +135,20 @@ class DiffDriveMotionModel : public MotionModel {
 };
 
 }  // namespace
+
+void wheelTravel(const Pose2& delta, double wheel_base_m, double* left, double* right) {
+  const double d = std::hypot(delta.x(), delta.y()) * (delta.x() < 0.0 ? -1.0 : 1.0);
+  const double half = 0.5 * wheel_base_m * delta.z();
+  *left = d - half;
+  *right = d + half;
+}
+
+void wheelTravelSigmas(double left, double right, double alpha1, double alpha2,
+                       double* sigma_left, double* sigma_right) {
+  const double slip = alpha2 * (left - right);
+  *sigma_left = std::sqrt(alpha1 * left * alpha1 * left + slip * slip);
+  *sigma_right = std::sqrt(alpha1 * right * alpha1 * right + slip * slip);
+}
 
 void validate(const MotionOptions& options) {
   if (options.model != "odometry" && options.model != "diff_drive") {

@@ -11,6 +11,8 @@
 #include <limits>
 #include <stdexcept>
 
+#include "rbpf_slam/io/grid_map_file.h"
+
 namespace rbpf_slam {
 namespace io {
 namespace {
@@ -130,67 +132,9 @@ std::vector<core::LandmarkEstimate> loadLandmarksYaml(const std::string& path) {
 std::vector<std::string> writeLandmarkGrid(const std::string& prefix,
                                            const std::vector<core::LandmarkEstimate>& landmarks,
                                            const GridMapOptions& options) {
-  if (!(options.resolution_m > 0.0)) throw std::invalid_argument("grid resolution must be > 0");
-  double min_x = std::numeric_limits<double>::max(), min_y = min_x;
-  double max_x = -min_x, max_y = -min_x;
-  auto extend = [&](const Eigen::Vector2d& p) {
-    min_x = std::min(min_x, p.x());
-    min_y = std::min(min_y, p.y());
-    max_x = std::max(max_x, p.x());
-    max_y = std::max(max_y, p.y());
-  };
-  for (const auto& l : landmarks) {
-    extend(l.start);
-    extend(l.end);
-  }
-  if (landmarks.empty()) min_x = min_y = max_x = max_y = 0.0;
-  min_x -= options.margin_m;
-  min_y -= options.margin_m;
-  max_x += options.margin_m;
-  max_y += options.margin_m;
-  const int width = static_cast<int>(std::ceil((max_x - min_x) / options.resolution_m));
-  const int height = static_cast<int>(std::ceil((max_y - min_y) / options.resolution_m));
-  if (static_cast<double>(width) * height > 2.5e8) {
-    throw std::runtime_error("grid of " + std::to_string(width) + " x " + std::to_string(height) +
-                             " cells is too large: raise the resolution");
-  }
-  std::vector<unsigned char> cells(static_cast<size_t>(width) * height, 205);
-  auto mark = [&](const Eigen::Vector2d& p) {
-    const int cx = static_cast<int>((p.x() - min_x) / options.resolution_m);
-    const int cy = static_cast<int>((p.y() - min_y) / options.resolution_m);
-    if (cx < 0 || cy < 0 || cx >= width || cy >= height) return;
-    cells[static_cast<size_t>(height - 1 - cy) * width + cx] = 0;  // row 0 is the top (max y)
-  };
-  for (const auto& l : landmarks) {
-    if (l.type == core::LandmarkType::kLine) {
-      const double length = (l.end - l.start).norm();
-      const int steps = std::max(1, static_cast<int>(std::ceil(2.0 * length / options.resolution_m)));
-      for (int i = 0; i <= steps; ++i) mark(l.start + (l.end - l.start) * (double(i) / steps));
-    } else {
-      const double r = options.point_radius_m;
-      for (double dx = -r; dx <= r; dx += 0.5 * options.resolution_m) {
-        for (double dy = -r; dy <= r; dy += 0.5 * options.resolution_m) {
-          if (dx * dx + dy * dy <= r * r) mark(l.mean + Eigen::Vector2d(dx, dy));
-        }
-      }
-    }
-  }
-  const std::string pgm_path = prefix + ".pgm", yaml_path = prefix + ".yaml";
-  {
-    std::ofstream pgm(pgm_path, std::ios::binary);
-    if (!pgm) throw std::runtime_error(pgm_path + ": cannot be written");
-    pgm << "P5\n# rbpf_slam landmark map\n" << width << " " << height << "\n255\n";
-    pgm.write(reinterpret_cast<const char*>(cells.data()), static_cast<std::streamsize>(cells.size()));
-    if (!pgm) throw std::runtime_error(pgm_path + ": write failed");
-  }
-  std::ofstream yaml(yaml_path);
-  if (!yaml) throw std::runtime_error(yaml_path + ": cannot be written");
-  const std::string image = pgm_path.substr(pgm_path.find_last_of('/') + 1);
-  yaml << std::setprecision(9) << "image: " << image << "\nresolution: " << options.resolution_m
-       << "\norigin: [" << min_x << ", " << min_y << ", 0.0]\nnegate: 0\n"
-       << "occupied_thresh: 0.65\nfree_thresh: 0.196\n";
-  if (!yaml) throw std::runtime_error(yaml_path + ": write failed");
-  return {pgm_path, yaml_path};
+  const core::GridMapData grid = core::rasterizeLandmarks(
+      landmarks, options.resolution_m, options.margin_m, options.point_radius_m);
+  return writeGridMap(prefix, grid, "rbpf_slam landmark map");
 }
 
 }  // namespace io

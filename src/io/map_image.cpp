@@ -66,6 +66,19 @@ void MapImage::dot(const Eigen::Vector2d& c, int radius_px, const uint8_t rgb[3]
   }
 }
 
+void MapImage::fill(const Eigen::Vector2d& min, const Eigen::Vector2d& max,
+                    const uint8_t rgb[3]) {
+  if (!min.allFinite() || !max.allFinite()) return;
+  const Eigen::Vector2d a = (min - origin_) / resolution_, b = (max - origin_) / resolution_;
+  const int x0 = std::max(0, static_cast<int>(std::ceil(a.x() - 0.5)));
+  const int x1 = std::min(width_, static_cast<int>(std::ceil(b.x() - 0.5)));
+  const int y0 = std::max(0, static_cast<int>(std::ceil(a.y() - 0.5)));
+  const int y1 = std::min(height_, static_cast<int>(std::ceil(b.y() - 0.5)));
+  for (int y = y0; y < y1; ++y) {
+    for (int x = x0; x < x1; ++x) setPixel(x, height_ - 1 - y, rgb);
+  }
+}
+
 void MapImage::writePng(const std::string& path) const {
   std::ofstream file(path, std::ios::binary);
   if (!file) throw std::runtime_error(path + ": cannot open for writing");

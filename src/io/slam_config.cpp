@@ -101,6 +101,29 @@ void readLineSlam(YamlSection& top, core::FilterOptions* f) {
   ekf.finish();
 }
 
+void readGrid(YamlSection section, core::GridOptions* o) {
+  // Ranges are checked by core::validate(GridOptions).
+  section.read("resolution_m", &o->resolution_m);
+  section.read("size_x_m", &o->size_x_m);
+  section.read("size_y_m", &o->size_y_m);
+  section.read("tile_cells", &o->tile_cells);
+  section.read("log_odds_occupied", &o->log_odds_occupied);
+  section.read("log_odds_free", &o->log_odds_free);
+  section.read("log_odds_clamp", &o->log_odds_clamp);
+  section.read("cone_arc_thickness_m", &o->cone_arc_thickness_m);
+  section.read("cone_max_range_m", &o->cone_max_range_m);
+  section.read("max_range_margin_m", &o->max_range_margin_m);
+  section.read("no_echo_free_range_m", &o->no_echo_free_range_m);
+  section.read("cone_fov_rad", &o->cone_fov_rad);
+  section.read("laser_max_range_m", &o->laser_max_range_m);
+  section.read("laser_no_return_free_m", &o->laser_no_return_free_m);
+  section.read("laser_beam_step", &o->laser_beam_step);
+  section.read("match_f", &o->match_f);
+  section.read("match_occupied_weight", &o->match_occupied_weight);
+  section.read("match_free_weight", &o->match_free_weight);
+  section.finish();
+}
+
 void readLaser(YamlSection section, core::LaserExtractorOptions* o) {
   section.read("method", &o->method, {"incremental", "split_and_merge"});
   section.read("sigma_range_m", &o->sigma_range_m, 1e-6, 1.0);
@@ -200,6 +223,8 @@ void readRos(YamlSection& top, RosOptions* o) {
   top.read("queue_size", &o->queue_size, 1, 10000);
   top.read("publish_particles", &o->publish_particles);
   top.read("map_save_prefix", &o->map_save_prefix);
+  top.read("map_update_period", &o->map_update_period, 0.0, 3600.0);
+  top.read("map_resolution", &o->map_resolution, 1e-3, 10.0);
   for (const std::string* frame : {&o->map_frame, &o->odom_frame, &o->base_frame}) {
     if (frame->empty()) throw ConfigError(top.source() + ": frame names must not be empty");
   }
@@ -234,6 +259,7 @@ SlamConfig parseSlamConfigTree(const YAML::Node& root, const std::string& source
   readExistence(top.section("existence"), &f.existence);
   readHinf(top.section("hinf"), &f.hinf);
   readLineSlam(top, &f);
+  readGrid(top.section("grid"), &f.grid);
   readLaser(top.section("laser_features"), &config.laser);
   readScanMatching(top.section("scan_matching"), &config.scan_matching);
   readSonar(top.section("sonar_features"), &config.sonar);

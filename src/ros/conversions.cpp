@@ -3,6 +3,7 @@
 #include <tf2/LinearMath/Quaternion.h>
 #include <tf2/utils.h>
 
+#include <algorithm>
 #include <cmath>
 
 namespace rbpf_slam {
@@ -222,6 +223,20 @@ FeatureArray toMsg(const core::FeatureSet& features, const std_msgs::Header& hea
     out.end.y = l.end.y();
     msg.lines.push_back(out);
   }
+  return msg;
+}
+
+nav_msgs::OccupancyGrid toOccupancyGrid(const core::GridMapData& grid, const std::string& frame,
+                                        const ros::Time& stamp) {
+  nav_msgs::OccupancyGrid msg;
+  msg.header.frame_id = frame;
+  msg.header.stamp = stamp;
+  msg.info.map_load_time = stamp;
+  msg.info.resolution = static_cast<float>(grid.resolution_m);
+  msg.info.width = static_cast<uint32_t>(std::max(grid.width, 0));
+  msg.info.height = static_cast<uint32_t>(std::max(grid.height, 0));
+  msg.info.origin = toPoseMsg(core::Pose2(grid.origin_x_m, grid.origin_y_m, 0.0));
+  msg.data.assign(grid.cells.begin(), grid.cells.end());
   return msg;
 }
 

@@ -16,10 +16,13 @@
 #include <cstdio>
 #include <fstream>
 #include <iomanip>
+#include <limits>
 #include <map>
 #include <memory>
 #include <sstream>
 
+#include "rbpf_slam/core/grid/grid_map_data.h"
+#include "rbpf_slam/io/grid_map_file.h"
 #include "rbpf_slam/io/landmark_file.h"
 #include "rbpf_slam/io/evaluation.h"
 #include "rbpf_slam/io/map_image.h"
@@ -32,6 +35,7 @@ namespace rosbridge {
 namespace {
 
 constexpr double kCloudAxisTolerance = 0.05;  // m: a cloud point lies on its transducer's axis
+constexpr double kLandmarkPointRadius = 0.1;  // m: a point landmark's disc in map.pgm
 
 std::string stripSlash(const std::string& s) {
   return !s.empty() && s[0] == '/' ? s.substr(1) : s;
@@ -39,6 +43,16 @@ std::string stripSlash(const std::string& s) {
 
 bool topicIs(const std::string& topic, const std::string& name) {
   return stripSlash(topic) == stripSlash(name);
+}
+
+/// Peak resident set of this process ("VmHWM"), MB; NaN when /proc is not there.
+double peakResidentMb() {
+  std::ifstream status("/proc/self/status");
+  std::string line;
+  while (std::getline(status, line)) {
+    if (line.rfind("VmHWM:", 0) == 0) return std::stod(line.substr(6)) / 1024.0;
+  }
+  return std::numeric_limits<double>::quiet_NaN();
 }
 
 /// A terminal progress bar: percentage, rate and time left.
@@ -427,12 +441,33 @@ OfflineSummary OfflineRunner::writeOutputs(const OfflineSummary& in) const {
          << ",\n  \"sonar_points\": " << sonar.points
          << ",\n  \"dropped_cloud_points\": " << summary.dropped_cloud_points;
   }
+  // The map in map_server conventions: the variant's grid, or its landmarks rasterised.
+  core::GridMapData grid;
+  const bool has_grid = pipeline_.session().filter().occupancyGrid(grid);
+  try {
+    if (!has_grid) {
+      grid = core::rasterizeLandmarks(landmarks, config_.ros.map_resolution, 1.0,
+                                      kLandmarkPointRadius);
+    }
+    io::writeGridMap(dir + "/map", grid);
+  } catch (const std::runtime_error& e) {
+    std::fprintf(stderr, "offline_slam: map.pgm not written: %s\n", e.what());
+  }
+  json << ",\n  \"map_width\": " << grid.width << ",\n  \"map_height\": " << grid.height
+       << ",\n  \"map_resolution\": " << grid.resolution_m
+       << ",\n  \"map_occupied_cells\": " << grid.count(65, 100)
+       << ",\n  \"map_free_cells\": " << grid.count(0, 19)
+       << ",\n  \"peak_rss_mb\": " << peakResidentMb();
   if (summary.has_reference) {
     json << ",\n  \"ate_rmse_m\": " << summary.ate_rmse_m
          << ",\n  \"final_position_error_m\": " << summary.final_position_error_m;
   }
   json << "\n}\n";
-  io::drawRunMap(dir + "/map.png", path, reference_path, landmarks);
+  if (has_grid) {
+    io::drawGridRunMap(dir + "/map.png", grid, path, reference_path);
+  } else {
+    io::drawRunMap(dir + "/map.png", path, reference_path, landmarks);
+  }
   return summary;
 }
 

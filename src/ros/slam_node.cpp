@@ -3,6 +3,7 @@
 #include <geometry_msgs/PoseArray.h>
 #include <geometry_msgs/PoseWithCovarianceStamped.h>
 #include <geometry_msgs/TransformStamped.h>
+#include <nav_msgs/MapMetaData.h>
 #include <nav_msgs/Path.h>
 #include <visualization_msgs/MarkerArray.h>
 
@@ -10,6 +11,8 @@
 #include <cmath>
 #include <sstream>
 
+#include "rbpf_slam/core/grid/grid_map_data.h"
+#include "rbpf_slam/io/grid_map_file.h"
 #include "rbpf_slam/io/landmark_file.h"
 #include "rbpf_slam/ros/conversions.h"
 #include "rbpf_slam/ros/param_loader.h"
@@ -17,6 +20,8 @@
 namespace rbpf_slam {
 namespace rosbridge {
 namespace {
+
+constexpr double kMapPointRadiusM = 0.1;  // a point landmark's disc on ~map
 
 constexpr double kWarningPeriodS = 10.0;
 constexpr double kTfCacheS = 30.0;
@@ -89,6 +94,14 @@ SlamNode::SlamNode(ros::NodeHandle nh, ros::NodeHandle private_nh)
                                                                    ? "localization only"
                                                                    : "mapping on")
                                                            << "); set the pose with initialpose");
+  }
+  map_publisher_ = private_nh_.advertise<nav_msgs::OccupancyGrid>("map", 1, true);
+  map_metadata_publisher_ = private_nh_.advertise<nav_msgs::MapMetaData>("map_metadata", 1, true);
+  dynamic_map_server_ =
+      private_nh_.advertiseService("dynamic_map", &SlamNode::dynamicMapService, this);
+  if (ros_options.map_update_period > 0.0) {
+    map_timer_ = nh_.createTimer(ros::Duration(ros_options.map_update_period),
+                                 &SlamNode::publishMap, this);
   }
   if (ros_options.transform_publish_period > 0.0) {
     transform_timer_ = nh_.createTimer(ros::Duration(ros_options.transform_publish_period),
@@ -340,6 +353,34 @@ void SlamNode::publishState(const ros::Time& stamp) {
   }
 }
 
+bool SlamNode::currentMap(const ros::Time& stamp, nav_msgs::OccupancyGrid* map) {
+  core::GridMapData grid;
+  if (!pipeline_.session().filter().occupancyGrid(grid)) {
+    try {
+      grid = core::rasterizeLandmarks(pipeline_.session().filter().landmarks(),
+                                      config_.ros.map_resolution, 1.0, kMapPointRadiusM);
+    } catch (const std::runtime_error& e) {
+      warnThrottled("map", std::string("No map: ") + e.what());
+      return false;
+    }
+  }
+  *map = toOccupancyGrid(grid, config_.ros.map_frame, stamp);
+  return true;
+}
+
+void SlamNode::publishMap(const ros::TimerEvent&) {
+  if (updates_ == map_published_at_update_ || updates_ == 0) return;  // nothing new
+  nav_msgs::OccupancyGrid map;
+  if (!currentMap(ros::Time::now(), &map)) return;
+  map_published_at_update_ = updates_;
+  map_metadata_publisher_.publish(map.info);
+  map_publisher_.publish(map);
+}
+
+bool SlamNode::dynamicMapService(nav_msgs::GetMap::Request&, nav_msgs::GetMap::Response& response) {
+  return currentMap(ros::Time::now(), &response.map);
+}
+
 void SlamNode::publishLandmarks(const ros::Time& stamp) {
   std_msgs::Header header;
   header.stamp = stamp;
@@ -392,7 +433,11 @@ bool SlamNode::saveMapService(MapFile::Request& request, MapFile::Response& resp
   try {
     const std::vector<core::LandmarkEstimate> landmarks = pipeline_.session().filter().landmarks();
     io::writeLandmarksYaml(prefix + ".landmarks.yaml", landmarks);
-    const std::vector<std::string> grid = io::writeLandmarkGrid(prefix, landmarks);
+    core::GridMapData occupancy;  // grid variants save their own grid, not the landmarks'
+    const std::vector<std::string> grid =
+        pipeline_.session().filter().occupancyGrid(occupancy)
+            ? io::writeGridMap(prefix, occupancy)
+            : io::writeLandmarkGrid(prefix, landmarks);
     response.success = true;
     response.message = "wrote " + std::to_string(landmarks.size()) + " landmarks to " + prefix +
                        ".landmarks.yaml and the picture to " + grid[0] + " + " + grid[1];

@@ -18,6 +18,8 @@ class MapImage {
            double margin_m = 1.0);
   void line(const Eigen::Vector2d& a, const Eigen::Vector2d& b, const uint8_t rgb[3]);
   void dot(const Eigen::Vector2d& p, int radius_px, const uint8_t rgb[3]);
+  /// Paints the pixels whose centres lie in the axis-aligned box [min, max) (metres).
+  void fill(const Eigen::Vector2d& min, const Eigen::Vector2d& max, const uint8_t rgb[3]);
   /// Writes an 8-bit RGB PNG; throws std::runtime_error naming the path on failure.
   void writePng(const std::string& path) const;
   int width() const { return width_; }

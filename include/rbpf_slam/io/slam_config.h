@@ -34,6 +34,8 @@ struct RosOptions {
   int queue_size = 20;
   bool publish_particles = true;
   std::string map_save_prefix = "rbpf_slam_map";  // ~save_map with no path: PREFIX.{yaml,pgm}
+  double map_update_period = 5.0;  // s between ~map publications (0: never)
+  double map_resolution = 0.05;    // m per cell of the rasterised landmark map (~map, map.pgm)
 };
 
 /// Everything a config file configures.

@@ -4,6 +4,7 @@
 #include <geometry_msgs/Pose.h>
 #include <geometry_msgs/Transform.h>
 #include <geometry_msgs/TransformStamped.h>
+#include <nav_msgs/OccupancyGrid.h>
 #include <nav_msgs/Odometry.h>
 #include <rbpf_slam/FeatureArray.h>
 #include <sensor_msgs/LaserScan.h>
@@ -16,6 +17,7 @@
 
 #include "rbpf_slam/core/features/feature_types.h"
 #include "rbpf_slam/core/geometry.h"
+#include "rbpf_slam/core/grid/grid_map_data.h"
 
 namespace rbpf_slam {
 namespace rosbridge {
@@ -54,6 +56,10 @@ std::vector<Eigen::Vector2d> toBasePoints(const sensor_msgs::PointCloud& msg,
 core::FeatureSet toFeatureSet(const FeatureArray& msg, const core::Pose2& frame_in_base,
                               int* dropped);
 FeatureArray toMsg(const core::FeatureSet& features, const std_msgs::Header& header);
+
+/// A core grid as nav_msgs/OccupancyGrid (same cell order and values) in frame at stamp.
+nav_msgs::OccupancyGrid toOccupancyGrid(const core::GridMapData& grid, const std::string& frame,
+                                        const ros::Time& stamp);
 
 }  // namespace rosbridge
 }  // namespace rbpf_slam

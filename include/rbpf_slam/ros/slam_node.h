@@ -1,10 +1,13 @@
 #pragma once
 // Wires ROS topics and tf to one SlamPipeline: scans, sonar readings and features in,
 // map -> odom, pose, trajectory, landmarks and particles out; services ~reset, ~pause, ~resume,
-// ~save_map, ~load_map and the `initialpose` topic.
+// ~save_map, ~load_map and the `initialpose` topic; the map as a grid on ~map, ~map_metadata
+// and ~dynamic_map (the variant's grid, or its landmarks rasterised).
 
 #include <geometry_msgs/PoseWithCovarianceStamped.h>
 #include <message_filters/subscriber.h>
+#include <nav_msgs/GetMap.h>
+#include <nav_msgs/OccupancyGrid.h>
 #include <rbpf_slam/FeatureArray.h>
 #include <rbpf_slam/MapFile.h>
 #include <ros/ros.h>
@@ -67,6 +70,10 @@ class SlamNode {
   bool resumeService(std_srvs::Empty::Request& request, std_srvs::Empty::Response& response);
   bool saveMapService(MapFile::Request& request, MapFile::Response& response);
   bool loadMapService(MapFile::Request& request, MapFile::Response& response);
+  /// The current map as a grid: the filter's own (grid_pf) or the landmarks rasterised.
+  bool currentMap(const ros::Time& stamp, nav_msgs::OccupancyGrid* map);
+  void publishMap(const ros::TimerEvent& event);
+  bool dynamicMapService(nav_msgs::GetMap::Request& request, nav_msgs::GetMap::Response& response);
   /// rviz's 2D Pose Estimate: the particles are redrawn around the pose, maps kept.
   void initialPoseCallback(const geometry_msgs::PoseWithCovarianceStamped::ConstPtr& msg);
   /// Resets everything when ros::Time::now() went backwards (a bag played again); returns
@@ -109,6 +116,10 @@ class SlamNode {
   bool paused_ = false;
   long frames_while_paused_ = 0;
   ros::Timer transform_timer_;
+  ros::Publisher map_publisher_, map_metadata_publisher_;
+  ros::ServiceServer dynamic_map_server_;
+  ros::Timer map_timer_;
+  long map_published_at_update_ = -1;
 
   LandmarkMarkers landmark_markers_;
   ros::Time last_transform_stamp_;

@@ -9,6 +9,7 @@
 #include "rbpf_slam/core/filters/multifilter_smc.h"
 #include "rbpf_slam/core/filters/robust_fastslam2.h"
 #include "rbpf_slam/core/filters/slam_filter.h"
+#include "rbpf_slam/core/grid/grid_pf.h"
 
 namespace rbpf_slam {
 namespace core {
@@ -24,7 +25,8 @@ void requireRange(const std::string& name, double value, double min, double max)
 }  // namespace
 
 std::vector<std::string> availableVariants() {
-  return {"fastslam2", "robust_fastslam2", "hinf_fastslam", "multifilter_smc", "ekf_slam"};
+  return {"fastslam2", "robust_fastslam2", "hinf_fastslam", "multifilter_smc", "ekf_slam",
+          "grid_pf"};
 }
 
 void validate(const RobustOptions& o) {
@@ -60,6 +62,7 @@ void validate(const FilterOptions& o) {
   validate(o.line_association);
   validate(o.multifilter);
   validate(o.ekf);
+  validate(o.grid);
 }
 
 std::unique_ptr<SlamFilter> createFilter(const FilterOptions& options) {
@@ -69,6 +72,7 @@ std::unique_ptr<SlamFilter> createFilter(const FilterOptions& options) {
   if (options.variant == "hinf_fastslam") return std::make_unique<HinfFastSlam>(options);
   if (options.variant == "multifilter_smc") return std::make_unique<MultiFilterSmc>(options);
   if (options.variant == "ekf_slam") return std::make_unique<EkfSlam>(options);
+  if (options.variant == "grid_pf") return std::make_unique<GridParticleFilter>(options);
   throw std::invalid_argument("variant = '" + options.variant + "' is not implemented");
 }
 

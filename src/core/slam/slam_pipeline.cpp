@@ -1,7 +1,19 @@
 #include "rbpf_slam/core/slam/slam_pipeline.h"
 
+#include <memory>
+
 namespace rbpf_slam {
 namespace core {
+namespace {
+
+// Cone readings held for the next update at most (a robot standing still for minutes).
+constexpr size_t kMaxPendingCones = 4096;
+
+bool usedFrame(FrameResult result) {
+  return result == FrameResult::kUpdated || result == FrameResult::kFirstFrame;
+}
+
+}  // namespace
 
 SlamPipeline::SlamPipeline(const PipelineOptions& options)
     : extractor_(options.laser),
@@ -14,12 +26,14 @@ void SlamPipeline::reset() {
   reference_points_.clear();
   submap_.clear();
   sonar_extractor_.reset();
+  pending_cones_.clear();
   last_features_ = FeatureSet();
 }
 
 FrameResult SlamPipeline::processScan(const RangeScan& scan, const Pose2& odom_pose) {
   last_features_ = extractor_.extract(scan);
   last_features_.stamp = scan.stamp;
+  last_features_.scan = std::make_shared<const RangeScan>(scan);
   if (!matcher_.options().enabled) return session_.process(scan.stamp, odom_pose, last_features_);
 
   // Laser-corrected increment since the last scan the filter used, seeded by odometry.
@@ -48,7 +62,7 @@ FrameResult SlamPipeline::processScan(const RangeScan& scan, const Pose2& odom_p
     }
   }
   const FrameResult result = session_.process(scan.stamp, odom_pose, last_features_, override_motion);
-  if (result == FrameResult::kUpdated || result == FrameResult::kFirstFrame) {
+  if (usedFrame(result)) {
     if (result == FrameResult::kFirstFrame) submap_.clear();
     addToSubmap(std::move(points), chain_delta);
     reference_odom_pose_ = odom_pose;
@@ -78,15 +92,42 @@ void SlamPipeline::addToSubmap(std::vector<Eigen::Vector2d> points, const Pose2&
 FrameResult SlamPipeline::processSonar(const std::vector<ConeReading>& readings,
                                        const Pose2& odom_pose, double stamp) {
   sonar_extractor_.addReadings(readings, odom_pose, stamp);
+  if (odom_pose.allFinite()) {
+    for (const ConeReading& r : readings) pending_cones_.push_back({r, odom_pose});
+    if (pending_cones_.size() > kMaxPendingCones) {
+      pending_cones_.erase(pending_cones_.begin(),
+                           pending_cones_.end() - static_cast<long>(kMaxPendingCones));
+    }
+  }
+  FrameResult result;
   if (session_.trajectory().empty()) {
     // The first frame anchors the map; the window has nothing to extract from yet.
     last_features_ = FeatureSet();
     last_features_.stamp = stamp;
-    return session_.process(stamp, odom_pose, last_features_);
+    last_features_.cones = pendingConesInBase(odom_pose);
+    result = session_.process(stamp, odom_pose, last_features_);
+  } else {
+    if (!sonar_extractor_.extractionDue(odom_pose)) return FrameResult::kSkippedNoMotion;
+    last_features_ = sonar_extractor_.extract(odom_pose, stamp);
+    last_features_.cones = pendingConesInBase(odom_pose);
+    result = session_.process(stamp, odom_pose, last_features_);
   }
-  if (!sonar_extractor_.extractionDue(odom_pose)) return FrameResult::kSkippedNoMotion;
-  last_features_ = sonar_extractor_.extract(odom_pose, stamp);
-  return session_.process(stamp, odom_pose, last_features_);
+  if (usedFrame(result)) pending_cones_.clear();
+  return result;
+}
+
+std::vector<ConeReading> SlamPipeline::pendingConesInBase(const Pose2& odom_pose) const {
+  std::vector<ConeReading> cones;
+  cones.reserve(pending_cones_.size());
+  if (!odom_pose.allFinite()) return cones;
+  const Pose2 odom_to_base = inverse(odom_pose);
+  for (const PendingCone& p : pending_cones_) {
+    ConeReading reading = p.reading;
+    // Where the transducer was when it fired, seen from the base at odom_pose.
+    reading.sensor_pose = compose(compose(odom_to_base, p.odom_pose), p.reading.sensor_pose);
+    cones.push_back(reading);
+  }
+  return cones;
 }
 
 FrameResult SlamPipeline::processFeatures(const FeatureSet& features, const Pose2& odom_pose) {

@@ -5,6 +5,7 @@
 
 #include "rbpf_slam/core/filters/estimator_rule.h"
 #include "rbpf_slam/core/filters/line_slam_options.h"
+#include "rbpf_slam/core/grid/grid_options.h"
 #include "rbpf_slam/core/motion/motion_model.h"
 #include "rbpf_slam/core/tracking/landmark_tracker_options.h"
 
@@ -67,6 +68,7 @@ struct FilterOptions {
   WadAssociationOptions line_association;  // variants multifilter_smc and ekf_slam
   MultiFilterOptions multifilter;          // variant multifilter_smc
   EkfSlamOptions ekf;                      // variant ekf_slam
+  GridOptions grid;                // variant grid_pf
 };
 
 /// Throws std::invalid_argument naming the first out-of-range field and its allowed range.

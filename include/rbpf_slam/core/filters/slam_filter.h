@@ -15,6 +15,8 @@
 namespace rbpf_slam {
 namespace core {
 
+struct GridMapData;  // grid/grid_map_data.h
+
 enum class LandmarkType { kPoint, kLine };
 
 /// A landmark of the best particle's map, in the map frame.
@@ -89,6 +91,10 @@ class SlamFilter {
   virtual bool loadMap(const std::vector<LandmarkEstimate>& /*landmarks*/) { return false; }
   /// Mapping off = localization only: landmarks are neither added nor changed.
   virtual bool setMapping(bool enabled) { return enabled; }
+
+  /// The best hypothesis' occupancy grid, for variants that keep one (grid_pf); the default
+  /// declines and callers rasterise landmarks() instead (rasterizeLandmarks).
+  virtual bool occupancyGrid(GridMapData& /*out*/) const { return false; }
 };
 
 /// Builds the variant named by options.variant; throws std::invalid_argument if unknown or

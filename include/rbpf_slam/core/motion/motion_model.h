@@ -30,7 +30,7 @@ struct MotionOptions {
   double alpha4 = 0.01;  // trans noise from rot [m^2/rad^2]
   // diff_drive (Yatim & Buniyamin eqs. 11, 12): wheel travel noise.
   double wheel_base_m = 0.33;
-  double wheel_alpha1 = 0.03;  // sigma per metre of mean wheel travel
+  double wheel_alpha1 = 0.03;  // sigma per metre of that wheel's travel
   double wheel_alpha2 = 0.03;  // sigma per metre of wheel travel difference
   // Floors so that a stationary robot keeps a little diffusion.
   double min_sigma_xy_m = 0.002;
@@ -50,6 +50,13 @@ class MotionModel {
   /// Covariance of x_t in the map frame, linearised at the mean.
   virtual Eigen::Matrix3d covariance(const Pose2& previous, const MotionInput& motion) const = 0;
 };
+
+/// Left and right wheel travel of a differential drive with this wheel base that moved by
+/// delta (eq. 11 inverted: d = (l + r) / 2 along the chord, dtheta = (r - l) / b).
+void wheelTravel(const Pose2& delta, double wheel_base_m, double* left, double* right);
+/// Eq. 12: sigma_l^2 = (alpha1 l)^2 + (alpha2 (l - r))^2, sigma_r^2 = (alpha1 r)^2 + (...)^2.
+void wheelTravelSigmas(double left, double right, double alpha1, double alpha2,
+                       double* sigma_left, double* sigma_right);
 
 /// Builds the model named by options.model; throws std::invalid_argument for unknown names.
 std::unique_ptr<MotionModel> createMotionModel(const MotionOptions& options);

@@ -33,7 +33,10 @@ class SlamPipeline {
   FrameResult processScan(const RangeScan& scan, const Pose2& odom_pose);
   /// Sonar (or other cone sensor) readings taken at stamp with the robot at odom_pose: they
   /// join the echo window; the filter is updated with the window's lines and points once the
-  /// robot moved enough since the last extraction (else kSkippedNoMotion).
+  /// robot moved enough since the last extraction (else kSkippedNoMotion). The update's
+  /// FeatureSet::cones holds every reading since the previous update, re-expressed in the base
+  /// frame at this odom_pose (for raw-data variants such as grid_pf). Laser scans likewise
+  /// arrive in FeatureSet::scan.
   FrameResult processSonar(const std::vector<ConeReading>& readings, const Pose2& odom_pose,
                            double stamp);
   /// Features already extracted (feature nodes, landmark sensors), in the base frame.
@@ -70,6 +73,12 @@ class SlamPipeline {
   std::vector<Eigen::Vector2d> reference_points_;  // the submap in the last scan's base frame
   Pose2 reference_odom_pose_ = Pose2::Zero();      // odometry pose of the last scan
   ScanMatchResult last_match_;
+  struct PendingCone {
+    ConeReading reading;
+    Pose2 odom_pose;
+  };
+  std::vector<PendingCone> pending_cones_;  // cone readings since the last filter update
+  std::vector<ConeReading> pendingConesInBase(const Pose2& odom_pose) const;
   long scans_matched_ = 0;
   long scans_unmatched_ = 0;
 };

@@ -1,0 +1,45 @@
+#pragma once
+// Options of the occupancy-grid particle filter (variant grid_pf, Yatim and Buniyamin 2015).
+
+#include <string>
+
+namespace rbpf_slam {
+namespace core {
+
+/// Grid, inverse sensor models (eq. 13) and map matching (eq. 14) of variant grid_pf.
+struct GridOptions {
+  // The map: a fixed extent centred on the first pose, stored in square tiles that particles
+  // share copy-on-write.
+  double resolution_m = 0.05;
+  double size_x_m = 100.0;  // extent along x, centred on the start
+  double size_y_m = 100.0;
+  int tile_cells = 64;      // tile side in cells (a tile is the unit of sharing)
+  // Log-odds added per observation (eq. 13 with l(m_i) = 0 as the prior) and their clamp.
+  double log_odds_occupied = 0.85;
+  double log_odds_free = -0.4;
+  double log_odds_clamp = 6.0;
+  // Cone sensors (sonar, infrared): an arc of this thickness at the range is occupied, the
+  // cone up to it free; a reading within max_range_margin_m of max_range is "no echo" and only
+  // frees the cone up to min(max_range, no_echo_free_range_m).
+  double cone_arc_thickness_m = 0.0;  // 0: one cell
+  double cone_max_range_m = 0.0;      // ignore echoes beyond this (0: the sensor's max)
+  double max_range_margin_m = 0.005;
+  double no_echo_free_range_m = 0.0;  // 0: up to max_range
+  double cone_fov_rad = 0.0;          // 0: each reading's field_of_view
+  // Laser beams: cells along the beam free, the end cell occupied; a beam with no return
+  // frees up to laser_no_return_free_m (0: nothing).
+  double laser_max_range_m = 20.0;    // shorten longer beams (their end is not a hit)
+  double laser_no_return_free_m = 0.0;
+  int laser_beam_step = 1;            // use every n-th beam
+  // Map matching weight (eq. 14): w *= exp(match / f), match = sum over local-map cells of
+  // weight * (+1 occupied, -1 free) * (2 p_global - 1).
+  double match_f = 100.0;
+  double match_occupied_weight = 1.0;
+  double match_free_weight = 1.0;
+};
+
+/// Throws std::invalid_argument naming the first out-of-range field ("grid.NAME").
+void validate(const GridOptions& options);
+
+}  // namespace core
+}  // namespace rbpf_slam

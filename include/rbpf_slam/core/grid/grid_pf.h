@@ -1,0 +1,68 @@
+#pragma once
+// Occupancy-grid particle-filter SLAM for low-cost range sensors (Yatim and Buniyamin 2015):
+// differential-drive wheel model (eqs. 11, 12), a log-odds grid per particle (eq. 13), weights
+// from matching the local map against the particle's map (eq. 14), low-variance resampling.
+
+#include <memory>
+#include <vector>
+
+#include "rbpf_slam/core/filters/slam_filter.h"
+#include "rbpf_slam/core/grid/grid_options.h"
+#include "rbpf_slam/core/grid/inverse_sensor_model.h"
+#include "rbpf_slam/core/grid/tiled_grid.h"
+
+namespace rbpf_slam {
+namespace core {
+
+/// Eq. 14's match of a local map placed at pose against a grid: the sum over local cells of
+/// weight * (+1 occupied, -1 free) * (2 p - 1), p the grid's occupancy (unknown: 0).
+double matchLocalMap(const std::vector<LocalMapCell>& local, const Pose2& pose,
+                     const TiledLogOddsGrid& grid, const GridOptions& options);
+/// Eq. 13: adds the local map placed at pose to the grid's log odds.
+void integrateLocalMap(const std::vector<LocalMapCell>& local, const Pose2& pose,
+                       const GridOptions& options, TiledLogOddsGrid* grid);
+
+/// Variant grid_pf: a particle is a pose and a copy-on-write tiled log-odds grid.
+class GridParticleFilter : public SlamFilter {
+ public:
+  explicit GridParticleFilter(const FilterOptions& options);
+
+  std::string variant() const override { return "grid_pf"; }
+  void reset(const Pose2& initial_pose = Pose2::Zero()) override;
+  void predict(const MotionInput& motion) override;
+  /// Uses features.scan and features.cones; landmark features are ignored.
+  UpdateStats update(const FeatureSet& features) override;
+  PoseEstimate estimate() const override;
+  std::vector<LandmarkEstimate> landmarks() const override { return {}; }
+  std::vector<WeightedPose> particles() const override;
+  FilterStats stats() const override { return stats_; }
+  bool resetPose(const Pose2& pose, const Eigen::Matrix3d& covariance) override;
+  bool setMapping(bool enabled) override;
+  bool occupancyGrid(GridMapData& out) const override;
+
+  /// The grid of the particle with the highest weight.
+  const TiledLogOddsGrid& bestGrid() const;
+  /// Distinct tiles held by all particles (shared tiles counted once) and their bytes.
+  long distinctTiles() const;
+  size_t gridBytes() const;
+  const LocalMapStats& localMapStats() const { return local_stats_; }
+
+ private:
+  struct Particle {
+    Pose2 pose = Pose2::Zero();
+    TiledLogOddsGrid grid;
+  };
+  int bestIndex() const;
+
+  const FilterOptions options_;
+  std::unique_ptr<MotionModel> motion_;
+  Rng rng_;
+  std::vector<Particle> particles_;
+  std::vector<double> weights_;  // normalised
+  FilterStats stats_;
+  LocalMapStats local_stats_;  // totals since reset
+  bool mapping_ = true;
+};
+
+}  // namespace core
+}  // namespace rbpf_slam

@@ -1,0 +1,81 @@
+#pragma once
+// A log-odds occupancy grid stored in square tiles held by shared_ptr: copying a grid copies
+// pointers, and a tile is duplicated only when a grid that shares it writes to it
+// (copy-on-write), so N particles cost one map plus the tiles each has changed.
+
+#include <Eigen/Core>
+#include <memory>
+#include <vector>
+
+#include "rbpf_slam/core/grid/grid_map_data.h"
+
+namespace rbpf_slam {
+namespace core {
+
+/// One particle's log-odds map over a fixed extent; cells never written read 0 (unknown).
+class TiledLogOddsGrid {
+ public:
+  TiledLogOddsGrid() = default;
+  /// width x height cells of resolution_m, cell (0, 0)'s corner at (origin_x_m, origin_y_m).
+  TiledLogOddsGrid(double resolution_m, double origin_x_m, double origin_y_m, int width,
+                   int height, int tile_cells);
+
+  /// Cell containing p; false when p is outside the grid.
+  bool cellOf(const Eigen::Vector2d& p, int* cx, int* cy) const {
+    const double fx = (p.x() - origin_x_m_) * inverse_resolution_;
+    const double fy = (p.y() - origin_y_m_) * inverse_resolution_;
+    if (!(fx >= 0.0 && fy >= 0.0 && fx < width_ && fy < height_)) return false;
+    *cx = static_cast<int>(fx);
+    *cy = static_cast<int>(fy);
+    return true;
+  }
+  /// Log odds of an inside cell (0 when its tile was never written).
+  float logOdds(int cx, int cy) const {
+    const Tile* tile = tiles_[tileIndex(cx, cy)].get();
+    return tile ? tile->cells[cellIndex(cx, cy)] : 0.0f;
+  }
+  /// Adds delta to an inside cell and clamps to [-clamp, clamp]; copies the tile first when
+  /// another grid shares it.
+  void add(int cx, int cy, float delta, float clamp);
+
+  double resolution() const { return resolution_m_; }
+  double originX() const { return origin_x_m_; }
+  double originY() const { return origin_y_m_; }
+  int width() const { return width_; }
+  int height() const { return height_; }
+  int tileCells() const { return tile_cells_; }
+  /// Tiles this grid has allocated (shared or not).
+  int allocatedTiles() const;
+  /// Tiles this grid holds that no other grid holds.
+  int exclusiveTiles() const;
+  /// Bytes of one tile's cells.
+  size_t tileBytes() const { return sizeof(float) * tile_cells_ * tile_cells_; }
+  /// Distinct tiles over a set of grids (the memory they really use is this times tileBytes).
+  static long distinctTiles(const std::vector<const TiledLogOddsGrid*>& grids);
+
+  /// Occupancy in nav_msgs/OccupancyGrid conventions over the bounding box of the allocated
+  /// tiles: -1 where the log odds are 0, else round(100 p).
+  GridMapData toGridMap() const;
+
+ private:
+  struct Tile {
+    std::vector<float> cells;
+  };
+  int tileIndex(int cx, int cy) const {
+    return (cy / tile_cells_) * tiles_x_ + cx / tile_cells_;
+  }
+  int cellIndex(int cx, int cy) const {
+    return (cy % tile_cells_) * tile_cells_ + cx % tile_cells_;
+  }
+
+  double resolution_m_ = 0.05;
+  double inverse_resolution_ = 20.0;
+  double origin_x_m_ = 0.0, origin_y_m_ = 0.0;
+  int width_ = 0, height_ = 0;
+  int tile_cells_ = 64;
+  int tiles_x_ = 0, tiles_y_ = 0;
+  std::vector<std::shared_ptr<Tile>> tiles_;
+};
+
+}  // namespace core
+}  // namespace rbpf_slam

@@ -1,0 +1,29 @@
+#pragma once
+// Occupancy grids on disk in map_server conventions (PREFIX.pgm + PREFIX.yaml, trinary:
+// occupied 0, free 254, unknown 205) and drawn into the run picture.
+
+#include <string>
+#include <vector>
+
+#include "rbpf_slam/core/grid/grid_map_data.h"
+
+namespace rbpf_slam {
+namespace io {
+
+/// Writes PREFIX.pgm and PREFIX.yaml (image, resolution, origin, negate 0, occupied_thresh
+/// 0.65, free_thresh 0.196); cells >= 65 are occupied, 0..19 free, the rest unknown. Returns
+/// the two paths; throws std::runtime_error naming the file on failure.
+std::vector<std::string> writeGridMap(const std::string& prefix, const core::GridMapData& grid,
+                                      const std::string& comment = "rbpf_slam map");
+
+/// Reads a map written by writeGridMap (or map_saver, trinary P5) back: 100, 0 or -1 per cell.
+core::GridMapData readGridMap(const std::string& yaml_path);
+
+/// The run picture over a grid: grey unknown, white free, black occupied, the reference
+/// (grey line) and the trajectory (blue line) on top.
+void drawGridRunMap(const std::string& path, const core::GridMapData& grid,
+                    const std::vector<core::Pose2>& trajectory,
+                    const std::vector<core::Pose2>& reference);
+
+}  // namespace io
+}  // namespace rbpf_slam

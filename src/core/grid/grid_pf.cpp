@@ -1,0 +1,214 @@
+#include "rbpf_slam/core/grid/grid_pf.h"
+
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include "rbpf_slam/core/filters/resampling.h"
+
+namespace rbpf_slam {
+namespace core {
+namespace {
+
+void requireRange(const std::string& name, double value, double min, double max) {
+  if (!(value >= min && value <= max)) {
+    throw std::invalid_argument("grid." + name + " = " + std::to_string(value) +
+                                " is out of range [" + std::to_string(min) + ", " +
+                                std::to_string(max) + "]");
+  }
+}
+
+}  // namespace
+
+void validate(const GridOptions& o) {
+  requireRange("resolution_m", o.resolution_m, 1e-3, 10.0);
+  requireRange("size_x_m", o.size_x_m, o.resolution_m, 1e5);
+  requireRange("size_y_m", o.size_y_m, o.resolution_m, 1e5);
+  requireRange("tile_cells", o.tile_cells, 4, 1024);
+  if (o.size_x_m / o.resolution_m * (o.size_y_m / o.resolution_m) > 4e9) {
+    throw std::invalid_argument("grid.size_x_m * grid.size_y_m / grid.resolution_m^2 exceeds "
+                                "4e9 cells: raise the resolution or shrink the map");
+  }
+  requireRange("log_odds_occupied", o.log_odds_occupied, 0.0, 100.0);
+  requireRange("log_odds_free", o.log_odds_free, -100.0, 0.0);
+  requireRange("log_odds_clamp", o.log_odds_clamp, 0.01, 100.0);
+  requireRange("cone_arc_thickness_m", o.cone_arc_thickness_m, 0.0, 10.0);
+  requireRange("cone_max_range_m", o.cone_max_range_m, 0.0, 1000.0);
+  requireRange("max_range_margin_m", o.max_range_margin_m, 0.0, 100.0);
+  requireRange("no_echo_free_range_m", o.no_echo_free_range_m, 0.0, 1000.0);
+  requireRange("cone_fov_rad", o.cone_fov_rad, 0.0, 3.1);
+  requireRange("laser_max_range_m", o.laser_max_range_m, 0.01, 1000.0);
+  requireRange("laser_no_return_free_m", o.laser_no_return_free_m, 0.0, 1000.0);
+  requireRange("laser_beam_step", o.laser_beam_step, 1, 1000);
+  requireRange("match_f", o.match_f, 1e-6, 1e9);
+  requireRange("match_occupied_weight", o.match_occupied_weight, 0.0, 1e6);
+  requireRange("match_free_weight", o.match_free_weight, 0.0, 1e6);
+}
+
+double matchLocalMap(const std::vector<LocalMapCell>& local, const Pose2& pose,
+                     const TiledLogOddsGrid& grid, const GridOptions& options) {
+  double match = 0.0;
+  int cx, cy;
+  for (const LocalMapCell& cell : local) {
+    if (!grid.cellOf(transformPoint(pose, cell.center), &cx, &cy)) continue;
+    const float l = grid.logOdds(cx, cy);
+    if (l == 0.0f) continue;
+    const double agreement = std::tanh(0.5 * l);  // 2 p - 1
+    match += cell.occupied ? options.match_occupied_weight * agreement
+                           : -options.match_free_weight * agreement;
+  }
+  return match;
+}
+
+void integrateLocalMap(const std::vector<LocalMapCell>& local, const Pose2& pose,
+                       const GridOptions& options, TiledLogOddsGrid* grid) {
+  const float occupied = static_cast<float>(options.log_odds_occupied);
+  const float free = static_cast<float>(options.log_odds_free);
+  const float clamp = static_cast<float>(options.log_odds_clamp);
+  int cx, cy;
+  for (const LocalMapCell& cell : local) {
+    if (grid->cellOf(transformPoint(pose, cell.center), &cx, &cy)) {
+      grid->add(cx, cy, cell.occupied ? occupied : free, clamp);
+    }
+  }
+}
+
+GridParticleFilter::GridParticleFilter(const FilterOptions& options)
+    : options_(options), motion_(createMotionModel(options.motion)), rng_(options.seed) {
+  validate(options_.grid);
+  if (options_.particles < 1) throw std::invalid_argument("particles must be >= 1");
+  reset();
+}
+
+void GridParticleFilter::reset(const Pose2& initial_pose) {
+  const GridOptions& g = options_.grid;
+  const int width = static_cast<int>(std::ceil(g.size_x_m / g.resolution_m));
+  const int height = static_cast<int>(std::ceil(g.size_y_m / g.resolution_m));
+  // Centred on the start; every particle starts with the same (empty, tile-less) grid.
+  const TiledLogOddsGrid empty(g.resolution_m, initial_pose.x() - 0.5 * width * g.resolution_m,
+                               initial_pose.y() - 0.5 * height * g.resolution_m, width, height,
+                               g.tile_cells);
+  particles_.assign(options_.particles, Particle{initial_pose, empty});
+  weights_.assign(options_.particles, 1.0 / options_.particles);
+  stats_ = FilterStats();
+  local_stats_ = LocalMapStats();
+}
+
+void GridParticleFilter::predict(const MotionInput& motion) {
+  for (Particle& p : particles_) p.pose = motion_->sample(p.pose, motion, rng_);
+  ++stats_.predictions;
+}
+
+UpdateStats GridParticleFilter::update(const FeatureSet& features) {
+  UpdateStats result;
+  LocalMapStats local_stats;
+  const std::vector<LocalMapCell> local = buildLocalMap(features, options_.grid, &local_stats);
+  result.features_in = local_stats.readings;
+  result.features_rejected = local_stats.rejected;
+  local_stats_.readings += local_stats.readings;
+  local_stats_.echoes += local_stats.echoes;
+  local_stats_.no_echo += local_stats.no_echo;
+  local_stats_.rejected += local_stats.rejected;
+  ++stats_.updates;
+  if (!local.empty()) {
+    // Eq. 14 in log space: log w += match / f, then normalise.
+    std::vector<double> log_weights(particles_.size());
+    for (size_t i = 0; i < particles_.size(); ++i) {
+      const double match = matchLocalMap(local, particles_[i].pose, particles_[i].grid,
+                                         options_.grid);
+      log_weights[i] = std::log(std::max(weights_[i], 1e-300)) + match / options_.grid.match_f;
+    }
+    if (!normalizeLogWeights(log_weights, &weights_)) {
+      ++result.weight_resets;
+      ++stats_.weight_resets;
+    }
+    if (mapping_) {
+      for (Particle& p : particles_) integrateLocalMap(local, p.pose, options_.grid, &p.grid);
+    }
+  }
+  result.neff = effectiveSampleSize(weights_);
+  stats_.last_neff = result.neff;
+  if (result.neff < options_.resample_threshold * particles_.size()) {
+    const std::vector<int> drawn =
+        resampleLowVariance(weights_, static_cast<int>(particles_.size()), rng_);
+    std::vector<Particle> next;
+    next.reserve(drawn.size());
+    for (int i : drawn) next.push_back(particles_[i]);  // grids share their tiles
+    particles_ = std::move(next);
+    weights_.assign(particles_.size(), 1.0 / particles_.size());
+    result.resampled = true;
+    ++stats_.resamples;
+  }
+  return result;
+}
+
+int GridParticleFilter::bestIndex() const {
+  int best = 0;
+  for (size_t i = 1; i < weights_.size(); ++i) {
+    if (weights_[i] > weights_[best]) best = static_cast<int>(i);
+  }
+  return best;
+}
+
+PoseEstimate GridParticleFilter::estimate() const {
+  PoseEstimate e;
+  double x = 0.0, y = 0.0, c = 0.0, s = 0.0;
+  for (size_t i = 0; i < particles_.size(); ++i) {
+    x += weights_[i] * particles_[i].pose.x();
+    y += weights_[i] * particles_[i].pose.y();
+    c += weights_[i] * std::cos(particles_[i].pose.z());
+    s += weights_[i] * std::sin(particles_[i].pose.z());
+  }
+  e.mean = Pose2(x, y, std::atan2(s, c));
+  e.covariance.setZero();
+  for (size_t i = 0; i < particles_.size(); ++i) {
+    Eigen::Vector3d d = particles_[i].pose - e.mean;
+    d.z() = wrapAngle(d.z());
+    e.covariance += weights_[i] * d * d.transpose();
+  }
+  e.covariance.diagonal().array() += 1e-9;
+  return e;
+}
+
+std::vector<WeightedPose> GridParticleFilter::particles() const {
+  std::vector<WeightedPose> out;
+  out.reserve(particles_.size());
+  for (size_t i = 0; i < particles_.size(); ++i) out.push_back({particles_[i].pose, weights_[i]});
+  return out;
+}
+
+bool GridParticleFilter::resetPose(const Pose2& pose, const Eigen::Matrix3d& covariance) {
+  for (Particle& p : particles_) {
+    p.pose = sampleMultivariate<3>(rng_, pose, covariance);
+    p.pose.z() = wrapAngle(p.pose.z());
+  }
+  weights_.assign(particles_.size(), 1.0 / particles_.size());
+  return true;
+}
+
+bool GridParticleFilter::setMapping(bool enabled) {
+  mapping_ = enabled;
+  return true;
+}
+
+bool GridParticleFilter::occupancyGrid(GridMapData& out) const {
+  out = bestGrid().toGridMap();
+  return true;
+}
+
+const TiledLogOddsGrid& GridParticleFilter::bestGrid() const {
+  return particles_[bestIndex()].grid;
+}
+
+long GridParticleFilter::distinctTiles() const {
+  std::vector<const TiledLogOddsGrid*> grids;
+  for (const Particle& p : particles_) grids.push_back(&p.grid);
+  return TiledLogOddsGrid::distinctTiles(grids);
+}
+
+size_t GridParticleFilter::gridBytes() const {
+  return static_cast<size_t>(distinctTiles()) * particles_.front().grid.tileBytes();
+}
+
+}  // namespace core
+}  // namespace rbpf_slam

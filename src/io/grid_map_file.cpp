@@ -1,0 +1,146 @@
+#include "rbpf_slam/io/grid_map_file.h"
+
+#include <yaml-cpp/yaml.h>
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <iomanip>
+#include <sstream>
+#include <stdexcept>
+
+#include "rbpf_slam/io/map_image.h"
+
+namespace rbpf_slam {
+namespace io {
+namespace {
+
+constexpr int kOccupiedPercent = 65;  // occupied_thresh 0.65
+constexpr int kFreePercent = 19;      // below free_thresh 0.196
+
+uint8_t pgmValue(int8_t cell) {
+  if (cell >= kOccupiedPercent) return 0;
+  if (cell >= 0 && cell <= kFreePercent) return 254;
+  return 205;
+}
+
+}  // namespace
+
+std::vector<std::string> writeGridMap(const std::string& prefix, const core::GridMapData& grid,
+                                      const std::string& comment) {
+  const int width = std::max(grid.width, 1), height = std::max(grid.height, 1);
+  std::vector<uint8_t> pixels(static_cast<size_t>(width) * height, 205);
+  for (int y = 0; y < grid.height; ++y) {
+    for (int x = 0; x < grid.width; ++x) {
+      // PGM row 0 is the top of the map (the largest y).
+      pixels[static_cast<size_t>(height - 1 - y) * width + x] = pgmValue(grid.at(x, y));
+    }
+  }
+  const std::string pgm_path = prefix + ".pgm", yaml_path = prefix + ".yaml";
+  {
+    std::ofstream pgm(pgm_path, std::ios::binary);
+    if (!pgm) throw std::runtime_error(pgm_path + ": cannot be written");
+    pgm << "P5\n# " << comment << "\n" << width << " " << height << "\n255\n";
+    pgm.write(reinterpret_cast<const char*>(pixels.data()),
+              static_cast<std::streamsize>(pixels.size()));
+    if (!pgm) throw std::runtime_error(pgm_path + ": write failed");
+  }
+  std::ofstream yaml(yaml_path);
+  if (!yaml) throw std::runtime_error(yaml_path + ": cannot be written");
+  const std::string image = pgm_path.substr(pgm_path.find_last_of('/') + 1);
+  yaml << std::setprecision(9) << "image: " << image << "\nresolution: " << grid.resolution_m
+       << "\norigin: [" << grid.origin_x_m << ", " << grid.origin_y_m << ", 0.0]\nnegate: 0\n"
+       << "occupied_thresh: 0.65\nfree_thresh: 0.196\n";
+  if (!yaml) throw std::runtime_error(yaml_path + ": write failed");
+  return {pgm_path, yaml_path};
+}
+
+core::GridMapData readGridMap(const std::string& yaml_path) {
+  YAML::Node root;
+  try {
+    root = YAML::LoadFile(yaml_path);
+  } catch (const YAML::Exception& e) {
+    throw std::runtime_error(yaml_path + ": " + e.what());
+  }
+  core::GridMapData grid;
+  std::string image;
+  try {
+    image = root["image"].as<std::string>();
+    grid.resolution_m = root["resolution"].as<double>();
+    grid.origin_x_m = root["origin"][0].as<double>();
+    grid.origin_y_m = root["origin"][1].as<double>();
+  } catch (const YAML::Exception& e) {
+    throw std::runtime_error(yaml_path + ": not a map_server map: " + e.what());
+  }
+  if (image.empty() || image[0] != '/') {
+    const size_t slash = yaml_path.find_last_of('/');
+    if (slash != std::string::npos) image = yaml_path.substr(0, slash + 1) + image;
+  }
+  std::ifstream pgm(image, std::ios::binary);
+  std::string magic;
+  pgm >> magic;
+  if (!pgm || magic != "P5") throw std::runtime_error(image + ": not a binary PGM");
+  auto next_number = [&]() {
+    pgm >> std::ws;
+    while (pgm.peek() == '#') {
+      std::string comment;
+      std::getline(pgm, comment);
+      pgm >> std::ws;
+    }
+    int v = -1;
+    pgm >> v;
+    return v;
+  };
+  grid.width = next_number();
+  grid.height = next_number();
+  const int max_value = next_number();
+  if (grid.width <= 0 || grid.height <= 0 || max_value != 255) {
+    throw std::runtime_error(image + ": unsupported PGM header");
+  }
+  pgm.get();
+  std::vector<uint8_t> pixels(static_cast<size_t>(grid.width) * grid.height);
+  pgm.read(reinterpret_cast<char*>(pixels.data()), static_cast<std::streamsize>(pixels.size()));
+  if (!pgm) throw std::runtime_error(image + ": truncated");
+  grid.cells.assign(pixels.size(), -1);
+  for (int y = 0; y < grid.height; ++y) {
+    for (int x = 0; x < grid.width; ++x) {
+      const size_t pixel = static_cast<size_t>(grid.height - 1 - y) * grid.width + x;
+      const double occupancy = (255 - pixels[pixel]) / 255.0;
+      int8_t& cell = grid.cells[static_cast<size_t>(y) * grid.width + x];
+      if (occupancy > 0.65) cell = 100;
+      else if (occupancy < 0.196) cell = 0;
+    }
+  }
+  return grid;
+}
+
+void drawGridRunMap(const std::string& path, const core::GridMapData& grid,
+                    const std::vector<core::Pose2>& trajectory,
+                    const std::vector<core::Pose2>& reference) {
+  const Eigen::Vector2d min(grid.origin_x_m, grid.origin_y_m);
+  const Eigen::Vector2d max = min + grid.resolution_m * Eigen::Vector2d(grid.width, grid.height);
+  // At least ~800 pixels across for small maps (an e-puck arena is 120 cells of 1 cm).
+  const int scale = std::clamp(800 / std::max(1, std::max(grid.width, grid.height)), 1, 8);
+  MapImage image(min, max, grid.resolution_m / scale, 0.0);
+  const uint8_t unknown[3] = {205, 205, 205}, free[3] = {255, 255, 255}, occupied[3] = {0, 0, 0};
+  const uint8_t grey[3] = {150, 150, 150}, blue[3] = {30, 90, 220};
+  for (int y = 0; y < grid.height; ++y) {
+    for (int x = 0; x < grid.width; ++x) {
+      const int8_t v = grid.at(x, y);
+      const uint8_t* colour = v >= kOccupiedPercent ? occupied
+                              : (v >= 0 && v <= kFreePercent) ? free : unknown;
+      const Eigen::Vector2d corner = min + grid.resolution_m * Eigen::Vector2d(x, y);
+      image.fill(corner, corner + Eigen::Vector2d::Constant(grid.resolution_m), colour);
+    }
+  }
+  for (size_t i = 1; i < reference.size(); ++i) {
+    image.line(reference[i - 1].head<2>(), reference[i].head<2>(), grey);
+  }
+  for (size_t i = 1; i < trajectory.size(); ++i) {
+    image.line(trajectory[i - 1].head<2>(), trajectory[i].head<2>(), blue);
+  }
+  image.writePng(path);
+}
+
+}  // namespace io
+}  // namespace rbpf_slam

@@ -1,0 +1,461 @@
+// Occupancy-grid PF-SLAM (variant grid_pf, Yatim and Buniyamin 2015): the wheel model's
+// statistics (eqs. 11, 12), the inverse sensor models on hand cases (eq. 13), copy-on-write
+// tile sharing, the map-matching weight (eq. 14), raw readings through the pipeline, and the
+// landmark rasterisation every other variant's map uses.
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <memory>
+#include <vector>
+
+#include "rbpf_slam/core/grid/grid_map_data.h"
+#include "rbpf_slam/core/grid/grid_pf.h"
+#include "rbpf_slam/core/grid/inverse_sensor_model.h"
+#include "rbpf_slam/core/grid/tiled_grid.h"
+#include "rbpf_slam/core/slam/slam_pipeline.h"
+#include "rbpf_slam/io/grid_map_file.h"
+#include "rbpf_slam/io/slam_config.h"
+
+namespace rbpf_slam {
+namespace core {
+namespace {
+
+TEST(WheelModel, SigmasFollowEquation12) {
+  double sl, sr;
+  wheelTravelSigmas(0.10, 0.14, 0.05, 0.2, &sl, &sr);
+  EXPECT_NEAR(sl, std::sqrt(std::pow(0.05 * 0.10, 2) + std::pow(0.2 * 0.04, 2)), 1e-12);
+  EXPECT_NEAR(sr, std::sqrt(std::pow(0.05 * 0.14, 2) + std::pow(0.2 * 0.04, 2)), 1e-12);
+  double l, r;
+  wheelTravel(Pose2(0.12, 0.0, 0.4 / 0.5 * 0.1), 0.5, &l, &r);  // dtheta = (r - l) / b
+  EXPECT_NEAR(l + r, 0.24, 1e-12);
+  EXPECT_NEAR(r - l, 0.5 * 0.08, 1e-12);
+}
+
+TEST(WheelModel, SampledWheelTravelHasTheEquation12Statistics) {
+  MotionOptions o;
+  o.model = "diff_drive";
+  o.wheel_base_m = 0.2;
+  o.wheel_alpha1 = 0.1;
+  o.wheel_alpha2 = 0.3;
+  o.min_sigma_xy_m = 0.0;
+  o.min_sigma_theta_rad = 0.0;
+  const auto model = createMotionModel(o);
+  MotionInput motion;
+  // Equation 11 with l = 0.2, r = 0.3: d = 0.25, dtheta = 0.5; the chord is at dtheta / 2.
+  motion.delta = Pose2(0.25 * std::cos(0.25), 0.25 * std::sin(0.25), 0.5);
+  double l0, r0, sl, sr;
+  wheelTravel(motion.delta, o.wheel_base_m, &l0, &r0);
+  ASSERT_NEAR(l0, 0.2, 1e-9);
+  ASSERT_NEAR(r0, 0.3, 1e-9);
+  wheelTravelSigmas(l0, r0, o.wheel_alpha1, o.wheel_alpha2, &sl, &sr);
+  Rng rng(7);
+  const int n = 40000;
+  double sum_l = 0, sum_r = 0, sq_l = 0, sq_r = 0, cross = 0;
+  const Pose2 start(1.0, -2.0, 0.3);
+  for (int i = 0; i < n; ++i) {
+    const Pose2 delta = between(start, model->sample(start, motion, rng));
+    double l, r;  // back from the sampled pose to the sampled wheel travel
+    wheelTravel(delta, o.wheel_base_m, &l, &r);
+    sum_l += l;
+    sum_r += r;
+    sq_l += l * l;
+    sq_r += r * r;
+    cross += l * r;
+  }
+  const double ml = sum_l / n, mr = sum_r / n;
+  EXPECT_NEAR(ml, 0.2, 4.0 * sl / std::sqrt(n));
+  EXPECT_NEAR(mr, 0.3, 4.0 * sr / std::sqrt(n));
+  EXPECT_NEAR(std::sqrt(sq_l / n - ml * ml), sl, 0.03 * sl);
+  EXPECT_NEAR(std::sqrt(sq_r / n - mr * mr), sr, 0.03 * sr);
+  // l and r are drawn independently.
+  EXPECT_NEAR((cross / n - ml * mr) / (sl * sr), 0.0, 0.03);
+}
+
+int countCells(const std::vector<LocalMapCell>& cells, bool occupied) {
+  int n = 0;
+  for (const auto& c : cells) n += c.occupied == occupied ? 1 : 0;
+  return n;
+}
+
+TEST(InverseSensorModel, LaserBeamFreesItsPathAndOccupiesItsEnd) {
+  GridOptions o;
+  o.resolution_m = 0.05;
+  auto scan = std::make_shared<RangeScan>();
+  scan->angle_min = 0.0;
+  scan->angle_increment = 0.1;
+  scan->range_min = 0.1;
+  scan->range_max = 10.0;
+  scan->ranges = {1.0f, NAN, INFINITY};
+  FeatureSet features;
+  features.scan = scan;
+  LocalMapStats stats;
+  const std::vector<LocalMapCell> cells = buildLocalMap(features, o, &stats);
+  EXPECT_EQ(stats.readings, 3);
+  EXPECT_EQ(stats.echoes, 1);
+  EXPECT_EQ(stats.rejected, 1);  // NaN
+  EXPECT_EQ(stats.no_echo, 1);   // +inf frees nothing with laser_no_return_free_m = 0
+  ASSERT_EQ(countCells(cells, true), 1);
+  EXPECT_EQ(countCells(cells, false), 20);  // [0, 0.95] in 5 cm cells
+  for (const auto& c : cells) {
+    if (c.occupied) {
+      EXPECT_NEAR(c.center.x(), 1.025, 1e-9);
+      EXPECT_NEAR(c.center.y(), 0.025, 1e-9);
+    } else {
+      EXPECT_LT(c.center.x(), 1.0);
+    }
+  }
+}
+
+TEST(InverseSensorModel, ConeEchoOccupiesTheArcAndFreesTheConeInside) {
+  GridOptions o;
+  o.resolution_m = 0.01;
+  ConeReading r;
+  r.range = 0.5;
+  r.min_range = 0.02;
+  r.max_range = 3.0;
+  r.field_of_view = 0.3;
+  r.sensor_pose = Pose2(0.1, 0.0, M_PI / 2);  // looking along +y
+  LocalMapBuilder builder(o.resolution_m);
+  LocalMapStats stats;
+  ASSERT_TRUE(addConeReading(r, o, &builder, &stats));
+  const std::vector<LocalMapCell> cells = builder.finish();
+  EXPECT_EQ(stats.echoes, 1);
+  int occupied = 0, free = 0;
+  for (const auto& c : cells) {
+    const Eigen::Vector2d v = c.center - Eigen::Vector2d(0.1, 0.0);
+    EXPECT_GT(v.y(), 0.0);  // nothing behind the transducer
+    const double off_axis = std::fabs(std::atan2(v.x(), v.y()));
+    EXPECT_LE(off_axis, 0.15 + std::atan(0.005 / v.norm()) + 1e-9);
+    if (c.occupied) {
+      ++occupied;
+      EXPECT_NEAR(v.norm(), 0.5, 0.005 + 1e-9);
+    } else {
+      ++free;
+      EXPECT_LT(v.norm(), 0.5);
+    }
+  }
+  // The arc spans 0.3 rad at 0.5 m: about 15 cells; the sector about 0.5^2 * 0.15 / 1e-4 cells.
+  EXPECT_GE(occupied, 12);
+  EXPECT_LE(occupied, 40);
+  EXPECT_GT(free, 250);
+  EXPECT_LT(free, 500);
+}
+
+TEST(InverseSensorModel, ConeAtMaxRangeOnlyFrees) {
+  GridOptions o;
+  o.resolution_m = 0.01;
+  ConeReading r;
+  r.range = 0.07;
+  r.max_range = 0.07;
+  r.field_of_view = 0.35;
+  LocalMapBuilder builder(o.resolution_m);
+  LocalMapStats stats;
+  ASSERT_TRUE(addConeReading(r, o, &builder, &stats));
+  const std::vector<LocalMapCell> cells = builder.finish();
+  EXPECT_EQ(stats.no_echo, 1);
+  EXPECT_EQ(countCells(cells, true), 0);
+  EXPECT_GT(countCells(cells, false), 3);
+  for (const auto& c : cells) EXPECT_LE(c.center.norm(), 0.07);
+  // Rejected: NaN, below the minimum range, a cone of zero width.
+  r.range = NAN;
+  EXPECT_FALSE(addConeReading(r, o, &builder, &stats));
+  r.range = 0.001;
+  r.min_range = 0.005;
+  EXPECT_FALSE(addConeReading(r, o, &builder, &stats));
+  r.range = 0.05;
+  r.field_of_view = 0.0;
+  EXPECT_FALSE(addConeReading(r, o, &builder, &stats));
+  EXPECT_EQ(stats.rejected, 3);
+  EXPECT_TRUE(builder.finish().empty());
+}
+
+TEST(TiledGrid, CopiesShareTilesUntilTheFirstWrite) {
+  TiledLogOddsGrid a(0.05, -10.0, -10.0, 400, 400, 64);  // 20 m x 20 m, 7 x 7 tiles
+  EXPECT_EQ(a.allocatedTiles(), 0);
+  EXPECT_EQ(a.logOdds(10, 10), 0.0f);
+  a.add(10, 10, 1.0f, 5.0f);
+  a.add(300, 300, 1.0f, 5.0f);
+  EXPECT_EQ(a.allocatedTiles(), 2);
+  EXPECT_EQ(a.exclusiveTiles(), 2);
+
+  std::vector<TiledLogOddsGrid> copies(99, a);  // 100 grids, still 2 tiles
+  EXPECT_EQ(a.exclusiveTiles(), 0);
+  std::vector<const TiledLogOddsGrid*> all{&a};
+  for (const auto& c : copies) all.push_back(&c);
+  EXPECT_EQ(TiledLogOddsGrid::distinctTiles(all), 2);
+
+  copies[0].add(11, 10, -0.5f, 5.0f);  // one write: one tile copied, in that grid only
+  EXPECT_EQ(TiledLogOddsGrid::distinctTiles(all), 3);
+  EXPECT_EQ(copies[0].exclusiveTiles(), 1);
+  EXPECT_EQ(copies[0].allocatedTiles(), 2);
+  EXPECT_FLOAT_EQ(copies[0].logOdds(11, 10), -0.5f);
+  EXPECT_FLOAT_EQ(copies[0].logOdds(10, 10), 1.0f);  // the copy kept the shared content
+  EXPECT_FLOAT_EQ(a.logOdds(11, 10), 0.0f);          // the original did not change
+  EXPECT_FLOAT_EQ(copies[1].logOdds(11, 10), 0.0f);
+  copies[0].add(11, 10, -0.5f, 5.0f);  // writing again: no further copy
+  EXPECT_EQ(TiledLogOddsGrid::distinctTiles(all), 3);
+  // Clamp.
+  for (int i = 0; i < 20; ++i) copies[0].add(11, 10, -1.0f, 5.0f);
+  EXPECT_FLOAT_EQ(copies[0].logOdds(11, 10), -5.0f);
+  int cx, cy;
+  EXPECT_FALSE(a.cellOf(Eigen::Vector2d(10.0, 0.0), &cx, &cy));
+  ASSERT_TRUE(a.cellOf(Eigen::Vector2d(-9.97, -9.92), &cx, &cy));
+  EXPECT_EQ(cx, 0);
+  EXPECT_EQ(cy, 1);
+}
+
+TEST(TiledGrid, ToGridMapFollowsOccupancyGridConventions) {
+  TiledLogOddsGrid g(0.1, -1.0, -1.0, 20, 20, 8);
+  g.add(12, 3, 2.0f, 5.0f);
+  g.add(13, 3, -2.0f, 5.0f);
+  const GridMapData m = g.toGridMap();
+  EXPECT_EQ(m.width, 8);  // one tile: cells 8..15 x 0..7
+  EXPECT_EQ(m.height, 8);
+  EXPECT_NEAR(m.origin_x_m, -1.0 + 0.8, 1e-12);
+  EXPECT_NEAR(m.origin_y_m, -1.0, 1e-12);
+  EXPECT_EQ(m.at(4, 3), static_cast<int8_t>(std::lround(100.0 / (1.0 + std::exp(-2.0)))));
+  EXPECT_EQ(m.at(5, 3), static_cast<int8_t>(std::lround(100.0 / (1.0 + std::exp(2.0)))));
+  EXPECT_EQ(m.at(0, 0), -1);
+  EXPECT_EQ(m.count(-1, -1), 62);
+}
+
+TEST(MapMatching, MatchIsTheAgreementOfLocalAndGlobalCells) {
+  GridOptions o;
+  o.resolution_m = 0.1;
+  TiledLogOddsGrid g(0.1, -5.0, -5.0, 100, 100, 16);
+  std::vector<LocalMapCell> local(2);
+  local[0].center = Eigen::Vector2d(1.05, 0.05);
+  local[0].occupied = true;
+  local[1].center = Eigen::Vector2d(0.55, 0.05);
+  EXPECT_EQ(matchLocalMap(local, Pose2::Zero(), g, o), 0.0);  // unknown map: no evidence
+  integrateLocalMap(local, Pose2::Zero(), o, &g);
+  const double expected = std::tanh(0.5 * o.log_odds_occupied) - std::tanh(0.5 * o.log_odds_free);
+  EXPECT_NEAR(matchLocalMap(local, Pose2::Zero(), g, o), expected, 1e-6);
+  // Shifted by 0.5 m the occupied cell lands on the free one: disagreement.
+  EXPECT_NEAR(matchLocalMap(local, Pose2(-0.5, 0.0, 0.0), g, o),
+              std::tanh(0.5 * o.log_odds_free), 1e-6);
+}
+
+FilterOptions gridOptions(int particles) {
+  FilterOptions o;
+  o.variant = "grid_pf";
+  o.particles = particles;
+  o.seed = 3;
+  o.resample_threshold = 0.0;  // keep the weights to look at them
+  o.motion.model = "diff_drive";
+  o.grid.resolution_m = 0.05;
+  o.grid.size_x_m = 20.0;
+  o.grid.size_y_m = 20.0;
+  return o;
+}
+
+/// A room 6 m x 4 m seen from (x, y, 0) by a 360-beam scan.
+FeatureSet roomScan(double x, double y) {
+  auto scan = std::make_shared<RangeScan>();
+  scan->angle_min = -M_PI;
+  scan->angle_increment = 2.0 * M_PI / 360;
+  scan->range_min = 0.05;
+  scan->range_max = 10.0;
+  for (int i = 0; i < 360; ++i) {
+    const double a = scan->angle_min + i * scan->angle_increment;
+    const double c = std::cos(a), s = std::sin(a);
+    double r = 1e9;
+    if (c > 1e-9) r = std::min(r, (3.0 - x) / c);
+    if (c < -1e-9) r = std::min(r, (-3.0 - x) / c);
+    if (s > 1e-9) r = std::min(r, (2.0 - y) / s);
+    if (s < -1e-9) r = std::min(r, (-2.0 - y) / s);
+    scan->ranges.push_back(static_cast<float>(r));
+  }
+  FeatureSet f;
+  f.scan = scan;
+  return f;
+}
+
+TEST(GridParticleFilter, WeightsFollowEquation14) {
+  const FilterOptions o = gridOptions(30);
+  GridParticleFilter filter(o);
+  filter.reset(Pose2::Zero());
+  filter.update(roomScan(0.0, 0.0));  // every particle maps the room from the origin
+  Eigen::Matrix3d spread = Eigen::Matrix3d::Zero();
+  spread.diagonal() << 0.04, 0.04, 0.01;
+  ASSERT_TRUE(filter.resetPose(Pose2::Zero(), spread));
+  const std::vector<WeightedPose> before = filter.particles();
+  const FeatureSet second = roomScan(0.0, 0.0);
+  const UpdateStats stats = filter.update(second);
+  EXPECT_FALSE(stats.resampled);
+  const std::vector<WeightedPose> after = filter.particles();
+  LocalMapStats ignored;
+  const std::vector<LocalMapCell> local = buildLocalMap(second, o.grid, &ignored);
+  // All maps are the same (built before the spread), so w_i / w_j = exp((m_i - m_j) / f).
+  const TiledLogOddsGrid& map = filter.bestGrid();
+  std::vector<double> match;
+  TiledLogOddsGrid reference(o.grid.resolution_m, -10.0, -10.0, 400, 400, o.grid.tile_cells);
+  integrateLocalMap(local, Pose2::Zero(), o.grid, &reference);
+  for (const auto& p : before) match.push_back(matchLocalMap(local, p.pose, reference, o.grid));
+  int best = 0, nearest = 0;
+  for (size_t i = 1; i < after.size(); ++i) {
+    const double ratio = after[i].weight / after[0].weight;
+    EXPECT_NEAR(std::log(ratio), (match[i] - match[0]) / o.grid.match_f, 1e-6) << i;
+    if (after[i].weight > after[best].weight) best = static_cast<int>(i);
+    if (before[i].pose.head<2>().norm() + std::fabs(before[i].pose.z()) <
+        before[nearest].pose.head<2>().norm() + std::fabs(before[nearest].pose.z())) {
+      nearest = static_cast<int>(i);
+    }
+  }
+  EXPECT_EQ(best, nearest);
+  EXPECT_GT(map.allocatedTiles(), 0);
+}
+
+TEST(GridParticleFilter, ResampledParticlesShareTiles) {
+  FilterOptions o = gridOptions(200);
+  o.resample_threshold = 1.0;  // resample every update
+  o.grid.match_f = 1.0;        // sharp weights: few ancestors survive
+  o.motion.min_sigma_xy_m = 0.05;
+  GridParticleFilter filter(o);
+  filter.reset(Pose2::Zero());
+  filter.update(roomScan(0.0, 0.0));
+  const long tiles_one_map = filter.bestGrid().allocatedTiles();
+  ASSERT_GT(tiles_one_map, 4);
+  // Before any resampling every particle wrote its own tiles.
+  EXPECT_EQ(filter.distinctTiles(), tiles_one_map * 200);
+  MotionInput motion;
+  motion.delta = Pose2(0.2, 0.0, 0.0);
+  filter.predict(motion);
+  const UpdateStats stats = filter.update(roomScan(0.2, 0.0));  // weigh, write, resample
+  ASSERT_TRUE(stats.resampled);
+  std::vector<std::pair<double, double>> ancestors;
+  for (const auto& p : filter.particles()) ancestors.emplace_back(p.pose.x(), p.pose.y());
+  std::sort(ancestors.begin(), ancestors.end());
+  const long unique = std::unique(ancestors.begin(), ancestors.end()) - ancestors.begin();
+  EXPECT_LT(unique, 100);
+  // Copies of one ancestor share every tile: memory follows ancestors, not particles.
+  EXPECT_LE(filter.distinctTiles(), unique * (tiles_one_map + 4));
+  EXPECT_GE(filter.distinctTiles(), unique * tiles_one_map);
+  EXPECT_EQ(filter.gridBytes(), filter.distinctTiles() * sizeof(float) * 64 * 64);
+  const PoseEstimate e = filter.estimate();
+  EXPECT_NEAR(e.mean.x(), 0.2, 0.05);
+  EXPECT_NEAR(e.mean.y(), 0.0, 0.05);
+  GridMapData map;
+  ASSERT_TRUE(filter.occupancyGrid(map));
+  EXPECT_GT(map.count(66, 100), 300);  // the walls (20 m of wall at 5 cm)
+  EXPECT_GT(map.count(0, 40), 3000);   // the room's inside, seen free twice
+}
+
+TEST(SlamPipeline, ConeReadingsReachTheFilterInTheBaseFrameOfTheUpdate) {
+  PipelineOptions o;
+  o.filter = gridOptions(5);
+  o.sonar.extract_lines = false;
+  o.sonar.extract_points = false;
+  o.sonar.extract_distance_m = 0.1;
+  SlamPipeline pipeline(o);
+  ConeReading r;
+  r.range = 1.0;
+  r.max_range = 5.0;
+  r.field_of_view = 0.3;
+  r.sensor_pose = Pose2(0.1, 0.0, 0.0);
+  EXPECT_EQ(pipeline.processSonar({r}, Pose2::Zero(), 1.0), FrameResult::kFirstFrame);
+  ASSERT_EQ(pipeline.lastFeatures().cones.size(), 1u);
+  EXPECT_EQ(pipeline.processSonar({r}, Pose2(0.02, 0.0, 0.0), 1.1), FrameResult::kUpdated);
+  ASSERT_EQ(pipeline.lastFeatures().cones.size(), 1u);
+  // Two readings 5 cm apart (the second does not move enough), then an update 12 cm on.
+  EXPECT_EQ(pipeline.processSonar({r}, Pose2(0.07, 0.0, 0.0), 1.2),
+            FrameResult::kSkippedNoMotion);
+  r.sensor_pose = Pose2(0.0, 0.1, M_PI / 2);
+  EXPECT_EQ(pipeline.processSonar({r}, Pose2(0.14, 0.0, 0.0), 1.3), FrameResult::kUpdated);
+  const std::vector<ConeReading>& cones = pipeline.lastFeatures().cones;
+  ASSERT_EQ(cones.size(), 2u);
+  EXPECT_NEAR(cones[0].sensor_pose.x(), 0.1 - 0.07, 1e-12);  // fired 7 cm behind
+  EXPECT_NEAR(cones[1].sensor_pose.y(), 0.1, 1e-12);
+  EXPECT_NEAR(cones[1].sensor_pose.z(), M_PI / 2, 1e-12);
+  // The landmark variants get them too, and ignore them.
+  o.filter.variant = "fastslam2";
+  SlamPipeline landmarks(o);
+  EXPECT_EQ(landmarks.processSonar({r}, Pose2::Zero(), 1.0), FrameResult::kFirstFrame);
+  EXPECT_TRUE(landmarks.session().filter().landmarks().empty());
+}
+
+TEST(LandmarkRaster, LinesAndPointsBecomeOccupiedCells) {
+  LandmarkEstimate wall;
+  wall.type = LandmarkType::kLine;
+  wall.start = Eigen::Vector2d(0.0, 0.0);
+  wall.end = Eigen::Vector2d(2.0, 0.0);
+  LandmarkEstimate post;
+  post.mean = Eigen::Vector2d(1.0, 1.0);
+  const GridMapData g = rasterizeLandmarks({wall, post}, 0.1, 0.5, 0.1);
+  EXPECT_NEAR(g.origin_x_m, -0.5, 1e-12);
+  EXPECT_NEAR(g.origin_y_m, -0.5, 1e-12);
+  EXPECT_NEAR(g.width, 30, 1);   // x from -0.5 to 2.0 + 0.5
+  EXPECT_NEAR(g.height, 21, 1);  // y from -0.5 to 1.1 + 0.5
+  const long occupied = g.count(100, 100);
+  EXPECT_GE(occupied, 20 + 1);
+  EXPECT_LE(occupied, 21 + 9);
+  EXPECT_EQ(g.at(5, 5), 100);   // (0.05, 0.05): the wall's first cell
+  EXPECT_EQ(g.at(15, 15), 100); // (1.05, 1.05): the post
+  EXPECT_EQ(g.at(15, 10), -1);
+  EXPECT_EQ(g.count(-1, -1) + occupied, static_cast<long>(g.cells.size()));
+}
+
+TEST(GridConfig, ShippedGridConfigsSelectTheVariantAndItsSensors) {
+  const std::string dir = std::string(RBPF_SOURCE_DIR) + "/config/";
+  const io::SlamConfig ir = io::loadSlamConfig(dir + "grid_pf.yaml");
+  EXPECT_EQ(ir.filter.variant, "grid_pf");
+  EXPECT_EQ(ir.frontend, "sonar");
+  EXPECT_EQ(ir.ros.sonar_topic, "ir");  // the simulator's infrared topic
+  EXPECT_EQ(ir.filter.motion.model, "diff_drive");
+  EXPECT_DOUBLE_EQ(ir.filter.motion.wheel_base_m, 0.053);
+  EXPECT_DOUBLE_EQ(ir.filter.grid.resolution_m, 0.01);
+  EXPECT_DOUBLE_EQ(ir.filter.grid.match_f, 100.0);
+  EXPECT_EQ(io::loadSlamConfig(dir + "grid_pf_sonar.yaml").ros.sonar_topic, "sonar");
+  const io::SlamConfig laser = io::loadSlamConfig(dir + "grid_pf_laser.yaml");
+  EXPECT_EQ(laser.frontend, "laser");
+  EXPECT_TRUE(laser.scan_matching.enabled);
+  EXPECT_NO_THROW(createFilter(laser.filter));
+}
+
+TEST(GridConfig, ErrorsNameTheGridKey) {
+  auto error = [](const std::string& yaml) -> std::string {
+    try {
+      io::parseSlamConfig(YAML::Load(yaml), "t.yaml");
+    } catch (const io::ConfigError& e) {
+      return e.what();
+    }
+    return "";
+  };
+  EXPECT_NE(error("variant: grid_pf\ngrid: {resolution_m: 0}").find("grid.resolution_m"),
+            std::string::npos);
+  EXPECT_NE(error("variant: grid_pf\ngrid: {match_f: -1}").find("grid.match_f"),
+            std::string::npos);
+  EXPECT_NE(error("grid: {resolutoin_m: 0.1}").find("resolutoin_m"), std::string::npos);
+  EXPECT_NE(error("map_update_period: -1").find("map_update_period"), std::string::npos);
+}
+
+TEST(GridMapFile, WritesAndReadsMapServerFiles) {
+  GridMapData g;
+  g.resolution_m = 0.1;
+  g.origin_x_m = -1.5;
+  g.origin_y_m = 2.0;
+  g.width = 3;
+  g.height = 2;
+  g.cells = {100, 0, -1, 70, 19, 50};  // row 0 is the bottom
+  char dir[] = "/tmp/grid_map_fileXXXXXX";
+  ASSERT_NE(mkdtemp(dir), nullptr);
+  const std::vector<std::string> files = io::writeGridMap(std::string(dir) + "/m", g);
+  ASSERT_EQ(files.size(), 2u);
+  const GridMapData back = io::readGridMap(files[1]);
+  EXPECT_EQ(back.width, 3);
+  EXPECT_EQ(back.height, 2);
+  EXPECT_DOUBLE_EQ(back.resolution_m, 0.1);
+  EXPECT_DOUBLE_EQ(back.origin_x_m, -1.5);
+  EXPECT_DOUBLE_EQ(back.origin_y_m, 2.0);
+  // Trinary: >= 65 occupied, 0..19 free, the rest unknown.
+  EXPECT_EQ(back.cells, (std::vector<int8_t>{100, 0, -1, 100, 0, -1}));
+  for (const auto& f : files) std::remove(f.c_str());
+  rmdir(dir);
+}
+
+}  // namespace
+}  // namespace core
+}  // namespace rbpf_slam
