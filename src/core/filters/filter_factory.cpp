@@ -2,7 +2,9 @@
 #include <stdexcept>
 #include <string>
 
+#include "rbpf_slam/core/filters/distributed_filter.h"
 #include "rbpf_slam/core/filters/fastslam2.h"
+#include "rbpf_slam/core/filters/fault_injector.h"
 #include "rbpf_slam/core/filters/hinf_fastslam.h"
 #include "rbpf_slam/core/filters/landmark_existence.h"
 #include "rbpf_slam/core/filters/robust_fastslam2.h"
@@ -22,7 +24,7 @@ void requireRange(const std::string& name, double value, double min, double max)
 }  // namespace
 
 std::vector<std::string> availableVariants() {
-  return {"fastslam2", "robust_fastslam2", "hinf_fastslam"};
+  return {"fastslam2", "robust_fastslam2", "hinf_fastslam", "dpf"};
 }
 
 void validate(const RobustOptions& o) {
@@ -55,10 +57,13 @@ void validate(const FilterOptions& o) {
   validate(o.tracker);
   validate(o.existence);
   validate(o.hinf);
+  validate(o.dpf);
 }
 
 std::unique_ptr<SlamFilter> createFilter(const FilterOptions& options) {
   validate(options);
+  if (options.dpf.fault.enabled && options.variant != "dpf") return createFaultInjectedFilter(options);
+  if (options.variant == "dpf") return std::make_unique<DistributedFilter>(options);
   if (options.variant == "fastslam2") return std::make_unique<FastSlam2>(options);
   if (options.variant == "robust_fastslam2") return std::make_unique<RobustFastSlam2>(options);
   if (options.variant == "hinf_fastslam") return std::make_unique<HinfFastSlam>(options);

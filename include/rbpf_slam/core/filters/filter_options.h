@@ -3,6 +3,7 @@
 
 #include <string>
 
+#include "rbpf_slam/core/filters/dpf_options.h"
 #include "rbpf_slam/core/filters/estimator_rule.h"
 #include "rbpf_slam/core/motion/motion_model.h"
 #include "rbpf_slam/core/tracking/landmark_tracker_options.h"
@@ -63,6 +64,7 @@ struct FilterOptions {
   bool use_lines = true;
   RobustOptions robust;            // variant robust_fastslam2 (particles = M per set)
   LandmarkTrackerOptions tracker;  // variant robust_fastslam2
+  DpfOptions dpf;                  // variant dpf (and the fault injector of any variant)
 };
 
 /// Throws std::invalid_argument naming the first out-of-range field and its allowed range.
