@@ -85,6 +85,7 @@ void readDpf(YamlSection section, core::DpfOptions* o) {
   section.read("local_filters", &o->local_filters, 1, 64);
   section.read("threads", &o->threads, 0, 64);
   section.read("weighting", &o->weighting, {"innovation", "neff", "mixed"});
+  section.read("fusion", &o->fusion, {"information", "average"});
   section.read("mix_innovation", &o->mix_innovation, 0.0, 1.0);
   section.read("adaptive_covariance", &o->adaptive_covariance);
   section.read("feedback", &o->feedback);

@@ -74,11 +74,12 @@ TEST(DpfMaster, FusesWithTheConfiguredWeights) {
     DpfOptions o;
     o.local_filters = 2;
     o.weighting = weighting;
+    o.fusion = "average";
     o.innovation_smoothing = 1.0;  // this step's NIS only
     o.fault_nis = 1e9;
     o.fault_neff_ratio = 0.0;
     DpfMaster master(o);
-    const auto out = master.fuse(1, {estimateOf(1, 1, Pose2(1.0, 0.0, 0.0), 4.0, 0.2),
+    const auto out = master.fuse(1, MotionInput(), {estimateOf(1, 1, Pose2(1.0, 0.0, 0.0), 4.0, 0.2),
                                      estimateOf(0, 1, Pose2(0.0, 0.0, 0.0), 2.0, 0.8)});
     const double expected = weighting == "innovation" ? 1.0 / 3.0
                             : weighting == "neff"     ? 0.2
@@ -93,10 +94,11 @@ TEST(DpfMaster, DownWeightsThenIsolatesAFaultyLocalAndNamesAMissingOne) {
   DpfOptions o;
   o.local_filters = 3;
   o.isolate_after_steps = 3;
+  o.fusion = "average";
   DpfMaster master(o);
   const Pose2 good(5.0, 5.0, 0.1), bad(9.0, 1.0, 1.0);
   for (long step = 1; step <= 3; ++step) {
-    const auto out = master.fuse(step, {estimateOf(0, step, good, 2.0, 0.9),
+    const auto out = master.fuse(step, MotionInput(), {estimateOf(0, step, good, 2.0, 0.9),
                                         estimateOf(1, step, bad, 200.0, 0.9),
                                         estimateOf(2, step, good, 2.0, 0.9)});
     EXPECT_TRUE(master.health()[1].suspect);
@@ -116,18 +118,51 @@ TEST(DpfMaster, DownWeightsThenIsolatesAFaultyLocalAndNamesAMissingOne) {
   // Neff-only weighting watches Neff: a collapsed local filter is flagged there.
   o.weighting = "neff";
   DpfMaster neff_master(o);
-  neff_master.fuse(1, {estimateOf(0, 1, good, 2.0, 0.9), estimateOf(1, 1, bad, 2.0, 0.001),
+  neff_master.fuse(1, MotionInput(), {estimateOf(0, 1, good, 2.0, 0.9), estimateOf(1, 1, bad, 2.0, 0.001),
                        estimateOf(2, 1, good, 2.0, 0.9)});
   EXPECT_TRUE(neff_master.health()[1].suspect);
   try {
-    master.fuse(4, {estimateOf(0, 4, good, 2.0, 0.9), estimateOf(2, 4, good, 2.0, 0.9)});
+    master.fuse(4, MotionInput(), {estimateOf(0, 4, good, 2.0, 0.9), estimateOf(2, 4, good, 2.0, 0.9)});
     FAIL() << "a missing estimate must be an error";
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("local filter 1"), std::string::npos) << e.what();
   }
-  EXPECT_THROW(master.fuse(5, {estimateOf(0, 5, good, 2, 1), estimateOf(1, 4, good, 2, 1),
+  EXPECT_THROW(master.fuse(5, MotionInput(), {estimateOf(0, 5, good, 2, 1), estimateOf(1, 4, good, 2, 1),
                                estimateOf(2, 5, good, 2, 1)}),
                std::invalid_argument);
+}
+
+TEST(DpfMaster, InformationFusionAddsWhatEachLocalLearned) {
+  // Prior N(0, I) for both; local 0 learned x = 1 with information I (posterior 0.5 I at
+  // (1, 0, 0)), local 1 learned y = 1 likewise. A centralised Kalman update with both gives
+  // information 3 I and mean (2/3, 2/3, 0).
+  DpfOptions o;
+  o.local_filters = 2;
+  DpfMaster master(o);
+  DpfLocalEstimate a = estimateOf(0, 1, Pose2(1.0, 0.0, 0.0), 2.0, 0.9);
+  DpfLocalEstimate b = estimateOf(1, 1, Pose2(0.0, 1.0, 0.0), 2.0, 0.9);
+  for (DpfLocalEstimate* e : {&a, &b}) {
+    e->prior_mean = Pose2::Zero();
+    e->prior_covariance = Eigen::Matrix3d::Identity();
+    e->covariance = 0.5 * Eigen::Matrix3d::Identity();
+  }
+  auto out = master.fuse(1, MotionInput(), {a, b});
+  EXPECT_NEAR(out.mean.x(), 2.0 / 3.0, 1e-6);
+  EXPECT_NEAR(out.mean.y(), 2.0 / 3.0, 1e-6);
+  EXPECT_NEAR(out.mean.z(), 0.0, 1e-6);
+  EXPECT_TRUE(out.covariance.isApprox(Eigen::Matrix3d::Identity() / 3.0, 1e-6));
+  // A local filter trusted half as much (weight 1/4 of 2: trust 0.5) contributes half of it.
+  b.nis_sum = 2 * 6.0;  // mean NIS 6 vs 2: innovation weight 1/4
+  o.weighting = "innovation";
+  o.innovation_smoothing = 1.0;
+  DpfMaster by_innovation(o);
+  out = by_innovation.fuse(1, MotionInput(), {a, b});
+  EXPECT_NEAR(out.weights[1], 0.25, 1e-9);
+  // Trust: local 0 min(1, 2 * 0.75) = 1, local 1 min(1, 2 * 0.25) = 0.5. Information
+  // I + I + 0.5 I = 2.5 I, vector (2, 0, 0) + 0.5 (0, 2, 0): mean (0.8, 0.4, 0).
+  EXPECT_NEAR(out.mean.x(), 0.8, 1e-6);
+  EXPECT_NEAR(out.mean.y(), 0.4, 1e-6);
+  EXPECT_TRUE(out.covariance.isApprox(Eigen::Matrix3d::Identity() / 2.5, 1e-6));
 }
 
 /// A synthetic run: a robot driving a circle of radius 10 m among 24 posts with known ids,

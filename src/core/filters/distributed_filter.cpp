@@ -40,6 +40,9 @@ void validate(const DpfOptions& o) {
     throw std::invalid_argument("dpf.weighting = '" + o.weighting +
                                 "' is not one of innovation, neff, mixed");
   }
+  if (o.fusion != "information" && o.fusion != "average") {
+    throw std::invalid_argument("dpf.fusion = '" + o.fusion + "' is not one of information, average");
+  }
   require("dpf.mix_innovation", o.mix_innovation, 0.0, 1.0);
   require("dpf.innovation_smoothing", o.innovation_smoothing, 1e-3, 1.0);
   require("dpf.fault_nis", o.fault_nis, 0.0, 1e9);
@@ -103,7 +106,7 @@ UpdateStats DistributedFilter::update(const FeatureSet& features) {
   std::vector<Pose2> injected(locals_.size(), Pose2::Zero());
   injected[options_.dpf.fault.local_index] = injector_.disturbance(step_);
   stepLocals(input, injected);
-  const DpfMasterOutput out = master_.fuse(step_, estimates_);
+  const DpfMasterOutput out = master_.fuse(step_, input.motion, estimates_);
   feedback_ = out.feedback;
 
   stats.features_in = static_cast<int>(features.points.size() + features.lines.size());

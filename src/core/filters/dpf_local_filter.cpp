@@ -32,6 +32,17 @@ void poseMoments(const std::vector<Pose2>& poses, const std::vector<double>& wei
   }
 }
 
+/// Moments of a Gaussian mixture: sum_j w_j N(means_j, covariances_j).
+void mixtureMoments(const std::vector<Pose2>& means, const std::vector<Eigen::Matrix3d>& covariances,
+                    const std::vector<double>& weights, Pose2* mean, Eigen::Matrix3d* covariance) {
+  poseMoments(means, weights, mean, covariance);
+  for (size_t j = 0; j < means.size(); ++j) *covariance += weights[j] * covariances[j];
+}
+
+Eigen::Matrix3d regularised(const Eigen::Matrix3d& m) {
+  return 0.5 * (m + m.transpose()) + Eigen::Vector3d(1e-8, 1e-8, 1e-10).asDiagonal().toDenseMatrix();
+}
+
 }  // namespace
 
 Eigen::Matrix2d adaptiveLikelihoodCovariance(const std::vector<Eigen::Vector2d>& innovations,
@@ -124,15 +135,23 @@ void DpfLocalFilter::applyFeedback(const DpfFeedback& feedback) {
     }
   }
   if (!options_.dpf.feedback) return;
+  // The cloud gets the master's mean and covariance: p' = m + A (p - mean), A A^T scaling the
+  // cloud's covariance onto the master's (Cholesky factors); particles keep their maps.
   std::vector<Pose2> poses;
   for (const auto& p : particles_) poses.push_back(p.pose);
   Pose2 mean;
   Eigen::Matrix3d covariance;
   poseMoments(poses, weights_, &mean, &covariance);
-  Pose2 shift = feedback.mean - mean;
-  shift.z() = wrapAngle(shift.z());
+  const Eigen::Matrix3d target = regularised(feedback.covariance);
+  const Eigen::Matrix3d own = regularised(covariance);
+  const Eigen::Matrix3d l_target = target.llt().matrixL();
+  const Eigen::Matrix3d l_own = own.llt().matrixL();
+  Eigen::Matrix3d a = l_target * l_own.inverse();
+  if (!a.allFinite()) a.setIdentity();
   for (auto& p : particles_) {
-    p.pose += shift;
+    Pose2 d = p.pose - mean;
+    d.z() = wrapAngle(d.z());
+    p.pose = feedback.mean + a * d;
     p.pose.z() = wrapAngle(p.pose.z());
   }
 }
@@ -169,15 +188,22 @@ DpfLocalEstimate DpfLocalFilter::step(const DpfStepInput& input, const Pose2& in
   for (size_t o = 0; o < m; ++o) {
     for (const auto& p : particles_) known[o] = known[o] && p.map->count(observations[o].id);
   }
+  prior_means_.assign(n, Pose2::Zero());
+  prior_covs_.assign(n, Eigen::Matrix3d::Zero());
+  proposal_means_.assign(n, Pose2::Zero());
+  proposal_covs_.assign(n, Eigen::Matrix3d::Zero());
   for (size_t j = 0; j < n; ++j) {
     Particle& p = particles_[j];
     if (m == 0) {
       p.pose = motion_model_->sample(p.pose, motion, rng_);
+      proposal_means_[j] = prior_means_[j] = p.pose;
       continue;
     }
     const Pose2 mu = motion_model_->mean(p.pose, motion);
     const Eigen::Matrix3d sigma = motion_model_->covariance(p.pose, motion) +
                                   Eigen::Vector3d(1e-10, 1e-10, 1e-12).asDiagonal().toDenseMatrix();
+    prior_means_[j] = mu;
+    prior_covs_[j] = sigma;
     // FastSLAM 2.0 proposal: the motion prior refined by every known landmark, at mu.
     Eigen::Matrix3d information = sigma.inverse();
     Eigen::Vector3d correction = Eigen::Vector3d::Zero();
@@ -197,7 +223,9 @@ DpfLocalEstimate DpfLocalFilter::step(const DpfStepInput& input, const Pose2& in
     const Eigen::Matrix3d proposal_cov = information.inverse();
     Pose2 proposal_mean = mu + proposal_cov * correction;
     proposal_mean.z() = wrapAngle(proposal_mean.z());
-    p.pose = sampleMultivariate<3>(rng_, proposal_mean, Eigen::Matrix3d(0.5 * (proposal_cov + proposal_cov.transpose())));
+    proposal_means_[j] = proposal_mean;
+    proposal_covs_[j] = 0.5 * (proposal_cov + proposal_cov.transpose());
+    p.pose = sampleMultivariate<3>(rng_, proposal_mean, proposal_covs_[j]);
     p.pose.z() = wrapAngle(p.pose.z());
     // Landmark EKFs at the sampled pose; unseen ids start new landmarks.
     auto map = std::make_shared<Map>(*p.map);
@@ -233,6 +261,8 @@ DpfLocalEstimate DpfLocalFilter::finishStep(
     const std::vector<std::vector<Eigen::Matrix2d>>& model_cov, const std::vector<bool>& known,
     DpfLocalEstimate* estimate) {
   const size_t n = particles_.size(), m = innovations.size();
+  mixtureMoments(prior_means_, prior_covs_, weights_, &estimate->prior_mean,
+                 &estimate->prior_covariance);
   // eq. 12 with the constant (model) covariance: the basic weights of this step.
   std::vector<double> basic_log(n, 0.0), basic;
   for (size_t o = 0; o < m; ++o) {
@@ -276,6 +306,9 @@ DpfLocalEstimate DpfLocalFilter::finishStep(
   for (size_t j = 0; j < n; ++j) log_weights_[j] += step_log[j];
   normalizeLogWeights(log_weights_, &weights_);
   estimate->neff = effectiveSampleSize(weights_);
+  Pose2 posterior_mean;
+  Eigen::Matrix3d posterior_cov;
+  mixtureMoments(proposal_means_, proposal_covs_, weights_, &posterior_mean, &posterior_cov);
   estimate->particles = static_cast<int>(n);
   for (size_t j = 0; j < n; ++j) log_weights_[j] = std::log(std::max(weights_[j], 1e-300));
   if (estimate->neff < options_.resample_threshold * n) {
@@ -289,9 +322,8 @@ DpfLocalEstimate DpfLocalFilter::finishStep(
   }
   estimate->index = index_;
   estimate->step = step;
-  std::vector<Pose2> poses;
-  for (const auto& p : particles_) poses.push_back(p.pose);
-  poseMoments(poses, weights_, &estimate->mean, &estimate->covariance);
+  estimate->mean = posterior_mean;
+  estimate->covariance = posterior_cov;
   estimate->landmarks = static_cast<int>(particles_[bestParticle()].map->size());
   return *estimate;
 }

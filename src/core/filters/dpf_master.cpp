@@ -1,5 +1,7 @@
 #include "rbpf_slam/core/filters/dpf_master.h"
 
+#include <Eigen/Eigenvalues>
+#include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
@@ -17,6 +19,44 @@ std::vector<double> normalised(std::vector<double> w) {
   }
   for (double& x : w) x = total > 0.0 ? x / total : 1.0 / w.size();
   return w;
+}
+
+/// The paper's fusion: x = sum_i w_i x_i (circular mean for the heading), covariance of the
+/// mixture.
+void fuseAverage(const std::vector<const DpfLocalEstimate*>& locals,
+                 const std::vector<double>& weights, DpfMasterOutput* out) {
+  double x = 0.0, y = 0.0, c = 0.0, s = 0.0;
+  for (size_t i = 0; i < locals.size(); ++i) {
+    const Pose2& m = locals[i]->mean;
+    x += weights[i] * m.x();
+    y += weights[i] * m.y();
+    c += weights[i] * std::cos(m.z());
+    s += weights[i] * std::sin(m.z());
+  }
+  out->mean = Pose2(x, y, std::atan2(s, c));
+  out->covariance.setZero();
+  for (size_t i = 0; i < locals.size(); ++i) {
+    Pose2 d = locals[i]->mean - out->mean;
+    d.z() = wrapAngle(d.z());
+    out->covariance += weights[i] * (locals[i]->covariance + d * d.transpose());
+  }
+}
+
+Pose2 difference(const Pose2& a, const Pose2& b) {
+  Pose2 d = a - b;
+  d.z() = wrapAngle(d.z());
+  return d;
+}
+
+Eigen::Matrix3d regularised(const Eigen::Matrix3d& m) {
+  return 0.5 * (m + m.transpose()) + Eigen::Vector3d(1e-8, 1e-8, 1e-10).asDiagonal().toDenseMatrix();
+}
+
+/// The positive semidefinite part of a symmetric matrix.
+Eigen::Matrix3d positivePart(const Eigen::Matrix3d& m) {
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(0.5 * (m + m.transpose()));
+  const Eigen::Vector3d values = eigen.eigenvalues().cwiseMax(0.0);
+  return eigen.eigenvectors() * values.asDiagonal() * eigen.eigenvectors().transpose();
 }
 
 }  // namespace
@@ -48,7 +88,8 @@ void DpfMaster::reset(const Pose2& initial_pose) {
   last_.weights.assign(options_.local_filters, 1.0 / options_.local_filters);
 }
 
-DpfMasterOutput DpfMaster::fuse(long step, const std::vector<DpfLocalEstimate>& estimates) {
+DpfMasterOutput DpfMaster::fuse(long step, const MotionInput& motion,
+                                const std::vector<DpfLocalEstimate>& estimates) {
   const int n = options_.local_filters;
   std::vector<const DpfLocalEstimate*> by_index(n, nullptr);
   for (const auto& e : estimates) {
@@ -109,25 +150,43 @@ DpfMasterOutput DpfMaster::fuse(long step, const std::vector<DpfLocalEstimate>& 
     }
   }
   out.weights = normalised(w);
-  double x = 0.0, y = 0.0, c = 0.0, s = 0.0;
-  for (int i = 0; i < n; ++i) {
-    const Pose2& m = by_index[i]->mean;
-    x += out.weights[i] * m.x();
-    y += out.weights[i] * m.y();
-    c += out.weights[i] * std::cos(m.z());
-    s += out.weights[i] * std::sin(m.z());
-  }
-  out.mean = Pose2(x, y, std::atan2(s, c));
-  out.covariance.setZero();
-  for (int i = 0; i < n; ++i) {
-    Pose2 d = by_index[i]->mean - out.mean;
-    d.z() = wrapAngle(d.z());
-    out.covariance += out.weights[i] * (by_index[i]->covariance + d * d.transpose());
+  const Pose2 prior_mean = compose(last_.mean, motion.delta);
+  if (options_.fusion != "information" || !fuseInformation(prior_mean, by_index, out.weights, &out)) {
+    fuseAverage(by_index, out.weights, &out);
   }
   out.feedback.mean = out.mean;
   out.feedback.covariance = out.covariance;
   last_ = out;
   return out;
+}
+
+bool DpfMaster::fuseInformation(const Pose2& prior_mean,
+                                const std::vector<const DpfLocalEstimate*>& locals,
+                                const std::vector<double>& weights, DpfMasterOutput* out) const {
+  const int n = static_cast<int>(locals.size());
+  Eigen::Matrix3d prior_cov = Eigen::Matrix3d::Zero();
+  for (int i = 0; i < n; ++i) prior_cov += weights[i] * locals[i]->prior_covariance;
+  // Linearised at the master's prior: information and information vector relative to it.
+  Eigen::Matrix3d information = regularised(prior_cov).inverse();
+  Eigen::Vector3d vector = Eigen::Vector3d::Zero();
+  for (int i = 0; i < n; ++i) {
+    const DpfLocalEstimate& e = *locals[i];
+    const double trust = std::min(1.0, n * weights[i]);
+    if (e.innovations == 0 || trust <= 0.0) continue;  // it learned nothing this step
+    const Eigen::Matrix3d posterior_info = regularised(e.covariance).inverse();
+    const Eigen::Matrix3d prior_info = regularised(e.prior_covariance).inverse();
+    information += trust * positivePart(posterior_info - prior_info);
+    vector += trust * (posterior_info * difference(e.mean, prior_mean) -
+                       prior_info * difference(e.prior_mean, prior_mean));
+  }
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(information);
+  if (!(eigen.eigenvalues().minCoeff() > 0.0) || !information.allFinite()) return false;
+  out->covariance = information.inverse();
+  const Eigen::Vector3d correction = out->covariance * vector;
+  if (!correction.allFinite()) return false;
+  out->mean = prior_mean + correction;
+  out->mean.z() = wrapAngle(out->mean.z());
+  return true;
 }
 
 }  // namespace core

@@ -42,8 +42,10 @@ struct DpfStepInput {
 struct DpfLocalEstimate {
   int index = 0;
   long step = 0;
-  Pose2 mean = Pose2::Zero();
+  Pose2 mean = Pose2::Zero();  // posterior (after this step's observations)
   Eigen::Matrix3d covariance = Eigen::Matrix3d::Identity();
+  Pose2 prior_mean = Pose2::Zero();  // predicted, before this step's observations
+  Eigen::Matrix3d prior_covariance = Eigen::Matrix3d::Identity();
   double neff = 0.0;          // before resampling
   int particles = 1;
   double nis_sum = 0.0;       // sum over this step's observations of the normalised innovation^2

@@ -78,6 +78,10 @@ class DpfLocalFilter {
   std::vector<Particle> particles_;
   std::vector<double> weights_;
   std::vector<double> log_weights_;  // since the last resampling
+  // This step's per-particle Gaussians: predicted (motion only) and proposal (after the
+  // observations), for the prior and posterior moments the master fuses.
+  std::vector<Pose2> prior_means_, proposal_means_;
+  std::vector<Eigen::Matrix3d> prior_covs_, proposal_covs_;
   long reinitialisations_ = 0;
 };
 

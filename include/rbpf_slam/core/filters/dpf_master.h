@@ -24,13 +24,21 @@ class DpfMaster {
  public:
   explicit DpfMaster(const DpfOptions& options);
   void reset(const Pose2& initial_pose);
-  /// Fuses one step's estimates (one per local filter, any order). Throws
+  /// Fuses one step's estimates (one per local filter, any order); `motion` is the step's
+  /// odometry increment (the master's prior is its last mean moved by it). Throws
   /// std::invalid_argument when an estimate is missing, duplicated or from another step.
-  DpfMasterOutput fuse(long step, const std::vector<DpfLocalEstimate>& estimates);
+  DpfMasterOutput fuse(long step, const MotionInput& motion,
+                       const std::vector<DpfLocalEstimate>& estimates);
   const std::vector<DpfLocalHealth>& health() const { return health_; }
   const DpfMasterOutput& last() const { return last_; }
 
  private:
+  /// Information fusion: the master's prior plus, for each local filter, its trust
+  /// min(1, N w_i) times the information it gained this step (posterior minus prior, in
+  /// information form). Returns false when the result is not positive definite.
+  bool fuseInformation(const Pose2& prior_mean, const std::vector<const DpfLocalEstimate*>& locals,
+                       const std::vector<double>& weights, DpfMasterOutput* out) const;
+
   const DpfOptions options_;
   std::vector<DpfLocalHealth> health_;
   DpfMasterOutput last_;

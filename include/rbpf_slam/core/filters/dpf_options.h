@@ -25,8 +25,10 @@ struct DpfOptions {
   int threads = 0;           // worker threads for the local filters (0: one per local filter)
   std::string weighting = "mixed";  // master weights: innovation | neff | mixed (section 3.2)
   double mix_innovation = 0.5;      // mixed: share of the innovation weight, the rest Neff
+  std::string fusion = "information";  // information: weighted information fusion of what each
+                                       // local learned; average: sum_i w_i x_i (the paper's)
   bool adaptive_covariance = true;  // eqs. 12-13: likelihood covariance from the particle spread
-  bool feedback = true;             // move each local filter's particles onto the master mean
+  bool feedback = true;  // give each local filter's particle cloud the master's mean and covariance
   double innovation_smoothing = 0.3;  // exponential smoothing of each local's mean NIS
   double fault_nis = 8.0;          // smoothed mean NIS (2 dof, expected 2) above this: suspect
   double fault_neff_ratio = 0.02;  // Neff / particles below this: suspect
