@@ -340,24 +340,3 @@ TEST(DpfOptions, OutOfRangeValuesAreNamed) {
 }  // namespace
 }  // namespace core
 }  // namespace rbpf_slam
-namespace rbpf_slam { namespace core { namespace {
-TEST(DpfDebug, Print) {
-  for (unsigned seed : {5u, 11u, 7u}) {
-  const SyntheticRun run = makeRun(120, seed);
-  for (int cfg = 0; cfg < 6; ++cfg) {
-    FilterOptions o = dpfOptions();
-    if (cfg == 1) o.dpf.local_filters = 1;
-    if (cfg == 2) o.dpf.feedback = false;
-    if (cfg == 3) o.dpf.adaptive_covariance = false;
-    if (cfg == 4) { o.dpf.fault_nis = 1e9; o.dpf.fault_neff_ratio = 0; }
-    if (cfg == 5) o.variant = "fastslam2";
-    auto f = createFilter(o);
-    printf("seed %u cfg %d rms %.3f\n", seed, cfg, rmsError(runFilter(f.get(), run), run.truth));
-  }
-  std::vector<Pose2> odometry;
-  Pose2 pose = Pose2::Zero();
-  for (const auto& m : run.motion) odometry.push_back(pose = compose(pose, m.delta));
-  printf("seed %u odometry %.3f\n", seed, rmsError(odometry, run.truth));
-  }
-}
-}}}

@@ -55,17 +55,13 @@ void validate(const DpfOptions& o) {
   require("fault.sigma_theta_rad", o.fault.sigma_theta_rad, 0.0, 10.0);
 }
 
-DistributedFilter::DistributedFilter(const FilterOptions& options)
+DpfCoordinator::DpfCoordinator(const FilterOptions& options)
     : options_(options), master_(options.dpf), injector_(options.dpf.fault, options.seed) {
   validate(options.dpf);
-  for (int i = 0; i < options.dpf.local_filters; ++i) {
-    locals_.push_back(std::make_unique<DpfLocalFilter>(options, i));
-  }
   reset(Pose2::Zero());
 }
 
-void DistributedFilter::reset(const Pose2& initial_pose) {
-  for (auto& local : locals_) local->reset(initial_pose);
+void DpfCoordinator::reset(const Pose2& initial_pose) {
   master_.reset(initial_pose);
   injector_.reset();
   pending_ = PendingMotion();
@@ -75,66 +71,100 @@ void DistributedFilter::reset(const Pose2& initial_pose) {
   stats_ = FilterStats();
 }
 
-void DistributedFilter::predict(const MotionInput& motion) {
+void DpfCoordinator::predict(const MotionInput& motion) {
   pending_.add(motion);
   ++stats_.predictions;
 }
 
-void DistributedFilter::stepLocals(const DpfStepInput& input, const std::vector<Pose2>& injected) {
-  const int n = static_cast<int>(locals_.size());
-  estimates_.assign(n, DpfLocalEstimate());
-  const int threads =
-      std::min(n, options_.dpf.threads == 0 ? n : options_.dpf.threads);
-  auto work = [&](int worker) {
-    for (int i = worker; i < n; i += threads) estimates_[i] = locals_[i]->step(input, injected[i]);
-  };
-  std::vector<std::thread> pool;
-  for (int t = 1; t < threads; ++t) pool.emplace_back(work, t);
-  work(0);
-  for (auto& thread : pool) thread.join();
-}
-
-UpdateStats DistributedFilter::update(const FeatureSet& features) {
-  UpdateStats stats;
-  ++step_;
+DpfStepInput DpfCoordinator::beginStep(const FeatureSet& features, std::vector<Pose2>* injected) {
   DpfStepInput input;
-  input.step = step_;
+  input.step = step_ + 1;
   input.motion = pending_.take();
   input.features = features;
   input.features.scan.reset();  // the local filters use point features only
+  input.features.cones.clear();
   input.feedback = feedback_;
-  std::vector<Pose2> injected(locals_.size(), Pose2::Zero());
-  injected[options_.dpf.fault.local_index] = injector_.disturbance(step_);
-  stepLocals(input, injected);
-  const DpfMasterOutput out = master_.fuse(step_, input.motion, estimates_);
-  feedback_ = out.feedback;
+  injected->assign(options_.dpf.local_filters, Pose2::Zero());
+  (*injected)[options_.dpf.fault.local_index] = injector_.disturbance(input.step);
+  return input;
+}
 
+UpdateStats DpfCoordinator::finishStep(const DpfStepInput& input,
+                                       std::vector<DpfLocalEstimate> estimates) {
+  const DpfMasterOutput out = master_.fuse(input.step, input.motion, estimates);
+  step_ = input.step;
+  feedback_ = out.feedback;
+  estimates_.assign(options_.dpf.local_filters, DpfLocalEstimate());
+  for (auto& e : estimates) estimates_[e.index] = e;  // fuse() checked the indices
+
+  UpdateStats stats;
+  const FeatureSet& features = input.features;
   stats.features_in = static_cast<int>(features.points.size() + features.lines.size());
   stats.features_rejected = static_cast<int>(features.lines.size());  // lines are not used
   double neff = 0.0;
+  int rejected = 0;
   for (size_t i = 0; i < estimates_.size(); ++i) {
     const DpfLocalEstimate& e = estimates_[i];
     neff += out.weights[i] * e.neff;
     stats.associated += e.innovations;
     stats.new_landmarks += e.new_landmarks;
-    stats.features_rejected = std::max(stats.features_rejected, e.rejected);
+    rejected = std::max(rejected, e.rejected);  // every local counts unknown ids
   }
+  stats.features_rejected += rejected;
   stats.neff = neff;
+  stats.fallbacks = static_cast<int>(out.feedback.reinitialise.size());  // isolations
   ++stats_.updates;
   stats_.last_neff = neff;
   stats_.landmarks = 0;
   for (const auto& e : estimates_) stats_.landmarks += e.landmarks;
-  stats_.fallbacks += static_cast<long>(out.feedback.reinitialise.size());
-  stats.fallbacks = static_cast<int>(out.feedback.reinitialise.size());
+  stats_.fallbacks += stats.fallbacks;
   return stats;
 }
 
-PoseEstimate DistributedFilter::estimate() const {
+PoseEstimate DpfCoordinator::estimate() const {
   PoseEstimate e;
   e.mean = master_.last().mean;
   e.covariance = master_.last().covariance;
   return e;
 }
+
+DistributedFilter::DistributedFilter(const FilterOptions& options)
+    : options_(options), coordinator_(options) {
+  for (int i = 0; i < options.dpf.local_filters; ++i) {
+    locals_.push_back(std::make_unique<DpfLocalFilter>(options, i));
+  }
+  reset(Pose2::Zero());
+}
+
+void DistributedFilter::reset(const Pose2& initial_pose) {
+  for (auto& local : locals_) local->reset(initial_pose);
+  coordinator_.reset(initial_pose);
+}
+
+void DistributedFilter::predict(const MotionInput& motion) { coordinator_.predict(motion); }
+
+std::vector<DpfLocalEstimate> DistributedFilter::stepLocals(const DpfStepInput& input,
+                                                            const std::vector<Pose2>& injected) {
+  const int n = static_cast<int>(locals_.size());
+  std::vector<DpfLocalEstimate> estimates(n);
+  const int threads = std::min(n, options_.dpf.threads == 0 ? n : options_.dpf.threads);
+  auto work = [&](int worker) {
+    for (int i = worker; i < n; i += threads) estimates[i] = locals_[i]->step(input, injected[i]);
+  };
+  std::vector<std::thread> pool;
+  for (int t = 1; t < threads; ++t) pool.emplace_back(work, t);
+  work(0);
+  for (auto& thread : pool) thread.join();
+  return estimates;
+}
+
+UpdateStats DistributedFilter::update(const FeatureSet& features) {
+  std::vector<Pose2> injected;
+  const DpfStepInput input = coordinator_.beginStep(features, &injected);
+  return coordinator_.finishStep(input, stepLocals(input, injected));
+}
+
+PoseEstimate DistributedFilter::estimate() const { return coordinator_.estimate(); }
 
 std::vector<LandmarkEstimate> localLandmarks(const DpfLocalFilter& local) {
   std::vector<LandmarkEstimate> out;
@@ -163,7 +193,7 @@ std::vector<LandmarkEstimate> DistributedFilter::landmarks() const {
 
 std::vector<WeightedPose> DistributedFilter::particles() const {
   std::vector<WeightedPose> out;
-  const std::vector<double>& w = master_.last().weights;
+  const std::vector<double>& w = coordinator_.master().last().weights;
   for (size_t i = 0; i < locals_.size(); ++i) {
     const auto& ps = locals_[i]->particles();
     const auto& pw = locals_[i]->weights();
@@ -172,7 +202,7 @@ std::vector<WeightedPose> DistributedFilter::particles() const {
   return out;
 }
 
-FilterStats DistributedFilter::stats() const { return stats_; }
+FilterStats DistributedFilter::stats() const { return coordinator_.stats(); }
 
 }  // namespace core
 }  // namespace rbpf_slam

@@ -23,6 +23,36 @@ struct PendingMotion {
   MotionInput take();
 };
 
+/// The master's side of the step protocol, shared by the threaded filter and the master node:
+/// collects the motion, builds each step's input (with the fault injector's disturbance for
+/// the faulted local filter), fuses the answers and keeps the statistics.
+class DpfCoordinator {
+ public:
+  explicit DpfCoordinator(const FilterOptions& options);
+  void reset(const Pose2& initial_pose);
+  void predict(const MotionInput& motion);
+  /// The next step's input; *injected gets the disturbance of each local filter.
+  DpfStepInput beginStep(const FeatureSet& features, std::vector<Pose2>* injected);
+  /// Fuses the answers to the step begun last (throws std::invalid_argument naming a missing
+  /// or unexpected local filter) and returns the step's statistics.
+  UpdateStats finishStep(const DpfStepInput& input, std::vector<DpfLocalEstimate> estimates);
+  PoseEstimate estimate() const;
+  FilterStats stats() const { return stats_; }
+  const DpfMaster& master() const { return master_; }
+  const std::vector<DpfLocalEstimate>& lastEstimates() const { return estimates_; }
+  long step() const { return step_; }
+
+ private:
+  const FilterOptions options_;
+  DpfMaster master_;
+  FaultInjector injector_;
+  PendingMotion pending_;
+  DpfFeedback feedback_;
+  std::vector<DpfLocalEstimate> estimates_;
+  long step_ = 0;
+  FilterStats stats_;
+};
+
 class DistributedFilter : public SlamFilter {
  public:
   explicit DistributedFilter(const FilterOptions& options);
@@ -36,23 +66,20 @@ class DistributedFilter : public SlamFilter {
   std::vector<WeightedPose> particles() const override;
   FilterStats stats() const override;
 
-  const DpfMaster& master() const { return master_; }
+  const DpfMaster& master() const { return coordinator_.master(); }
   const DpfLocalFilter& local(int i) const { return *locals_[i]; }
-  const std::vector<DpfLocalEstimate>& lastEstimates() const { return estimates_; }
+  const std::vector<DpfLocalEstimate>& lastEstimates() const {
+    return coordinator_.lastEstimates();
+  }
 
  private:
   /// Steps every local filter, in worker threads when configured; results in index order.
-  void stepLocals(const DpfStepInput& input, const std::vector<Pose2>& injected);
+  std::vector<DpfLocalEstimate> stepLocals(const DpfStepInput& input,
+                                           const std::vector<Pose2>& injected);
 
   const FilterOptions options_;
   std::vector<std::unique_ptr<DpfLocalFilter>> locals_;
-  DpfMaster master_;
-  FaultInjector injector_;
-  PendingMotion pending_;
-  DpfFeedback feedback_;
-  std::vector<DpfLocalEstimate> estimates_;
-  long step_ = 0;
-  FilterStats stats_;
+  DpfCoordinator coordinator_;
 };
 
 /// Converts a local filter's best map into landmark estimates.

@@ -14,8 +14,8 @@ struct FaultInjectorOptions {
   bool enabled = false;
   int start_step = 1000;           // first filter step (1-based count of updates) disturbed
   int local_index = 0;             // dpf: the local filter whose process is disturbed
-  double sigma_xy_m = 0.5;         // per-step N(0, sigma^2) added to dx and dy of the increment
-  double sigma_theta_rad = 0.05;   // ... and to dtheta
+  double sigma_xy_m = 2.0;         // per-step N(0, sigma^2) added to dx and dy of the increment
+  double sigma_theta_rad = 0.2;    // ... and to dtheta
 };
 
 /// The distributed filter: local particle filters over blocks of landmarks and a master
