@@ -34,6 +34,7 @@ struct DpfOptions {
   double fault_neff_ratio = 0.02;  // Neff / particles below this: suspect
   double suspect_weight = 0.05;    // a suspect local's weight is multiplied by this
   int isolate_after_steps = 3;     // consecutive suspect steps before isolation + re-init
+  double step_timeout_s = 10.0;    // dpf_master_node: wait this long for every local's answer
   FaultInjectorOptions fault;
 };
 
