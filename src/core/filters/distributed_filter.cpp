@@ -44,6 +44,7 @@ void validate(const DpfOptions& o) {
     throw std::invalid_argument("dpf.fusion = '" + o.fusion + "' is not one of information, average");
   }
   require("dpf.mix_innovation", o.mix_innovation, 0.0, 1.0);
+  require("dpf.feedback_inflation", o.feedback_inflation, 1.0, 100.0);
   require("dpf.innovation_smoothing", o.innovation_smoothing, 1e-3, 1.0);
   require("dpf.fault_nis", o.fault_nis, 0.0, 1e9);
   require("dpf.fault_neff_ratio", o.fault_neff_ratio, 0.0, 1.0);

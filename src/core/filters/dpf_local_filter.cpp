@@ -142,7 +142,8 @@ void DpfLocalFilter::applyFeedback(const DpfFeedback& feedback) {
   Pose2 mean;
   Eigen::Matrix3d covariance;
   poseMoments(poses, weights_, &mean, &covariance);
-  const Eigen::Matrix3d target = regularised(feedback.covariance);
+  const Eigen::Matrix3d target =
+      regularised(options_.dpf.feedback_inflation * feedback.covariance);
   const Eigen::Matrix3d own = regularised(covariance);
   const Eigen::Matrix3d l_target = target.llt().matrixL();
   const Eigen::Matrix3d l_own = own.llt().matrixL();

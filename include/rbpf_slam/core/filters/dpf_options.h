@@ -29,6 +29,7 @@ struct DpfOptions {
                                        // local learned; average: sum_i w_i x_i (the paper's)
   bool adaptive_covariance = true;  // eqs. 12-13: likelihood covariance from the particle spread
   bool feedback = true;  // give each local filter's particle cloud the master's mean and covariance
+  double feedback_inflation = 1.0;  // the locals' clouds get this times the master covariance
   double innovation_smoothing = 0.3;  // exponential smoothing of each local's mean NIS
   double fault_nis = 8.0;          // smoothed mean NIS (2 dof, expected 2) above this: suspect
   double fault_neff_ratio = 0.02;  // Neff / particles below this: suspect
