@@ -3,7 +3,7 @@
 //  - live (default): rbpf_slam_node's topics, tf and services, with the remote filter;
 //  - ~bag set: reads the bag like offline_slam (same pipeline, as fast as the locals answer)
 //    and writes ~output/{trajectory.tum,landmarks.yaml,summary.json,map.png}, then
-//    ~output/dpf_master.done, and exits.
+//    ~output/dpf_master.done, and exits (on an error: ~output/dpf_master.error with the message).
 #include <ros/ros.h>
 
 #include <exception>
@@ -30,10 +30,16 @@ int runBag(ros::NodeHandle nh, ros::NodeHandle private_nh) {
   rbpf_slam::io::SlamConfig config =
       rb::loadConfigFromParams(private_nh, {"bag", "output", "reference"});
   config.filter.variant = "dpf";
-  auto filter = std::make_unique<rb::RemoteDpfFilter>(nh, config.filter);
-  filter->waitForLocals(config.filter.dpf.step_timeout_s);
-  rb::OfflineRunner runner(config, options, std::move(filter));
-  const auto s = runner.run();
+  rb::OfflineSummary s;
+  try {
+    auto filter = std::make_unique<rb::RemoteDpfFilter>(nh, config.filter);
+    filter->waitForLocals(config.filter.dpf.step_timeout_s);
+    rb::OfflineRunner runner(config, options, std::move(filter));
+    s = runner.run();
+  } catch (const std::exception& e) {
+    std::ofstream(options.output_dir + "/dpf_master.error") << e.what() << "\n";
+    throw;
+  }
   ROS_INFO("dpf_master_node: %ld updates, %d landmarks, %.1f s wall, update %.2f ms mean",
            s.updates, s.landmarks, s.wall_s, s.update_ms_mean);
   std::ofstream(options.output_dir + "/dpf_master.done") << s.updates << "\n";

@@ -7,6 +7,7 @@
 
 #include <cmath>
 #include <fstream>
+#include <iterator>
 #include <string>
 #include <vector>
 
@@ -23,8 +24,35 @@ namespace core = rbpf_slam::core;
 
 bool exists(const std::string& path) { return std::ifstream(path).good(); }
 
+/// Waits for one of the files; returns the one that appeared ("" on timeout).
+std::string waitForEither(const std::string& a, const std::string& b, double wait_s) {
+  const ros::WallTime deadline = ros::WallTime::now() + ros::WallDuration(wait_s);
+  while (ros::ok() && ros::WallTime::now() < deadline) {
+    if (exists(a)) return a;
+    if (exists(b)) return b;
+    ros::WallDuration(0.5).sleep();
+  }
+  return "";
+}
+
+TEST(DpfMultiNode, MasterNamesAMissingLocalFilter) {
+  ros::NodeHandle private_nh("~");
+  std::string workdir, expect_error;
+  double wait_s = 240.0;
+  if (!private_nh.getParam("expect_error", expect_error)) GTEST_SKIP() << "no ~expect_error";
+  ASSERT_TRUE(private_nh.getParam("workdir", workdir));
+  private_nh.getParam("wait", wait_s);
+  const std::string error = workdir + "/master/dpf_master.error";
+  const std::string done = workdir + "/master/dpf_master.done";
+  ASSERT_EQ(waitForEither(error, done, wait_s), error) << "dpf_master_node reported no error";
+  std::ifstream in(error);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find(expect_error), std::string::npos) << text;
+}
+
 TEST(DpfMultiNode, SameTrajectoryAsTheThreadedFilter) {
   ros::NodeHandle private_nh("~");
+  if (private_nh.hasParam("expect_error")) GTEST_SKIP() << "the error case";
   std::string workdir, config_path;
   int seed = 3, fault_start = 50, fault_local = 1;
   double wait_s = 240.0, tolerance_m = 0.01;
@@ -37,12 +65,9 @@ TEST(DpfMultiNode, SameTrajectoryAsTheThreadedFilter) {
   private_nh.getParam("tolerance_m", tolerance_m);
 
   const std::string done = workdir + "/master/dpf_master.done";
-  const ros::WallTime deadline = ros::WallTime::now() + ros::WallDuration(wait_s);
-  while (!exists(done) && ros::ok() && ros::WallTime::now() < deadline) {
-    ros::WallDuration(0.5).sleep();
-  }
-  ASSERT_TRUE(exists(done)) << "dpf_master_node did not finish the bag (no " << done
-                            << "); see its log";
+  const std::string error = workdir + "/master/dpf_master.error";
+  ASSERT_EQ(waitForEither(done, error, wait_s), done)
+      << "dpf_master_node did not finish the bag; see " << error << " and its log";
 
   const io::SlamConfig config = io::loadSlamConfig(
       config_path, {"seed=" + std::to_string(seed), "fault.enabled=true",
