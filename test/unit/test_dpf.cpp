@@ -11,6 +11,7 @@
 #include "rbpf_slam/core/filters/dpf_local_filter.h"
 #include "rbpf_slam/core/filters/dpf_master.h"
 #include "rbpf_slam/core/filters/slam_filter.h"
+#include "rbpf_slam/io/slam_config.h"
 
 namespace rbpf_slam {
 namespace core {
@@ -335,6 +336,34 @@ TEST(DpfOptions, OutOfRangeValuesAreNamed) {
   o = dpfOptions();
   o.dpf.fault.local_index = 3;  // only 3 local filters: 0..2
   EXPECT_THROW(createFilter(o), std::invalid_argument);
+}
+
+TEST(DpfConfig, TheShippedConfigAndItsErrors) {
+  const io::SlamConfig c =
+      io::loadSlamConfig(std::string(RBPF_SOURCE_DIR) + "/config/landmarks_dpf.yaml");
+  EXPECT_EQ(c.filter.variant, "dpf");
+  EXPECT_EQ(c.filter.dpf.local_filters, 3);
+  EXPECT_EQ(c.filter.dpf.weighting, "mixed");
+  EXPECT_EQ(c.filter.dpf.fusion, "information");
+  EXPECT_TRUE(c.filter.dpf.adaptive_covariance);
+  EXPECT_FALSE(c.filter.dpf.fault.enabled);
+  EXPECT_EQ(c.filter.dpf.fault.start_step, 1000);
+  EXPECT_EQ(createFilter(c.filter)->variant(), "dpf");
+  auto errorOf = [](const std::string& yaml) -> std::string {
+    try {
+      io::parseSlamConfig(YAML::Load(yaml), "t.yaml");
+    } catch (const io::ConfigError& e) {
+      return e.what();
+    }
+    return "";
+  };
+  EXPECT_NE(errorOf("variant: dpf\ndpf: {bogus: 1}").find("bogus"), std::string::npos);
+  EXPECT_NE(errorOf("variant: dpf\ndpf: {weighting: votes}").find("weighting"), std::string::npos);
+  EXPECT_NE(errorOf("variant: dpf\ndpf: {local_filters: 0}").find("local_filters"),
+            std::string::npos);
+  EXPECT_NE(errorOf("variant: dpf\nfault: {local_index: 5}").find("fault.local_index"),
+            std::string::npos);
+  EXPECT_EQ(errorOf("variant: fastslam2\nfault: {enabled: true, start_step: 5}"), "");
 }
 
 }  // namespace
