@@ -124,6 +124,34 @@ void readGrid(YamlSection section, core::GridOptions* o) {
   section.finish();
 }
 
+// Ranges are checked by core::validate(DpfOptions).
+void readDpf(YamlSection section, core::DpfOptions* o) {
+  section.read("local_filters", &o->local_filters, 1, 64);
+  section.read("threads", &o->threads, 0, 64);
+  section.read("weighting", &o->weighting, {"innovation", "neff", "mixed"});
+  section.read("fusion", &o->fusion, {"information", "average"});
+  section.read("mix_innovation", &o->mix_innovation, 0.0, 1.0);
+  section.read("adaptive_covariance", &o->adaptive_covariance);
+  section.read("feedback", &o->feedback);
+  section.read("feedback_inflation", &o->feedback_inflation, 1.0, 100.0);
+  section.read("innovation_smoothing", &o->innovation_smoothing, 1e-3, 1.0);
+  section.read("fault_nis", &o->fault_nis, 0.0, 1e9);
+  section.read("fault_neff_ratio", &o->fault_neff_ratio, 0.0, 1.0);
+  section.read("suspect_weight", &o->suspect_weight, 0.0, 1.0);
+  section.read("isolate_after_steps", &o->isolate_after_steps, 1, 1000000);
+  section.read("step_timeout_s", &o->step_timeout_s, 1e-3, 1e6);
+  section.finish();
+}
+
+void readFault(YamlSection section, core::FaultInjectorOptions* o) {
+  section.read("enabled", &o->enabled);
+  section.read("start_step", &o->start_step, 1, 1000000000);
+  section.read("local_index", &o->local_index, 0, 63);
+  section.read("sigma_xy_m", &o->sigma_xy_m, 0.0, 100.0);
+  section.read("sigma_theta_rad", &o->sigma_theta_rad, 0.0, 10.0);
+  section.finish();
+}
+
 void readLaser(YamlSection section, core::LaserExtractorOptions* o) {
   section.read("method", &o->method, {"incremental", "split_and_merge"});
   section.read("sigma_range_m", &o->sigma_range_m, 1e-6, 1.0);
@@ -260,6 +288,8 @@ SlamConfig parseSlamConfigTree(const YAML::Node& root, const std::string& source
   readHinf(top.section("hinf"), &f.hinf);
   readLineSlam(top, &f);
   readGrid(top.section("grid"), &f.grid);
+  readDpf(top.section("dpf"), &f.dpf);
+  readFault(top.section("fault"), &f.dpf.fault);
   readLaser(top.section("laser_features"), &config.laser);
   readScanMatching(top.section("scan_matching"), &config.scan_matching);
   readSonar(top.section("sonar_features"), &config.sonar);

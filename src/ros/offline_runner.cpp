@@ -191,6 +191,12 @@ OfflineRunner::OfflineRunner(const io::SlamConfig& config, const OfflineOptions&
   io::applyMapConfig(config_, &pipeline_.session());
 }
 
+OfflineRunner::OfflineRunner(const io::SlamConfig& config, const OfflineOptions& options,
+                             std::unique_ptr<core::SlamFilter> filter)
+    : config_(config), options_(options), pipeline_(config.pipeline(), std::move(filter)) {
+  io::applyMapConfig(config_, &pipeline_.session());
+}
+
 OfflineSummary OfflineRunner::run() {
   OfflineSummary summary;
   rosbag::Bag bag;

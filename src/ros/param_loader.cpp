@@ -61,7 +61,8 @@ YAML::Node paramsToYaml(const XmlRpc::XmlRpcValue& value) {
   }
 }
 
-io::SlamConfig loadConfigFromParams(const ros::NodeHandle& private_nh) {
+io::SlamConfig loadConfigFromParams(const ros::NodeHandle& private_nh,
+                                    const std::set<std::string>& node_parameters) {
   const std::string ns = private_nh.getNamespace();
   const std::string source = "~ parameters (" + ns + ")";
   XmlRpc::XmlRpcValue tree;
@@ -71,7 +72,7 @@ io::SlamConfig loadConfigFromParams(const ros::NodeHandle& private_nh) {
       throw io::ConfigError(source + ": " + ns + " must be a namespace of parameters");
     }
     for (auto it = tree.begin(); it != tree.end(); ++it) {
-      if (isRosAddedKey(it->first)) continue;
+      if (isRosAddedKey(it->first) || node_parameters.count(it->first)) continue;
       root[it->first] = paramsToYaml(it->second);
     }
   }

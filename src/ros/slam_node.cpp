@@ -51,11 +51,14 @@ const char* describe(core::FrameResult result) {
 
 }  // namespace
 
-SlamNode::SlamNode(ros::NodeHandle nh, ros::NodeHandle private_nh)
+SlamNode::SlamNode(ros::NodeHandle nh, ros::NodeHandle private_nh,
+                   const SlamNodeCustomisation& customisation)
     : nh_(nh),
       private_nh_(private_nh),
-      config_(loadConfigFromParams(private_nh)),
-      pipeline_(config_.pipeline()),
+      config_(loadConfigFromParams(private_nh, customisation.own_parameters)),
+      pipeline_(customisation.make_filter
+                    ? core::SlamPipeline(config_.pipeline(), customisation.make_filter(config_))
+                    : core::SlamPipeline(config_.pipeline())),
       tf_buffer_(ros::Duration(kTfCacheS)),
       tf_listener_(tf_buffer_, nh) {
   const io::RosOptions& ros_options = config_.ros;

@@ -2,6 +2,7 @@
 // Runs the SLAM pipeline over a bag file without a roscore: reads tf, scans, sonar and features
 // straight from the bag, feeds the same SlamPipeline as rbpf_slam_node, writes the results.
 
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -49,6 +50,9 @@ struct OfflineSummary {
 class OfflineRunner {
  public:
   OfflineRunner(const io::SlamConfig& config, const OfflineOptions& options);
+  /// With a filter built elsewhere (dpf_master_node: the local filters in other processes).
+  OfflineRunner(const io::SlamConfig& config, const OfflineOptions& options,
+                std::unique_ptr<core::SlamFilter> filter);
   /// Processes the whole bag and writes trajectory.tum, landmarks.yaml, summary.json and
   /// map.png into the output directory. Throws std::runtime_error with a clear message.
   OfflineSummary run();

@@ -6,6 +6,9 @@
 #include <xmlrpcpp/XmlRpcValue.h>
 #include <yaml-cpp/yaml.h>
 
+#include <set>
+#include <string>
+
 #include "rbpf_slam/io/slam_config.h"
 
 namespace rbpf_slam {
@@ -18,7 +21,9 @@ YAML::Node paramsToYaml(const XmlRpc::XmlRpcValue& value);
 /// Parses the whole private parameter tree of private_nh with io::parseSlamConfig. Parameters
 /// that ROS tools add to a private namespace are skipped. Throws io::ConfigError naming the
 /// namespace and the key.
-io::SlamConfig loadConfigFromParams(const ros::NodeHandle& private_nh);
+/// `node_parameters` are the node's own private parameters (not config keys), also skipped.
+io::SlamConfig loadConfigFromParams(const ros::NodeHandle& private_nh,
+                                    const std::set<std::string>& node_parameters = {});
 
 }  // namespace rosbridge
 }  // namespace rbpf_slam

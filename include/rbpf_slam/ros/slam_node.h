@@ -20,8 +20,10 @@
 #include <tf2_ros/transform_broadcaster.h>
 #include <tf2_ros/transform_listener.h>
 
+#include <functional>
 #include <map>
 #include <memory>
+#include <set>
 #include <string>
 
 #include "rbpf_slam/core/slam/slam_pipeline.h"
@@ -32,12 +34,20 @@
 namespace rbpf_slam {
 namespace rosbridge {
 
+/// How a node built on SlamNode differs from rbpf_slam_node (dpf_master_node).
+struct SlamNodeCustomisation {
+  std::set<std::string> own_parameters;  // private parameters that are not config keys
+  /// Builds the filter from the config (default: core::createFilter).
+  std::function<std::unique_ptr<core::SlamFilter>(const io::SlamConfig&)> make_filter;
+};
+
 /// The rbpf_slam_node: converts incoming messages, hands them to the core, publishes results.
 class SlamNode {
  public:
   /// Reads the config from private_nh's parameters; throws io::ConfigError (bad parameters) or
   /// std::invalid_argument (options the core rejects).
-  SlamNode(ros::NodeHandle nh, ros::NodeHandle private_nh);
+  SlamNode(ros::NodeHandle nh, ros::NodeHandle private_nh,
+           const SlamNodeCustomisation& customisation = SlamNodeCustomisation());
 
   const io::SlamConfig& config() const { return config_; }
 

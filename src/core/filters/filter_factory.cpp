@@ -3,7 +3,9 @@
 #include <string>
 
 #include "rbpf_slam/core/filters/ekf_slam.h"
+#include "rbpf_slam/core/filters/distributed_filter.h"
 #include "rbpf_slam/core/filters/fastslam2.h"
+#include "rbpf_slam/core/filters/fault_injector.h"
 #include "rbpf_slam/core/filters/hinf_fastslam.h"
 #include "rbpf_slam/core/filters/landmark_existence.h"
 #include "rbpf_slam/core/filters/multifilter_smc.h"
@@ -26,7 +28,7 @@ void requireRange(const std::string& name, double value, double min, double max)
 
 std::vector<std::string> availableVariants() {
   return {"fastslam2", "robust_fastslam2", "hinf_fastslam", "multifilter_smc", "ekf_slam",
-          "grid_pf"};
+          "grid_pf", "dpf"};
 }
 
 void validate(const RobustOptions& o) {
@@ -63,10 +65,13 @@ void validate(const FilterOptions& o) {
   validate(o.multifilter);
   validate(o.ekf);
   validate(o.grid);
+  validate(o.dpf);
 }
 
 std::unique_ptr<SlamFilter> createFilter(const FilterOptions& options) {
   validate(options);
+  if (options.dpf.fault.enabled && options.variant != "dpf") return createFaultInjectedFilter(options);
+  if (options.variant == "dpf") return std::make_unique<DistributedFilter>(options);
   if (options.variant == "fastslam2") return std::make_unique<FastSlam2>(options);
   if (options.variant == "robust_fastslam2") return std::make_unique<RobustFastSlam2>(options);
   if (options.variant == "hinf_fastslam") return std::make_unique<HinfFastSlam>(options);

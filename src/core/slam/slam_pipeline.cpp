@@ -1,6 +1,7 @@
 #include "rbpf_slam/core/slam/slam_pipeline.h"
 
 #include <memory>
+#include <utility>
 
 namespace rbpf_slam {
 namespace core {
@@ -20,6 +21,12 @@ SlamPipeline::SlamPipeline(const PipelineOptions& options)
       matcher_(options.scan_matching),
       sonar_extractor_(options.sonar),
       session_(createFilter(options.filter), options.session) {}
+
+SlamPipeline::SlamPipeline(const PipelineOptions& options, std::unique_ptr<SlamFilter> filter)
+    : extractor_(options.laser),
+      matcher_(options.scan_matching),
+      sonar_extractor_(options.sonar),
+      session_(std::move(filter), options.session) {}
 
 void SlamPipeline::reset() {
   session_.reset();

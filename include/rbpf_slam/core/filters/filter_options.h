@@ -3,6 +3,7 @@
 
 #include <string>
 
+#include "rbpf_slam/core/filters/dpf_options.h"
 #include "rbpf_slam/core/filters/estimator_rule.h"
 #include "rbpf_slam/core/filters/line_slam_options.h"
 #include "rbpf_slam/core/grid/grid_options.h"
@@ -69,6 +70,7 @@ struct FilterOptions {
   MultiFilterOptions multifilter;          // variant multifilter_smc
   EkfSlamOptions ekf;                      // variant ekf_slam
   GridOptions grid;                // variant grid_pf
+  DpfOptions dpf;                  // variant dpf (and the fault injector of any variant)
 };
 
 /// Throws std::invalid_argument naming the first out-of-range field and its allowed range.

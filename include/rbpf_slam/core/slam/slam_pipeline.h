@@ -28,6 +28,8 @@ struct PipelineOptions {
 class SlamPipeline {
  public:
   explicit SlamPipeline(const PipelineOptions& options);
+  /// With a filter built elsewhere (e.g. dpf_master_node's remote distributed filter).
+  SlamPipeline(const PipelineOptions& options, std::unique_ptr<SlamFilter> filter);
 
   /// A laser scan taken with the robot at odom_pose (odom frame).
   FrameResult processScan(const RangeScan& scan, const Pose2& odom_pose);

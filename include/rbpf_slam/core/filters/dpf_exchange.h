@@ -1,0 +1,76 @@
+#pragma once
+// The data the local filters and the master filter of the distributed filter exchange, as
+// plain structs: the same step protocol runs between threads or between ROS nodes.
+//
+// Step protocol (step k = 1, 2, ...), identical in both deployments:
+//   1. the master sends DpfStepInput{k, motion_k, features_k, feedback_{k-1}} to every local;
+//   2. local i applies feedback_{k-1} (re-initialise if listed, else shift onto the master
+//      mean when feedback is on), predicts with motion_k, updates with its block of
+//      features_k, and answers DpfLocalEstimate{i, k, ...};
+//   3. the master fuses the N estimates of step k (in index order) into DpfMasterOutput_k,
+//      whose feedback goes out with step k + 1.
+// Each local filter owns its generator, seeded from (seed, index), so the result does not
+// depend on which thread or process runs which local filter.
+
+#include <Eigen/Core>
+#include <vector>
+
+#include "rbpf_slam/core/features/feature_types.h"
+#include "rbpf_slam/core/geometry.h"
+#include "rbpf_slam/core/motion/motion_model.h"
+
+namespace rbpf_slam {
+namespace core {
+
+/// What the master tells the local filters after fusing a step.
+struct DpfFeedback {
+  long step = 0;  // the step this feedback was fused from (0: none yet)
+  Pose2 mean = Pose2::Zero();
+  Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
+  std::vector<int> reinitialise;  // indices of isolated local filters to redraw from the master
+};
+
+/// One step of input, the same for every local filter.
+struct DpfStepInput {
+  long step = 0;
+  MotionInput motion;
+  FeatureSet features;  // all features: each local filter takes its own block
+  DpfFeedback feedback;
+};
+
+/// A local filter's answer for one step.
+struct DpfLocalEstimate {
+  int index = 0;
+  long step = 0;
+  Pose2 mean = Pose2::Zero();  // posterior (after this step's observations)
+  Eigen::Matrix3d covariance = Eigen::Matrix3d::Identity();
+  Pose2 prior_mean = Pose2::Zero();  // predicted, before this step's observations
+  Eigen::Matrix3d prior_covariance = Eigen::Matrix3d::Identity();
+  double neff = 0.0;          // before resampling
+  int particles = 1;
+  double nis_sum = 0.0;       // sum over this step's observations of the normalised innovation^2
+  int innovations = 0;        // observations of known landmarks this step
+  int new_landmarks = 0;
+  int rejected = 0;           // features of this block that were unusable
+  int landmarks = 0;          // in the best particle
+};
+
+/// Per-local bookkeeping of the master (fault detection state).
+struct DpfLocalHealth {
+  double smoothed_nis = 2.0;  // exponential average of the mean NIS (2 dof: expectation 2)
+  int suspect_steps = 0;      // consecutive steps flagged
+  bool suspect = false;
+  long isolations = 0;
+};
+
+/// What the master produced for one step.
+struct DpfMasterOutput {
+  long step = 0;
+  Pose2 mean = Pose2::Zero();
+  Eigen::Matrix3d covariance = Eigen::Matrix3d::Identity();
+  std::vector<double> weights;  // fused weight of each local filter (sum 1)
+  DpfFeedback feedback;
+};
+
+}  // namespace core
+}  // namespace rbpf_slam

@@ -1,0 +1,89 @@
+#pragma once
+// One local filter of the distributed particle filter (Pei et al. 2014): a Rao-Blackwellised
+// particle filter over the robot pose and its own block of point landmarks (ids i mod N), with
+// the FastSLAM 2.0 proposal and the adaptive importance function of eqs. 12-13.
+
+#include <map>
+#include <memory>
+#include <vector>
+
+#include "rbpf_slam/core/filters/dpf_exchange.h"
+#include "rbpf_slam/core/filters/filter_options.h"
+#include "rbpf_slam/core/filters/slam_filter.h"
+#include "rbpf_slam/core/motion/motion_model.h"
+#include "rbpf_slam/core/random.h"
+
+namespace rbpf_slam {
+namespace core {
+
+/// eq. 13 (our reading): the covariance used in the likelihood of one observation is the
+/// measurement noise plus the weighted spread of the particles' innovations under the basic
+/// weights of the first pass: R + sum_j w_j (v_j - v_bar)(v_j - v_bar)^T, v_bar = sum_j w_j v_j.
+/// `weights` are normalised; entries with weight 0 do not contribute.
+Eigen::Matrix2d adaptiveLikelihoodCovariance(const std::vector<Eigen::Vector2d>& innovations,
+                                             const std::vector<double>& weights,
+                                             const Eigen::Matrix2d& measurement_noise);
+
+/// Seed of local filter `index` derived from the filter's seed (splitmix64 of both).
+unsigned long localFilterSeed(unsigned long seed, int index);
+
+class DpfLocalFilter {
+ public:
+  /// A point landmark's EKF in the map frame.
+  struct Landmark {
+    Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+    Eigen::Matrix2d covariance = Eigen::Matrix2d::Identity();
+    int observations = 0;
+  };
+  using Map = std::map<int, Landmark>;  // keyed by landmark id
+  struct Particle {
+    Pose2 pose = Pose2::Zero();
+    std::shared_ptr<const Map> map = std::make_shared<const Map>();
+  };
+
+  DpfLocalFilter(const FilterOptions& options, int index);
+
+  int index() const { return index_; }
+  void reset(const Pose2& initial_pose);
+  /// Runs steps 2 of the protocol (dpf_exchange.h) for one input; `injected` is the
+  /// disturbance added to this filter's odometry increment (zero when not faulted).
+  DpfLocalEstimate step(const DpfStepInput& input, const Pose2& injected = Pose2::Zero());
+  /// True when this filter takes features with this landmark id.
+  bool owns(int id) const;
+
+  const std::vector<Particle>& particles() const { return particles_; }
+  const std::vector<double>& weights() const { return weights_; }
+  int bestParticle() const;
+  long reinitialisations() const { return reinitialisations_; }
+
+ private:
+  struct Observation {
+    int id = -1;
+    Eigen::Vector2d z = Eigen::Vector2d::Zero();
+    Eigen::Matrix2d noise = Eigen::Matrix2d::Identity();
+  };
+  std::vector<Observation> prepare(const FeatureSet& features, int* rejected) const;
+  void applyFeedback(const DpfFeedback& feedback);
+  void reinitialise(const DpfFeedback& feedback);
+  /// Weights (eq. 12, adaptive covariance of eq. 13 when enabled), NIS, resampling.
+  DpfLocalEstimate finishStep(long step,
+                              const std::vector<std::vector<Eigen::Vector2d>>& innovations,
+                              const std::vector<std::vector<Eigen::Matrix2d>>& model_cov,
+                              const std::vector<bool>& known, DpfLocalEstimate* estimate);
+
+  const FilterOptions options_;
+  const int index_;
+  std::unique_ptr<MotionModel> motion_model_;
+  Rng rng_;
+  std::vector<Particle> particles_;
+  std::vector<double> weights_;
+  std::vector<double> log_weights_;  // since the last resampling
+  // This step's per-particle Gaussians: predicted (motion only) and proposal (after the
+  // observations), for the prior and posterior moments the master fuses.
+  std::vector<Pose2> prior_means_, proposal_means_;
+  std::vector<Eigen::Matrix3d> prior_covs_, proposal_covs_;
+  long reinitialisations_ = 0;
+};
+
+}  // namespace core
+}  // namespace rbpf_slam

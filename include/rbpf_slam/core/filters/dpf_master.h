@@ -1,0 +1,48 @@
+#pragma once
+// The master filter of the distributed particle filter (Pei et al. 2014, section 3.2): fuses
+// the local filters' pose estimates with weights from their innovations, their Neff, or a mix
+// of both, and isolates a local filter whose innovation or Neff shows a fault.
+
+#include <vector>
+
+#include "rbpf_slam/core/filters/dpf_exchange.h"
+#include "rbpf_slam/core/filters/dpf_options.h"
+
+namespace rbpf_slam {
+namespace core {
+
+/// Innovation method (Won et al., the paper's eq. 4 reference): w_i proportional to
+/// 1 / (mean NIS of local i); a larger innovation means a worse local filter.
+std::vector<double> innovationWeights(const std::vector<double>& mean_nis);
+/// Neff method (eqs. 15-16): w_i proportional to Neff_i / particles_i.
+std::vector<double> neffWeights(const std::vector<double>& neff_ratio);
+/// Mixed (the paper's proposal): alpha * innovation weights + (1 - alpha) * Neff weights.
+std::vector<double> mixedWeights(const std::vector<double>& innovation,
+                                 const std::vector<double>& neff, double alpha);
+
+class DpfMaster {
+ public:
+  explicit DpfMaster(const DpfOptions& options);
+  void reset(const Pose2& initial_pose);
+  /// Fuses one step's estimates (one per local filter, any order); `motion` is the step's
+  /// odometry increment (the master's prior is its last mean moved by it). Throws
+  /// std::invalid_argument when an estimate is missing, duplicated or from another step.
+  DpfMasterOutput fuse(long step, const MotionInput& motion,
+                       const std::vector<DpfLocalEstimate>& estimates);
+  const std::vector<DpfLocalHealth>& health() const { return health_; }
+  const DpfMasterOutput& last() const { return last_; }
+
+ private:
+  /// Information fusion: the master's prior plus, for each local filter, its trust
+  /// min(1, N w_i) times the information it gained this step (posterior minus prior, in
+  /// information form). Returns false when the result is not positive definite.
+  bool fuseInformation(const Pose2& prior_mean, const std::vector<const DpfLocalEstimate*>& locals,
+                       const std::vector<double>& weights, DpfMasterOutput* out) const;
+
+  const DpfOptions options_;
+  std::vector<DpfLocalHealth> health_;
+  DpfMasterOutput last_;
+};
+
+}  // namespace core
+}  // namespace rbpf_slam

@@ -1,0 +1,333 @@
+#include "rbpf_slam/core/filters/dpf_local_filter.h"
+
+#include <Eigen/Cholesky>
+#include <Eigen/LU>
+#include <cmath>
+
+#include "rbpf_slam/core/filters/measurement_models.h"
+#include "rbpf_slam/core/filters/resampling.h"
+
+namespace rbpf_slam {
+namespace core {
+namespace {
+
+Eigen::Matrix2d symmetric(const Eigen::Matrix2d& m) { return 0.5 * (m + m.transpose()); }
+
+/// Weighted mean and covariance of poses (circular mean for the heading).
+void poseMoments(const std::vector<Pose2>& poses, const std::vector<double>& weights, Pose2* mean,
+                 Eigen::Matrix3d* covariance) {
+  double x = 0.0, y = 0.0, c = 0.0, s = 0.0;
+  for (size_t j = 0; j < poses.size(); ++j) {
+    x += weights[j] * poses[j].x();
+    y += weights[j] * poses[j].y();
+    c += weights[j] * std::cos(poses[j].z());
+    s += weights[j] * std::sin(poses[j].z());
+  }
+  *mean = Pose2(x, y, std::atan2(s, c));
+  covariance->setZero();
+  for (size_t j = 0; j < poses.size(); ++j) {
+    Pose2 d = poses[j] - *mean;
+    d.z() = wrapAngle(d.z());
+    *covariance += weights[j] * d * d.transpose();
+  }
+}
+
+/// Moments of a Gaussian mixture: sum_j w_j N(means_j, covariances_j).
+void mixtureMoments(const std::vector<Pose2>& means, const std::vector<Eigen::Matrix3d>& covariances,
+                    const std::vector<double>& weights, Pose2* mean, Eigen::Matrix3d* covariance) {
+  poseMoments(means, weights, mean, covariance);
+  for (size_t j = 0; j < means.size(); ++j) *covariance += weights[j] * covariances[j];
+}
+
+Eigen::Matrix3d regularised(const Eigen::Matrix3d& m) {
+  return 0.5 * (m + m.transpose()) + Eigen::Vector3d(1e-8, 1e-8, 1e-10).asDiagonal().toDenseMatrix();
+}
+
+}  // namespace
+
+Eigen::Matrix2d adaptiveLikelihoodCovariance(const std::vector<Eigen::Vector2d>& innovations,
+                                             const std::vector<double>& weights,
+                                             const Eigen::Matrix2d& measurement_noise) {
+  Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+  double total = 0.0;
+  for (size_t j = 0; j < innovations.size(); ++j) {
+    mean += weights[j] * innovations[j];
+    total += weights[j];
+  }
+  if (!(total > 0.0)) return measurement_noise;
+  mean /= total;
+  Eigen::Matrix2d spread = Eigen::Matrix2d::Zero();
+  for (size_t j = 0; j < innovations.size(); ++j) {
+    const Eigen::Vector2d d = innovations[j] - mean;
+    spread += weights[j] * d * d.transpose();
+  }
+  return symmetric(measurement_noise + spread / total);
+}
+
+unsigned long localFilterSeed(unsigned long seed, int index) {
+  // splitmix64 of the seed mixed with the index: independent streams per local filter.
+  uint64_t z = static_cast<uint64_t>(seed) + 0x9e3779b97f4a7c15ULL * (index + 1);
+  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+  z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+  return static_cast<unsigned long>(z ^ (z >> 31));
+}
+
+DpfLocalFilter::DpfLocalFilter(const FilterOptions& options, int index)
+    : options_(options), index_(index), motion_model_(createMotionModel(options.motion)) {
+  reset(Pose2::Zero());
+}
+
+void DpfLocalFilter::reset(const Pose2& initial_pose) {
+  rng_.seed(localFilterSeed(options_.seed, index_));
+  particles_.assign(options_.particles, Particle());
+  for (auto& p : particles_) p.pose = initial_pose;
+  weights_.assign(options_.particles, 1.0 / options_.particles);
+  log_weights_.assign(options_.particles, 0.0);
+  reinitialisations_ = 0;
+}
+
+bool DpfLocalFilter::owns(int id) const {
+  return id >= 0 && id % options_.dpf.local_filters == index_;
+}
+
+int DpfLocalFilter::bestParticle() const {
+  int best = 0;
+  for (size_t j = 1; j < weights_.size(); ++j) {
+    if (weights_[j] > weights_[best]) best = static_cast<int>(j);
+  }
+  return best;
+}
+
+std::vector<DpfLocalFilter::Observation> DpfLocalFilter::prepare(const FeatureSet& features,
+                                                                 int* rejected) const {
+  std::vector<Observation> out;
+  const MeasurementOptions& m = options_.measurement;
+  const Eigen::Matrix2d floor =
+      Eigen::Vector2d(m.sigma_range_m * m.sigma_range_m, m.sigma_bearing_rad * m.sigma_bearing_rad)
+          .asDiagonal();
+  for (const auto& point : features.points) {
+    if (point.id >= 0 && !owns(point.id)) continue;  // another local filter's block
+    if (point.id < 0 || !std::isfinite(point.range) || !std::isfinite(point.bearing) ||
+        point.range <= 0.0) {
+      // Unknown identities: every local filter counts them (blocks need known ids).
+      ++*rejected;
+      continue;
+    }
+    Observation o;
+    o.id = point.id;
+    o.z << point.range, wrapAngle(point.bearing);
+    o.noise = floor;
+    const Eigen::Matrix2d given = symmetric(point.covariance);
+    if (m.use_feature_covariance && given.allFinite() && given(0, 0) >= 0.0 && given(1, 1) >= 0.0) {
+      o.noise += given * m.covariance_inflation;
+    }
+    out.push_back(o);
+  }
+  return out;
+}
+
+void DpfLocalFilter::applyFeedback(const DpfFeedback& feedback) {
+  if (feedback.step <= 0) return;
+  for (int i : feedback.reinitialise) {
+    if (i == index_) {
+      reinitialise(feedback);
+      return;
+    }
+  }
+  if (!options_.dpf.feedback) return;
+  // The cloud gets the master's mean and covariance: p' = m + A (p - mean), A A^T scaling the
+  // cloud's covariance onto the master's (Cholesky factors); particles keep their maps.
+  std::vector<Pose2> poses;
+  for (const auto& p : particles_) poses.push_back(p.pose);
+  Pose2 mean;
+  Eigen::Matrix3d covariance;
+  poseMoments(poses, weights_, &mean, &covariance);
+  const Eigen::Matrix3d target =
+      regularised(options_.dpf.feedback_inflation * feedback.covariance);
+  const Eigen::Matrix3d own = regularised(covariance);
+  const Eigen::Matrix3d l_target = target.llt().matrixL();
+  const Eigen::Matrix3d l_own = own.llt().matrixL();
+  Eigen::Matrix3d a = l_target * l_own.inverse();
+  if (!a.allFinite()) a.setIdentity();
+  for (auto& p : particles_) {
+    Pose2 d = p.pose - mean;
+    d.z() = wrapAngle(d.z());
+    p.pose = feedback.mean + a * d;
+    p.pose.z() = wrapAngle(p.pose.z());
+  }
+}
+
+void DpfLocalFilter::reinitialise(const DpfFeedback& feedback) {
+  // Poses redrawn around the master's estimate; every particle keeps the best map.
+  const std::shared_ptr<const Map> map = particles_[bestParticle()].map;
+  Eigen::Matrix3d covariance = 0.5 * (feedback.covariance + feedback.covariance.transpose());
+  covariance += Eigen::Vector3d(1e-6, 1e-6, 1e-8).asDiagonal();
+  for (auto& p : particles_) {
+    p.pose = sampleMultivariate<3>(rng_, feedback.mean, covariance);
+    p.pose.z() = wrapAngle(p.pose.z());
+    p.map = map;
+  }
+  weights_.assign(particles_.size(), 1.0 / particles_.size());
+  log_weights_.assign(particles_.size(), 0.0);
+  ++reinitialisations_;
+}
+
+DpfLocalEstimate DpfLocalFilter::step(const DpfStepInput& input, const Pose2& injected) {
+  applyFeedback(input.feedback);
+  MotionInput motion = input.motion;
+  motion.delta += injected;
+  motion.delta.z() = wrapAngle(motion.delta.z());
+  DpfLocalEstimate estimate;
+  const std::vector<Observation> observations = prepare(input.features, &estimate.rejected);
+  const size_t n = particles_.size(), m = observations.size();
+
+  // Innovations at each particle's predicted mean and their model covariance (eq. 12's
+  // constant): measurement noise plus the linearised pose and landmark uncertainty.
+  std::vector<std::vector<Eigen::Vector2d>> v(m, std::vector<Eigen::Vector2d>(n));
+  std::vector<std::vector<Eigen::Matrix2d>> model_cov(m, std::vector<Eigen::Matrix2d>(n));
+  std::vector<bool> known(m, true);
+  for (size_t o = 0; o < m; ++o) {
+    for (const auto& p : particles_) known[o] = known[o] && p.map->count(observations[o].id);
+  }
+  prior_means_.assign(n, Pose2::Zero());
+  prior_covs_.assign(n, Eigen::Matrix3d::Zero());
+  proposal_means_.assign(n, Pose2::Zero());
+  proposal_covs_.assign(n, Eigen::Matrix3d::Zero());
+  for (size_t j = 0; j < n; ++j) {
+    Particle& p = particles_[j];
+    if (m == 0) {
+      p.pose = motion_model_->sample(p.pose, motion, rng_);
+      proposal_means_[j] = prior_means_[j] = p.pose;
+      continue;
+    }
+    const Pose2 mu = motion_model_->mean(p.pose, motion);
+    const Eigen::Matrix3d sigma = motion_model_->covariance(p.pose, motion) +
+                                  Eigen::Vector3d(1e-10, 1e-10, 1e-12).asDiagonal().toDenseMatrix();
+    prior_means_[j] = mu;
+    prior_covs_[j] = sigma;
+    // FastSLAM 2.0 proposal: the motion prior refined by every known landmark, at mu.
+    Eigen::Matrix3d information = sigma.inverse();
+    Eigen::Vector3d correction = Eigen::Vector3d::Zero();
+    for (size_t o = 0; o < m; ++o) {
+      auto it = p.map->find(observations[o].id);
+      if (it == p.map->end()) continue;
+      const Prediction pred = predictPoint(mu, it->second.mean);
+      const Eigen::Matrix2d q = symmetric(pred.h_landmark * it->second.covariance *
+                                              pred.h_landmark.transpose() +
+                                          observations[o].noise);
+      const Eigen::Matrix2d q_inv = q.inverse();
+      v[o][j] = innovation(observations[o].z, pred.z);
+      model_cov[o][j] = symmetric(q + pred.h_pose * sigma * pred.h_pose.transpose());
+      information += pred.h_pose.transpose() * q_inv * pred.h_pose;
+      correction += pred.h_pose.transpose() * q_inv * v[o][j];
+    }
+    const Eigen::Matrix3d proposal_cov = information.inverse();
+    Pose2 proposal_mean = mu + proposal_cov * correction;
+    proposal_mean.z() = wrapAngle(proposal_mean.z());
+    proposal_means_[j] = proposal_mean;
+    proposal_covs_[j] = 0.5 * (proposal_cov + proposal_cov.transpose());
+    p.pose = sampleMultivariate<3>(rng_, proposal_mean, proposal_covs_[j]);
+    p.pose.z() = wrapAngle(p.pose.z());
+    // Landmark EKFs at the sampled pose; unseen ids start new landmarks.
+    auto map = std::make_shared<Map>(*p.map);
+    for (const auto& obs : observations) {
+      auto it = map->find(obs.id);
+      if (it == map->end()) {
+        Eigen::Matrix2d jacobian;
+        Landmark lm;
+        lm.mean = pointFromObservation(p.pose, obs.z, &jacobian);
+        lm.covariance = symmetric(jacobian * obs.noise * jacobian.transpose());
+        lm.observations = 1;
+        (*map)[obs.id] = lm;
+        continue;
+      }
+      Landmark& lm = it->second;
+      const Prediction pred = predictPoint(p.pose, lm.mean);
+      const Eigen::Matrix2d s =
+          symmetric(pred.h_landmark * lm.covariance * pred.h_landmark.transpose() + obs.noise);
+      const Eigen::Matrix2d gain = lm.covariance * pred.h_landmark.transpose() * s.inverse();
+      lm.mean += gain * innovation(obs.z, pred.z);
+      lm.covariance = symmetric((Eigen::Matrix2d::Identity() - gain * pred.h_landmark) *
+                                lm.covariance);
+      ++lm.observations;
+    }
+    p.map = map;
+  }
+  for (size_t o = 0; o < m; ++o) estimate.new_landmarks += known[o] ? 0 : 1;
+  return finishStep(input.step, v, model_cov, known, &estimate);
+}
+
+DpfLocalEstimate DpfLocalFilter::finishStep(
+    long step, const std::vector<std::vector<Eigen::Vector2d>>& innovations,
+    const std::vector<std::vector<Eigen::Matrix2d>>& model_cov, const std::vector<bool>& known,
+    DpfLocalEstimate* estimate) {
+  const size_t n = particles_.size(), m = innovations.size();
+  mixtureMoments(prior_means_, prior_covs_, weights_, &estimate->prior_mean,
+                 &estimate->prior_covariance);
+  // eq. 12 with the constant (model) covariance: the basic weights of this step.
+  std::vector<double> basic_log(n, 0.0), basic;
+  for (size_t o = 0; o < m; ++o) {
+    if (!known[o]) continue;
+    for (size_t j = 0; j < n; ++j) {
+      const Eigen::Matrix2d& c = model_cov[o][j];
+      basic_log[j] += -0.5 * (innovations[o][j].dot(c.ldlt().solve(innovations[o][j])) +
+                              std::log(std::max(c.determinant(), 1e-300)));
+    }
+  }
+  normalizeLogWeights(basic_log, &basic);
+  std::vector<double> step_log = basic_log;
+  for (size_t o = 0; o < m; ++o) {
+    if (!known[o]) continue;
+    // The master's innovation measure: NIS of the weighted mean innovation.
+    Eigen::Vector2d mean_v = Eigen::Vector2d::Zero();
+    Eigen::Matrix2d mean_c = Eigen::Matrix2d::Zero();
+    for (size_t j = 0; j < n; ++j) {
+      mean_v += basic[j] * innovations[o][j];
+      mean_c += basic[j] * model_cov[o][j];
+    }
+    // The predictive covariance of the particle mixture: model covariance plus spread.
+    mean_c += adaptiveLikelihoodCovariance(innovations[o], basic, Eigen::Matrix2d::Zero());
+    estimate->nis_sum += mean_v.dot(mean_c.ldlt().solve(mean_v));
+    ++estimate->innovations;
+  }
+  if (options_.dpf.adaptive_covariance && m > 0) {
+    // eq. 13: recompute the likelihood covariance from the particles' spread, then eq. 12.
+    std::fill(step_log.begin(), step_log.end(), 0.0);
+    for (size_t o = 0; o < m; ++o) {
+      if (!known[o]) continue;
+      const Eigen::Matrix2d spread =
+          adaptiveLikelihoodCovariance(innovations[o], basic, Eigen::Matrix2d::Zero());
+      for (size_t j = 0; j < n; ++j) {
+        const Eigen::Matrix2d c = model_cov[o][j] + spread;
+        step_log[j] += -0.5 * (innovations[o][j].dot(c.ldlt().solve(innovations[o][j])) +
+                               std::log(std::max(c.determinant(), 1e-300)));
+      }
+    }
+  }
+  for (size_t j = 0; j < n; ++j) log_weights_[j] += step_log[j];
+  normalizeLogWeights(log_weights_, &weights_);
+  estimate->neff = effectiveSampleSize(weights_);
+  Pose2 posterior_mean;
+  Eigen::Matrix3d posterior_cov;
+  mixtureMoments(proposal_means_, proposal_covs_, weights_, &posterior_mean, &posterior_cov);
+  estimate->particles = static_cast<int>(n);
+  for (size_t j = 0; j < n; ++j) log_weights_[j] = std::log(std::max(weights_[j], 1e-300));
+  if (estimate->neff < options_.resample_threshold * n) {
+    const std::vector<int> drawn = resampleLowVariance(weights_, static_cast<int>(n), rng_);
+    std::vector<Particle> next;
+    next.reserve(n);
+    for (int k : drawn) next.push_back(particles_[k]);
+    particles_ = std::move(next);
+    weights_.assign(n, 1.0 / n);
+    log_weights_.assign(n, 0.0);
+  }
+  estimate->index = index_;
+  estimate->step = step;
+  estimate->mean = posterior_mean;
+  estimate->covariance = posterior_cov;
+  estimate->landmarks = static_cast<int>(particles_[bestParticle()].map->size());
+  return *estimate;
+}
+
+}  // namespace core
+}  // namespace rbpf_slam

@@ -1,0 +1,193 @@
+#include "rbpf_slam/core/filters/dpf_master.h"
+
+#include <Eigen/Eigenvalues>
+#include <Eigen/LU>
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+namespace rbpf_slam {
+namespace core {
+namespace {
+
+std::vector<double> normalised(std::vector<double> w) {
+  double total = 0.0;
+  for (double& x : w) {
+    if (!std::isfinite(x) || x < 0.0) x = 0.0;
+    total += x;
+  }
+  for (double& x : w) x = total > 0.0 ? x / total : 1.0 / w.size();
+  return w;
+}
+
+/// The paper's fusion: x = sum_i w_i x_i (circular mean for the heading), covariance of the
+/// mixture.
+void fuseAverage(const std::vector<const DpfLocalEstimate*>& locals,
+                 const std::vector<double>& weights, DpfMasterOutput* out) {
+  double x = 0.0, y = 0.0, c = 0.0, s = 0.0;
+  for (size_t i = 0; i < locals.size(); ++i) {
+    const Pose2& m = locals[i]->mean;
+    x += weights[i] * m.x();
+    y += weights[i] * m.y();
+    c += weights[i] * std::cos(m.z());
+    s += weights[i] * std::sin(m.z());
+  }
+  out->mean = Pose2(x, y, std::atan2(s, c));
+  out->covariance.setZero();
+  for (size_t i = 0; i < locals.size(); ++i) {
+    Pose2 d = locals[i]->mean - out->mean;
+    d.z() = wrapAngle(d.z());
+    out->covariance += weights[i] * (locals[i]->covariance + d * d.transpose());
+  }
+}
+
+Pose2 difference(const Pose2& a, const Pose2& b) {
+  Pose2 d = a - b;
+  d.z() = wrapAngle(d.z());
+  return d;
+}
+
+Eigen::Matrix3d regularised(const Eigen::Matrix3d& m) {
+  return 0.5 * (m + m.transpose()) + Eigen::Vector3d(1e-8, 1e-8, 1e-10).asDiagonal().toDenseMatrix();
+}
+
+/// The positive semidefinite part of a symmetric matrix.
+Eigen::Matrix3d positivePart(const Eigen::Matrix3d& m) {
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(0.5 * (m + m.transpose()));
+  const Eigen::Vector3d values = eigen.eigenvalues().cwiseMax(0.0);
+  return eigen.eigenvectors() * values.asDiagonal() * eigen.eigenvectors().transpose();
+}
+
+}  // namespace
+
+std::vector<double> innovationWeights(const std::vector<double>& mean_nis) {
+  std::vector<double> w;
+  for (double nis : mean_nis) w.push_back(1.0 / std::max(nis, 1e-6));
+  return normalised(w);
+}
+
+std::vector<double> neffWeights(const std::vector<double>& neff_ratio) {
+  return normalised(neff_ratio);
+}
+
+std::vector<double> mixedWeights(const std::vector<double>& innovation,
+                                 const std::vector<double>& neff, double alpha) {
+  std::vector<double> w(innovation.size());
+  for (size_t i = 0; i < w.size(); ++i) w[i] = alpha * innovation[i] + (1.0 - alpha) * neff[i];
+  return normalised(w);
+}
+
+DpfMaster::DpfMaster(const DpfOptions& options) : options_(options) { reset(Pose2::Zero()); }
+
+void DpfMaster::reset(const Pose2& initial_pose) {
+  health_.assign(options_.local_filters, DpfLocalHealth());
+  last_ = DpfMasterOutput();
+  last_.mean = initial_pose;
+  last_.covariance.setZero();
+  last_.weights.assign(options_.local_filters, 1.0 / options_.local_filters);
+}
+
+DpfMasterOutput DpfMaster::fuse(long step, const MotionInput& motion,
+                                const std::vector<DpfLocalEstimate>& estimates) {
+  const int n = options_.local_filters;
+  std::vector<const DpfLocalEstimate*> by_index(n, nullptr);
+  for (const auto& e : estimates) {
+    if (e.index < 0 || e.index >= n || by_index[e.index] || e.step != step) {
+      throw std::invalid_argument("dpf master: unexpected estimate from local filter " +
+                                  std::to_string(e.index) + " for step " +
+                                  std::to_string(e.step) + " (fusing step " +
+                                  std::to_string(step) + ")");
+    }
+    by_index[e.index] = &e;
+  }
+  for (int i = 0; i < n; ++i) {
+    if (!by_index[i]) {
+      throw std::invalid_argument("dpf master: no estimate from local filter " +
+                                  std::to_string(i) + " for step " + std::to_string(step));
+    }
+  }
+  std::vector<double> nis(n), neff(n);
+  for (int i = 0; i < n; ++i) {
+    const DpfLocalEstimate& e = *by_index[i];
+    DpfLocalHealth& h = health_[i];
+    if (e.innovations > 0) {
+      const double a = options_.innovation_smoothing;
+      h.smoothed_nis = (1.0 - a) * h.smoothed_nis + a * e.nis_sum / e.innovations;
+    }
+    nis[i] = h.smoothed_nis;
+    neff[i] = e.neff / std::max(e.particles, 1);
+  }
+  const std::vector<double> by_innovation = innovationWeights(nis);
+  const std::vector<double> by_neff = neffWeights(neff);
+  std::vector<double> w;
+  if (options_.weighting == "innovation") {
+    w = by_innovation;
+  } else if (options_.weighting == "neff") {
+    w = by_neff;
+  } else {
+    w = mixedWeights(by_innovation, by_neff, options_.mix_innovation);
+  }
+  DpfMasterOutput out;
+  out.step = step;
+  out.feedback.step = step;
+  // Fault detection: what the weighting looks at decides what counts as a fault.
+  const bool watch_innovation = options_.weighting != "neff";
+  const bool watch_neff = options_.weighting != "innovation";
+  for (int i = 0; i < n; ++i) {
+    DpfLocalHealth& h = health_[i];
+    h.suspect = (watch_innovation && nis[i] > options_.fault_nis) ||
+                (watch_neff && neff[i] < options_.fault_neff_ratio);
+    h.suspect_steps = h.suspect ? h.suspect_steps + 1 : 0;
+    if (!h.suspect) continue;
+    w[i] *= options_.suspect_weight;
+    if (h.suspect_steps >= options_.isolate_after_steps) {
+      w[i] = 0.0;
+      out.feedback.reinitialise.push_back(i);
+      h.suspect_steps = 0;
+      h.smoothed_nis = 2.0;
+      ++h.isolations;
+    }
+  }
+  out.weights = normalised(w);
+  const Pose2 prior_mean = compose(last_.mean, motion.delta);
+  if (options_.fusion != "information" || !fuseInformation(prior_mean, by_index, out.weights, &out)) {
+    fuseAverage(by_index, out.weights, &out);
+  }
+  out.feedback.mean = out.mean;
+  out.feedback.covariance = out.covariance;
+  last_ = out;
+  return out;
+}
+
+bool DpfMaster::fuseInformation(const Pose2& prior_mean,
+                                const std::vector<const DpfLocalEstimate*>& locals,
+                                const std::vector<double>& weights, DpfMasterOutput* out) const {
+  const int n = static_cast<int>(locals.size());
+  Eigen::Matrix3d prior_cov = Eigen::Matrix3d::Zero();
+  for (int i = 0; i < n; ++i) prior_cov += weights[i] * locals[i]->prior_covariance;
+  // Linearised at the master's prior: information and information vector relative to it.
+  Eigen::Matrix3d information = regularised(prior_cov).inverse();
+  Eigen::Vector3d vector = Eigen::Vector3d::Zero();
+  for (int i = 0; i < n; ++i) {
+    const DpfLocalEstimate& e = *locals[i];
+    const double trust = std::min(1.0, n * weights[i]);
+    if (e.innovations == 0 || trust <= 0.0) continue;  // it learned nothing this step
+    const Eigen::Matrix3d posterior_info = regularised(e.covariance).inverse();
+    const Eigen::Matrix3d prior_info = regularised(e.prior_covariance).inverse();
+    information += trust * positivePart(posterior_info - prior_info);
+    vector += trust * (posterior_info * difference(e.mean, prior_mean) -
+                       prior_info * difference(e.prior_mean, prior_mean));
+  }
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(information);
+  if (!(eigen.eigenvalues().minCoeff() > 0.0) || !information.allFinite()) return false;
+  out->covariance = information.inverse();
+  const Eigen::Vector3d correction = out->covariance * vector;
+  if (!correction.allFinite()) return false;
+  out->mean = prior_mean + correction;
+  out->mean.z() = wrapAngle(out->mean.z());
+  return true;
+}
+
+}  // namespace core
+}  // namespace rbpf_slam

@@ -1,0 +1,139 @@
+#include "rbpf_slam/io/victoria_park.h"
+
+#include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <stdexcept>
+
+namespace rbpf_slam {
+namespace io {
+namespace {
+
+[[noreturn]] void fail(const std::string& source, std::size_t line, const std::string& why) {
+  throw std::runtime_error(source + ":" + std::to_string(line) + ": " + why);
+}
+
+double number(const std::string& token, const std::string& source, std::size_t line) {
+  char* end = nullptr;
+  const double value = std::strtod(token.c_str(), &end);
+  if (token.empty() || end != token.c_str() + token.size()) {
+    fail(source, line, "'" + token + "' is not a number");
+  }
+  if (!std::isfinite(value)) fail(source, line, "'" + token + "' is not finite");
+  return value;
+}
+
+long index(const std::string& token, const std::string& source, std::size_t line) {
+  char* end = nullptr;
+  const long value = std::strtol(token.c_str(), &end, 10);
+  if (token.empty() || end != token.c_str() + token.size() || value < 0) {
+    fail(source, line, "'" + token + "' is not a non-negative integer index");
+  }
+  return value;
+}
+
+}  // namespace
+
+VictoriaParkLog parseVictoriaPark(std::istream& in, const std::string& source) {
+  VictoriaParkLog log;
+  std::string text;
+  std::size_t line = 0;
+  while (std::getline(in, text)) {
+    ++line;
+    if (!text.empty() && text.back() == '\r') text.pop_back();
+    std::istringstream fields(text);
+    std::vector<std::string> tokens;
+    for (std::string t; fields >> t;) tokens.push_back(t);
+    if (tokens.empty() || tokens[0][0] == '#') continue;
+    const std::string& tag = tokens[0];
+    if (tag == "ODOMETRY") {
+      if (tokens.size() != 12) {
+        fail(source, line, "ODOMETRY needs 11 fields (i j dx dy dtheta + 6 covariance terms), "
+                           "got " + std::to_string(tokens.size() - 1));
+      }
+      VictoriaOdometry o;
+      o.line = line;
+      o.from = index(tokens[1], source, line);
+      o.to = index(tokens[2], source, line);
+      double v[9];
+      for (int k = 0; k < 9; ++k) v[k] = number(tokens[3 + k], source, line);
+      o.delta = core::Pose2(v[0], v[1], core::wrapAngle(v[2]));
+      o.covariance << v[3], v[4], v[5], v[4], v[6], v[7], v[5], v[7], v[8];
+      if (!log.odometry.empty() && log.odometry.back().to != o.from) {
+        fail(source, line, "ODOMETRY " + std::to_string(o.from) + " -> " + std::to_string(o.to) +
+                               " does not continue from pose " +
+                               std::to_string(log.odometry.back().to));
+      }
+      log.odometry.push_back(o);
+    } else if (tag == "LANDMARK") {
+      if (tokens.size() != 8) {
+        fail(source, line, "LANDMARK needs 7 fields (i l dx dy + 3 covariance terms), got " +
+                               std::to_string(tokens.size() - 1));
+      }
+      VictoriaLandmark l;
+      l.line = line;
+      l.pose = index(tokens[1], source, line);
+      const long tree = index(tokens[2], source, line);
+      if (tree > 2147483647L) fail(source, line, "tree id too large");
+      l.tree = static_cast<int>(tree);
+      double v[5];
+      for (int k = 0; k < 5; ++k) v[k] = number(tokens[3 + k], source, line);
+      l.position << v[0], v[1];
+      l.covariance << v[2], v[3], v[3], v[4];
+      if (l.position.norm() <= 0.0) fail(source, line, "a tree at the sensor (zero range)");
+      log.landmarks.push_back(l);
+    } else {
+      fail(source, line, "unknown record '" + tag + "' (expected ODOMETRY or LANDMARK)");
+    }
+  }
+  if (log.odometry.empty()) throw std::runtime_error(source + ": no ODOMETRY line");
+  return log;
+}
+
+VictoriaParkLog loadVictoriaPark(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error(path + ": cannot be opened");
+  return parseVictoriaPark(in, path);
+}
+
+std::vector<VictoriaPose> victoriaParkPoses(const VictoriaParkLog& log, std::size_t* orphans) {
+  std::vector<VictoriaPose> poses;
+  std::map<long, std::size_t> position;
+  VictoriaPose first;
+  first.index = log.odometry.front().from;
+  poses.push_back(first);
+  position[first.index] = 0;
+  for (const auto& o : log.odometry) {
+    VictoriaPose next;
+    next.index = o.to;
+    next.odometry = core::compose(poses.back().odometry, o.delta);
+    position[o.to] = poses.size();
+    poses.push_back(next);
+  }
+  *orphans = 0;
+  for (const auto& l : log.landmarks) {
+    auto it = position.find(l.pose);
+    if (it == position.end()) {
+      ++*orphans;
+      continue;
+    }
+    poses[it->second].landmarks.push_back(l);
+  }
+  return poses;
+}
+
+void toRangeBearing(const VictoriaLandmark& landmark, double* range, double* bearing,
+                    Eigen::Matrix2d* covariance) {
+  const double x = landmark.position.x(), y = landmark.position.y();
+  const double r2 = x * x + y * y, r = std::sqrt(r2);
+  *range = r;
+  *bearing = std::atan2(y, x);
+  Eigen::Matrix2d j;
+  j << x / r, y / r, -y / r2, x / r2;
+  *covariance = j * landmark.covariance * j.transpose();
+}
+
+}  // namespace io
+}  // namespace rbpf_slam

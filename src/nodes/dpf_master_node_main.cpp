@@ -1,0 +1,69 @@
+// dpf_master_node: the master filter of the distributed filter, its local filters being
+// dpf_local_node processes (include/rbpf_slam/ros/dpf_nodes.h). Two modes:
+//  - live (default): rbpf_slam_node's topics, tf and services, with the remote filter;
+//  - ~bag set: reads the bag like offline_slam (same pipeline, as fast as the locals answer)
+//    and writes ~output/{trajectory.tum,landmarks.yaml,summary.json,map.png}, then
+//    ~output/dpf_master.done, and exits (on an error: ~output/dpf_master.error with the message).
+#include <ros/ros.h>
+
+#include <exception>
+#include <fstream>
+#include <memory>
+#include <string>
+
+#include "rbpf_slam/ros/dpf_nodes.h"
+#include "rbpf_slam/ros/offline_runner.h"
+#include "rbpf_slam/ros/param_loader.h"
+#include "rbpf_slam/ros/slam_node.h"
+
+namespace {
+
+namespace rb = rbpf_slam::rosbridge;
+
+int runBag(ros::NodeHandle nh, ros::NodeHandle private_nh) {
+  rb::OfflineOptions options;
+  private_nh.getParam("bag", options.bag_path);
+  private_nh.getParam("output", options.output_dir);
+  private_nh.getParam("reference", options.reference_path);
+  options.progress = false;
+  if (options.output_dir.empty()) throw std::invalid_argument("~output is required with ~bag");
+  rbpf_slam::io::SlamConfig config =
+      rb::loadConfigFromParams(private_nh, {"bag", "output", "reference"});
+  config.filter.variant = "dpf";
+  rb::OfflineSummary s;
+  try {
+    auto filter = std::make_unique<rb::RemoteDpfFilter>(nh, config.filter);
+    filter->waitForLocals(config.filter.dpf.step_timeout_s);
+    rb::OfflineRunner runner(config, options, std::move(filter));
+    s = runner.run();
+  } catch (const std::exception& e) {
+    std::ofstream(options.output_dir + "/dpf_master.error") << e.what() << "\n";
+    throw;
+  }
+  ROS_INFO("dpf_master_node: %ld updates, %d landmarks, %.1f s wall, update %.2f ms mean",
+           s.updates, s.landmarks, s.wall_s, s.update_ms_mean);
+  std::ofstream(options.output_dir + "/dpf_master.done") << s.updates << "\n";
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  ros::init(argc, argv, "dpf_master_node");
+  ros::NodeHandle nh, private_nh("~");
+  try {
+    if (private_nh.hasParam("bag")) return runBag(nh, private_nh);
+    rb::SlamNodeCustomisation custom;
+    custom.make_filter = [nh](const rbpf_slam::io::SlamConfig& config) {
+      rbpf_slam::core::FilterOptions options = config.filter;
+      options.variant = "dpf";
+      return std::make_unique<rb::RemoteDpfFilter>(nh, options);
+    };
+    rb::SlamNode node(nh, private_nh, custom);
+    ros::spin();
+  } catch (const std::exception& e) {
+    ROS_FATAL_STREAM("dpf_master_node: " << e.what());
+    return 1;
+  }
+  return 0;
+}

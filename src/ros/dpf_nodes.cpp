@@ -1,0 +1,320 @@
+#include "rbpf_slam/ros/dpf_nodes.h"
+
+#include <algorithm>
+#include <set>
+#include <sstream>
+#include <stdexcept>
+
+#include "rbpf_slam/ros/param_loader.h"
+
+namespace rbpf_slam {
+namespace rosbridge {
+namespace {
+
+template <typename Array>
+core::Pose2 toPose(const Array& a) {
+  return core::Pose2(a[0], a[1], a[2]);
+}
+
+template <typename Array>
+void fromPose(const core::Pose2& p, Array* a) {
+  for (int k = 0; k < 3; ++k) (*a)[k] = p[k];
+}
+
+template <typename Array>
+Eigen::Matrix3d toMatrix(const Array& a) {
+  Eigen::Matrix3d m;
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) m(r, c) = a[3 * r + c];
+  }
+  return m;
+}
+
+template <typename Array>
+void fromMatrix(const Eigen::Matrix3d& m, Array* a) {
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) (*a)[3 * r + c] = m(r, c);
+  }
+}
+
+}  // namespace
+
+DpfStep toMsg(const core::DpfStepInput& input, const core::Pose2& initial_pose,
+              int injected_index, const core::Pose2& injected) {
+  DpfStep msg;
+  msg.header.stamp.fromSec(std::max(0.0, input.motion.stamp));
+  msg.step = input.step;
+  fromPose(initial_pose, &msg.initial_pose);
+  msg.motion_stamp = input.motion.stamp;
+  msg.motion_dt = input.motion.dt;
+  fromPose(input.motion.delta, &msg.motion_delta);
+  msg.motion_noise_scale = input.motion.noise_scale;
+  for (const auto& p : input.features.points) {
+    PointFeature f;
+    f.range = p.range;
+    f.bearing = p.bearing;
+    f.covariance = {p.covariance(0, 0), p.covariance(0, 1), p.covariance(1, 0),
+                    p.covariance(1, 1)};
+    f.id = p.id;
+    msg.points.push_back(f);
+  }
+  msg.feedback_step = input.feedback.step;
+  fromPose(input.feedback.mean, &msg.feedback_mean);
+  fromMatrix(input.feedback.covariance, &msg.feedback_covariance);
+  msg.reinitialise = input.feedback.reinitialise;
+  msg.injected_index = injected_index;
+  fromPose(injected, &msg.injected);
+  return msg;
+}
+
+core::DpfStepInput fromMsg(const DpfStep& msg) {
+  core::DpfStepInput input;
+  input.step = msg.step;
+  input.motion.stamp = msg.motion_stamp;
+  input.motion.dt = msg.motion_dt;
+  input.motion.delta = toPose(msg.motion_delta);
+  input.motion.noise_scale = msg.motion_noise_scale;
+  input.features.stamp = msg.motion_stamp;
+  for (const auto& f : msg.points) {
+    core::PointFeature p;
+    p.range = f.range;
+    p.bearing = f.bearing;
+    p.covariance << f.covariance[0], f.covariance[1], f.covariance[2], f.covariance[3];
+    p.id = f.id;
+    input.features.points.push_back(p);
+  }
+  input.feedback.step = msg.feedback_step;
+  input.feedback.mean = toPose(msg.feedback_mean);
+  input.feedback.covariance = toMatrix(msg.feedback_covariance);
+  input.feedback.reinitialise = msg.reinitialise;
+  return input;
+}
+
+DpfLocalEstimate toMsg(const core::DpfLocalEstimate& e,
+                       const std::vector<core::LandmarkEstimate>& landmarks) {
+  DpfLocalEstimate msg;
+  msg.index = e.index;
+  msg.step = e.step;
+  fromPose(e.mean, &msg.mean);
+  fromMatrix(e.covariance, &msg.covariance);
+  fromPose(e.prior_mean, &msg.prior_mean);
+  fromMatrix(e.prior_covariance, &msg.prior_covariance);
+  msg.neff = e.neff;
+  msg.particles = e.particles;
+  msg.nis_sum = e.nis_sum;
+  msg.innovations = e.innovations;
+  msg.new_landmarks = e.new_landmarks;
+  msg.rejected = e.rejected;
+  msg.landmarks = e.landmarks;
+  for (const auto& l : landmarks) {
+    msg.landmark_ids.push_back(l.id);
+    msg.landmark_means.push_back(l.mean.x());
+    msg.landmark_means.push_back(l.mean.y());
+    for (int k = 0; k < 4; ++k) msg.landmark_covariances.push_back(l.covariance(k / 2, k % 2));
+    msg.landmark_observations.push_back(l.observations);
+  }
+  return msg;
+}
+
+core::DpfLocalEstimate fromMsg(const DpfLocalEstimate& msg) {
+  core::DpfLocalEstimate e;
+  e.index = msg.index;
+  e.step = msg.step;
+  e.mean = toPose(msg.mean);
+  e.covariance = toMatrix(msg.covariance);
+  e.prior_mean = toPose(msg.prior_mean);
+  e.prior_covariance = toMatrix(msg.prior_covariance);
+  e.neff = msg.neff;
+  e.particles = msg.particles;
+  e.nis_sum = msg.nis_sum;
+  e.innovations = msg.innovations;
+  e.new_landmarks = msg.new_landmarks;
+  e.rejected = msg.rejected;
+  e.landmarks = msg.landmarks;
+  return e;
+}
+
+std::vector<core::LandmarkEstimate> landmarksOf(const DpfLocalEstimate& msg) {
+  std::vector<core::LandmarkEstimate> out;
+  const size_t n = msg.landmark_ids.size();
+  if (msg.landmark_means.size() != 2 * n || msg.landmark_covariances.size() != 4 * n ||
+      msg.landmark_observations.size() != n) {
+    return out;  // malformed: the master keeps no map from it
+  }
+  for (size_t i = 0; i < n; ++i) {
+    core::LandmarkEstimate l;
+    l.id = msg.landmark_ids[i];
+    l.mean << msg.landmark_means[2 * i], msg.landmark_means[2 * i + 1];
+    for (int k = 0; k < 4; ++k) l.covariance(k / 2, k % 2) = msg.landmark_covariances[4 * i + k];
+    l.observations = msg.landmark_observations[i];
+    out.push_back(l);
+  }
+  return out;
+}
+
+RemoteDpfFilter::RemoteDpfFilter(ros::NodeHandle nh, const core::FilterOptions& options)
+    : options_(options), nh_(nh), coordinator_(options) {
+  core::validate(options.dpf);
+  ros::NodeHandle queue_nh(nh_);
+  queue_nh.setCallbackQueue(&queue_);
+  step_publisher_ = nh_.advertise<DpfStep>("dpf/step", 100);
+  estimate_subscriber_ =
+      queue_nh.subscribe("dpf/estimate", 1000, &RemoteDpfFilter::estimateCallback, this,
+                         ros::TransportHints().tcpNoDelay());
+  alive_.assign(options.dpf.local_filters, false);
+  landmarks_.assign(options.dpf.local_filters, {});
+}
+
+void RemoteDpfFilter::reset(const core::Pose2& initial_pose) {
+  coordinator_.reset(initial_pose);
+  initial_pose_ = initial_pose;
+  landmarks_.assign(options_.dpf.local_filters, {});
+}
+
+void RemoteDpfFilter::estimateCallback(const DpfLocalEstimate::ConstPtr& msg) {
+  const int n = options_.dpf.local_filters;
+  if (msg->index < 0 || msg->index >= n) {
+    ROS_WARN_STREAM_THROTTLE(5.0, "dpf_master_node: an estimate from local filter "
+                                      << msg->index << " ignored: dpf.local_filters = " << n);
+    return;
+  }
+  alive_[msg->index] = true;
+  if (msg->step != waiting_step_) return;  // a hello or an old answer
+  if (answers_.count(msg->index)) {
+    duplicate_error_ = "two dpf_local_node processes answer as local filter " +
+                       std::to_string(msg->index) + " (each needs its own ~index)";
+    return;
+  }
+  answers_[msg->index] = msg;
+}
+
+template <typename Done>
+bool RemoteDpfFilter::spinUntil(Done done, double timeout_s) {
+  const ros::WallTime deadline = ros::WallTime::now() + ros::WallDuration(timeout_s);
+  while (!done()) {
+    if (!ros::ok()) throw std::runtime_error("dpf_master_node: ROS is shutting down");
+    if (ros::WallTime::now() > deadline) return false;
+    queue_.callAvailable(ros::WallDuration(0.01));
+  }
+  return true;
+}
+
+std::string RemoteDpfFilter::missing(const std::vector<bool>& present) const {
+  std::ostringstream out;
+  bool first = true;
+  for (size_t i = 0; i < present.size(); ++i) {
+    if (present[i]) continue;
+    out << (first ? "" : ", ") << i;
+    first = false;
+  }
+  return out.str();
+}
+
+void RemoteDpfFilter::waitForLocals(double timeout_s) {
+  const uint32_t n = static_cast<uint32_t>(options_.dpf.local_filters);
+  const bool ok = spinUntil(
+      [&] {
+        return std::all_of(alive_.begin(), alive_.end(), [](bool a) { return a; }) &&
+               step_publisher_.getNumSubscribers() >= n;
+      },
+      timeout_s);
+  if (!ok) {
+    std::string silent = missing(alive_);
+    throw std::runtime_error(
+        "dpf_master_node: no answer from local filter(s) " +
+        (silent.empty() ? std::string("(all said hello, but fewer than ") + std::to_string(n) +
+                              " subscribe to dpf/step)"
+                        : silent) +
+        " within " + std::to_string(timeout_s) +
+        " s: start one dpf_local_node per local filter with ~index = 0.." +
+        std::to_string(n - 1) + " and the same config");
+  }
+  locals_ready_ = true;
+}
+
+core::UpdateStats RemoteDpfFilter::update(const core::FeatureSet& features) {
+  if (!locals_ready_) waitForLocals(options_.dpf.step_timeout_s);
+  std::vector<core::Pose2> injected;
+  const core::DpfStepInput input = coordinator_.beginStep(features, &injected);
+  const int faulted = options_.dpf.fault.local_index;
+  answers_.clear();
+  duplicate_error_.clear();
+  waiting_step_ = input.step;
+  step_publisher_.publish(toMsg(input, initial_pose_, faulted, injected[faulted]));
+  const size_t n = options_.dpf.local_filters;
+  const bool ok = spinUntil([&] { return answers_.size() == n || !duplicate_error_.empty(); },
+                            options_.dpf.step_timeout_s);
+  if (!duplicate_error_.empty()) throw std::runtime_error("dpf_master_node: " + duplicate_error_);
+  if (!ok) {
+    std::vector<bool> present(n, false);
+    for (const auto& [index, msg] : answers_) present[index] = true;
+    throw std::runtime_error("dpf_master_node: step " + std::to_string(input.step) +
+                             ": no estimate from local filter(s) " + missing(present) +
+                             " within " + std::to_string(options_.dpf.step_timeout_s) +
+                             " s (dpf.step_timeout_s); is that dpf_local_node still running?");
+  }
+  std::vector<core::DpfLocalEstimate> estimates;
+  for (const auto& [index, msg] : answers_) {
+    estimates.push_back(fromMsg(*msg));
+    landmarks_[index] = landmarksOf(*msg);
+  }
+  return coordinator_.finishStep(input, estimates);
+}
+
+std::vector<core::LandmarkEstimate> RemoteDpfFilter::landmarks() const {
+  std::vector<core::LandmarkEstimate> out;
+  for (const auto& block : landmarks_) out.insert(out.end(), block.begin(), block.end());
+  std::sort(out.begin(), out.end(), [](const auto& a, const auto& b) { return a.id < b.id; });
+  return out;
+}
+
+std::vector<core::WeightedPose> RemoteDpfFilter::particles() const {
+  return {{coordinator_.estimate().mean, 1.0}};
+}
+
+DpfLocalNode::DpfLocalNode(ros::NodeHandle nh, ros::NodeHandle private_nh) {
+  const io::SlamConfig config = loadConfigFromParams(private_nh, {"index"});
+  core::FilterOptions options = config.filter;
+  options.variant = "dpf";
+  core::validate(options.dpf);
+  if (!private_nh.getParam("index", index_)) {
+    throw std::invalid_argument("dpf_local_node: ~index (0.." +
+                                std::to_string(options.dpf.local_filters - 1) + ") is required");
+  }
+  if (index_ < 0 || index_ >= options.dpf.local_filters) {
+    throw std::invalid_argument("dpf_local_node: ~index = " + std::to_string(index_) +
+                                " is out of range [0, " +
+                                std::to_string(options.dpf.local_filters - 1) + "]");
+  }
+  local_ = std::make_unique<core::DpfLocalFilter>(options, index_);
+  estimate_publisher_ = nh.advertise<DpfLocalEstimate>("dpf/estimate", 100, /*latch=*/true);
+  step_subscriber_ = nh.subscribe("dpf/step", 1000, &DpfLocalNode::stepCallback, this,
+                                  ros::TransportHints().tcpNoDelay());
+  DpfLocalEstimate hello;
+  hello.index = index_;
+  hello.step = 0;
+  estimate_publisher_.publish(hello);
+  ROS_INFO_STREAM("dpf_local_node: local filter " << index_ << " of "
+                                                  << options.dpf.local_filters << " ready");
+}
+
+void DpfLocalNode::stepCallback(const DpfStep::ConstPtr& msg) {
+  if (msg->step == 1) {
+    local_->reset(toPose(msg->initial_pose));
+    expected_step_ = 1;
+  }
+  if (msg->step != expected_step_) {
+    ROS_ERROR_STREAM("dpf_local_node " << index_ << ": step " << msg->step << " arrived, "
+                                       << "expected " << expected_step_
+                                       << " (a step was lost); ignored");
+    return;
+  }
+  const core::Pose2 injected = msg->injected_index == index_ ? toPose(msg->injected)
+                                                              : core::Pose2::Zero();
+  const core::DpfLocalEstimate estimate = local_->step(fromMsg(*msg), injected);
+  estimate_publisher_.publish(toMsg(estimate, core::localLandmarks(*local_)));
+  ++expected_step_;
+}
+
+}  // namespace rosbridge
+}  // namespace rbpf_slam

@@ -1,0 +1,371 @@
+// Distributed particle filter (Pei et al. 2014): the adaptive covariance of eq. 13 and the
+// master's fusion weights on hand cases, fault isolation and re-initialisation, determinism
+// across thread counts, and accuracy against FastSLAM 2.0 on a synthetic landmark world.
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <stdexcept>
+
+#include "rbpf_slam/core/filters/distributed_filter.h"
+#include "rbpf_slam/core/filters/dpf_local_filter.h"
+#include "rbpf_slam/core/filters/dpf_master.h"
+#include "rbpf_slam/core/filters/slam_filter.h"
+#include "rbpf_slam/io/slam_config.h"
+
+namespace rbpf_slam {
+namespace core {
+namespace {
+
+TEST(DpfAdaptiveCovariance, AddsTheWeightedSpreadOfTheInnovations) {
+  const Eigen::Matrix2d r = Eigen::Vector2d(0.01, 0.001).asDiagonal();
+  // Two particles, equal weights, innovations +-1 m in range: spread diag(1, 0).
+  Eigen::Matrix2d c = adaptiveLikelihoodCovariance({{1.0, 0.0}, {-1.0, 0.0}}, {0.5, 0.5}, r);
+  EXPECT_NEAR(c(0, 0), 1.01, 1e-12);
+  EXPECT_NEAR(c(1, 1), 0.001, 1e-12);
+  EXPECT_NEAR(c(0, 1), 0.0, 1e-12);
+  // Unequal weights: mean 0.5 (range), spread 0.25 * 1.5^2 + 0.75 * 0.5^2 = 0.75; bearing
+  // innovations 0.2 and 0: mean 0.05, spread 0.25 * 0.15^2 + 0.75 * 0.05^2 = 0.0075; cross
+  // 0.25 * 1.5 * 0.15 + 0.75 * (-0.5) * (-0.05) = 0.075.
+  c = adaptiveLikelihoodCovariance({{2.0, 0.2}, {0.0, 0.0}}, {0.25, 0.75}, r);
+  EXPECT_NEAR(c(0, 0), 0.76, 1e-12);
+  EXPECT_NEAR(c(1, 1), 0.0085, 1e-12);
+  EXPECT_NEAR(c(0, 1), 0.075, 1e-12);
+  EXPECT_NEAR(c(1, 0), 0.075, 1e-12);
+  // Collapsed particles: the measurement noise alone.
+  c = adaptiveLikelihoodCovariance({{0.3, 0.1}, {0.3, 0.1}}, {0.5, 0.5}, r);
+  EXPECT_TRUE(c.isApprox(r));
+}
+
+TEST(DpfMasterWeights, InnovationNeffAndMixedOnHandCases) {
+  const auto inn = innovationWeights({2.0, 4.0});
+  EXPECT_NEAR(inn[0], 2.0 / 3.0, 1e-12);
+  EXPECT_NEAR(inn[1], 1.0 / 3.0, 1e-12);
+  const auto neff = neffWeights({0.8, 0.2});
+  EXPECT_NEAR(neff[0], 0.8, 1e-12);
+  EXPECT_NEAR(neff[1], 0.2, 1e-12);
+  const auto mixed = mixedWeights(inn, neff, 0.5);
+  EXPECT_NEAR(mixed[0], (2.0 / 3.0 + 0.8) / 2.0, 1e-12);
+  EXPECT_NEAR(mixed[1], (1.0 / 3.0 + 0.2) / 2.0, 1e-12);
+  const auto inn_only = mixedWeights(inn, neff, 1.0);
+  EXPECT_NEAR(inn_only[0], inn[0], 1e-12);
+  // Degenerate inputs: all zero -> uniform; NaN counts as zero.
+  const auto zero = neffWeights({0.0, 0.0, 0.0, 0.0});
+  for (double w : zero) EXPECT_DOUBLE_EQ(w, 0.25);
+  const auto nan = neffWeights({NAN, 1.0});
+  EXPECT_DOUBLE_EQ(nan[0], 0.0);
+  EXPECT_DOUBLE_EQ(nan[1], 1.0);
+}
+
+DpfLocalEstimate estimateOf(int index, long step, const Pose2& mean, double nis, double neff) {
+  DpfLocalEstimate e;
+  e.index = index;
+  e.step = step;
+  e.mean = mean;
+  e.covariance = Eigen::Matrix3d::Identity() * 0.01;
+  e.particles = 100;
+  e.neff = neff * 100;
+  e.innovations = 2;
+  e.nis_sum = 2 * nis;
+  return e;
+}
+
+TEST(DpfMaster, FusesWithTheConfiguredWeights) {
+  for (const std::string weighting : {"innovation", "neff", "mixed"}) {
+    DpfOptions o;
+    o.local_filters = 2;
+    o.weighting = weighting;
+    o.fusion = "average";
+    o.innovation_smoothing = 1.0;  // this step's NIS only
+    o.fault_nis = 1e9;
+    o.fault_neff_ratio = 0.0;
+    DpfMaster master(o);
+    const auto out = master.fuse(1, MotionInput(), {estimateOf(1, 1, Pose2(1.0, 0.0, 0.0), 4.0, 0.2),
+                                     estimateOf(0, 1, Pose2(0.0, 0.0, 0.0), 2.0, 0.8)});
+    const double expected = weighting == "innovation" ? 1.0 / 3.0
+                            : weighting == "neff"     ? 0.2
+                                                      : (1.0 / 3.0 + 0.2) / 2.0;
+    EXPECT_NEAR(out.weights[1], expected, 1e-12) << weighting;
+    EXPECT_NEAR(out.mean.x(), expected, 1e-12) << weighting;  // weighted mean of 0 and 1
+    EXPECT_TRUE(out.feedback.reinitialise.empty());
+  }
+}
+
+TEST(DpfMaster, DownWeightsThenIsolatesAFaultyLocalAndNamesAMissingOne) {
+  DpfOptions o;
+  o.local_filters = 3;
+  o.isolate_after_steps = 3;
+  o.fusion = "average";
+  DpfMaster master(o);
+  const Pose2 good(5.0, 5.0, 0.1), bad(9.0, 1.0, 1.0);
+  for (long step = 1; step <= 3; ++step) {
+    const auto out = master.fuse(step, MotionInput(), {estimateOf(0, step, good, 2.0, 0.9),
+                                        estimateOf(1, step, bad, 200.0, 0.9),
+                                        estimateOf(2, step, good, 2.0, 0.9)});
+    EXPECT_TRUE(master.health()[1].suspect);
+    EXPECT_FALSE(master.health()[0].suspect);
+    if (step < 3) {
+      EXPECT_GT(out.weights[1], 0.0);
+      EXPECT_LT(out.weights[1], 0.05);
+      EXPECT_TRUE(out.feedback.reinitialise.empty());
+    } else {
+      EXPECT_EQ(out.weights[1], 0.0);
+      ASSERT_EQ(out.feedback.reinitialise.size(), 1u);
+      EXPECT_EQ(out.feedback.reinitialise[0], 1);
+      EXPECT_TRUE(out.mean.isApprox(good, 1e-12));
+      EXPECT_EQ(master.health()[1].isolations, 1);
+    }
+  }
+  // Neff-only weighting watches Neff: a collapsed local filter is flagged there.
+  o.weighting = "neff";
+  DpfMaster neff_master(o);
+  neff_master.fuse(1, MotionInput(), {estimateOf(0, 1, good, 2.0, 0.9), estimateOf(1, 1, bad, 2.0, 0.001),
+                       estimateOf(2, 1, good, 2.0, 0.9)});
+  EXPECT_TRUE(neff_master.health()[1].suspect);
+  try {
+    master.fuse(4, MotionInput(), {estimateOf(0, 4, good, 2.0, 0.9), estimateOf(2, 4, good, 2.0, 0.9)});
+    FAIL() << "a missing estimate must be an error";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("local filter 1"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(master.fuse(5, MotionInput(), {estimateOf(0, 5, good, 2, 1), estimateOf(1, 4, good, 2, 1),
+                               estimateOf(2, 5, good, 2, 1)}),
+               std::invalid_argument);
+}
+
+TEST(DpfMaster, InformationFusionAddsWhatEachLocalLearned) {
+  // Prior N(0, I) for both; local 0 learned x = 1 with information I (posterior 0.5 I at
+  // (1, 0, 0)), local 1 learned y = 1 likewise. A centralised Kalman update with both gives
+  // information 3 I and mean (2/3, 2/3, 0).
+  DpfOptions o;
+  o.local_filters = 2;
+  DpfMaster master(o);
+  DpfLocalEstimate a = estimateOf(0, 1, Pose2(1.0, 0.0, 0.0), 2.0, 0.9);
+  DpfLocalEstimate b = estimateOf(1, 1, Pose2(0.0, 1.0, 0.0), 2.0, 0.9);
+  for (DpfLocalEstimate* e : {&a, &b}) {
+    e->prior_mean = Pose2::Zero();
+    e->prior_covariance = Eigen::Matrix3d::Identity();
+    e->covariance = 0.5 * Eigen::Matrix3d::Identity();
+  }
+  auto out = master.fuse(1, MotionInput(), {a, b});
+  EXPECT_NEAR(out.mean.x(), 2.0 / 3.0, 1e-6);
+  EXPECT_NEAR(out.mean.y(), 2.0 / 3.0, 1e-6);
+  EXPECT_NEAR(out.mean.z(), 0.0, 1e-6);
+  EXPECT_TRUE(out.covariance.isApprox(Eigen::Matrix3d::Identity() / 3.0, 1e-6));
+  // A local filter trusted half as much (weight 1/4 of 2: trust 0.5) contributes half of it.
+  b.nis_sum = 2 * 6.0;  // mean NIS 6 vs 2: innovation weight 1/4
+  o.weighting = "innovation";
+  o.innovation_smoothing = 1.0;
+  DpfMaster by_innovation(o);
+  out = by_innovation.fuse(1, MotionInput(), {a, b});
+  EXPECT_NEAR(out.weights[1], 0.25, 1e-9);
+  // Trust: local 0 min(1, 2 * 0.75) = 1, local 1 min(1, 2 * 0.25) = 0.5. Information
+  // I + I + 0.5 I = 2.5 I, vector (2, 0, 0) + 0.5 (0, 2, 0): mean (0.8, 0.4, 0).
+  EXPECT_NEAR(out.mean.x(), 0.8, 1e-6);
+  EXPECT_NEAR(out.mean.y(), 0.4, 1e-6);
+  EXPECT_TRUE(out.covariance.isApprox(Eigen::Matrix3d::Identity() / 2.5, 1e-6));
+}
+
+/// A synthetic run: a robot driving a circle of radius 10 m among 24 posts with known ids,
+/// noisy odometry, range-bearing observations within 8 m.
+struct SyntheticRun {
+  std::vector<Pose2> truth;
+  std::vector<MotionInput> motion;
+  std::vector<FeatureSet> features;
+};
+
+SyntheticRun makeRun(int steps, unsigned seed) {
+  Rng rng(seed);
+  std::vector<Eigen::Vector2d> posts;
+  for (int k = 0; k < 24; ++k) {
+    const double a = 2.0 * M_PI * k / 24.0;
+    const double r = k % 2 ? 6.5 : 13.5;
+    posts.emplace_back(r * std::cos(a), 10.0 + r * std::sin(a));
+  }
+  SyntheticRun run;
+  Pose2 pose(0.0, 0.0, 0.0);
+  const Pose2 step_delta(0.5, 0.0, 0.05);
+  for (int t = 0; t < steps; ++t) {
+    pose = compose(pose, step_delta);
+    run.truth.push_back(pose);
+    MotionInput m;
+    m.dt = 0.5;
+    m.stamp = 0.5 * (t + 1);
+    m.delta = step_delta + Pose2(sampleGaussian(rng, 0.05), sampleGaussian(rng, 0.02),
+                                 sampleGaussian(rng, 0.02));
+    run.motion.push_back(m);
+    FeatureSet f;
+    f.stamp = m.stamp;
+    for (int k = 0; k < 24; ++k) {
+      const Eigen::Vector2d d = transformPoint(inverse(pose), posts[k]);
+      const double range = d.norm();
+      if (range > 12.0) continue;
+      PointFeature p;
+      p.id = k;
+      p.range = range + sampleGaussian(rng, 0.05);
+      p.bearing = std::atan2(d.y(), d.x()) + sampleGaussian(rng, 0.01);
+      p.covariance = Eigen::Vector2d(0.05 * 0.05, 0.01 * 0.01).asDiagonal();
+      f.points.push_back(p);
+    }
+    run.features.push_back(f);
+  }
+  return run;
+}
+
+FilterOptions dpfOptions() {
+  FilterOptions o;
+  o.variant = "dpf";
+  o.particles = 30;
+  o.use_lines = false;
+  o.motion.alpha1 = 0.05;
+  o.motion.alpha2 = 0.01;
+  o.motion.alpha3 = 0.02;
+  o.motion.alpha4 = 0.01;
+  o.motion.min_sigma_xy_m = 0.05;
+  o.motion.min_sigma_theta_rad = 0.02;
+  o.measurement.sigma_range_m = 0.05;
+  o.measurement.sigma_bearing_rad = 0.01;
+  o.measurement.use_feature_covariance = false;
+  return o;
+}
+
+std::vector<Pose2> runFilter(SlamFilter* filter, const SyntheticRun& run) {
+  std::vector<Pose2> out;
+  for (size_t t = 0; t < run.motion.size(); ++t) {
+    filter->predict(run.motion[t]);
+    filter->update(run.features[t]);
+    out.push_back(filter->estimate().mean);
+  }
+  return out;
+}
+
+double rmsError(const std::vector<Pose2>& a, const std::vector<Pose2>& b, size_t from = 0) {
+  double sum = 0.0;
+  for (size_t t = from; t < a.size(); ++t) sum += (a[t].head<2>() - b[t].head<2>()).squaredNorm();
+  return std::sqrt(sum / (a.size() - from));
+}
+
+TEST(DistributedFilter, SameTrajectoryWhateverTheNumberOfThreads) {
+  const SyntheticRun run = makeRun(80, 7);
+  std::vector<std::vector<Pose2>> results;
+  for (int threads : {1, 2, 3}) {
+    FilterOptions o = dpfOptions();
+    o.dpf.threads = threads;
+    auto filter = createFilter(o);
+    results.push_back(runFilter(filter.get(), run));
+  }
+  for (size_t k = 1; k < results.size(); ++k) {
+    for (size_t t = 0; t < results[0].size(); ++t) {
+      ASSERT_EQ(results[0][t], results[k][t]) << "threads differ at step " << t;
+    }
+  }
+  FilterOptions other = dpfOptions();
+  other.seed = 43;
+  auto filter = createFilter(other);
+  EXPECT_NE(runFilter(filter.get(), run).back(), results[0].back()) << "the seed must matter";
+}
+
+TEST(DistributedFilter, TracksAsWellAsFastSlam2AndBeatsOdometry) {
+  const SyntheticRun run = makeRun(120, 11);
+  FilterOptions o = dpfOptions();
+  auto dpf = createFilter(o);
+  const double dpf_error = rmsError(runFilter(dpf.get(), run), run.truth);
+  o.variant = "fastslam2";
+  auto fastslam = createFilter(o);
+  const double fastslam_error = rmsError(runFilter(fastslam.get(), run), run.truth);
+  std::vector<Pose2> odometry;
+  Pose2 pose = Pose2::Zero();
+  for (const auto& m : run.motion) odometry.push_back(pose = compose(pose, m.delta));
+  const double odometry_error = rmsError(odometry, run.truth);
+  EXPECT_LT(dpf_error, 0.5 * odometry_error) << dpf_error << " vs odometry " << odometry_error;
+  EXPECT_LT(dpf_error, 1.5 * fastslam_error + 0.05) << dpf_error << " vs " << fastslam_error;
+  EXPECT_EQ(dpf->landmarks().size(), fastslam->landmarks().size());
+}
+
+TEST(DistributedFilter, IsolatesAndReinitialisesTheFaultyLocalFilter) {
+  const SyntheticRun run = makeRun(120, 5);
+  FilterOptions o = dpfOptions();
+  auto clean = std::make_unique<DistributedFilter>(o);
+  const double clean_error = rmsError(runFilter(clean.get(), run), run.truth, 40);
+  o.dpf.fault.enabled = true;
+  o.dpf.fault.start_step = 40;
+  o.dpf.fault.local_index = 1;
+  o.dpf.fault.sigma_xy_m = 1.0;
+  o.dpf.fault.sigma_theta_rad = 0.2;
+  DistributedFilter faulty(o);
+  const double faulty_error = rmsError(runFilter(&faulty, run), run.truth, 40);
+  const auto& health = faulty.master().health();
+  EXPECT_GT(health[1].isolations, 0);
+  EXPECT_GT(faulty.local(1).reinitialisations(), 0);
+  EXPECT_EQ(faulty.local(1).reinitialisations(), health[1].isolations);
+  EXPECT_GT(health[1].isolations, health[0].isolations + health[2].isolations);
+  EXPECT_LT(faulty_error, 1.5 * clean_error + 0.05) << faulty_error << " vs " << clean_error;
+  // Without isolation (never flagged) the same fault hurts more.
+  o.dpf.fault_nis = 1e9;
+  o.dpf.fault_neff_ratio = 0.0;
+  o.dpf.weighting = "neff";
+  DistributedFilter blind(o);
+  runFilter(&blind, run);
+  EXPECT_EQ(blind.master().health()[1].isolations, 0);
+}
+
+TEST(FaultInjector, CentralisedFilterGetsTheSameDisturbance) {
+  FaultInjectorOptions o;
+  o.enabled = true;
+  o.start_step = 3;
+  FaultInjector a(o, 42), b(o, 42);
+  EXPECT_EQ(a.disturbance(2), Pose2::Zero());
+  const Pose2 d = a.disturbance(3);
+  EXPECT_NE(d, Pose2::Zero());
+  EXPECT_EQ(b.disturbance(3), d);
+  FilterOptions f = dpfOptions();
+  f.variant = "fastslam2";
+  f.dpf.fault = o;
+  EXPECT_EQ(createFilter(f)->variant(), "fastslam2");  // wrapped, same interface
+}
+
+TEST(DpfOptions, OutOfRangeValuesAreNamed) {
+  FilterOptions o = dpfOptions();
+  o.dpf.weighting = "votes";
+  try {
+    createFilter(o);
+    FAIL();
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("dpf.weighting"), std::string::npos);
+  }
+  o = dpfOptions();
+  o.dpf.fault.local_index = 3;  // only 3 local filters: 0..2
+  EXPECT_THROW(createFilter(o), std::invalid_argument);
+}
+
+TEST(DpfConfig, TheShippedConfigAndItsErrors) {
+  const io::SlamConfig c =
+      io::loadSlamConfig(std::string(RBPF_SOURCE_DIR) + "/config/landmarks_dpf.yaml");
+  EXPECT_EQ(c.filter.variant, "dpf");
+  EXPECT_EQ(c.filter.dpf.local_filters, 3);
+  EXPECT_EQ(c.filter.dpf.weighting, "mixed");
+  EXPECT_EQ(c.filter.dpf.fusion, "information");
+  EXPECT_TRUE(c.filter.dpf.adaptive_covariance);
+  EXPECT_FALSE(c.filter.dpf.fault.enabled);
+  EXPECT_EQ(c.filter.dpf.fault.start_step, 1000);
+  EXPECT_EQ(createFilter(c.filter)->variant(), "dpf");
+  auto errorOf = [](const std::string& yaml) -> std::string {
+    try {
+      io::parseSlamConfig(YAML::Load(yaml), "t.yaml");
+    } catch (const io::ConfigError& e) {
+      return e.what();
+    }
+    return "";
+  };
+  EXPECT_NE(errorOf("variant: dpf\ndpf: {bogus: 1}").find("bogus"), std::string::npos);
+  EXPECT_NE(errorOf("variant: dpf\ndpf: {weighting: votes}").find("weighting"), std::string::npos);
+  EXPECT_NE(errorOf("variant: dpf\ndpf: {local_filters: 0}").find("local_filters"),
+            std::string::npos);
+  EXPECT_NE(errorOf("variant: dpf\nfault: {local_index: 5}").find("fault.local_index"),
+            std::string::npos);
+  EXPECT_EQ(errorOf("variant: fastslam2\nfault: {enabled: true, start_step: 5}"), "");
+}
+
+}  // namespace
+}  // namespace core
+}  // namespace rbpf_slam
