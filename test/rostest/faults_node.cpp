@@ -10,6 +10,7 @@
 #include <diagnostic_msgs/DiagnosticArray.h>
 #include <geometry_msgs/PoseWithCovarianceStamped.h>
 #include <gtest/gtest.h>
+#include <rbpf_slam/FeatureArray.h>
 #include <ros/ros.h>
 #include <rosgraph_msgs/Clock.h>
 #include <sensor_msgs/LaserScan.h>
@@ -150,6 +151,7 @@ class Robot {
     ros::NodeHandle nh;
     clock_pub_ = nh.advertise<rosgraph_msgs::Clock>("/clock", 10);
     scan_pub_ = nh.advertise<sensor_msgs::LaserScan>("/scan", 10);
+    features_pub_ = nh.advertise<FeatureArray>("/features", 10);
     geometry_msgs::TransformStamped laser =
         rosbridge::toTransformStamped(core::Pose2(0.1, 0.0, 0.0), "base_link", "laser", ros::Time(0.0));
     static_broadcaster_.sendTransform(laser);
@@ -192,6 +194,10 @@ class Robot {
     scan_pub_.publish(msg);
     ros::WallDuration(0.05).sleep();
   }
+  void publish(const FeatureArray& msg) {
+    features_pub_.publish(msg);
+    ros::WallDuration(0.05).sleep();
+  }
   /// n ordinary steps.
   void drive(int n) {
     for (int i = 0; i < n; ++i) {
@@ -208,7 +214,8 @@ class Robot {
     ros::WallDuration(0.1).sleep();
   }
   bool subscribed() const {
-    return scan_pub_.getNumSubscribers() > 0 && clock_pub_.getNumSubscribers() > 0;
+    return scan_pub_.getNumSubscribers() > 0 && clock_pub_.getNumSubscribers() > 0 &&
+           features_pub_.getNumSubscribers() > 0;
   }
 
  private:
@@ -217,7 +224,7 @@ class Robot {
     clock.clock = ros::Time(t);
     clock_pub_.publish(clock);
   }
-  ros::Publisher clock_pub_, scan_pub_;
+  ros::Publisher clock_pub_, scan_pub_, features_pub_;
   tf2_ros::TransformBroadcaster broadcaster_;
   tf2_ros::StaticTransformBroadcaster static_broadcaster_;
   double t_ = 1.0;
@@ -404,6 +411,46 @@ TEST_F(FaultsTest, G_OdometryJumpIsSurvived) {
   EXPECT_TRUE(caughtUp());
   settle();
   EXPECT_EQ(observer_->nonFinite(), 0);
+}
+
+// Every input (scans, sonar, features) goes through the same tf gate; the features topic
+// shows it here, with non-finite and absurd features next to a good one.
+TEST_F(FaultsTest, G2_FeaturesInAnUnknownFrameOrNonFiniteAreDropped) {
+  const long unknown_before = std::max(0L, observer_->diagnostic("dropped: frame not in tf"));
+  robot_->tick();
+  FeatureArray msg;
+  msg.header.stamp = ros::Time(robot_->time());
+  msg.header.frame_id = "no_such_sensor";
+  PointFeature good;
+  good.range = 2.0;
+  good.bearing = 0.5;
+  good.covariance = {0.01, 0.0, 0.0, 0.001};
+  good.id = -1;
+  msg.points.push_back(good);
+  robot_->publish(msg);
+  settle();
+  EXPECT_EQ(observer_->diagnostic("dropped: frame not in tf"), unknown_before + 1);
+  robot_->tick();
+  msg.header.stamp = ros::Time(robot_->time());
+  msg.header.frame_id = "base_link";
+  PointFeature bad = good;
+  bad.range = std::numeric_limits<double>::quiet_NaN();
+  msg.points.push_back(bad);
+  bad = good;
+  bad.covariance = {std::numeric_limits<double>::infinity(), 0.0, 0.0, 1.0};
+  msg.points.push_back(bad);
+  LineFeature line;
+  line.rho = -3.0;  // a negative rho is normalised, not rejected
+  line.theta = 0.3;
+  line.covariance = {0.0, 0.0, 0.0, 0.0};  // zero: the filter's floors apply
+  line.start.x = 3.0;
+  line.end.x = 3.5;
+  msg.lines.push_back(line);
+  robot_->publish(msg);
+  EXPECT_TRUE(caughtUp()) << "the frame with two bad features was not used at all";
+  settle();
+  EXPECT_EQ(observer_->nonFinite(), 0);
+  expectRecovers("bad features");
 }
 
 TEST_F(FaultsTest, H_ClockJumpBackClearsTheMapAndMappingRestarts) {
