@@ -1,5 +1,6 @@
 #include "rbpf_slam/core/motion/motion_model.h"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
@@ -173,6 +174,25 @@ std::unique_ptr<MotionModel> createMotionModel(const MotionOptions& options) {
   validate(options);
   if (options.model == "diff_drive") return std::make_unique<DiffDriveMotionModel>(options);
   return std::make_unique<OdometryMotionModel>(options);
+}
+
+void PendingMotion::add(const MotionInput& m) {
+  if (!m.delta.allFinite()) return;
+  if (!has_motion) {
+    motion = m;
+    has_motion = true;
+    return;
+  }
+  motion.delta = compose(motion.delta, m.delta);
+  motion.dt += m.dt;
+  motion.stamp = m.stamp;
+  motion.noise_scale = std::max(motion.noise_scale, m.noise_scale);
+}
+
+MotionInput PendingMotion::take() {
+  const MotionInput m = has_motion ? motion : MotionInput();
+  *this = PendingMotion();
+  return m;
 }
 
 }  // namespace core

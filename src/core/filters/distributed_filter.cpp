@@ -7,25 +7,6 @@
 namespace rbpf_slam {
 namespace core {
 
-void PendingMotion::add(const MotionInput& m) {
-  if (!has_motion) {
-    motion = m;
-    has_motion = true;
-    return;
-  }
-  motion.delta = compose(motion.delta, m.delta);
-  motion.dt += m.dt;
-  motion.stamp = m.stamp;
-  motion.noise_scale = std::max(motion.noise_scale, m.noise_scale);
-}
-
-MotionInput PendingMotion::take() {
-  const MotionInput m = has_motion ? motion : MotionInput();
-  has_motion = false;
-  motion = MotionInput();
-  return m;
-}
-
 void validate(const DpfOptions& o) {
   auto require = [](const char* name, double value, double min, double max) {
     if (!(value >= min && value <= max)) {

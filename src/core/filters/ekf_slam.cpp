@@ -27,36 +27,26 @@ void EkfSlam::reset(const Pose2& initial_pose) {
   state_ = initial_pose;
   covariance_ = Eigen::Matrix3d::Identity() * 1e-9;
   info_.clear();
-  pending_motion_ = MotionInput();
-  has_pending_motion_ = false;
+  pending_motion_ = PendingMotion();
   next_landmark_id_ = 0;
   stats_ = FilterStats();
 }
 
 void EkfSlam::predict(const MotionInput& motion) {
   ++stats_.predictions;
-  if (!motion.delta.allFinite()) return;
-  if (!has_pending_motion_) {
-    pending_motion_ = motion;
-    has_pending_motion_ = true;
-    return;
-  }
-  pending_motion_.delta = compose(pending_motion_.delta, motion.delta);
-  pending_motion_.dt += motion.dt;
-  pending_motion_.stamp = motion.stamp;
-  pending_motion_.noise_scale = std::max(pending_motion_.noise_scale, motion.noise_scale);
+  pending_motion_.add(motion);
 }
 
 void EkfSlam::applyMotion() {
-  if (!has_pending_motion_) return;
-  has_pending_motion_ = false;
+  if (!pending_motion_.has_motion) return;
+  const MotionInput motion = pending_motion_.take();
   const Pose2 previous = pose();
-  const Pose2& d = pending_motion_.delta;
+  const Pose2& d = motion.delta;
   const double c = std::cos(previous.z()), s = std::sin(previous.z());
   Eigen::Matrix3d f = Eigen::Matrix3d::Identity();  // d compose(previous, d) / d previous
   f(0, 2) = -s * d.x() - c * d.y();
   f(1, 2) = c * d.x() - s * d.y();
-  const Eigen::Matrix3d q = motion_model_->covariance(previous, pending_motion_);
+  const Eigen::Matrix3d q = motion_model_->covariance(previous, motion);
   state_.head<3>() = compose(previous, d);
   const int n = state_.size();
   covariance_.topLeftCorner<3, 3>() = f * covariance_.topLeftCorner<3, 3>() * f.transpose() + q;
@@ -310,7 +300,7 @@ bool EkfSlam::resetPose(const Pose2& new_pose, const Eigen::Matrix3d& cov) {
   covariance_.topLeftCorner<3, 3>() = 0.5 * (cov + cov.transpose());
   covariance_.topRightCorner(3, n - 3).setZero();
   covariance_.bottomLeftCorner(n - 3, 3).setZero();
-  has_pending_motion_ = false;
+  pending_motion_ = PendingMotion();
   return true;
 }
 

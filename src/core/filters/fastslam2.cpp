@@ -74,8 +74,7 @@ void FastSlam2::reset(const Pose2& initial_pose) {
     p.map = std::make_shared<LandmarkMap>();
   }
   weights_.assign(particles_.size(), 1.0 / particles_.size());
-  has_pending_motion_ = false;
-  pending_motion_ = MotionInput();
+  pending_motion_ = PendingMotion();
   next_landmark_id_ = 0;
   step_ = 0;
   stats_ = FilterStats();
@@ -83,15 +82,7 @@ void FastSlam2::reset(const Pose2& initial_pose) {
 
 void FastSlam2::predict(const MotionInput& motion) {
   ++stats_.predictions;
-  if (!has_pending_motion_) {
-    pending_motion_ = motion;
-    has_pending_motion_ = true;
-    return;
-  }
-  // Several odometry steps between two updates: compose them into one increment.
-  pending_motion_.delta = compose(pending_motion_.delta, motion.delta);
-  pending_motion_.dt += motion.dt;
-  pending_motion_.stamp = motion.stamp;
+  pending_motion_.add(motion);  // several odometry steps between two updates compose
 }
 
 std::vector<Observation> FastSlam2::prepare(const FeatureSet& features, int* rejected) const {
@@ -387,8 +378,7 @@ UpdateStats FastSlam2::update(const FeatureSet& features) {
   ++step_;
   const std::vector<Observation> observations = prepare(features, &stats.features_rejected);
   stats.features_in = static_cast<int>(features.lines.size() + features.points.size());
-  const MotionInput motion = has_pending_motion_ ? pending_motion_ : MotionInput();
-  has_pending_motion_ = false;
+  const MotionInput motion = pending_motion_.take();
   std::vector<ParticleUpdate> results(particles_.size());
   for (size_t i = 0; i < particles_.size(); ++i) {
     Particle& p = particles_[i];
@@ -460,8 +450,9 @@ PoseEstimate FastSlam2::estimate() const {
   Eigen::Vector2d xy = Eigen::Vector2d::Zero();
   std::vector<Pose2> poses(particles_.size());
   for (size_t i = 0; i < particles_.size(); ++i) {
-    poses[i] = has_pending_motion_ ? compose(particles_[i].pose, pending_motion_.delta)
-                                   : particles_[i].pose;
+    poses[i] = pending_motion_.has_motion
+                   ? compose(particles_[i].pose, pending_motion_.motion.delta)
+                   : particles_[i].pose;
     xy += weights_[i] * poses[i].head<2>();
     sin_sum += weights_[i] * std::sin(poses[i].z());
     cos_sum += weights_[i] * std::cos(poses[i].z());
@@ -508,7 +499,7 @@ bool FastSlam2::resetPose(const Pose2& pose, const Eigen::Matrix3d& covariance) 
     p.log_weight = 0.0;
   }
   weights_.assign(particles_.size(), 1.0 / particles_.size());
-  has_pending_motion_ = false;
+  pending_motion_ = PendingMotion();
   return true;
 }
 

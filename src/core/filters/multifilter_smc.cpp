@@ -155,24 +155,14 @@ void MultiFilterSmc::reset(const Pose2& initial_pose) {
   robot_.assign(options_.particles, initial_pose);
   weights_.assign(robot_.size(), 1.0 / robot_.size());
   filters_.clear();
-  pending_motion_ = MotionInput();
-  has_pending_motion_ = false;
+  pending_motion_ = PendingMotion();
   next_landmark_id_ = 0;
   stats_ = FilterStats();
 }
 
 void MultiFilterSmc::predict(const MotionInput& motion) {
   ++stats_.predictions;
-  if (!motion.delta.allFinite()) return;
-  if (!has_pending_motion_) {
-    pending_motion_ = motion;
-    has_pending_motion_ = true;
-    return;
-  }
-  pending_motion_.delta = compose(pending_motion_.delta, motion.delta);
-  pending_motion_.dt += motion.dt;
-  pending_motion_.stamp = motion.stamp;
-  pending_motion_.noise_scale = std::max(pending_motion_.noise_scale, motion.noise_scale);
+  pending_motion_.add(motion);
 }
 
 std::vector<MultiFilterSmc::LocalFeature> MultiFilterSmc::prepare(const FeatureSet& features,
@@ -238,9 +228,9 @@ UpdateStats MultiFilterSmc::update(const FeatureSet& features) {
 
 void MultiFilterSmc::updateRobot(const std::vector<LocalFeature>& features, UpdateStats* stats) {
   const int n = robot_.size();
-  if (has_pending_motion_) {
-    for (auto& pose : robot_) pose = motion_model_->sample(pose, pending_motion_, rng_);
-    has_pending_motion_ = false;
+  if (pending_motion_.has_motion) {
+    const MotionInput motion = pending_motion_.take();
+    for (auto& pose : robot_) pose = motion_model_->sample(pose, motion, rng_);
   }
   stats->neff = effectiveSampleSize(weights_);
   if (features.empty() || filters_.empty()) return;
@@ -383,7 +373,7 @@ bool MultiFilterSmc::resetPose(const Pose2& pose, const Eigen::Matrix3d& covaria
     p.z() = wrapAngle(p.z());
   }
   weights_.assign(robot_.size(), 1.0 / robot_.size());
-  has_pending_motion_ = false;
+  pending_motion_ = PendingMotion();
   return true;
 }
 

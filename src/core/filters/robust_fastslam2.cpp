@@ -61,7 +61,7 @@ Eigen::Matrix3d RobustFastSlam2::incrementCovariance(const MotionInput& motion) 
 }
 
 UpdateStats RobustFastSlam2::update(const FeatureSet& features) {
-  const MotionInput motion = has_pending_motion_ ? pending_motion_ : MotionInput();
+  const MotionInput motion = pending_motion_.has_motion ? pending_motion_.motion : MotionInput();
   int rejected = 0;
   std::vector<Observation> observations = prepare(features, &rejected);
   const int step = step_ + 1;
@@ -103,7 +103,7 @@ UpdateStats RobustFastSlam2::robustUpdate(const std::vector<Observation>& observ
                                           const std::vector<const AncestorSet*>& ancestors) {
   UpdateStats stats;
   ++step_;
-  has_pending_motion_ = false;
+  pending_motion_ = PendingMotion();
   const int t = step_;
   const int count = options_.particles;
   const int old_id_limit = ancestors.back()->next_landmark_id;

@@ -15,14 +15,6 @@
 namespace rbpf_slam {
 namespace core {
 
-/// Accumulates the motion between filter steps (several predict() calls compose).
-struct PendingMotion {
-  bool has_motion = false;
-  MotionInput motion;
-  void add(const MotionInput& m);
-  MotionInput take();
-};
-
 /// The master's side of the step protocol, shared by the threaded filter and the master node:
 /// collects the motion, builds each step's input (with the fault injector's disturbance for
 /// the faulted local filter), fuses the answers and keeps the statistics.

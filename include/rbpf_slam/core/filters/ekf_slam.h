@@ -65,8 +65,7 @@ class EkfSlam : public SlamFilter {
   Eigen::VectorXd state_;
   Eigen::MatrixXd covariance_;
   std::vector<LandmarkInfo> info_;
-  MotionInput pending_motion_;
-  bool has_pending_motion_ = false;
+  PendingMotion pending_motion_;
   int next_landmark_id_ = 0;
   FilterStats stats_;
 };

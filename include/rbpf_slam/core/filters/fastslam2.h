@@ -114,8 +114,7 @@ class FastSlam2 : public SlamFilter {
   Rng rng_;
   std::vector<Particle> particles_;
   std::vector<double> weights_;  // normalised, same order as particles_
-  MotionInput pending_motion_;
-  bool has_pending_motion_ = false;
+  PendingMotion pending_motion_;
   int next_landmark_id_ = 0;
   bool mapping_ = true;  // false: localization only, the maps stay as they are
   int step_ = 0;

@@ -94,8 +94,7 @@ class MultiFilterSmc : public SlamFilter {
   std::vector<Pose2> robot_;
   std::vector<double> weights_;  // normalised, same order as robot_
   std::vector<LandmarkParticleFilter> filters_;
-  MotionInput pending_motion_;
-  bool has_pending_motion_ = false;
+  PendingMotion pending_motion_;
   bool mapping_ = true;
   int next_landmark_id_ = 0;
   FilterStats stats_;

@@ -20,6 +20,17 @@ struct MotionInput {
   double noise_scale = 1.0;    // multiplies the model's sigmas (< 1: laser-corrected increment)
 };
 
+/// The motion not yet applied by an update: several predict() calls before one update
+/// compose (deltas compose, durations add, the larger noise scale wins); a non-finite step
+/// is ignored. Every filter variant keeps one.
+struct PendingMotion {
+  bool has_motion = false;
+  MotionInput motion;
+  void add(const MotionInput& m);
+  /// The accumulated motion (a zero one if none) and forget it.
+  MotionInput take();
+};
+
 /// Options of every motion model (unused fields are ignored by a model).
 struct MotionOptions {
   std::string model = "odometry";  // odometry | diff_drive
