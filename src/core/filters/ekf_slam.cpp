@@ -102,18 +102,7 @@ std::vector<EkfSlam::Observation> EkfSlam::prepare(const FeatureSet& features,
 }
 
 GlobalFeature EkfSlam::inMap(const Observation& o, const Pose2& at, int source) const {
-  GlobalFeature g;
-  g.type = o.type;
-  g.source = source;
-  if (o.type == LandmarkType::kLine) {
-    g.value = toGlobalFrame(o.line, at);
-    g.start = transformPoint(at, o.line.start);
-    g.end = transformPoint(at, o.line.end);
-  } else {
-    g.value = pointFromObservation(at, o.z, nullptr);
-    g.start = g.end = g.value;
-  }
-  return g;
+  return globalFeature(o.type, o.line, o.z, at, source);
 }
 
 UpdateStats EkfSlam::update(const FeatureSet& features) {

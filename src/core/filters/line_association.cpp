@@ -1,5 +1,7 @@
 #include "rbpf_slam/core/filters/line_association.h"
 
+#include "rbpf_slam/core/filters/measurement_models.h"
+
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -39,6 +41,22 @@ void validate(const MultiFilterOptions& o) {
 
 void validate(const EkfSlamOptions& o) {
   requireRange("ekf.innovation_gate_chi2", o.innovation_gate_chi2, 0.0, 1e6);
+}
+
+GlobalFeature globalFeature(LandmarkType type, const LineFeature& line,
+                            const Eigen::Vector2d& range_bearing, const Pose2& at, int source) {
+  GlobalFeature g;
+  g.type = type;
+  g.source = source;
+  if (type == LandmarkType::kLine) {
+    g.value = toGlobalFrame(line, at);
+    g.start = transformPoint(at, line.start);
+    g.end = transformPoint(at, line.end);
+  } else {
+    g.value = pointFromObservation(at, range_bearing, nullptr);
+    g.start = g.end = g.value;
+  }
+  return g;
 }
 
 Eigen::Vector2d toGlobalFrame(const LineFeature& line, const Pose2& pose) {

@@ -199,18 +199,7 @@ std::vector<MultiFilterSmc::LocalFeature> MultiFilterSmc::prepare(const FeatureS
 
 GlobalFeature MultiFilterSmc::inMap(const LocalFeature& feature, const Pose2& pose,
                                     int source) const {
-  GlobalFeature g;
-  g.type = feature.type;
-  g.source = source;
-  if (feature.type == LandmarkType::kLine) {
-    g.value = toGlobalFrame(feature.line, pose);
-    g.start = transformPoint(pose, feature.line.start);
-    g.end = transformPoint(pose, feature.line.end);
-  } else {
-    g.value = pointFromObservation(pose, feature.range_bearing, nullptr);
-    g.start = g.end = g.value;
-  }
-  return g;
+  return globalFeature(feature.type, feature.line, feature.range_bearing, pose, source);
 }
 
 UpdateStats MultiFilterSmc::update(const FeatureSet& features) {

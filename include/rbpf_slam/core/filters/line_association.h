@@ -43,6 +43,11 @@ struct GlobalFeature {
   int source = -1;  // index into the caller's observation list
 };
 
+/// A feature seen from `at`, in the map frame: a line by ToGlobalFrame with its observed
+/// extent, a point from its (range, bearing). Shared by the multi-filter SMC and the EKF.
+GlobalFeature globalFeature(LandmarkType type, const LineFeature& line,
+                            const Eigen::Vector2d& range_bearing, const Pose2& at, int source);
+
 /// WAD between two lines as sets of points: the smaller of the WAD to (rho2, theta2) and to
 /// its other normal form (-rho2, theta2 + pi). They differ only for lines passing near the
 /// origin, where rho ~ 0 and the normal's direction flips between sightings.
