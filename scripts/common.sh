@@ -37,7 +37,13 @@ build_package() {
   if [ -d "$BUILD/devel" ] && [ ! -L "$BUILD/devel" ]; then rm -rf "$BUILD/devel"; fi
   ln -sfn ../devel "$BUILD/devel"
   echo "Building ($build_type) in $BUILD ..."
-  cmake -S "$ROOT" -B "$BUILD" -DCMAKE_BUILD_TYPE="$build_type" \
+  # ccache, when the machine has it (developers' worktrees share one cache; CI has none).
+  local launcher=()
+  if command -v ccache >/dev/null 2>&1; then
+    export CCACHE_BASEDIR="${CCACHE_BASEDIR:-$(dirname "$ROOT")}"
+    launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
+  fi
+  cmake -S "$ROOT" -B "$BUILD" -DCMAKE_BUILD_TYPE="$build_type" "${launcher[@]}" \
     -DPYTHON_EXECUTABLE=/usr/bin/python3 -DCATKIN_DEVEL_PREFIX="$DEVEL" >"$BUILD/cmake.log" 2>&1 \
     || { tail -n 40 "$BUILD/cmake.log"; echo "cmake failed (log: $BUILD/cmake.log)" >&2; return 1; }
   make -C "$BUILD" -j"$(nproc)" >"$BUILD/make.log" 2>&1 \
