@@ -48,7 +48,8 @@ diagnostic_msgs::DiagnosticArray SlamDiagnostics::report(const ros::Time& stamp,
     problem = "paused (~resume to continue)";
   } else if (dropped_period > 0) {
     problem = std::to_string(dropped_period) + " message(s) dropped since the last report";
-  } else if (updates_total_ > 0 && stats.last_neff < options_.low_neff_fraction * particles) {
+  } else if (options_.filter_fields && updates_total_ > 0 &&
+             stats.last_neff < options_.low_neff_fraction * particles) {
     problem = "effective sample size " + text(stats.last_neff) + " of " +
               std::to_string(particles) + " particles";
   } else if (mean_ms > options_.slow_update_ms) {
@@ -64,12 +65,14 @@ diagnostic_msgs::DiagnosticArray SlamDiagnostics::report(const ros::Time& stamp,
   status.values.push_back(keyValue("updates", text(updates_total_)));
   status.values.push_back(keyValue("updates since last report", text(updates_period_)));
   status.values.push_back(keyValue("update time mean [ms]", text(mean_ms)));
-  status.values.push_back(keyValue("Neff", text(stats.last_neff)));
-  status.values.push_back(keyValue("particles", text(particles)));
-  status.values.push_back(keyValue("landmarks", text(stats.landmarks)));
-  status.values.push_back(keyValue("resamples", text(stats.resamples)));
-  status.values.push_back(keyValue("weight resets", text(stats.weight_resets)));
-  status.values.push_back(keyValue("numeric fallbacks", text(stats.fallbacks)));
+  if (options_.filter_fields) {
+    status.values.push_back(keyValue("Neff", text(stats.last_neff)));
+    status.values.push_back(keyValue("particles", text(particles)));
+    status.values.push_back(keyValue("landmarks", text(stats.landmarks)));
+    status.values.push_back(keyValue("resamples", text(stats.resamples)));
+    status.values.push_back(keyValue("weight resets", text(stats.weight_resets)));
+    status.values.push_back(keyValue("numeric fallbacks", text(stats.fallbacks)));
+  }
   status.values.push_back(keyValue("resets", text(resets_total_)));
   status.values.push_back(keyValue("paused", paused_ ? "true" : "false"));
   for (const auto& [cause, count] : drops_total_) {

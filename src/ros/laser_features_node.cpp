@@ -7,26 +7,26 @@
 
 namespace rbpf_slam {
 namespace rosbridge {
-namespace {
-
-constexpr double kWarningPeriodS = 10.0;
-
-}  // namespace
-
 LaserFeaturesNode::LaserFeaturesNode(ros::NodeHandle nh, ros::NodeHandle private_nh)
     : config_(loadConfigFromParams(private_nh)),
       extractor_(config_.laser),
       tf_listener_(tf_buffer_, nh) {
-  const uint32_t queue = static_cast<uint32_t>(config_.ros.queue_size);
-  scan_subscriber_.subscribe(nh, config_.ros.scan_topic, queue);
+  using Ptr = sensor_msgs::LaserScan::ConstPtr;
+  TfGatedSubscriber<sensor_msgs::LaserScan>::Handlers handlers;
+  handlers.on_message = [this](const Ptr& msg) { scanCallback(msg); };
+  handlers.on_failure = [this](const Ptr& msg, tf2_ros::FilterFailureReason reason) {
+    messageDropped(msg, reason);
+  };
+  handlers.on_unknown_frame = [this](const Ptr& msg, const std::string& error) {
+    warnings_.warn("frame " + msg->header.frame_id,
+                   "Dropping a scan in frame '" + msg->header.frame_id +
+                       "': tf has no transform " + config_.ros.base_frame + " -> " +
+                       msg->header.frame_id + " (" + error + ")");
+  };
   // Only base -> sensor is needed (usually static), so wait for that, not for odometry.
-  scan_filter_ = std::make_unique<tf2_ros::MessageFilter<sensor_msgs::LaserScan>>(
-      scan_subscriber_, tf_buffer_, config_.ros.base_frame, queue, nh);
-  scan_filter_->registerCallback(&LaserFeaturesNode::scanCallback, this);
-  scan_filter_->registerFailureCallback(
-      [this](const sensor_msgs::LaserScan::ConstPtr& msg, tf2_ros::FilterFailureReason r) {
-        messageDropped(msg, r);
-      });
+  scan_input_ = std::make_unique<TfGatedSubscriber<sensor_msgs::LaserScan>>(
+      nh, config_.ros.scan_topic, static_cast<uint32_t>(config_.ros.queue_size), &tf_buffer_,
+      config_.ros.base_frame, config_.ros.base_frame, std::move(handlers));
   features_publisher_ = nh.advertise<FeatureArray>(config_.ros.features_topic, 10);
 }
 
@@ -37,14 +37,14 @@ void LaserFeaturesNode::scanCallback(const sensor_msgs::LaserScan::ConstPtr& msg
         tf_buffer_.lookupTransform(config_.ros.base_frame, msg->header.frame_id, msg->header.stamp)
             .transform);
   } catch (const tf2::TransformException& e) {
-    warnThrottled("tf " + msg->header.frame_id, "No transform " + config_.ros.base_frame + " -> " +
+    warnings_.warn("tf " + msg->header.frame_id, "No transform " + config_.ros.base_frame + " -> " +
                                                     msg->header.frame_id + ": " + e.what());
     return;
   }
   core::RangeScan scan;
   std::string error;
   const bool ok = toRangeScan(*msg, sensor_in_base, &scan, &error);
-  if (!error.empty()) warnThrottled("scan header", "Scan: " + error);
+  if (!error.empty()) warnings_.warn("scan header", "Scan: " + error);
   if (!ok) return;
   std_msgs::Header header;
   header.stamp = msg->header.stamp;
@@ -55,20 +55,12 @@ void LaserFeaturesNode::scanCallback(const sensor_msgs::LaserScan::ConstPtr& msg
 void LaserFeaturesNode::messageDropped(const sensor_msgs::LaserScan::ConstPtr& msg,
                                        tf2_ros::FilterFailureReason reason) {
   if (reason == tf2_ros::filter_failure_reasons::EmptyFrameID) {
-    warnThrottled("empty frame_id", "Dropping a scan with an empty header.frame_id");
+    warnings_.warn("empty frame_id", "Dropping a scan with an empty header.frame_id");
   } else {
-    warnThrottled("no tf " + msg->header.frame_id,
+    warnings_.warn("no tf " + msg->header.frame_id,
                   "Dropping a scan: no transform " + config_.ros.base_frame + " -> " +
                       msg->header.frame_id + " at " + std::to_string(msg->header.stamp.toSec()));
   }
-}
-
-void LaserFeaturesNode::warnThrottled(const std::string& cause, const std::string& message) {
-  const ros::WallTime now = ros::WallTime::now();
-  auto it = last_warning_.find(cause);
-  if (it != last_warning_.end() && (now - it->second).toSec() < kWarningPeriodS) return;
-  last_warning_[cause] = now;
-  ROS_WARN_STREAM("laser_features: " << message);
 }
 
 }  // namespace rosbridge

@@ -23,7 +23,6 @@ namespace {
 
 constexpr double kMapPointRadiusM = 0.1;  // a point landmark's disc on ~map
 
-constexpr double kWarningPeriodS = 10.0;
 constexpr double kTfCacheS = 30.0;
 constexpr double kSummaryPeriodS = 30.0;
 
@@ -63,17 +62,14 @@ SlamNode::SlamNode(ros::NodeHandle nh, ros::NodeHandle private_nh,
       tf_listener_(tf_buffer_, nh) {
   const io::RosOptions& ros_options = config_.ros;
   if (config_.frontend == "laser") {
-    subscribeFiltered(ros_options.scan_topic, &scan_subscriber_, &scan_filter_,
-                      &SlamNode::scanCallback);
+    scan_input_ = subscribeFiltered(ros_options.scan_topic, &SlamNode::scanCallback);
   } else if (config_.frontend == "sonar" && ros_options.sonar_source == "cloud") {
-    subscribeFiltered(ros_options.sonar_cloud_topic, &sonar_cloud_subscriber_,
-                      &sonar_cloud_filter_, &SlamNode::sonarCloudCallback);
+    sonar_cloud_input_ =
+        subscribeFiltered(ros_options.sonar_cloud_topic, &SlamNode::sonarCloudCallback);
   } else if (config_.frontend == "sonar") {
-    subscribeFiltered(ros_options.sonar_topic, &sonar_subscriber_, &sonar_filter_,
-                      &SlamNode::sonarCallback);
+    sonar_input_ = subscribeFiltered(ros_options.sonar_topic, &SlamNode::sonarCallback);
   }
-  subscribeFiltered(ros_options.features_topic, &features_subscriber_, &features_filter_,
-                    &SlamNode::featuresCallback);
+  features_input_ = subscribeFiltered(ros_options.features_topic, &SlamNode::featuresCallback);
 
   pose_publisher_ = private_nh_.advertise<geometry_msgs::PoseWithCovarianceStamped>("pose", 10);
   trajectory_publisher_ = private_nh_.advertise<nav_msgs::Path>("trajectory", 1, true);
@@ -118,26 +114,20 @@ SlamNode::SlamNode(ros::NodeHandle nh, ros::NodeHandle private_nh,
 }
 
 template <typename Message>
-void SlamNode::subscribeFiltered(
-    const std::string& topic, message_filters::Subscriber<Message>* subscriber,
-    std::unique_ptr<tf2_ros::MessageFilter<Message>>* filter,
-    void (SlamNode::*callback)(const boost::shared_ptr<const Message>&)) {
-  const uint32_t queue = static_cast<uint32_t>(config_.ros.queue_size);
-  subscriber->subscribe(nh_, topic, queue);
-  *filter = std::make_unique<tf2_ros::MessageFilter<Message>>(tf_buffer_, config_.ros.odom_frame,
-                                                               queue, nh_);
-  // A message in a frame tf does not connect to the base would wait in the queue silently
-  // until pushed out; it is dropped (and named) before it gets there.
-  tf2_ros::MessageFilter<Message>* tf_filter = filter->get();
-  subscriber->registerCallback(boost::function<void(const boost::shared_ptr<const Message>&)>(
-      [this, tf_filter](const boost::shared_ptr<const Message>& msg) {
-        if (frameConnected(msg->header)) tf_filter->add(msg);
-      }));
-  (*filter)->registerCallback(callback, this);
-  (*filter)->registerFailureCallback(
-      [this](const boost::shared_ptr<const Message>& msg, tf2_ros::FilterFailureReason r) {
-        messageDropped(msg->header, r);
-      });
+std::unique_ptr<TfGatedSubscriber<Message>> SlamNode::subscribeFiltered(
+    const std::string& topic, void (SlamNode::*callback)(const boost::shared_ptr<const Message>&)) {
+  using Ptr = boost::shared_ptr<const Message>;
+  typename TfGatedSubscriber<Message>::Handlers handlers;
+  handlers.on_message = [this, callback](const Ptr& msg) { (this->*callback)(msg); };
+  handlers.on_failure = [this](const Ptr& msg, tf2_ros::FilterFailureReason reason) {
+    messageDropped(msg->header, reason);
+  };
+  handlers.on_unknown_frame = [this](const Ptr& msg, const std::string& error) {
+    frameNotInTf(msg->header, error);
+  };
+  return std::make_unique<TfGatedSubscriber<Message>>(
+      nh_, topic, static_cast<uint32_t>(config_.ros.queue_size), &tf_buffer_, config_.ros.base_frame,
+      config_.ros.odom_frame, std::move(handlers));
 }
 
 void SlamNode::sonarCallback(const sensor_msgs::Range::ConstPtr& msg) {
@@ -224,26 +214,20 @@ void SlamNode::featuresCallback(const FeatureArray::ConstPtr& msg) {
   if (dropped > 0) {
     warnThrottled("non-finite features", "Dropped " + std::to_string(dropped) +
                                              " feature(s) with non-finite values from " +
-                                             features_subscriber_.getTopic());
+                                             features_input_->topic());
   }
   const auto t0 = std::chrono::steady_clock::now();
   const core::FrameResult result = pipeline_.processFeatures(features, odom_pose);
   handleResult(result, msg->header.stamp, millisecondsSince(t0));
 }
 
-bool SlamNode::frameConnected(const std_msgs::Header& header) {
+void SlamNode::frameNotInTf(const std_msgs::Header& header, const std::string& tf_error) {
   const std::string& base = config_.ros.base_frame;
-  // An empty frame is the MessageFilter's to report; before tf has the base frame at all
-  // (start-up), every message waits in the bounded queue.
-  if (header.frame_id.empty() || !tf_buffer_._frameExists(base)) return true;
-  std::string error;
-  if (tf_buffer_.canTransform(base, header.frame_id, ros::Time(0), &error)) return true;
   diagnostics_.recordDrop("frame not in tf");
   warnThrottled("frame " + header.frame_id,
                 "Dropping a message in frame '" + header.frame_id + "': tf has no transform " +
-                    base + " -> " + header.frame_id + " (" + error +
+                    base + " -> " + header.frame_id + " (" + tf_error +
                     "); is the frame name right and its transform published?");
-  return false;
 }
 
 void SlamNode::messageDropped(const std_msgs::Header& header, tf2_ros::FilterFailureReason reason) {
@@ -543,23 +527,15 @@ void SlamNode::resetAll(const std::string& why) {
   ROS_WARN_STREAM("rbpf_slam_node: " << why << ": clearing the map, the trajectory and tf");
   pipeline_.reset();  // filter, history and the scan matcher's reference
   tf_buffer_.clear();
-  if (scan_filter_) scan_filter_->clear();
-  if (sonar_filter_) sonar_filter_->clear();
-  if (sonar_cloud_filter_) sonar_cloud_filter_->clear();
-  features_filter_->clear();
+  if (scan_input_) scan_input_->clear();
+  if (sonar_input_) sonar_input_->clear();
+  if (sonar_cloud_input_) sonar_cloud_input_->clear();
+  features_input_->clear();
   last_transform_stamp_ = ros::Time();
   updates_ = 0;
   stale_drops_in_a_row_ = 0;
   publishLandmarks(ros::Time::now());  // DELETE for every landmark shown
   trajectory_publisher_.publish(toPath(pipeline_.session().trajectory(), config_.ros.map_frame));
-}
-
-void SlamNode::warnThrottled(const std::string& cause, const std::string& message) {
-  const ros::WallTime now = ros::WallTime::now();
-  auto it = last_warning_.find(cause);
-  if (it != last_warning_.end() && (now - it->second).toSec() < kWarningPeriodS) return;
-  last_warning_[cause] = now;
-  ROS_WARN_STREAM("rbpf_slam_node: " << message);
 }
 
 }  // namespace rosbridge

@@ -2,6 +2,8 @@
 
 #include <rbpf_slam/FeatureArray.h>
 
+#include <chrono>
+#include <cmath>
 #include <stdexcept>
 
 #include "rbpf_slam/ros/conversions.h"
@@ -11,40 +13,56 @@ namespace rbpf_slam {
 namespace rosbridge {
 namespace {
 
-constexpr double kWarningPeriodS = 10.0;
+DiagnosticsOptions extractorDiagnostics() {
+  DiagnosticsOptions options;
+  options.filter_fields = false;
+  return options;
+}
 
 }  // namespace
 
 SonarFeaturesNode::SonarFeaturesNode(ros::NodeHandle nh, ros::NodeHandle private_nh)
     : config_(loadConfigFromParams(private_nh)),
       extractor_(config_.sonar),
-      tf_listener_(tf_buffer_, nh) {
+      tf_listener_(tf_buffer_, nh),
+      diagnostics_("sonar_features", extractorDiagnostics()) {
   if (config_.ros.sonar_source != "range") {
     throw std::invalid_argument("sonar_source = '" + config_.ros.sonar_source +
                                 "': sonar_features reads sensor_msgs/Range (sonar_source: "
                                 "range); give sonar_cloud to rbpf_slam_node directly");
   }
-  const uint32_t queue = static_cast<uint32_t>(config_.ros.queue_size);
-  sonar_subscriber_.subscribe(nh, config_.ros.sonar_topic, queue);
+  using Ptr = sensor_msgs::Range::ConstPtr;
+  TfGatedSubscriber<sensor_msgs::Range>::Handlers handlers;
+  handlers.on_message = [this](const Ptr& msg) { sonarCallback(msg); };
+  handlers.on_failure = [this](const Ptr& msg, tf2_ros::FilterFailureReason reason) {
+    messageDropped(msg, reason);
+  };
+  handlers.on_unknown_frame = [this](const Ptr& msg, const std::string& error) {
+    drop("frame not in tf", "frame " + msg->header.frame_id,
+         "Dropping a sonar reading in frame '" + msg->header.frame_id + "': tf has no transform " +
+             config_.ros.base_frame + " -> " + msg->header.frame_id + " (" + error +
+             "); is the frame name right and its transform published?");
+  };
   // Echoes are placed by odometry, so wait for odom -> base as well as base -> transducer.
-  sonar_filter_ = std::make_unique<tf2_ros::MessageFilter<sensor_msgs::Range>>(
-      sonar_subscriber_, tf_buffer_, config_.ros.odom_frame, queue, nh);
-  sonar_filter_->registerCallback(&SonarFeaturesNode::sonarCallback, this);
-  sonar_filter_->registerFailureCallback(
-      [this](const sensor_msgs::Range::ConstPtr& msg, tf2_ros::FilterFailureReason r) {
-        messageDropped(msg, r);
-      });
+  sonar_input_ = std::make_unique<TfGatedSubscriber<sensor_msgs::Range>>(
+      nh, config_.ros.sonar_topic, static_cast<uint32_t>(config_.ros.queue_size), &tf_buffer_,
+      config_.ros.base_frame, config_.ros.odom_frame, std::move(handlers));
   features_publisher_ = nh.advertise<FeatureArray>(config_.ros.features_topic, 10);
+  diagnostics_publisher_ = nh.advertise<diagnostic_msgs::DiagnosticArray>("/diagnostics", 10);
+  diagnostics_timer_ =
+      nh.createWallTimer(ros::WallDuration(1.0), &SonarFeaturesNode::publishDiagnostics, this);
 }
 
 void SonarFeaturesNode::sonarCallback(const sensor_msgs::Range::ConstPtr& msg) {
   const double stamp = msg->header.stamp.toSec();
   if (stamp + config_.session.reset_on_time_jump_back_s < last_stamp_) {
-    warnThrottled("time jump", "Sonar stamps went back by " + std::to_string(last_stamp_ - stamp) +
-                                   " s: clearing the echo window");
+    warnings_.warn("time jump", "Sonar stamps went back by " +
+                                    std::to_string(last_stamp_ - stamp) +
+                                    " s: clearing the echo window");
     extractor_.reset();
+    diagnostics_.recordReset();
   } else if (stamp < last_stamp_) {
-    warnThrottled("old stamp", "Dropping a sonar reading older than the last one");
+    drop("old stamp", "old stamp", "Dropping a sonar reading older than the last one");
     return;
   }
   last_stamp_ = stamp;
@@ -58,16 +76,22 @@ void SonarFeaturesNode::sonarCallback(const sensor_msgs::Range::ConstPtr& msg) {
         tf_buffer_.lookupTransform(config_.ros.base_frame, msg->header.frame_id, msg->header.stamp)
             .transform);
   } catch (const tf2::TransformException& e) {
-    warnThrottled("tf " + msg->header.frame_id, std::string("No transform: ") + e.what());
+    drop("no tf", "tf " + msg->header.frame_id, std::string("No transform: ") + e.what());
     return;
   }
   core::ConeReading reading;
   std::string error;
   if (!toConeReading(*msg, sensor_in_base, &reading, &error)) {
-    warnThrottled("sonar " + msg->header.frame_id,
-                  "Dropping a sonar reading from " + msg->header.frame_id + ": " + error);
+    drop("bad sonar reading", "sonar " + msg->header.frame_id,
+         "Dropping a sonar reading from " + msg->header.frame_id + ": " + error);
     return;
   }
+  if (!std::isfinite(reading.range)) {
+    warnings_.warn("sonar range " + msg->header.frame_id,
+                   "Sonar " + msg->header.frame_id +
+                       " sent a non-finite range (counted as no echo)");
+  }
+  const auto t0 = std::chrono::steady_clock::now();
   extractor_.addReadings({reading}, odom_pose, stamp);
   if (!extractor_.extractionDue(odom_pose)) return;
   std_msgs::Header header;
@@ -75,26 +99,35 @@ void SonarFeaturesNode::sonarCallback(const sensor_msgs::Range::ConstPtr& msg) {
   header.frame_id = config_.ros.base_frame;
   features_publisher_.publish(toMsg(extractor_.extract(odom_pose, stamp), header));
   ++published_;
+  diagnostics_.recordUpdate(
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
 }
 
 void SonarFeaturesNode::messageDropped(const sensor_msgs::Range::ConstPtr& msg,
                                        tf2_ros::FilterFailureReason reason) {
   if (reason == tf2_ros::filter_failure_reasons::EmptyFrameID) {
-    warnThrottled("empty frame_id", "Dropping a sonar reading with an empty header.frame_id");
+    drop("empty frame_id", "empty frame_id",
+         "Dropping a sonar reading with an empty header.frame_id");
   } else {
-    warnThrottled("no tf " + msg->header.frame_id,
-                  "Dropping a sonar reading: no transform " + config_.ros.odom_frame + " -> " +
-                      config_.ros.base_frame + " -> " + msg->header.frame_id + " at " +
-                      std::to_string(msg->header.stamp.toSec()));
+    drop(reason == tf2_ros::filter_failure_reasons::OutTheBack ? "older than the tf cache"
+                                                              : "no tf in time",
+         "no tf " + msg->header.frame_id,
+         "Dropping a sonar reading: no transform " + config_.ros.odom_frame + " -> " +
+             config_.ros.base_frame + " -> " + msg->header.frame_id + " at " +
+             std::to_string(msg->header.stamp.toSec()));
   }
 }
 
-void SonarFeaturesNode::warnThrottled(const std::string& cause, const std::string& message) {
-  const ros::WallTime now = ros::WallTime::now();
-  auto it = last_warning_.find(cause);
-  if (it != last_warning_.end() && (now - it->second).toSec() < kWarningPeriodS) return;
-  last_warning_[cause] = now;
-  ROS_WARN_STREAM("sonar_features: " << message);
+void SonarFeaturesNode::drop(const std::string& cause, const std::string& key,
+                             const std::string& message) {
+  diagnostics_.recordDrop(cause);
+  warnings_.warn(key, message);
+}
+
+void SonarFeaturesNode::publishDiagnostics(const ros::WallTimerEvent&) {
+  const ros::Time now = ros::Time::now();
+  diagnostics_publisher_.publish(diagnostics_.report(
+      now.isZero() ? ros::Time(ros::WallTime::now().toSec()) : now, core::FilterStats(), 0));
 }
 
 }  // namespace rosbridge

@@ -1,13 +1,16 @@
 #!/usr/bin/env python3
-"""Writes a corrupted copy of a laser bag (sensor_msgs/LaserScan on /scan, tf odom -> base_link
-on /tf), with one fault class per window of the bag's duration, so that tests can check that
-the node and the offline runner survive each one and recover after it:
+"""Writes a corrupted copy of a robot bag (sensor_msgs/LaserScan on /scan, sensor_msgs/Range on
+/sonar, sensor_msgs/PointCloud on /sonar_cloud, rbpf_slam/FeatureArray on /features, tf
+odom -> base_link on /tf; any of the sensor topics may be missing), with one fault class per window of the bag's duration, so that tests
+can check that the node and the offline runner survive each one and recover after it:
 
-  fraction 0.10-0.20  invalid beams: NaN, +inf, -inf in a third of the beams, one all-NaN scan
-  fraction 0.25       a scan duplicated (same stamp) and a copy stamped 5 s in the past
-  fraction 0.35-0.45  tf gap: no odom -> base_link for this span (scans keep coming)
-  fraction 0.50       a scan with an empty frame_id and one in a frame tf does not know
-  fraction 0.55       a scan whose angle_increment is NaN (malformed header)
+  fraction 0.10-0.20  invalid ranges: NaN, +inf, -inf in a third of the beams, one all-NaN
+                      scan; sonar ranges NaN, +inf, -inf, 0, negative in turn; NaN cloud points;
+                      features with NaN range, infinite or zero covariance, negative rho
+  fraction 0.25       a message duplicated (same stamp) and a copy stamped 5 s in the past
+  fraction 0.35-0.45  tf gap: no odom -> base_link for this span (sensors keep coming)
+  fraction 0.50       a message with an empty frame_id and one in a frame tf does not know
+  fraction 0.55       a malformed message: scan angle_increment NaN, sonar field_of_view NaN
   fraction 0.60       the odometry jumps 3 m sideways and stays shifted
   end                 the first 20% of the bag again with its own stamps (a loop: time goes back)
 
@@ -19,6 +22,40 @@ import math
 import sys
 
 import rosbag
+
+
+SENSORS = ("/scan", "/sonar", "/sonar_cloud", "/features")
+BAD = [float("nan"), float("inf"), float("-inf"), 0.0, -1.0]
+
+
+def invalidate(topic, msg, done):
+    """The invalid-range fault, in place."""
+    if topic == "/scan":
+        ranges = list(msg.ranges)
+        for i in range(0, len(ranges), 3):
+            ranges[i] = BAD[(i // 3) % 3]
+        if "all_nan" not in done:
+            ranges = [float("nan")] * len(ranges)
+            done.add("all_nan")
+        msg.ranges = ranges
+    elif topic == "/sonar":
+        count = len([d for d in done if d.startswith("sonar#")])
+        done.add("sonar#%d" % count)
+        msg.range = BAD[count % len(BAD)]
+    elif topic == "/sonar_cloud":
+        for i in range(0, len(msg.points), 2):
+            msg.points[i].x = float("nan")
+    else:
+        for i, p in enumerate(msg.points):
+            if i % 3 == 0:
+                p.range = float("nan")
+            elif i % 3 == 1:
+                p.covariance = [float("inf"), 0.0, 0.0, 1.0]
+            else:
+                p.covariance = [0.0, 0.0, 0.0, 0.0]
+        for line in msg.lines:
+            line.rho = -line.rho
+            line.theta += math.pi
 
 
 def main():
@@ -52,32 +89,29 @@ def main():
                         x.transform.translation.y += 3.0
             if topic == "/odom" and st >= at(0.60):
                 msg.pose.pose.position.y += 3.0
-            if topic == "/scan":
+            if topic in SENSORS:
                 if at(0.10) <= st < at(0.20):
-                    ranges = list(msg.ranges)
-                    bad = [float("nan"), float("inf"), float("-inf")]
-                    for i in range(0, len(ranges), 3):
-                        ranges[i] = bad[(i // 3) % 3]
-                    if "all_nan" not in done:
-                        ranges = [float("nan")] * len(ranges)
-                        done.add("all_nan")
-                    msg.ranges = ranges
-                if st >= at(0.25) and "stale" not in done:
-                    done.add("stale")
+                    invalidate(topic, msg, done)
+                if st >= at(0.25) and "stale" + topic not in done:
+                    done.add("stale" + topic)
                     out.write(topic, msg, t)
                     old = copy.deepcopy(msg)
                     old.header.stamp.secs -= 5
                     out.write(topic, old, t)
-                if st >= at(0.50) and "frames" not in done:
-                    done.add("frames")
-                    for frame in ("", "no_such_laser"):
+                if st >= at(0.50) and "frames" + topic not in done:
+                    done.add("frames" + topic)
+                    for frame in ("", "no_such_sensor"):
                         odd = copy.deepcopy(msg)
                         odd.header.frame_id = frame
                         out.write(topic, odd, t)
-                if st >= at(0.55) and "malformed" not in done:
-                    done.add("malformed")
+                if (st >= at(0.55) and "malformed" + topic not in done
+                        and topic in ("/scan", "/sonar")):
+                    done.add("malformed" + topic)
                     odd = copy.deepcopy(msg)
-                    odd.angle_increment = float("nan")
+                    if topic == "/scan":
+                        odd.angle_increment = float("nan")
+                    else:
+                        odd.field_of_view = float("nan")
                     out.write(topic, odd, t)
             out.write(topic, msg, t)
         # The loop: the bag starts over, stamps and all (rosbag play -l, a restarted driver).

@@ -102,5 +102,29 @@ TEST(SonarSlam, BadReadingsAreSkippedNotFatal) {
   EXPECT_EQ(pipeline.sonarExtractor().stats().readings, 0);
 }
 
+// A ring arrives as one message per transducer with one stamp: the readings after the one that
+// anchored (or updated) the map join the window; none is a rejected frame.
+TEST(SonarSlam, TheRestOfARingAtTheSameStampIsNotRejected) {
+  const io::SlamConfig config =
+      io::loadSlamConfig(std::string(RBPF_SOURCE_DIR) + "/config/sonar_fastslam2.yaml");
+  core::SlamPipeline pipeline(config.pipeline());
+  core::ConeReading reading;
+  reading.range = 2.0;
+  reading.max_range = 5.0;
+  reading.field_of_view = 0.5;
+  EXPECT_EQ(pipeline.processSonar({reading}, core::Pose2::Zero(), 1.0),
+            core::FrameResult::kFirstFrame);
+  for (int i = 1; i < 8; ++i) {
+    reading.sensor_pose = core::Pose2(0.0, 0.0, 0.2 * i);
+    EXPECT_EQ(pipeline.processSonar({reading}, core::Pose2::Zero(), 1.0),
+              core::FrameResult::kSkippedNoMotion)
+        << "reading " << i;
+  }
+  EXPECT_EQ(pipeline.sonarExtractor().stats().readings, 8);
+  // The next ring, after the robot moved, updates.
+  EXPECT_EQ(pipeline.processSonar({reading}, core::Pose2(0.5, 0, 0), 2.0),
+            core::FrameResult::kUpdated);
+}
+
 }  // namespace
 }  // namespace rbpf_slam

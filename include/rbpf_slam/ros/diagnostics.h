@@ -17,6 +17,9 @@ namespace rosbridge {
 struct DiagnosticsOptions {
   double low_neff_fraction = 0.1;  // Neff below this fraction of the particles
   double slow_update_ms = 200.0;   // mean update time above this
+  /// false for a node without a filter (a feature extractor): the report leaves out Neff,
+  /// particles, landmarks, resamples, weight resets and fallbacks.
+  bool filter_fields = true;
 };
 
 /// Counts what happened since the last report and builds one DiagnosticStatus from it.

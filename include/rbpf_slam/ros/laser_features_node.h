@@ -1,19 +1,17 @@
 #pragma once
 // Extracts line and point features from laser scans and republishes them as FeatureArray.
 
-#include <message_filters/subscriber.h>
 #include <ros/ros.h>
 #include <sensor_msgs/LaserScan.h>
 #include <tf2_ros/buffer.h>
-#include <tf2_ros/message_filter.h>
 #include <tf2_ros/transform_listener.h>
 
-#include <map>
 #include <memory>
 #include <string>
 
 #include "rbpf_slam/core/features/laser_line_extractor.h"
 #include "rbpf_slam/io/slam_config.h"
+#include "rbpf_slam/ros/node_support.h"
 
 namespace rbpf_slam {
 namespace rosbridge {
@@ -29,16 +27,14 @@ class LaserFeaturesNode {
   void scanCallback(const sensor_msgs::LaserScan::ConstPtr& msg);
   void messageDropped(const sensor_msgs::LaserScan::ConstPtr& msg,
                       tf2_ros::FilterFailureReason reason);
-  void warnThrottled(const std::string& cause, const std::string& message);
 
   const io::SlamConfig config_;
   const core::LaserLineExtractor extractor_;
   tf2_ros::Buffer tf_buffer_;
   tf2_ros::TransformListener tf_listener_;
-  message_filters::Subscriber<sensor_msgs::LaserScan> scan_subscriber_;
-  std::unique_ptr<tf2_ros::MessageFilter<sensor_msgs::LaserScan>> scan_filter_;
+  std::unique_ptr<TfGatedSubscriber<sensor_msgs::LaserScan>> scan_input_;
   ros::Publisher features_publisher_;
-  std::map<std::string, ros::WallTime> last_warning_;
+  ThrottledWarnings warnings_{"laser_features"};
 };
 
 }  // namespace rosbridge

@@ -5,7 +5,6 @@
 // and ~dynamic_map (the variant's grid, or its landmarks rasterised).
 
 #include <geometry_msgs/PoseWithCovarianceStamped.h>
-#include <message_filters/subscriber.h>
 #include <nav_msgs/GetMap.h>
 #include <nav_msgs/OccupancyGrid.h>
 #include <rbpf_slam/FeatureArray.h>
@@ -30,6 +29,7 @@
 #include "rbpf_slam/io/slam_config.h"
 #include "rbpf_slam/ros/diagnostics.h"
 #include "rbpf_slam/ros/markers.h"
+#include "rbpf_slam/ros/node_support.h"
 
 namespace rbpf_slam {
 namespace rosbridge {
@@ -56,16 +56,13 @@ class SlamNode {
   void featuresCallback(const FeatureArray::ConstPtr& msg);
   void sonarCallback(const sensor_msgs::Range::ConstPtr& msg);
   void sonarCloudCallback(const sensor_msgs::PointCloud::ConstPtr& msg);
-  /// Subscribes to topic through a tf MessageFilter on the odometry frame.
+  /// Subscribes to topic through tf (TfGatedSubscriber) on the odometry frame.
   template <typename Message>
-  void subscribeFiltered(const std::string& topic,
-                         message_filters::Subscriber<Message>* subscriber,
-                         std::unique_ptr<tf2_ros::MessageFilter<Message>>* filter,
-                         void (SlamNode::*callback)(const boost::shared_ptr<const Message>&));
+  std::unique_ptr<TfGatedSubscriber<Message>> subscribeFiltered(
+      const std::string& topic, void (SlamNode::*callback)(const boost::shared_ptr<const Message>&));
   void messageDropped(const std_msgs::Header& header, tf2_ros::FilterFailureReason reason);
-  /// False (dropped, counted, warned) when tf has the base frame but no path from it to the
-  /// message's frame, which would otherwise wait in the queue until pushed out.
-  bool frameConnected(const std_msgs::Header& header);
+  /// A message whose frame tf does not connect to the base: dropped, counted, warned.
+  void frameNotInTf(const std_msgs::Header& header, const std::string& tf_error);
   /// The odometry pose of the base and the pose of the message frame in the base frame at
   /// the header's stamp; false (with a throttled warning) if tf cannot give them.
   bool lookupPoses(const std_msgs::Header& header, core::Pose2* odom_pose,
@@ -93,7 +90,9 @@ class SlamNode {
   bool readyForFrame();
   void resetAll(const std::string& why);
   /// Warns about cause at most once every few seconds.
-  void warnThrottled(const std::string& cause, const std::string& message);
+  void warnThrottled(const std::string& cause, const std::string& message) {
+    warnings_.warn(cause, message);
+  }
 
   ros::NodeHandle nh_;
   ros::NodeHandle private_nh_;
@@ -103,14 +102,10 @@ class SlamNode {
   tf2_ros::Buffer tf_buffer_;
   tf2_ros::TransformListener tf_listener_;
   tf2_ros::TransformBroadcaster tf_broadcaster_;
-  message_filters::Subscriber<sensor_msgs::LaserScan> scan_subscriber_;
-  std::unique_ptr<tf2_ros::MessageFilter<sensor_msgs::LaserScan>> scan_filter_;
-  message_filters::Subscriber<FeatureArray> features_subscriber_;
-  std::unique_ptr<tf2_ros::MessageFilter<FeatureArray>> features_filter_;
-  message_filters::Subscriber<sensor_msgs::Range> sonar_subscriber_;
-  std::unique_ptr<tf2_ros::MessageFilter<sensor_msgs::Range>> sonar_filter_;
-  message_filters::Subscriber<sensor_msgs::PointCloud> sonar_cloud_subscriber_;
-  std::unique_ptr<tf2_ros::MessageFilter<sensor_msgs::PointCloud>> sonar_cloud_filter_;
+  std::unique_ptr<TfGatedSubscriber<sensor_msgs::LaserScan>> scan_input_;
+  std::unique_ptr<TfGatedSubscriber<FeatureArray>> features_input_;
+  std::unique_ptr<TfGatedSubscriber<sensor_msgs::Range>> sonar_input_;
+  std::unique_ptr<TfGatedSubscriber<sensor_msgs::PointCloud>> sonar_cloud_input_;
   std::vector<core::Pose2> sonar_transducers_;  // sonar_cloud: from tf, found once
 
   ros::Publisher pose_publisher_;
@@ -135,7 +130,7 @@ class SlamNode {
   ros::Time last_transform_stamp_;
   ros::Time last_now_;
   int stale_drops_in_a_row_ = 0;  // "older than the tf cache" drops since the last good frame
-  std::map<std::string, ros::WallTime> last_warning_;
+  ThrottledWarnings warnings_{"rbpf_slam_node"};
   long updates_ = 0;
 };
 

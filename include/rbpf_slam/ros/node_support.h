@@ -1,0 +1,92 @@
+#pragma once
+// What every node of the package does the same way with its inputs: warnings throttled per
+// cause, and sensor topics that wait for tf in a bounded MessageFilter but drop (and name) a
+// message whose frame tf does not know at all instead of letting it wait silently until the
+// queue pushes it out.
+
+#include <message_filters/subscriber.h>
+#include <ros/ros.h>
+#include <std_msgs/Header.h>
+#include <tf2_ros/buffer.h>
+#include <tf2_ros/message_filter.h>
+
+#include <functional>
+#include <map>
+#include <string>
+#include <utility>
+
+namespace rbpf_slam {
+namespace rosbridge {
+
+/// ROS_WARN at most once per period for each cause (a short key such as "no tf sonar_3").
+class ThrottledWarnings {
+ public:
+  explicit ThrottledWarnings(std::string node_name, double period_s = 10.0)
+      : node_name_(std::move(node_name)), period_s_(period_s) {}
+
+  void warn(const std::string& cause, const std::string& message);
+
+ private:
+  const std::string node_name_;
+  const double period_s_;
+  std::map<std::string, ros::WallTime> last_;
+};
+
+/// False, with tf's explanation in *error, when tf knows base_frame but has no path from it to
+/// frame. True for an empty frame (the MessageFilter reports that) and while tf has no
+/// base_frame yet (start-up: everything waits in the bounded queue).
+bool frameInTf(const tf2_ros::Buffer& tf, const std::string& base_frame, const std::string& frame,
+               std::string* error);
+
+/// A subscription whose messages reach on_message only once tf can transform their stamp into
+/// target_frame (tf2_ros::MessageFilter, bounded queue). Messages in a frame not connected to
+/// base_frame go to on_unknown_frame at once; messages the filter gives up on go to on_failure.
+template <typename Message>
+class TfGatedSubscriber {
+ public:
+  using Ptr = boost::shared_ptr<const Message>;
+  struct Handlers {
+    std::function<void(const Ptr&)> on_message;
+    std::function<void(const Ptr&, tf2_ros::FilterFailureReason)> on_failure;
+    std::function<void(const Ptr&, const std::string& tf_error)> on_unknown_frame;
+  };
+
+  TfGatedSubscriber(ros::NodeHandle nh, const std::string& topic, uint32_t queue_size,
+                    tf2_ros::Buffer* tf, std::string base_frame, const std::string& target_frame,
+                    Handlers handlers)
+      : tf_(tf),
+        base_frame_(std::move(base_frame)),
+        handlers_(std::move(handlers)),
+        filter_(*tf, target_frame, queue_size, nh) {
+    subscriber_.subscribe(nh, topic, queue_size);
+    subscriber_.registerCallback(boost::function<void(const Ptr&)>([this](const Ptr& msg) {
+      std::string error;
+      if (frameInTf(*tf_, base_frame_, msg->header.frame_id, &error)) {
+        filter_.add(msg);
+      } else if (handlers_.on_unknown_frame) {
+        handlers_.on_unknown_frame(msg, error);
+      }
+    }));
+    filter_.registerCallback(
+        boost::function<void(const Ptr&)>([this](const Ptr& msg) { handlers_.on_message(msg); }));
+    filter_.registerFailureCallback([this](const Ptr& msg, tf2_ros::FilterFailureReason reason) {
+      if (handlers_.on_failure) handlers_.on_failure(msg, reason);
+    });
+  }
+  TfGatedSubscriber(const TfGatedSubscriber&) = delete;
+  TfGatedSubscriber& operator=(const TfGatedSubscriber&) = delete;
+
+  /// Empties the tf queue (after a reset: nothing queued before it is processed after it).
+  void clear() { filter_.clear(); }
+  std::string topic() const { return subscriber_.getTopic(); }
+
+ private:
+  tf2_ros::Buffer* tf_;
+  const std::string base_frame_;
+  const Handlers handlers_;
+  message_filters::Subscriber<Message> subscriber_;
+  tf2_ros::MessageFilter<Message> filter_;
+};
+
+}  // namespace rosbridge
+}  // namespace rbpf_slam

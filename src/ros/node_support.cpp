@@ -1,0 +1,21 @@
+#include "rbpf_slam/ros/node_support.h"
+
+namespace rbpf_slam {
+namespace rosbridge {
+
+void ThrottledWarnings::warn(const std::string& cause, const std::string& message) {
+  const ros::WallTime now = ros::WallTime::now();
+  auto it = last_.find(cause);
+  if (it != last_.end() && (now - it->second).toSec() < period_s_) return;
+  last_[cause] = now;
+  ROS_WARN_STREAM(node_name_ << ": " << message);
+}
+
+bool frameInTf(const tf2_ros::Buffer& tf, const std::string& base_frame, const std::string& frame,
+               std::string* error) {
+  if (frame.empty() || !tf._frameExists(base_frame)) return true;
+  return tf.canTransform(base_frame, frame, ros::Time(0), error);
+}
+
+}  // namespace rosbridge
+}  // namespace rbpf_slam
