@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
-"""Writes a corrupted copy of a robot bag (sensor_msgs/LaserScan on /scan, sensor_msgs/Range on
-/sonar, sensor_msgs/PointCloud on /sonar_cloud, rbpf_slam/FeatureArray on /features, tf
-odom -> base_link on /tf; any of the sensor topics may be missing), with one fault class per window of the bag's duration, so that tests
+"""Writes a corrupted copy of a robot bag (sensor topics found by type, on any topic:
+sensor_msgs/LaserScan, sensor_msgs/Range (sonar, infrared), sensor_msgs/PointCloud (sonar
+cloud), rbpf_slam/FeatureArray; tf odom -> base_link on /tf), with one fault class per window of the bag's duration, so that tests
 can check that the node and the offline runner survive each one and recover after it:
 
   fraction 0.10-0.20  invalid ranges: NaN, +inf, -inf in a third of the beams, one all-NaN
@@ -24,13 +24,15 @@ import sys
 import rosbag
 
 
-SENSORS = ("/scan", "/sonar", "/sonar_cloud", "/features")
+SCAN, RANGE, CLOUD, FEATURES = ("sensor_msgs/LaserScan", "sensor_msgs/Range",
+                                 "sensor_msgs/PointCloud", "rbpf_slam/FeatureArray")
+SENSORS = (SCAN, RANGE, CLOUD, FEATURES)
 BAD = [float("nan"), float("inf"), float("-inf"), 0.0, -1.0]
 
 
 def invalidate(topic, msg, done):
     """The invalid-range fault, in place."""
-    if topic == "/scan":
+    if msg._type == SCAN:
         ranges = list(msg.ranges)
         for i in range(0, len(ranges), 3):
             ranges[i] = BAD[(i // 3) % 3]
@@ -38,11 +40,11 @@ def invalidate(topic, msg, done):
             ranges = [float("nan")] * len(ranges)
             done.add("all_nan")
         msg.ranges = ranges
-    elif topic == "/sonar":
+    elif msg._type == RANGE:
         count = len([d for d in done if d.startswith("sonar#")])
         done.add("sonar#%d" % count)
         msg.range = BAD[count % len(BAD)]
-    elif topic == "/sonar_cloud":
+    elif msg._type == CLOUD:
         for i in range(0, len(msg.points), 2):
             msg.points[i].x = float("nan")
     else:
@@ -89,7 +91,7 @@ def main():
                         x.transform.translation.y += 3.0
             if topic == "/odom" and st >= at(0.60):
                 msg.pose.pose.position.y += 3.0
-            if topic in SENSORS:
+            if msg._type in SENSORS:
                 if at(0.10) <= st < at(0.20):
                     invalidate(topic, msg, done)
                 if st >= at(0.25) and "stale" + topic not in done:
@@ -105,10 +107,10 @@ def main():
                         odd.header.frame_id = frame
                         out.write(topic, odd, t)
                 if (st >= at(0.55) and "malformed" + topic not in done
-                        and topic in ("/scan", "/sonar")):
+                        and msg._type in (SCAN, RANGE)):
                     done.add("malformed" + topic)
                     odd = copy.deepcopy(msg)
-                    if topic == "/scan":
+                    if msg._type == SCAN:
                         odd.angle_increment = float("nan")
                     else:
                         odd.field_of_view = float("nan")
