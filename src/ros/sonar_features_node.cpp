@@ -11,21 +11,11 @@
 
 namespace rbpf_slam {
 namespace rosbridge {
-namespace {
-
-DiagnosticsOptions extractorDiagnostics() {
-  DiagnosticsOptions options;
-  options.filter_fields = false;
-  return options;
-}
-
-}  // namespace
-
 SonarFeaturesNode::SonarFeaturesNode(ros::NodeHandle nh, ros::NodeHandle private_nh)
     : config_(loadConfigFromParams(private_nh)),
       extractor_(config_.sonar),
       tf_listener_(tf_buffer_, nh),
-      diagnostics_("sonar_features", extractorDiagnostics()) {
+      diagnostics_("sonar_features", DiagnosticsOptions::withoutFilter()) {
   if (config_.ros.sonar_source != "range") {
     throw std::invalid_argument("sonar_source = '" + config_.ros.sonar_source +
                                 "': sonar_features reads sensor_msgs/Range (sonar_source: "

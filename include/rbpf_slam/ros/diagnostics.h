@@ -20,6 +20,13 @@ struct DiagnosticsOptions {
   /// false for a node without a filter (a feature extractor): the report leaves out Neff,
   /// particles, landmarks, resamples, weight resets and fallbacks.
   bool filter_fields = true;
+
+  /// For a node without a filter (feature extraction, the landmark tracker).
+  static DiagnosticsOptions withoutFilter() {
+    DiagnosticsOptions options;
+    options.filter_fields = false;
+    return options;
+  }
 };
 
 /// Counts what happened since the last report and builds one DiagnosticStatus from it.

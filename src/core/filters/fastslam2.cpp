@@ -85,9 +85,10 @@ void FastSlam2::predict(const MotionInput& motion) {
   pending_motion_.add(motion);  // several odometry steps between two updates compose
 }
 
-std::vector<Observation> FastSlam2::prepare(const FeatureSet& features, int* rejected) const {
+std::vector<Observation> prepareObservations(const FeatureSet& features,
+                                             const FilterOptions& options, int* rejected) {
   std::vector<Observation> out;
-  const MeasurementOptions& m = options_.measurement;
+  const MeasurementOptions& m = options.measurement;
   *rejected = 0;
   auto noiseOf = [&](const Eigen::Matrix2d& given, double sigma_a, double sigma_b) {
     Eigen::Matrix2d floor = Eigen::Vector2d(sigma_a * sigma_a, sigma_b * sigma_b).asDiagonal();
@@ -96,7 +97,7 @@ std::vector<Observation> FastSlam2::prepare(const FeatureSet& features, int* rej
     }
     return floor;
   };
-  if (options_.use_lines) {
+  if (options.use_lines) {
     for (const auto& line : features.lines) {
       Observation o;
       o.type = LandmarkType::kLine;
@@ -114,7 +115,7 @@ std::vector<Observation> FastSlam2::prepare(const FeatureSet& features, int* rej
       out.push_back(o);
     }
   }
-  if (options_.use_points) {
+  if (options.use_points) {
     for (const auto& point : features.points) {
       if (!std::isfinite(point.range) || !std::isfinite(point.bearing) || point.range <= 0.0) {
         ++*rejected;
@@ -129,6 +130,10 @@ std::vector<Observation> FastSlam2::prepare(const FeatureSet& features, int* rej
     }
   }
   return out;
+}
+
+std::vector<Observation> FastSlam2::prepare(const FeatureSet& features, int* rejected) const {
+  return prepareObservations(features, options_, rejected);
 }
 
 FastSlam2::Match FastSlam2::associate(const LandmarkMap& map, const Pose2& pose,

@@ -19,6 +19,8 @@ std::vector<TrackerObservation> forTracker(const std::vector<Observation>& obser
     out[i].type = observations[i].type;
     out[i].z = observations[i].z;
     out[i].noise = observations[i].noise;
+    out[i].start = observations[i].start;
+    out[i].end = observations[i].end;
   }
   return out;
 }

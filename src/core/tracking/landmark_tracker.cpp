@@ -1,6 +1,7 @@
 #include "rbpf_slam/core/tracking/landmark_tracker.h"
 
 #include <Eigen/Dense>
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -44,6 +45,7 @@ void LandmarkTracker::reset() {
   state_ = Eigen::VectorXd::Zero(3);
   covariance_ = Eigen::MatrixXd::Zero(3, 3);
   landmarks_.clear();
+  next_id_ = 0;
 }
 
 TrackerEvent LandmarkTracker::update(int step, const Pose2& increment,
@@ -59,6 +61,8 @@ TrackerEvent LandmarkTracker::update(int step, const Pose2& increment,
     if (index >= 0 && d2 < options_.gate_chi2) {
       correct(index, o);
       landmarks_[index].last_seen_step = step;
+      ++landmarks_[index].observations;
+      if (o.type == LandmarkType::kLine) extend(index, o, false);
       ++event.matched;
     } else if (index < 0 || d2 > options_.new_landmark_chi2) {
       fresh.push_back(&o);  // started after the corrections, so that they cannot match it
@@ -159,7 +163,10 @@ void LandmarkTracker::start(const TrackerObservation& o, int step) {
   Tracked t;
   t.type = o.type;
   t.last_seen_step = step;
+  t.id = next_id_++;
+  t.observations = 1;
   landmarks_.push_back(t);
+  if (o.type == LandmarkType::kLine) extend(trackedLandmarks() - 1, o, true);
 }
 
 void LandmarkTracker::remove(int landmark) {
@@ -203,6 +210,48 @@ int LandmarkTracker::forget(int step) {
   // With nothing left to anchor it, the tracker's frame restarts at the robot (bounded drift).
   if (landmarks_.empty()) covariance_.setZero();
   return forgotten;
+}
+
+void LandmarkTracker::extend(int landmark, const TrackerObservation& o, bool first) {
+  const Pose2 pose = state_.head<3>();
+  const double theta = state_(3 + 2 * landmark + 1);
+  const Eigen::Vector2d direction(-std::sin(theta), std::cos(theta));
+  Tracked& t = landmarks_[landmark];
+  for (const Eigen::Vector2d& end : {o.start, o.end}) {
+    const double along = direction.dot(transformPoint(pose, end));
+    if (!std::isfinite(along)) continue;
+    if (first) {
+      t.extent_min = t.extent_max = along;
+      first = false;
+    } else {
+      t.extent_min = std::min(t.extent_min, along);
+      t.extent_max = std::max(t.extent_max, along);
+    }
+  }
+}
+
+std::vector<LandmarkEstimate> LandmarkTracker::landmarks() const {
+  std::vector<LandmarkEstimate> out;
+  for (int i = 0; i < trackedLandmarks(); ++i) {
+    const int j = 3 + 2 * i;
+    LandmarkEstimate e;
+    e.id = landmarks_[i].id;
+    e.type = landmarks_[i].type;
+    e.mean = state_.segment<2>(j);
+    e.covariance = covariance_.block<2, 2>(j, j);
+    e.observations = landmarks_[i].observations;
+    if (e.type == LandmarkType::kLine) {
+      const double rho = e.mean.x(), theta = e.mean.y();
+      const Eigen::Vector2d foot(rho * std::cos(theta), rho * std::sin(theta));
+      const Eigen::Vector2d direction(-std::sin(theta), std::cos(theta));
+      e.start = foot + landmarks_[i].extent_min * direction;
+      e.end = foot + landmarks_[i].extent_max * direction;
+    } else {
+      e.start = e.end = e.mean;
+    }
+    out.push_back(e);
+  }
+  return out;
 }
 
 }  // namespace core

@@ -33,6 +33,12 @@ struct Observation {
   int known_id = -1;
 };
 
+/// Feature set -> observations with the noise of options.measurement (the feature's own
+/// covariance plus the floors, or the floors alone), lines only if options.use_lines, points
+/// only if options.use_points; non-finite features are left out and counted in *rejected.
+std::vector<Observation> prepareObservations(const FeatureSet& features,
+                                             const FilterOptions& options, int* rejected);
+
 class FastSlam2 : public SlamFilter {
  public:
   explicit FastSlam2(const FilterOptions& options);

@@ -20,6 +20,8 @@ struct TrackerObservation {
   LandmarkType type = LandmarkType::kPoint;
   Eigen::Vector2d z = Eigen::Vector2d::Zero();
   Eigen::Matrix2d noise = Eigen::Matrix2d::Identity();
+  Eigen::Vector2d start = Eigen::Vector2d::Zero();  // line: observed extent, base frame
+  Eigen::Vector2d end = Eigen::Vector2d::Zero();
 };
 
 /// What one tracker step found.
@@ -44,6 +46,9 @@ class LandmarkTracker {
                       const std::vector<TrackerObservation>& observations);
 
   int trackedLandmarks() const { return static_cast<int>(landmarks_.size()); }
+  /// The tracked landmarks in the tracker's frame, with ids stable while tracked (a landmark
+  /// forgotten and met again gets a new id) and, for lines, the extent observed so far.
+  std::vector<LandmarkEstimate> landmarks() const;
   /// The robot pose in the tracker's own frame (origin: the pose at reset).
   Pose2 pose() const { return state_.head<3>(); }
   const Eigen::VectorXd& state() const { return state_; }
@@ -53,7 +58,12 @@ class LandmarkTracker {
   struct Tracked {
     LandmarkType type = LandmarkType::kPoint;
     int last_seen_step = 0;
+    int id = 0;
+    int observations = 0;
+    double extent_min = 0.0, extent_max = 0.0;  // line: along its direction, tracker frame
   };
+  /// Widens a line's extent by the observation's end points.
+  void extend(int landmark, const TrackerObservation& observation, bool first);
   void predict(const Pose2& increment, const Eigen::Matrix3d& increment_cov);
   /// Index of the tracked landmark nearest in Mahalanobis distance, -1 when none.
   int associate(const TrackerObservation& observation, double* distance2) const;
@@ -66,6 +76,7 @@ class LandmarkTracker {
   Eigen::VectorXd state_;  // pose (x, y, theta), then two entries per landmark
   Eigen::MatrixXd covariance_;
   std::vector<Tracked> landmarks_;
+  int next_id_ = 0;
 };
 
 }  // namespace core

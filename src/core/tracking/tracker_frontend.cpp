@@ -1,0 +1,83 @@
+#include "rbpf_slam/core/tracking/tracker_frontend.h"
+
+#include <cmath>
+
+#include "rbpf_slam/core/filters/fastslam2.h"
+#include "rbpf_slam/core/filters/measurement_models.h"
+
+namespace rbpf_slam {
+namespace core {
+
+TrackerFrontend::TrackerFrontend(const FilterOptions& options)
+    : options_(options), motion_model_(createMotionModel(options.motion)), tracker_(options.tracker) {}
+
+void TrackerFrontend::reset() {
+  tracker_.reset();
+  anchored_ = false;
+  anchor_ = last_odom_ = Pose2::Zero();
+  last_stamp_ = 0.0;
+  step_ = 0;
+}
+
+bool TrackerFrontend::process(const FeatureSet& features, const Pose2& odom_pose,
+                              TrackerEvent* event, std::string* why) {
+  if (!odom_pose.allFinite()) {
+    *why = "odometry pose not finite";
+    return false;
+  }
+  if (anchored_ && !(features.stamp > last_stamp_)) {
+    *why = "stamp not after the last";
+    return false;
+  }
+  MotionInput motion;
+  if (anchored_) {
+    motion.stamp = features.stamp;
+    motion.dt = features.stamp - last_stamp_;
+    motion.delta = between(last_odom_, odom_pose);
+  } else {
+    anchor_ = odom_pose;
+    anchored_ = true;
+  }
+  last_odom_ = odom_pose;
+  last_stamp_ = features.stamp;
+  int rejected = 0;
+  const std::vector<Observation> prepared = prepareObservations(features, options_, &rejected);
+  std::vector<TrackerObservation> observations(prepared.size());
+  for (size_t i = 0; i < prepared.size(); ++i) {
+    observations[i].type = prepared[i].type;
+    observations[i].z = prepared[i].z;
+    observations[i].noise = prepared[i].noise;
+    observations[i].start = prepared[i].start;
+    observations[i].end = prepared[i].end;
+  }
+  // The increment's covariance in the previous base frame (the motion model's, from zero).
+  *event = tracker_.update(++step_, motion.delta,
+                           motion_model_->covariance(Pose2::Zero(), motion), observations);
+  return true;
+}
+
+std::vector<LandmarkEstimate> TrackerFrontend::landmarks() const {
+  std::vector<LandmarkEstimate> out = tracker_.landmarks();
+  for (LandmarkEstimate& e : out) {
+    if (e.type == LandmarkType::kLine) {
+      // A line of the tracker's frame is an observation from the anchor's pose.
+      Eigen::Matrix2d jacobian;
+      e.mean = lineFromObservation(anchor_, e.mean, &jacobian);
+      e.covariance = jacobian * e.covariance * jacobian.transpose();
+    } else {
+      const double c = std::cos(anchor_.z()), s = std::sin(anchor_.z());
+      Eigen::Matrix2d r;
+      r << c, -s, s, c;
+      e.mean = transformPoint(anchor_, e.mean);
+      e.covariance = r * e.covariance * r.transpose();
+    }
+    e.start = transformPoint(anchor_, e.start);
+    e.end = transformPoint(anchor_, e.end);
+  }
+  return out;
+}
+
+Pose2 TrackerFrontend::pose() const { return compose(anchor_, tracker_.pose()); }
+
+}  // namespace core
+}  // namespace rbpf_slam

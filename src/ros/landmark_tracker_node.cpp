@@ -1,0 +1,119 @@
+#include "rbpf_slam/ros/landmark_tracker_node.h"
+
+#include <rbpf_slam/TrackerEvent.h>
+#include <visualization_msgs/MarkerArray.h>
+
+#include <chrono>
+
+#include "rbpf_slam/ros/conversions.h"
+#include "rbpf_slam/ros/param_loader.h"
+
+namespace rbpf_slam {
+namespace rosbridge {
+LandmarkTrackerNode::LandmarkTrackerNode(ros::NodeHandle nh, ros::NodeHandle private_nh)
+    : config_(loadConfigFromParams(private_nh)),
+      frontend_(config_.filter),
+      tf_listener_(tf_buffer_, nh),
+      diagnostics_("landmark_tracker", DiagnosticsOptions::withoutFilter()) {
+  using Ptr = FeatureArray::ConstPtr;
+  TfGatedSubscriber<FeatureArray>::Handlers handlers;
+  handlers.on_message = [this](const Ptr& msg) { featuresCallback(msg); };
+  handlers.on_failure = [this](const Ptr& msg, tf2_ros::FilterFailureReason reason) {
+    messageDropped(msg, reason);
+  };
+  handlers.on_unknown_frame = [this](const Ptr& msg, const std::string& error) {
+    drop("frame not in tf", "frame " + msg->header.frame_id,
+         "Dropping features in frame '" + msg->header.frame_id + "': tf has no transform " +
+             config_.ros.base_frame + " -> " + msg->header.frame_id + " (" + error + ")");
+  };
+  features_input_ = std::make_unique<TfGatedSubscriber<FeatureArray>>(
+      nh, config_.ros.features_topic, static_cast<uint32_t>(config_.ros.queue_size), &tf_buffer_,
+      config_.ros.base_frame, config_.ros.odom_frame, std::move(handlers));
+  events_publisher_ = nh.advertise<TrackerEvent>("tracker/events", 100);
+  landmarks_publisher_ = nh.advertise<visualization_msgs::MarkerArray>("tracker/landmarks", 1, true);
+  diagnostics_publisher_ = nh.advertise<diagnostic_msgs::DiagnosticArray>("/diagnostics", 10);
+  diagnostics_timer_ =
+      nh.createWallTimer(ros::WallDuration(1.0), &LandmarkTrackerNode::publishDiagnostics, this);
+}
+
+void LandmarkTrackerNode::featuresCallback(const FeatureArray::ConstPtr& msg) {
+  const io::RosOptions& o = config_.ros;
+  core::Pose2 odom_pose, frame_in_base;
+  try {
+    odom_pose =
+        toPose2(tf_buffer_.lookupTransform(o.odom_frame, o.base_frame, msg->header.stamp).transform);
+    frame_in_base = toPose2(
+        tf_buffer_.lookupTransform(o.base_frame, msg->header.frame_id, msg->header.stamp).transform);
+  } catch (const tf2::TransformException& e) {
+    drop("no tf", "tf " + msg->header.frame_id, std::string("No transform: ") + e.what());
+    return;
+  }
+  int dropped = 0;
+  core::FeatureSet features = toFeatureSet(*msg, frame_in_base, &dropped);
+  if (dropped > 0) {
+    warnings_.warn("non-finite features", "Dropped " + std::to_string(dropped) +
+                                              " feature(s) with non-finite values");
+  }
+  // Stamps far behind the last frame: a bag played again or a restarted driver.
+  const double jump = config_.session.reset_on_time_jump_back_s;
+  if (frontend_.steps() > 0 && jump > 0.0 && features.stamp + jump < frontend_.lastStamp()) {
+    warnings_.warn("time jump", "Feature stamps went back by " +
+                                    std::to_string(frontend_.lastStamp() - features.stamp) +
+                                    " s: the tracker starts over");
+    frontend_.reset();
+    diagnostics_.recordReset();
+  }
+  const auto t0 = std::chrono::steady_clock::now();
+  core::TrackerEvent event;
+  std::string why;
+  if (!frontend_.process(features, odom_pose, &event, &why)) {
+    drop(why, why, "Dropping a feature frame stamped " +
+                       std::to_string(msg->header.stamp.toSec()) + ": " + why);
+    return;
+  }
+  diagnostics_.recordUpdate(
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+  std_msgs::Header header;
+  header.stamp = msg->header.stamp;
+  header.frame_id = o.odom_frame;
+  if (event.new_landmark) {
+    TrackerEvent out;
+    out.header = header;
+    out.step = event.step;
+    out.started = event.started;
+    out.matched = event.matched;
+    out.forgotten = event.forgotten;
+    out.tracked = event.tracked;
+    events_publisher_.publish(out);
+  }
+  landmarks_publisher_.publish(markers_.update(frontend_.landmarks(), header));
+}
+
+void LandmarkTrackerNode::messageDropped(const FeatureArray::ConstPtr& msg,
+                                         tf2_ros::FilterFailureReason reason) {
+  if (reason == tf2_ros::filter_failure_reasons::EmptyFrameID) {
+    drop("empty frame_id", "empty frame_id", "Dropping features with an empty header.frame_id");
+  } else {
+    drop(reason == tf2_ros::filter_failure_reasons::OutTheBack ? "older than the tf cache"
+                                                              : "no tf in time",
+         "no tf " + msg->header.frame_id,
+         "Dropping features: no transform " + config_.ros.odom_frame + " -> " +
+             config_.ros.base_frame + " -> " + msg->header.frame_id + " at " +
+             std::to_string(msg->header.stamp.toSec()));
+  }
+}
+
+void LandmarkTrackerNode::drop(const std::string& cause, const std::string& key,
+                               const std::string& message) {
+  diagnostics_.recordDrop(cause);
+  warnings_.warn(key, message);
+}
+
+void LandmarkTrackerNode::publishDiagnostics(const ros::WallTimerEvent&) {
+  const ros::Time now = ros::Time::now();
+  diagnostics_publisher_.publish(diagnostics_.report(
+      now.isZero() ? ros::Time(ros::WallTime::now().toSec()) : now, core::FilterStats(), 0));
+}
+
+}  // namespace rosbridge
+}  // namespace rbpf_slam

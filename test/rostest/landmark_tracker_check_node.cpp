@@ -1,0 +1,99 @@
+// landmark_tracker.test: the landmark_tracker node on a simulated lee_sim_b bag (range-bearing
+// landmarks) publishes new-landmark events with increasing steps and stamps, each starting at
+// least one landmark, and finite landmark markers in the odometry frame; /diagnostics reports
+// its updates.
+
+#include <diagnostic_msgs/DiagnosticArray.h>
+#include <gtest/gtest.h>
+#include <rbpf_slam/TrackerEvent.h>
+#include <ros/ros.h>
+#include <visualization_msgs/MarkerArray.h>
+
+#include <cmath>
+#include <mutex>
+#include <set>
+#include <string>
+#include <utility>
+
+namespace rbpf_slam {
+namespace {
+
+struct Seen {
+  std::mutex mutex;
+  int events = 0, bad_events = 0, out_of_order = 0, non_finite = 0, wrong_frame = 0;
+  int last_step = 0;
+  double last_stamp = 0.0;
+  std::set<std::pair<std::string, int>> shown;
+  long updates = -1;
+};
+
+TEST(LandmarkTracker, PublishesEventsAndLandmarks) {
+  ros::NodeHandle nh, pnh("~");
+  const double timeout = pnh.param("timeout", 150.0);
+  const int min_events = pnh.param("min_events", 5);
+  Seen seen;
+  ros::Subscriber events = nh.subscribe<TrackerEvent>(
+      "tracker/events", 100, [&seen](const TrackerEvent::ConstPtr& msg) {
+        std::lock_guard<std::mutex> lock(seen.mutex);
+        ++seen.events;
+        if (msg->started < 1 || msg->tracked < msg->started || msg->header.frame_id != "odom")
+          ++seen.bad_events;
+        if (msg->step <= seen.last_step || msg->header.stamp.toSec() <= seen.last_stamp)
+          ++seen.out_of_order;
+        seen.last_step = msg->step;
+        seen.last_stamp = msg->header.stamp.toSec();
+      });
+  ros::Subscriber markers = nh.subscribe<visualization_msgs::MarkerArray>(
+      "tracker/landmarks", 10, [&seen](const visualization_msgs::MarkerArray::ConstPtr& msg) {
+        std::lock_guard<std::mutex> lock(seen.mutex);
+        for (const auto& m : msg->markers) {
+          const auto key = std::make_pair(m.ns, m.id);
+          if (m.action == visualization_msgs::Marker::DELETE) {
+            seen.shown.erase(key);
+            continue;
+          }
+          seen.shown.insert(key);
+          if (m.header.frame_id != "odom") ++seen.wrong_frame;
+          bool ok = std::isfinite(m.pose.position.x) && std::isfinite(m.pose.position.y);
+          for (const auto& p : m.points) ok = ok && std::isfinite(p.x) && std::isfinite(p.y);
+          if (!ok) ++seen.non_finite;
+        }
+      });
+  ros::Subscriber diagnostics = nh.subscribe<diagnostic_msgs::DiagnosticArray>(
+      "/diagnostics", 10, [&seen](const diagnostic_msgs::DiagnosticArray::ConstPtr& msg) {
+        std::lock_guard<std::mutex> lock(seen.mutex);
+        for (const auto& status : msg->status) {
+          if (status.name != "landmark_tracker") continue;
+          for (const auto& kv : status.values) {
+            if (kv.key == "updates") seen.updates = std::stol(kv.value);
+          }
+        }
+      });
+  const ros::WallTime deadline = ros::WallTime::now() + ros::WallDuration(timeout);
+  while (ros::WallTime::now() < deadline) {
+    {
+      std::lock_guard<std::mutex> lock(seen.mutex);
+      if (seen.events >= min_events && seen.updates > 3 * min_events && !seen.shown.empty()) break;
+    }
+    ros::WallDuration(0.1).sleep();
+  }
+  std::lock_guard<std::mutex> lock(seen.mutex);
+  EXPECT_GE(seen.events, min_events);
+  EXPECT_GT(seen.updates, 3 * min_events) << "most frames bring no new landmark";
+  EXPECT_FALSE(seen.shown.empty()) << "no landmark markers";
+  EXPECT_EQ(seen.bad_events, 0);
+  EXPECT_EQ(seen.out_of_order, 0);
+  EXPECT_EQ(seen.non_finite, 0);
+  EXPECT_EQ(seen.wrong_frame, 0);
+}
+
+}  // namespace
+}  // namespace rbpf_slam
+
+int main(int argc, char** argv) {
+  testing::InitGoogleTest(&argc, argv);
+  ros::init(argc, argv, "landmark_tracker_check");
+  ros::AsyncSpinner spinner(1);
+  spinner.start();
+  return RUN_ALL_TESTS();
+}
