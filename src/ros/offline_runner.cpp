@@ -379,13 +379,21 @@ OfflineSummary OfflineRunner::writeOutputs(const OfflineSummary& in) const {
   OfflineSummary summary = in;
   const std::string& dir = options_.output_dir;
   mkdir(dir.c_str(), 0755);
-  std::vector<io::StampedPose> estimate;
+  // The trajectory: the best particle's path when the filter keeps paths (FastSLAM's estimate
+  // of the whole path, the one its map was built from, corrected by every loop it closed),
+  // else the pose estimated at each update. The latter is always in trajectory_online.tum.
+  std::vector<io::StampedPose> estimate, online;
   std::vector<core::Pose2> path;
-  for (const auto& p : pipeline_.session().trajectory()) {
-    estimate.push_back({p.stamp, p.pose});
-    path.push_back(p.pose);
+  for (const auto& p : pipeline_.session().trajectory()) online.push_back({p.stamp, p.pose});
+  const std::vector<core::Pose2> best_path = pipeline_.session().filter().bestPath();
+  const bool use_best_path = !best_path.empty() && best_path.size() == online.size();
+  for (size_t i = 0; i < online.size(); ++i) {
+    estimate.push_back({online[i].stamp, use_best_path ? best_path[i] : online[i].pose});
+    path.push_back(estimate.back().pose);
   }
+  summary.trajectory_source = use_best_path ? "best_particle_path" : "online_estimate";
   io::writeTum(dir + "/trajectory.tum", estimate);
+  io::writeTum(dir + "/trajectory_online.tum", online);
 
   std::vector<core::Pose2> reference_path;
   if (!options_.reference_path.empty()) {
@@ -398,6 +406,7 @@ OfflineSummary OfflineRunner::writeOutputs(const OfflineSummary& in) const {
       summary.has_reference = r.matched_poses > 0;
       summary.ate_rmse_m = r.ate_rmse_m;
       summary.final_position_error_m = r.final_position_error_m;
+      summary.ate_online_rmse_m = io::evaluateTrajectory(online, reference, eval).ate_rmse_m;
       // Draw the reference in the estimate's frame.
       const core::Pose2 to_estimate = core::inverse(r.alignment);
       for (const auto& p : reference) reference_path.push_back(core::compose(to_estimate, p.pose));
@@ -466,8 +475,10 @@ OfflineSummary OfflineRunner::writeOutputs(const OfflineSummary& in) const {
        << ",\n  \"peak_rss_mb\": " << peakResidentMb();
   if (summary.has_reference) {
     json << ",\n  \"ate_rmse_m\": " << summary.ate_rmse_m
+         << ",\n  \"ate_online_rmse_m\": " << summary.ate_online_rmse_m
          << ",\n  \"final_position_error_m\": " << summary.final_position_error_m;
   }
+  json << ",\n  \"trajectory_source\": \"" << summary.trajectory_source << "\"";
   json << "\n}\n";
   if (has_grid) {
     io::drawGridRunMap(dir + "/map.png", grid, path, reference_path);

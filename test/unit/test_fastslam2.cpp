@@ -209,6 +209,75 @@ TEST(FastSlam2, MapsEveryWallOnceAndIsRepeatable) {
   EXPECT_EQ(lines, static_cast<int>(world.walls.size()));
 }
 
+// FastSLAM estimates whole paths: each particle keeps its history, resampling shares it, and
+// bestPath() is the history of the particle whose map landmarks() returns.
+TEST(FastSlam2, BestPathIsTheBestParticlesHistory) {
+  FilterOptions options;
+  options.particles = 20;
+  options.seed = 4;
+  SyntheticWorld world;
+  FastSlam2 filter(options);
+  Rng rng(2);
+  Pose2 truth(-3, -3, 0), odom = truth;
+  filter.reset(truth);
+  EXPECT_TRUE(filter.bestPath().empty());
+  filter.update(world.observe(truth, rng, 0.02, 0.01));
+  std::vector<Pose2> truths{truth}, odoms{odom};
+  for (int k = 0; k < 40; ++k) {
+    const Pose2 delta(0.15, 0.0, 0.02);
+    truth = compose(truth, delta);
+    MotionInput motion;
+    motion.delta = Pose2(delta.x() * 1.05, 0.01, delta.z() + 0.01);  // biased odometry
+    filter.predict(motion);
+    filter.update(k % 7 == 3 ? FeatureSet() : world.observe(truth, rng, 0.02, 0.01));
+    odom = compose(odom, motion.delta);
+    truths.push_back(truth);
+    odoms.push_back(odom);
+  }
+  EXPECT_GT(filter.stats().resamples, 0);
+  const std::vector<Pose2> path = filter.bestPath();
+  ASSERT_EQ(path.size(), truths.size());  // one pose per update, empty frames included
+  const Particle& best = filter.particleSet()[filter.bestParticle()];
+  EXPECT_TRUE(path.back().isApprox(best.pose));
+  double sq = 0.0, odom_sq = 0.0;
+  for (size_t i = 0; i < path.size(); ++i) {
+    sq += (path[i].head<2>() - truths[i].head<2>()).squaredNorm();
+    odom_sq += (odoms[i].head<2>() - truths[i].head<2>()).squaredNorm();
+  }
+  EXPECT_LT(std::sqrt(sq / path.size()), 0.5 * std::sqrt(odom_sq / path.size()));
+  // Resampled particles share their common history instead of copying it.
+  const PathNode* first = filter.particleSet()[0].path.get();
+  for (size_t i = 0; i + 5 < path.size(); ++i) first = first->parent.get();
+  int shared = 0;
+  for (const Particle& p : filter.particleSet()) {
+    const PathNode* n = p.path.get();
+    for (size_t i = 0; i + 5 < path.size(); ++i) n = n->parent.get();
+    shared += n == first;
+  }
+  EXPECT_GT(shared, 1);
+  // A new pose distribution starts new paths; a reset forgets them.
+  filter.resetPose(truth, Eigen::Matrix3d::Identity() * 0.01);
+  EXPECT_TRUE(filter.bestPath().empty());
+  filter.update(world.observe(truth, rng, 0.02, 0.01));
+  EXPECT_EQ(filter.bestPath().size(), 1u);
+  filter.reset(truth);
+  EXPECT_TRUE(filter.bestPath().empty());
+}
+
+// A live robot updates for hours: freeing a path of millions of poses must not recurse (the
+// default shared_ptr chain destruction overflows the stack long before).
+TEST(FastSlam2, LongPathIsFreedWithoutRecursion) {
+  std::shared_ptr<PathNode> path;
+  for (int i = 0; i < 2000000; ++i) path = std::make_shared<PathNode>(Pose2(i, 0, 0), std::move(path));
+  std::shared_ptr<PathNode> branch = std::make_shared<PathNode>(Pose2::Zero(), path->parent);
+  path.reset();  // the branch still holds all but the newest node
+  int length = 0;
+  for (const PathNode* n = branch.get(); n != nullptr; n = n->parent.get()) ++length;
+  EXPECT_EQ(length, 2000000);
+  branch.reset();
+  SUCCEED();
+}
+
 TEST(FastSlam2, NonFiniteFeaturesAreRejectedNotFused) {
   FilterOptions options;
   options.particles = 5;

@@ -75,6 +75,32 @@ TEST(ScanMatcher, CorridorKeepsOdometryAlongTheAxis) {
   EXPECT_NEAR(r.delta.z(), 0.02, 0.01);
 }
 
+// Odometry with a glitch (the Intel log's repeated and out-of-order stamps put it metres off
+// between two scans): no start near it converges or passes max_correction, so the matcher
+// starts again from rest instead of handing the broken odometry to the filter.
+TEST(ScanMatcher, RecoversFromAnOdometryGlitchByStartingFromRest) {
+  Rng rng(6);
+  const Pose2 first(-2.0, 0.5, 0.1), motion(0.6, -0.1, -0.3);
+  const auto reference = roomScan(first, 0.01, &rng);
+  const auto current = roomScan(compose(first, motion), 0.01, &rng);
+  ScanMatcherOptions options;
+  options.enabled = true;
+  const ScanMatcher matcher(options);
+  const ScanMatchResult r = matcher.match(reference, current, Pose2(4.5, -2.4, -0.05));
+  ASSERT_TRUE(r.ok);
+  EXPECT_TRUE(r.from_rest);
+  EXPECT_LT((r.delta.head<2>() - motion.head<2>()).norm(), 0.02) << r.delta.transpose();
+  EXPECT_LT(std::fabs(wrapAngle(r.delta.z() - motion.z())), 0.005);
+  // Good odometry is still the first start.
+  const ScanMatchResult good = matcher.match(reference, current, Pose2(0.55, -0.05, -0.25));
+  ASSERT_TRUE(good.ok);
+  EXPECT_FALSE(good.from_rest);
+  // From rest, a corridor leaves the motion along it unmeasured: rejected, not zero.
+  const auto corridor_ref = roomScan(Pose2::Zero(), 0.005, &rng, true);
+  const auto corridor_cur = roomScan(Pose2(0.8, 0.05, 0.02), 0.005, &rng, true);
+  EXPECT_FALSE(matcher.match(corridor_ref, corridor_cur, Pose2(5.0, 0.0, 0.0)).ok);
+}
+
 TEST(ScanMatcher, RejectsTooFewPointsAndInvalidOptions) {
   ScanMatcherOptions options;
   const ScanMatcher matcher(options);

@@ -45,6 +45,8 @@ struct OfflineSummary {
   bool has_reference = false;
   double ate_rmse_m = 0.0;
   double final_position_error_m = 0.0;
+  double ate_online_rmse_m = 0.0;  // of trajectory_online.tum (the per-update estimates)
+  std::string trajectory_source;   // best_particle_path | online_estimate
 };
 
 class OfflineRunner {

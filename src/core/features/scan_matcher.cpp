@@ -165,10 +165,30 @@ ScanMatchResult ScanMatcher::match(const std::vector<Eigen::Vector2d>& reference
   ScanMatchResult best;
   if (reference.size() < 10 || current.size() < 10 || !initial_delta.allFinite()) return best;
   const std::vector<Eigen::Vector2d> normals = normalsOf(reference);
-  std::vector<Pose2> starts{initial_delta};
+  // From odometry first; only if that fails, from rest: wheel odometry has glitches (repeated
+  // or out-of-order stamps put the Intel log's odometry 4.5 m off between two scans), and
+  // then a start at the odometry guess cannot converge or is rejected as too far from it.
+  best = matchAround(reference, normals, current, initial_delta);
+  if (!best.ok) {
+    const ScanMatchResult from_rest = matchAround(reference, normals, current, Pose2::Zero());
+    // Degenerate (a corridor): the motion along it would be the start's zero, not a measurement.
+    if (from_rest.ok && !from_rest.degenerate) {
+      best = from_rest;
+      best.from_rest = true;
+    }
+  }
+  return best;
+}
+
+ScanMatchResult ScanMatcher::matchAround(const std::vector<Eigen::Vector2d>& reference,
+                                         const std::vector<Eigen::Vector2d>& normals,
+                                         const std::vector<Eigen::Vector2d>& current,
+                                         const Pose2& guess) const {
+  ScanMatchResult best;
+  std::vector<Pose2> starts{guess};
   if (options_.rotation_guess_rad > 0.0) {
     for (double sign : {-1.0, 1.0}) {
-      Pose2 s = initial_delta;
+      Pose2 s = guess;
       s.z() = wrapAngle(s.z() + sign * options_.rotation_guess_rad);
       starts.push_back(s);
     }
@@ -184,7 +204,7 @@ ScanMatchResult ScanMatcher::match(const std::vector<Eigen::Vector2d>& reference
     }
   }
   if (best.ok) {
-    const Pose2 correction = between(initial_delta, best.delta);
+    const Pose2 correction = between(guess, best.delta);
     if (correction.head<2>().norm() > options_.max_correction_m ||
         std::fabs(correction.z()) > options_.max_correction_rad) {
       best.ok = false;

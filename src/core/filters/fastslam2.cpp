@@ -1,6 +1,7 @@
 #include "rbpf_slam/core/filters/fastslam2.h"
 
 #include <Eigen/Dense>
+#include <algorithm>
 #include <cmath>
 
 #include "rbpf_slam/core/filters/landmark_existence.h"
@@ -39,6 +40,12 @@ bool finiteCovariance(const Eigen::Matrix2d& c) {
 }
 
 }  // namespace
+
+PathNode::~PathNode() {
+  // Free the ancestors this node alone holds one by one instead of by recursion.
+  std::shared_ptr<PathNode> next = std::move(parent);
+  while (next && next.use_count() == 1) next = std::move(next->parent);
+}
 
 LandmarkEstimate toEstimate(const Landmark& landmark) {
   LandmarkEstimate e;
@@ -389,7 +396,7 @@ UpdateStats FastSlam2::update(const FeatureSet& features) {
     Particle& p = particles_[i];
     if (observations.empty()) {
       p.pose = motion_model_->sample(p.pose, motion, rng_);
-      continue;
+      continue;  // its path node is added below
     }
     const Pose2 predicted = motion_model_->mean(p.pose, motion);
     const Eigen::Matrix3d motion_cov = motion_model_->covariance(p.pose, motion);
@@ -397,6 +404,7 @@ UpdateStats FastSlam2::update(const FeatureSet& features) {
     if (mapping_) results[i].removed = manageExistence(options_.existence, &p.map, p.pose, step_);
     stats.fallbacks += results[i].fallbacks;
   }
+  for (auto& p : particles_) p.path = std::make_shared<PathNode>(p.pose, std::move(p.path));
   stats_.fallbacks += stats.fallbacks;
   weighAndResample(&stats);
   // Report the association of the particle that now carries the most weight.
@@ -447,6 +455,17 @@ int FastSlam2::bestParticle() const {
     }
   }
   return best;
+}
+
+std::vector<Pose2> FastSlam2::bestPath() const {
+  std::vector<Pose2> path;
+  const int best = bestParticle();
+  if (best < 0) return path;
+  for (const PathNode* n = particles_[best].path.get(); n != nullptr; n = n->parent.get()) {
+    path.push_back(n->pose);
+  }
+  std::reverse(path.begin(), path.end());
+  return path;
 }
 
 PoseEstimate FastSlam2::estimate() const {
@@ -502,6 +521,7 @@ bool FastSlam2::resetPose(const Pose2& pose, const Eigen::Matrix3d& covariance) 
     p.pose = sampleMultivariate<3>(rng_, pose, c);
     p.pose.z() = wrapAngle(p.pose.z());
     p.log_weight = 0.0;
+    p.path.reset();
   }
   weights_.assign(particles_.size(), 1.0 / particles_.size());
   pending_motion_ = PendingMotion();

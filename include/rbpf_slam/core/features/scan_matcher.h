@@ -40,6 +40,8 @@ struct ScanMatchResult {
   int iterations = 0;
   double weakest_information = 0.0;  // smallest eigenvalue of the translation information
   bool degenerate = false;  // a translation direction was taken from odometry
+  bool from_rest = false;   // matched from zero motion after the odometry start failed (an
+                            // odometry glitch); max_correction then bounds the motion itself
 };
 
 /// Valid returns of a scan as points in the base frame (sensor pose applied).
@@ -49,13 +51,20 @@ std::vector<Eigen::Vector2d> scanPointsInBase(const RangeScan& scan, double max_
 class ScanMatcher {
  public:
   explicit ScanMatcher(const ScanMatcherOptions& options);
-  /// Aligns current (base frame at t) to reference (base frame at t-1) from initial_delta.
+  /// Aligns current (base frame at t) to reference (base frame at t-1) from initial_delta
+  /// (odometry), or, when no match from there is accepted, from zero motion.
   ScanMatchResult match(const std::vector<Eigen::Vector2d>& reference,
                         const std::vector<Eigen::Vector2d>& current,
                         const Pose2& initial_delta) const;
   const ScanMatcherOptions& options() const { return options_; }
 
  private:
+  /// The best of the starts at guess and guess turned by +-rotation_guess_rad; not ok if it
+  /// ends farther than max_correction from guess.
+  ScanMatchResult matchAround(const std::vector<Eigen::Vector2d>& reference,
+                              const std::vector<Eigen::Vector2d>& normals,
+                              const std::vector<Eigen::Vector2d>& current,
+                              const Pose2& guess) const;
   ScanMatchResult matchFrom(const std::vector<Eigen::Vector2d>& reference,
                             const std::vector<Eigen::Vector2d>& normals,
                             const std::vector<Eigen::Vector2d>& current, const Pose2& start) const;

@@ -16,11 +16,25 @@
 namespace rbpf_slam {
 namespace core {
 
-/// One hypothesis: a pose and its own map.
+/// A particle's past pose at one update, linked to the one before; particles that share an
+/// ancestor share its history (resampling copies a pointer, not the path).
+struct PathNode {
+  PathNode(const Pose2& p, std::shared_ptr<PathNode> previous)
+      : pose(p), parent(std::move(previous)) {}
+  ~PathNode();  // unlinks iteratively: a path of a million updates must not recurse
+  PathNode(const PathNode&) = delete;
+  PathNode& operator=(const PathNode&) = delete;
+  Pose2 pose;
+  std::shared_ptr<PathNode> parent;
+};
+
+/// One hypothesis: a pose, its own map, and the path that led to it (FastSLAM estimates the
+/// posterior over whole paths: the best particle's path is the map's trajectory).
 struct Particle {
   Pose2 pose = Pose2::Zero();
   double log_weight = 0.0;
   std::shared_ptr<LandmarkMap> map = std::make_shared<LandmarkMap>();
+  std::shared_ptr<PathNode> path;  // pose at each update(), newest first; null before any
 };
 
 /// One observation prepared for the filter: value, noise, type, and extent if a line.
@@ -60,6 +74,9 @@ class FastSlam2 : public SlamFilter {
   std::vector<Observation> prepare(const FeatureSet& features, int* rejected) const;
   const std::vector<Particle>& particleSet() const { return particles_; }
   int bestParticle() const;
+  /// The pose at every update() since the last reset, oldest first, of the particle that now
+  /// carries the most weight (its map is landmarks()); resetPose() starts a new path.
+  std::vector<Pose2> bestPath() const override;
 
  protected:
   /// A FastSLAM 2.0 whose proposal and landmark updates follow `rule` (e.g. H-infinity).

@@ -95,6 +95,10 @@ class SlamFilter {
   /// The best hypothesis' occupancy grid, for variants that keep one (grid_pf); the default
   /// declines and callers rasterise landmarks() instead (rasterizeLandmarks).
   virtual bool occupancyGrid(GridMapData& /*out*/) const { return false; }
+  /// For variants that estimate whole paths (FastSLAM): the best hypothesis' pose at every
+  /// update() since the last reset, oldest first, which after a loop closure is the path
+  /// consistent with its map, unlike the sequence of estimate()s. Default: empty (none).
+  virtual std::vector<Pose2> bestPath() const { return {}; }
 };
 
 /// Builds the variant named by options.variant; throws std::invalid_argument if unknown or
