@@ -134,6 +134,7 @@ void readDpf(YamlSection section, core::DpfOptions* o) {
   section.read("adaptive_covariance", &o->adaptive_covariance);
   section.read("feedback", &o->feedback);
   section.read("feedback_inflation", &o->feedback_inflation, 1.0, 100.0);
+  section.read("feedback_mode", &o->feedback_mode, {"reweight", "moment"});
   section.read("innovation_smoothing", &o->innovation_smoothing, 1e-3, 1.0);
   section.read("fault_nis", &o->fault_nis, 0.0, 1e9);
   section.read("fault_neff_ratio", &o->fault_neff_ratio, 0.0, 1.0);

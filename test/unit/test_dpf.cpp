@@ -37,6 +37,38 @@ TEST(DpfAdaptiveCovariance, AddsTheWeightedSpreadOfTheInnovations) {
   EXPECT_TRUE(c.isApprox(r));
 }
 
+TEST(DpfFeedback, LogRatioIsTheGaussianOfTheOtherLocalsInformation) {
+  // Own posterior N(0, I), master N(m, I / 4): the ratio has information 4 - 1 = 3 and centre
+  // 4 m / 3 in every direction (x, y, heading).
+  const Pose2 m(0.3, -0.6, 0.15);
+  const Pose2 centre = m * (4.0 / 3.0);
+  const std::vector<Pose2> poses = {centre, centre + Pose2(0.5, 0.0, 0.0),
+                                    centre + Pose2(0.0, -0.2, 0.1)};
+  const std::vector<double> r = feedbackLogRatio(poses, m, 0.25 * Eigen::Matrix3d::Identity(),
+                                                 Pose2::Zero(), Eigen::Matrix3d::Identity());
+  EXPECT_NEAR(r[0], 0.0, 1e-6);
+  EXPECT_NEAR(r[1] - r[0], -0.5 * 3.0 * 0.25, 1e-6);
+  EXPECT_NEAR(r[2] - r[0], -0.5 * 3.0 * (0.04 + 0.01), 1e-6);
+}
+
+TEST(DpfFeedback, LogRatioLeavesOutDirectionsWhereTheMasterIsBroader) {
+  // The master is sharper in x only (0.25 against 1) and broader in y and heading: only x
+  // weighs the particles; y and the heading change nothing.
+  const Eigen::Matrix3d master = Eigen::Vector3d(0.25, 4.0, 4.0).asDiagonal();
+  const std::vector<Pose2> poses = {Pose2(0.0, 0.0, 0.0), Pose2(0.0, 3.0, -1.0),
+                                    Pose2(1.0, 0.0, 0.0)};
+  const std::vector<double> r =
+      feedbackLogRatio(poses, Pose2::Zero(), master, Pose2::Zero(), Eigen::Matrix3d::Identity());
+  EXPECT_NEAR(r[1] - r[0], 0.0, 1e-9);
+  EXPECT_NEAR(r[2] - r[0], -0.5 * 3.0, 1e-6);
+  // Headings are compared wrapped around the master's.
+  const std::vector<double> w =
+      feedbackLogRatio({Pose2(0.0, 0.0, M_PI - 0.1), Pose2(0.0, 0.0, -M_PI + 0.1)},
+                       Pose2(0.0, 0.0, M_PI), 0.25 * Eigen::Matrix3d::Identity(),
+                       Pose2(0.0, 0.0, M_PI), Eigen::Matrix3d::Identity());
+  EXPECT_NEAR(w[0], w[1], 1e-9);
+}
+
 TEST(DpfMasterWeights, InnovationNeffAndMixedOnHandCases) {
   const auto inn = innovationWeights({2.0, 4.0});
   EXPECT_NEAR(inn[0], 2.0 / 3.0, 1e-12);

@@ -24,6 +24,10 @@ void validate(const DpfOptions& o) {
   if (o.fusion != "information" && o.fusion != "average") {
     throw std::invalid_argument("dpf.fusion = '" + o.fusion + "' is not one of information, average");
   }
+  if (o.feedback_mode != "reweight" && o.feedback_mode != "moment") {
+    throw std::invalid_argument("dpf.feedback_mode = '" + o.feedback_mode +
+                                "' is not one of reweight, moment");
+  }
   require("dpf.mix_innovation", o.mix_innovation, 0.0, 1.0);
   require("dpf.feedback_inflation", o.feedback_inflation, 1.0, 100.0);
   require("dpf.innovation_smoothing", o.innovation_smoothing, 1e-3, 1.0);

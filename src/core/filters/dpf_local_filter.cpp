@@ -1,6 +1,7 @@
 #include "rbpf_slam/core/filters/dpf_local_filter.h"
 
 #include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
 #include <Eigen/LU>
 #include <cmath>
 
@@ -64,6 +65,32 @@ Eigen::Matrix2d adaptiveLikelihoodCovariance(const std::vector<Eigen::Vector2d>&
   return symmetric(measurement_noise + spread / total);
 }
 
+std::vector<double> feedbackLogRatio(const std::vector<Pose2>& poses, const Pose2& target_mean,
+                                     const Eigen::Matrix3d& target_cov, const Pose2& own_mean,
+                                     const Eigen::Matrix3d& own_cov) {
+  // With x' = x - target_mean: log ratio = -0.5 x'^T (A - B) x' - x'^T B mu' + const, where
+  // A, B are the target's and own information and mu' = own_mean - target_mean.
+  const Eigen::Matrix3d a = regularised(target_cov).inverse();
+  const Eigen::Matrix3d b = regularised(own_cov).inverse();
+  Pose2 mu = own_mean - target_mean;
+  mu.z() = wrapAngle(mu.z());
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(0.5 * ((a - b) + (a - b).transpose()));
+  const Eigen::Vector3d linear = eigen.eigenvectors().transpose() * (-b * mu);
+  std::vector<double> out(poses.size(), 0.0);
+  for (size_t j = 0; j < poses.size(); ++j) {
+    Pose2 d = poses[j] - target_mean;
+    d.z() = wrapAngle(d.z());
+    const Eigen::Vector3d y = eigen.eigenvectors().transpose() * d;
+    for (int k = 0; k < 3; ++k) {
+      const double lambda = eigen.eigenvalues()(k);
+      if (!(lambda > 1e-9 * a.trace())) continue;  // target not sharper here: no information
+      const double centre = linear(k) / lambda;
+      out[j] += -0.5 * lambda * (y(k) - centre) * (y(k) - centre);
+    }
+  }
+  return out;
+}
+
 unsigned long localFilterSeed(unsigned long seed, int index) {
   // splitmix64 of the seed mixed with the index: independent streams per local filter.
   uint64_t z = static_cast<uint64_t>(seed) + 0x9e3779b97f4a7c15ULL * (index + 1);
@@ -84,6 +111,7 @@ void DpfLocalFilter::reset(const Pose2& initial_pose) {
   weights_.assign(options_.particles, 1.0 / options_.particles);
   log_weights_.assign(options_.particles, 0.0);
   reinitialisations_ = 0;
+  has_posterior_ = false;
 }
 
 bool DpfLocalFilter::owns(int id) const {
@@ -127,6 +155,7 @@ std::vector<DpfLocalFilter::Observation> DpfLocalFilter::prepare(const FeatureSe
 }
 
 void DpfLocalFilter::applyFeedback(const DpfFeedback& feedback) {
+  feedback_neff_ = static_cast<double>(particles_.size());
   if (feedback.step <= 0) return;
   for (int i : feedback.reinitialise) {
     if (i == index_) {
@@ -135,6 +164,44 @@ void DpfLocalFilter::applyFeedback(const DpfFeedback& feedback) {
     }
   }
   if (!options_.dpf.feedback) return;
+  if (options_.dpf.feedback_mode == "reweight" && has_posterior_) {
+    reweight(feedback);
+  } else {
+    momentMatch(feedback);
+  }
+}
+
+void DpfLocalFilter::reweight(const DpfFeedback& feedback) {
+  std::vector<Pose2> poses;
+  for (const auto& p : particles_) poses.push_back(p.pose);
+  const std::vector<double> ratio =
+      feedbackLogRatio(poses, feedback.mean, feedback.covariance, posterior_mean_, posterior_cov_);
+  const size_t n = particles_.size();
+  std::vector<double> log_weights = log_weights_, weights;
+  for (size_t j = 0; j < n; ++j) log_weights[j] += ratio[j];
+  normalizeLogWeights(log_weights, &weights);
+  feedback_neff_ = effectiveSampleSize(weights);
+  if (feedback_neff_ < std::max(1.5, options_.dpf.fault_neff_ratio * n)) {
+    // The cloud does not cover the master's estimate (e.g. a disturbed process): reweighting
+    // would leave one particle; move the cloud onto the master instead.
+    momentMatch(feedback);
+    return;
+  }
+  log_weights_ = log_weights;
+  weights_ = weights;
+  for (size_t j = 0; j < n; ++j) log_weights_[j] = std::log(std::max(weights_[j], 1e-300));
+  if (effectiveSampleSize(weights_) < options_.resample_threshold * n) {
+    const std::vector<int> drawn = resampleLowVariance(weights_, static_cast<int>(n), rng_);
+    std::vector<Particle> next;
+    next.reserve(n);
+    for (int k : drawn) next.push_back(particles_[k]);
+    particles_ = std::move(next);
+    weights_.assign(n, 1.0 / n);
+    log_weights_.assign(n, 0.0);
+  }
+}
+
+void DpfLocalFilter::momentMatch(const DpfFeedback& feedback) {
   // The cloud gets the master's mean and covariance: p' = m + A (p - mean), A A^T scaling the
   // cloud's covariance onto the master's (Cholesky factors); particles keep their maps.
   std::vector<Pose2> poses;
@@ -169,6 +236,7 @@ void DpfLocalFilter::reinitialise(const DpfFeedback& feedback) {
   }
   weights_.assign(particles_.size(), 1.0 / particles_.size());
   log_weights_.assign(particles_.size(), 0.0);
+  has_posterior_ = false;  // the cloud is the master's now
   ++reinitialisations_;
 }
 
@@ -306,7 +374,9 @@ DpfLocalEstimate DpfLocalFilter::finishStep(
   }
   for (size_t j = 0; j < n; ++j) log_weights_[j] += step_log[j];
   normalizeLogWeights(log_weights_, &weights_);
-  estimate->neff = effectiveSampleSize(weights_);
+  // A cloud that did not cover the master's estimate reports that Neff (the master's Neff
+  // check then sees the inconsistency even though the cloud was moved onto the master).
+  estimate->neff = std::min(effectiveSampleSize(weights_), feedback_neff_);
   Pose2 posterior_mean;
   Eigen::Matrix3d posterior_cov;
   mixtureMoments(proposal_means_, proposal_covs_, weights_, &posterior_mean, &posterior_cov);
@@ -325,6 +395,9 @@ DpfLocalEstimate DpfLocalFilter::finishStep(
   estimate->step = step;
   estimate->mean = posterior_mean;
   estimate->covariance = posterior_cov;
+  has_posterior_ = true;
+  posterior_mean_ = posterior_mean;
+  posterior_cov_ = posterior_cov;
   estimate->landmarks = static_cast<int>(particles_[bestParticle()].map->size());
   return *estimate;
 }

@@ -65,6 +65,11 @@ class DpfLocalFilter {
   std::vector<Observation> prepare(const FeatureSet& features, int* rejected) const;
   void applyFeedback(const DpfFeedback& feedback);
   void reinitialise(const DpfFeedback& feedback);
+  /// feedback_mode moment: moves and scales the cloud onto the master's mean and covariance.
+  void momentMatch(const DpfFeedback& feedback);
+  /// feedback_mode reweight: weights times N(x; master) / N(x; own last posterior), then
+  /// resampling when Neff drops under the threshold.
+  void reweight(const DpfFeedback& feedback);
   /// Weights (eq. 12, adaptive covariance of eq. 13 when enabled), NIS, resampling.
   DpfLocalEstimate finishStep(long step,
                               const std::vector<std::vector<Eigen::Vector2d>>& innovations,
@@ -83,7 +88,20 @@ class DpfLocalFilter {
   std::vector<Pose2> prior_means_, proposal_means_;
   std::vector<Eigen::Matrix3d> prior_covs_, proposal_covs_;
   long reinitialisations_ = 0;
+  // The posterior this filter reported last (the denominator of the reweighting feedback).
+  bool has_posterior_ = false;
+  double feedback_neff_ = 0.0;  // Neff of the last reweighting feedback (particles: none)
+  Pose2 posterior_mean_ = Pose2::Zero();
+  Eigen::Matrix3d posterior_cov_ = Eigen::Matrix3d::Identity();
 };
+
+/// The log of the ratio N(x; target_mean, target_cov) / N(x; own_mean, own_cov) at each pose,
+/// up to a constant, keeping only the directions in which the target is the sharper (where
+/// the ratio is a Gaussian; elsewhere reweighting cannot add information and the direction is
+/// left out). Headings are wrapped relative to the target mean.
+std::vector<double> feedbackLogRatio(const std::vector<Pose2>& poses, const Pose2& target_mean,
+                                     const Eigen::Matrix3d& target_cov, const Pose2& own_mean,
+                                     const Eigen::Matrix3d& own_cov);
 
 }  // namespace core
 }  // namespace rbpf_slam

@@ -30,6 +30,12 @@ struct DpfOptions {
   bool adaptive_covariance = true;  // eqs. 12-13: likelihood covariance from the particle spread
   bool feedback = true;  // give each local filter's particle cloud the master's mean and covariance
   double feedback_inflation = 1.0;  // the locals' clouds get this times the master covariance
+  // How the feedback reaches a local filter's particles. reweight: each particle's weight is
+  // multiplied by N(x; master) / N(x; the local's own posterior), i.e. by the information the
+  // other local filters added, so that pose and map stay paired (the particles whose map agrees
+  // with the fused pose survive resampling). moment: the cloud is moved and scaled onto the
+  // master's mean and covariance (maps untouched; breaks the pose-map correlation).
+  std::string feedback_mode = "reweight";
   double innovation_smoothing = 0.3;  // exponential smoothing of each local's mean NIS
   double fault_nis = 8.0;          // smoothed mean NIS (2 dof, expected 2) above this: suspect
   double fault_neff_ratio = 0.02;  // Neff / particles below this: suspect
