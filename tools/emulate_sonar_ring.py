@@ -285,6 +285,9 @@ def main():
     ap.add_argument('--range-from', choices=['base', 'transducer'], default='base',
                     help='apex of the cone and origin of the range: base (base_link origin, as '
                     'the shared intel/aces bags do) or transducer (physical)')
+    ap.add_argument('--perfect-odometry', action='store_true',
+                    help='diagnostic: /odom and /tf odom -> base_link are the interpolated '
+                    'reference at the ring times (no drift) instead of the input\'s')
     ap.add_argument('--check', action='store_true',
                     help='compare with the input bag\'s own rings at the scan stamps')
     args = ap.parse_args()
@@ -351,8 +354,33 @@ def main():
             f.write('%.6f %.6f %.6f 0 0 0 %.9f %.9f\n' % (t, p[0], p[1], math.sin(p[2] / 2), math.cos(p[2] / 2)))
     with rosbag.Bag(args.bag) as src, rosbag.Bag(args.output, 'w') as out:
         out.write('/tf_static', static, static.transforms[0].header.stamp)
+        import copy
+        odo_msg = tf_msg = None
         for topic, msg, t in src.read_messages(topics=['/odom', '/tf']):
+            if args.perfect_odometry:
+                if topic == '/odom':
+                    odo_msg = msg
+                else:
+                    tf_msg = msg
+                continue
             out.write(topic, msg, t)
+        if args.perfect_odometry:
+            for k, (t, p) in enumerate(zip(ring_t, P)):
+                stamp = rospy.Time.from_sec(float(t))
+                o = copy.deepcopy(odo_msg)
+                o.header.seq = k
+                o.header.stamp = stamp
+                o.pose.pose.position.x, o.pose.pose.position.y = float(p[0]), float(p[1])
+                o.pose.pose.orientation.z = math.sin(p[2] / 2)
+                o.pose.pose.orientation.w = math.cos(p[2] / 2)
+                tf = copy.deepcopy(tf_msg)
+                tr = tf.transforms[0]
+                tr.header.stamp = stamp
+                tr.transform.translation.x, tr.transform.translation.y = float(p[0]), float(p[1])
+                tr.transform.rotation.z = math.sin(p[2] / 2)
+                tr.transform.rotation.w = math.cos(p[2] / 2)
+                out.write('/odom', o, stamp)
+                out.write('/tf', tf, stamp)
         for k, (t, ranges) in enumerate(zip(ring_t, R)):
             stamp = rospy.Time.from_sec(float(t))
             cloud = PointCloud()
