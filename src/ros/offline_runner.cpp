@@ -345,6 +345,13 @@ OfflineSummary OfflineRunner::run() {
                    pipeline_.lastMatch().delta.y(), pipeline_.lastMatch().delta.z(),
                    pipeline_.lastMatch().inlier_ratio, pipeline_.lastMatch().residual_rms_m,
                    pipeline_.lastMatch().weakest_information);
+      // The features of this update, base frame, with the odometry pose they were taken at.
+      for (const core::LineFeature& l : pipeline_.lastFeatures().lines) {
+        std::fprintf(stderr, "  line t=%.3f odom=(%.4f %.4f %.5f) rho=%.4f theta=%.5f sd=(%.4f %.5f) start=(%.3f %.3f) end=(%.3f %.3f)\n",
+                     stamp.toSec(), odom_pose.x(), odom_pose.y(), odom_pose.z(), l.rho, l.theta,
+                     std::sqrt(l.covariance(0, 0)), std::sqrt(l.covariance(1, 1)), l.start.x(),
+                     l.start.y(), l.end.x(), l.end.y());
+      }
     }
     const double wall =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
