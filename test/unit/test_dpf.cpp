@@ -247,6 +247,7 @@ SyntheticRun makeRun(int steps, unsigned seed) {
 FilterOptions dpfOptions() {
   FilterOptions o;
   o.variant = "dpf";
+  o.dpf.feedback_mode = "reweight";  // the accurate mode (config/landmarks_dpf.yaml: moment)
   o.particles = 30;
   o.use_lines = false;
   o.motion.alpha1 = 0.05;
