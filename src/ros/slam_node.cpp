@@ -509,6 +509,9 @@ bool SlamNode::checkClock() {
     std::ostringstream why;
     why << "time jumped back by " << (last_now_ - now).toSec() << " s (bag restarted?)";
     resetAll(why.str());
+    // Only a clock that went back lets map -> odom stamps start over; after any other reset
+    // (sensor stamps back, ~reset) the next one must still be later than the last one sent.
+    last_transform_stamp_ = ros::Time();
   }
   last_now_ = now;
   return true;
@@ -531,7 +534,6 @@ void SlamNode::resetAll(const std::string& why) {
   if (sonar_input_) sonar_input_->clear();
   if (sonar_cloud_input_) sonar_cloud_input_->clear();
   features_input_->clear();
-  last_transform_stamp_ = ros::Time();
   updates_ = 0;
   stale_drops_in_a_row_ = 0;
   publishLandmarks(ros::Time::now());  // DELETE for every landmark shown
