@@ -6,24 +6,13 @@
 
 #include "rbpf_slam/core/filters/intermediate_path.h"
 #include "rbpf_slam/core/filters/resampling.h"
+#include "rbpf_slam/core/tracking/tracker_frontend.h"
 
 namespace rbpf_slam {
 namespace core {
 namespace {
 
 constexpr double kLog2Pi = 1.8378770664093453;
-
-std::vector<TrackerObservation> forTracker(const std::vector<Observation>& observations) {
-  std::vector<TrackerObservation> out(observations.size());
-  for (size_t i = 0; i < observations.size(); ++i) {
-    out[i].type = observations[i].type;
-    out[i].z = observations[i].z;
-    out[i].noise = observations[i].noise;
-    out[i].start = observations[i].start;
-    out[i].end = observations[i].end;
-  }
-  return out;
-}
 
 }  // namespace
 
@@ -68,7 +57,7 @@ UpdateStats RobustFastSlam2::update(const FeatureSet& features) {
   std::vector<Observation> observations = prepare(features, &rejected);
   const int step = step_ + 1;
   const TrackerEvent event =
-      tracker_.update(step, motion.delta, incrementCovariance(motion), forTracker(observations));
+      tracker_.update(step, motion.delta, incrementCovariance(motion), toTrackerObservations(observations));
   StepRecord record;
   record.step = step;
   record.motion = motion;

@@ -8,6 +8,18 @@
 namespace rbpf_slam {
 namespace core {
 
+std::vector<TrackerObservation> toTrackerObservations(const std::vector<Observation>& observations) {
+  std::vector<TrackerObservation> out(observations.size());
+  for (size_t i = 0; i < observations.size(); ++i) {
+    out[i].type = observations[i].type;
+    out[i].z = observations[i].z;
+    out[i].noise = observations[i].noise;
+    out[i].start = observations[i].start;
+    out[i].end = observations[i].end;
+  }
+  return out;
+}
+
 TrackerFrontend::TrackerFrontend(const FilterOptions& options)
     : options_(options), motion_model_(createMotionModel(options.motion)), tracker_(options.tracker) {}
 
@@ -42,14 +54,7 @@ bool TrackerFrontend::process(const FeatureSet& features, const Pose2& odom_pose
   last_stamp_ = features.stamp;
   int rejected = 0;
   const std::vector<Observation> prepared = prepareObservations(features, options_, &rejected);
-  std::vector<TrackerObservation> observations(prepared.size());
-  for (size_t i = 0; i < prepared.size(); ++i) {
-    observations[i].type = prepared[i].type;
-    observations[i].z = prepared[i].z;
-    observations[i].noise = prepared[i].noise;
-    observations[i].start = prepared[i].start;
-    observations[i].end = prepared[i].end;
-  }
+  const std::vector<TrackerObservation> observations = toTrackerObservations(prepared);
   // The increment's covariance in the previous base frame (the motion model's, from zero).
   *event = tracker_.update(++step_, motion.delta,
                            motion_model_->covariance(Pose2::Zero(), motion), observations);

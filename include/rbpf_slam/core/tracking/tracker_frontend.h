@@ -16,6 +16,11 @@
 namespace rbpf_slam {
 namespace core {
 
+struct Observation;
+
+/// The filter's prepared observations as the tracker takes them.
+std::vector<TrackerObservation> toTrackerObservations(const std::vector<Observation>& observations);
+
 class TrackerFrontend {
  public:
   /// Uses options.tracker, the observation noise of options.measurement, options.use_lines /
