@@ -190,15 +190,7 @@ void DpfLocalFilter::reweight(const DpfFeedback& feedback) {
   log_weights_ = log_weights;
   weights_ = weights;
   for (size_t j = 0; j < n; ++j) log_weights_[j] = std::log(std::max(weights_[j], 1e-300));
-  if (effectiveSampleSize(weights_) < options_.resample_threshold * n) {
-    const std::vector<int> drawn = resampleLowVariance(weights_, static_cast<int>(n), rng_);
-    std::vector<Particle> next;
-    next.reserve(n);
-    for (int k : drawn) next.push_back(particles_[k]);
-    particles_ = std::move(next);
-    weights_.assign(n, 1.0 / n);
-    log_weights_.assign(n, 0.0);
-  }
+  resampleIfBelow(effectiveSampleSize(weights_));
 }
 
 void DpfLocalFilter::momentMatch(const DpfFeedback& feedback) {
@@ -382,15 +374,7 @@ DpfLocalEstimate DpfLocalFilter::finishStep(
   mixtureMoments(proposal_means_, proposal_covs_, weights_, &posterior_mean, &posterior_cov);
   estimate->particles = static_cast<int>(n);
   for (size_t j = 0; j < n; ++j) log_weights_[j] = std::log(std::max(weights_[j], 1e-300));
-  if (estimate->neff < options_.resample_threshold * n) {
-    const std::vector<int> drawn = resampleLowVariance(weights_, static_cast<int>(n), rng_);
-    std::vector<Particle> next;
-    next.reserve(n);
-    for (int k : drawn) next.push_back(particles_[k]);
-    particles_ = std::move(next);
-    weights_.assign(n, 1.0 / n);
-    log_weights_.assign(n, 0.0);
-  }
+  resampleIfBelow(estimate->neff);
   estimate->index = index_;
   estimate->step = step;
   estimate->mean = posterior_mean;
@@ -400,6 +384,18 @@ DpfLocalEstimate DpfLocalFilter::finishStep(
   posterior_cov_ = posterior_cov;
   estimate->landmarks = static_cast<int>(particles_[bestParticle()].map->size());
   return *estimate;
+}
+
+void DpfLocalFilter::resampleIfBelow(double neff) {
+  const size_t n = particles_.size();
+  if (!(neff < options_.resample_threshold * n)) return;
+  const std::vector<int> drawn = resampleLowVariance(weights_, static_cast<int>(n), rng_);
+  std::vector<Particle> next;
+  next.reserve(n);
+  for (int k : drawn) next.push_back(particles_[k]);
+  particles_ = std::move(next);
+  weights_.assign(n, 1.0 / n);
+  log_weights_.assign(n, 0.0);
 }
 
 }  // namespace core

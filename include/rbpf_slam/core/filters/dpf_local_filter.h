@@ -70,6 +70,8 @@ class DpfLocalFilter {
   /// feedback_mode reweight: weights times N(x; master) / N(x; own last posterior), then
   /// resampling when Neff drops under the threshold.
   void reweight(const DpfFeedback& feedback);
+  /// Low-variance resampling (weights then uniform) when neff < resample_threshold x N.
+  void resampleIfBelow(double neff);
   /// Weights (eq. 12, adaptive covariance of eq. 13 when enabled), NIS, resampling.
   DpfLocalEstimate finishStep(long step,
                               const std::vector<std::vector<Eigen::Vector2d>>& innovations,
