@@ -31,6 +31,22 @@ void readAssociation(YamlSection section, core::AssociationOptions* o) {
   section.finish();
 }
 
+void readRelocalization(YamlSection section, core::RelocalizationOptions* o) {
+  section.read("enabled", &o->enabled);
+  section.read("search_xy_m", &o->search_xy_m, 0.0, 20.0);
+  section.read("search_theta_rad", &o->search_theta_rad, 0.0, 1.0);
+  section.read("min_unmatched", &o->min_unmatched, 1, 1000);
+  section.read("min_unmatched_ratio", &o->min_unmatched_ratio, 0.0, 1.0);
+  section.read("min_matches", &o->min_matches, 1, 1000);
+  section.read("min_gain", &o->min_gain, 1, 1000);
+  section.read("min_matched_ratio", &o->min_matched_ratio, 0.0, 1.0);
+  section.read("min_landmark_age", &o->min_landmark_age, 0, 1000000);
+  section.read("line_tolerance_m", &o->line_tolerance_m, 1e-3, 10.0);
+  section.read("angle_tolerance_rad", &o->angle_tolerance_rad, 1e-4, 1.0);
+  section.read("point_tolerance_m", &o->point_tolerance_m, 1e-3, 10.0);
+  section.finish();
+}
+
 void readRobust(YamlSection section, core::RobustOptions* o) {
   section.read("ancestor_sets", &o->ancestor_sets, 1, 100);
   section.read("ancestor_spacing_steps", &o->ancestor_spacing_steps, 1, 100000);
@@ -278,6 +294,7 @@ SlamConfig parseSlamConfigTree(const YAML::Node& root, const std::string& source
   top.read("particles", &f.particles, 1, 100000);
   top.read("seed", &f.seed);
   top.read("resample_threshold", &f.resample_threshold, 0.0, 1.0);
+  top.read("proposal_sample_scale", &f.proposal_sample_scale, 1e-3, 1.0);
   top.read("use_points", &f.use_points);
   top.read("use_lines", &f.use_lines);
   readMotion(top.section("motion"), &f.motion);
@@ -286,6 +303,7 @@ SlamConfig parseSlamConfigTree(const YAML::Node& root, const std::string& source
   readRobust(top.section("robust"), &f.robust);
   readTracker(top.section("tracker"), &f.tracker);
   readExistence(top.section("existence"), &f.existence);
+  readRelocalization(top.section("relocalization"), &f.relocalization);
   readHinf(top.section("hinf"), &f.hinf);
   readLineSlam(top, &f);
   readGrid(top.section("grid"), &f.grid);

@@ -379,6 +379,7 @@ OfflineSummary OfflineRunner::run() {
   summary.landmarks = static_cast<int>(pipeline_.session().filter().landmarks().size());
   summary.particles = config_.filter.particles;
   summary.fallbacks = pipeline_.session().filter().stats().fallbacks;
+  summary.relocalizations = pipeline_.session().filter().stats().relocalizations;
   return writeOutputs(summary);
 }
 
@@ -446,6 +447,7 @@ OfflineSummary OfflineRunner::writeOutputs(const OfflineSummary& in) const {
        << "  \"landmarks\": " << summary.landmarks << ",\n"
        << "  \"particles\": " << summary.particles << ",\n"
        << "  \"fallbacks\": " << summary.fallbacks << ",\n"
+       << "  \"relocalizations\": " << summary.relocalizations << ",\n"
        << "  \"update_ms_mean\": " << summary.update_ms_mean << ",\n"
        << "  \"update_ms_p99\": " << summary.update_ms_p99 << ",\n"
        << "  \"update_ms_max\": " << summary.update_ms_max << ",\n"

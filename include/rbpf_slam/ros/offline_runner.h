@@ -39,6 +39,7 @@ struct OfflineSummary {
   int landmarks = 0;
   int particles = 0;
   long fallbacks = 0;  // H-infinity steps that fell back to the EKF (since the last reset)
+  long relocalizations = 0;  // particle proposals started from a searched pose correction
   double update_ms_mean = 0.0;
   double update_ms_p99 = 0.0;
   double update_ms_max = 0.0;

@@ -6,6 +6,7 @@
 
 #include "rbpf_slam/core/filters/landmark_existence.h"
 #include "rbpf_slam/core/filters/measurement_models.h"
+#include "rbpf_slam/core/filters/relocalization.h"
 #include "rbpf_slam/core/filters/resampling.h"
 
 namespace rbpf_slam {
@@ -289,44 +290,82 @@ bool FastSlam2::updateLandmark(LandmarkMap* map, const Match& match, const Pose2
   return !c.fallback;
 }
 
-FastSlam2::ParticleUpdate FastSlam2::updateParticle(Particle* particle,
-                                                    const Pose2& predicted_mean,
-                                                    const Eigen::Matrix3d& motion_cov,
-                                                    const std::vector<Observation>& observations) {
-  ParticleUpdate result;
-  Pose2 mean = predicted_mean;
-  Eigen::Matrix3d cov = motion_cov;
-  double log_likelihood = 0.0;
+FastSlam2::Proposal FastSlam2::refineProposal(const LandmarkMap& map, const Pose2& prior_mean,
+                                              const Eigen::Matrix3d& prior_cov,
+                                              const std::vector<Observation>& observations) const {
+  Proposal q;
+  q.mean = prior_mean;
+  q.cov = prior_cov;
   const bool pointwise = rule_->pointwiseWeights();
-  std::vector<std::pair<int, int>> matched;  // (observation, landmark index)
-  std::vector<int> fresh;
-  const LandmarkMap& map = *particle->map;
   const AssociationOptions& a = options_.association;
   for (size_t k = 0; k < observations.size(); ++k) {
     const Observation& o = observations[k];
-    const Match m = associate(map, mean, cov, o);
+    const Match m = associate(map, q.mean, q.cov, o);
     if (m.index >= 0 && m.distance2 < a.gate_chi2) {
       // Proposal: refine the pose Gaussian with this observation (Montemerlo 2003, eq. 3.7).
       const Eigen::Matrix<double, 2, 3>& h = m.prediction.h_pose;
-      const Eigen::Matrix2d s = h * cov * h.transpose() + m.landmark_innovation_cov;
+      const Eigen::Matrix2d s = h * q.cov * h.transpose() + m.landmark_innovation_cov;
       Eigen::Matrix2d s_inv;
       const Eigen::Vector2d v = innovation(o.z, m.prediction.z);
       const double ll = logGaussian2(v, s, &s_inv);
       if (!std::isfinite(ll)) continue;
-      const Correction<3> c = ekfCorrection<3>(cov, h, m.landmark_innovation_cov);
+      const Correction<3> c = ekfCorrection<3>(q.cov, h, m.landmark_innovation_cov);
       if (!c.ok) continue;
-      if (!pointwise) log_likelihood += ll;  // the marginal weight of FastSLAM 2.0
-      mean += c.gain * v;
-      mean.z() = wrapAngle(mean.z());
-      cov = c.covariance;
-      matched.emplace_back(static_cast<int>(k), m.index);
+      if (!pointwise) q.log_likelihood += ll;  // the marginal weight of FastSLAM 2.0
+      q.mean += c.gain * v;
+      q.mean.z() = wrapAngle(q.mean.z());
+      q.cov = c.covariance;
+      q.matched.emplace_back(static_cast<int>(k), m.index);
     } else if (m.index < 0 || m.distance2 > a.new_landmark_chi2) {
       // Likelihood of a new landmark: as if observed at the new-landmark threshold.
-      log_likelihood += -0.5 * a.new_landmark_chi2 - 0.5 * std::log(o.noise.determinant()) - kLog2Pi;
-      fresh.push_back(static_cast<int>(k));
+      q.log_likelihood += -0.5 * a.new_landmark_chi2 - 0.5 * std::log(o.noise.determinant()) - kLog2Pi;
+      q.fresh.push_back(static_cast<int>(k));
     }
     // Between the gate and the new-landmark threshold: ambiguous, left out.
   }
+  return q;
+}
+
+bool FastSlam2::relocalize(const LandmarkMap& map, const Eigen::Matrix3d& motion_cov,
+                           const std::vector<Observation>& observations, Pose2* prior_mean,
+                           Proposal* proposal) const {
+  const RelocalizationOptions& r = options_.relocalization;
+  if (!r.enabled) return false;
+  const int unmatched = static_cast<int>(observations.size() - proposal->matched.size());
+  if (unmatched < r.min_unmatched || unmatched < r.min_unmatched_ratio * observations.size()) {
+    return false;
+  }
+  const PoseCorrection c =
+      searchPoseCorrection(map, *prior_mean, observations, r,
+                           options_.association.line_overlap_margin_m,
+                           r.min_landmark_age > 0 ? step_ - r.min_landmark_age : 2147483647);
+  if (!c.found) return false;
+  Proposal moved = refineProposal(map, c.pose, motion_cov, observations);
+  const int needed = std::max<int>(r.min_matches, proposal->matched.size() + r.min_gain);
+  if (static_cast<int>(moved.matched.size()) < needed ||
+      moved.matched.size() < r.min_matched_ratio * observations.size()) {
+    return false;
+  }
+  *prior_mean = c.pose;
+  *proposal = std::move(moved);
+  return true;
+}
+
+FastSlam2::ParticleUpdate FastSlam2::updateParticle(Particle* particle,
+                                                    const Pose2& predicted,
+                                                    const Eigen::Matrix3d& motion_cov,
+                                                    const std::vector<Observation>& observations) {
+  ParticleUpdate result;
+  const bool pointwise = rule_->pointwiseWeights();
+  const LandmarkMap& map = *particle->map;
+  Pose2 predicted_mean = predicted;
+  Proposal q = refineProposal(map, predicted_mean, motion_cov, observations);
+  result.relocalized = relocalize(map, motion_cov, observations, &predicted_mean, &q);
+  Pose2& mean = q.mean;
+  Eigen::Matrix3d& cov = q.cov;
+  double& log_likelihood = q.log_likelihood;
+  const std::vector<std::pair<int, int>>& matched = q.matched;
+  const std::vector<int>& fresh = q.fresh;
   if (rule_->attenuatesPose() && !matched.empty()) {
     // H-infinity proposal (Havangi eqs. 20-23, every matched landmark of the step stacked, the
     // landmark's uncertainty counted in R as in FastSLAM 2.0).
@@ -340,7 +379,10 @@ FastSlam2::ParticleUpdate FastSlam2::updateParticle(Particle* particle,
     cov = h.covariance;
     result.fallbacks += h.fallback;
   }
-  particle->pose = sampleMultivariate<3>(rng_, mean, cov);  // Havangi eq. 24
+  // Draw from the proposal (Havangi eq. 24); proposal_sample_scale < 1 narrows the draw when
+  // observations refined it (1: FastSLAM 2.0 exactly; see FilterOptions).
+  if (!matched.empty()) cov *= options_.proposal_sample_scale;
+  particle->pose = sampleMultivariate<3>(rng_, mean, cov);
   particle->pose.z() = wrapAngle(particle->pose.z());
   // Pointwise importance weight (Havangi eq. 36): p(z | s) p(s | s_prev, u) / q(s) at the
   // drawn pose s; p(z | s) is accumulated by the landmark updates below.
@@ -403,6 +445,7 @@ UpdateStats FastSlam2::update(const FeatureSet& features) {
     results[i] = updateParticle(&p, predicted, motion_cov, observations);
     if (mapping_) results[i].removed = manageExistence(options_.existence, &p.map, p.pose, step_);
     stats.fallbacks += results[i].fallbacks;
+    stats_.relocalizations += results[i].relocalized;
   }
   for (auto& p : particles_) p.path = std::make_shared<PathNode>(p.pose, std::move(p.path));
   stats_.fallbacks += stats.fallbacks;

@@ -44,6 +44,7 @@ void validate(const FilterOptions& o) {
   if (!known) throw std::invalid_argument("variant = '" + o.variant + "' is not implemented");
   requireRange("particles", o.particles, 1, 100000);
   requireRange("resample_threshold", o.resample_threshold, 0.0, 1.0);
+  requireRange("proposal_sample_scale", o.proposal_sample_scale, 1e-3, 1.0);
   requireRange("association.gate_chi2", o.association.gate_chi2, 0.1, 1000.0);
   requireRange("association.new_landmark_chi2", o.association.new_landmark_chi2,
                o.association.gate_chi2, 1000.0);
@@ -60,6 +61,7 @@ void validate(const FilterOptions& o) {
   validate(o.robust);
   validate(o.tracker);
   validate(o.existence);
+  validate(o.relocalization);
   validate(o.hinf);
   validate(o.line_association);
   validate(o.multifilter);

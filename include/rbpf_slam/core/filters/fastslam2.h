@@ -88,7 +88,27 @@ class FastSlam2 : public SlamFilter {
     int created = 0;
     int fallbacks = 0;  // H-infinity corrections that fell back to the EKF
     int removed = 0;    // landmarks dropped by existence management
+    bool relocalized = false;  // the proposal started from a searched pose correction
   };
+  /// The proposal of one particle before drawing: the prior refined by each associated
+  /// observation in turn (Montemerlo 2003, eq. 3.7), with the marginal log-likelihood.
+  struct Proposal {
+    Pose2 mean = Pose2::Zero();
+    Eigen::Matrix3d cov = Eigen::Matrix3d::Identity();
+    double log_likelihood = 0.0;
+    std::vector<std::pair<int, int>> matched;  // (observation, landmark index)
+    std::vector<int> fresh;                    // observations that start new landmarks
+  };
+  Proposal refineProposal(const LandmarkMap& map, const Pose2& prior_mean,
+                          const Eigen::Matrix3d& prior_cov,
+                          const std::vector<Observation>& observations) const;
+  /// When `proposal` (from the motion prior) leaves most observations unmatched, searches a
+  /// pose correction (relocalization.h); if the proposal from the corrected pose associates
+  /// clearly more, replaces *proposal with it, sets *prior_mean to the corrected pose and
+  /// returns true. Off unless options.relocalization.enabled.
+  bool relocalize(const LandmarkMap& map, const Eigen::Matrix3d& motion_cov,
+                  const std::vector<Observation>& observations, Pose2* prior_mean,
+                  Proposal* proposal) const;
   /// FastSLAM 2.0 step for one particle from its predicted pose and motion covariance.
   ParticleUpdate updateParticle(Particle* particle, const Pose2& predicted_mean,
                                 const Eigen::Matrix3d& motion_cov,

@@ -6,6 +6,7 @@
 #include "rbpf_slam/core/filters/dpf_options.h"
 #include "rbpf_slam/core/filters/estimator_rule.h"
 #include "rbpf_slam/core/filters/line_slam_options.h"
+#include "rbpf_slam/core/filters/relocalization.h"
 #include "rbpf_slam/core/grid/grid_options.h"
 #include "rbpf_slam/core/motion/motion_model.h"
 #include "rbpf_slam/core/tracking/landmark_tracker_options.h"
@@ -57,8 +58,13 @@ struct FilterOptions {
   int particles = 100;
   unsigned long seed = 42;
   double resample_threshold = 0.5;  // resample when Neff < threshold * particles
+  // fastslam2 family: each particle's pose is drawn from its proposal N(mean, scale x cov)
+  // when observations refined it. 1 is FastSLAM 2.0; below 1 the particles follow the map
+  // more closely (less heading noise injected per update, at the cost of diversity).
+  double proposal_sample_scale = 1.0;
   MotionOptions motion;
   AssociationOptions association;
+  RelocalizationOptions relocalization;  // fastslam2 and the variants built on it
   MeasurementOptions measurement;
   ExistenceOptions existence;
   HinfOptions hinf;  // variant hinf_fastslam only

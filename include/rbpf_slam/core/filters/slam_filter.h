@@ -59,6 +59,7 @@ struct FilterStats {
   long resamples = 0;
   long weight_resets = 0;
   long fallbacks = 0;
+  long relocalizations = 0;  // particle proposals started from a searched pose correction
   double last_neff = 0.0;
   int landmarks = 0;  // in the best particle
 };
