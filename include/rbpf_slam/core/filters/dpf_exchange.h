@@ -60,6 +60,8 @@ struct DpfLocalHealth {
   double smoothed_nis = 2.0;  // exponential average of the mean NIS (2 dof: expectation 2)
   int suspect_steps = 0;      // consecutive steps flagged
   bool suspect = false;
+  double prior_nis = 0.0;     // this step's Mahalanobis^2 of its prior against the master's
+  bool inconsistent = false;  // prior_nis > fault_prior_chi2: not fused this step
   long isolations = 0;
 };
 
