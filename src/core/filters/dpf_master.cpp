@@ -72,9 +72,6 @@ void gainedInformation(const Eigen::Matrix3d& posterior_info, const Eigen::Matri
   }
 }
 
-namespace {
-
-}  // namespace
 
 std::vector<double> innovationWeights(const std::vector<double>& mean_nis) {
   std::vector<double> w;
@@ -181,7 +178,8 @@ DpfMasterOutput DpfMaster::fuse(long step, const MotionInput& motion,
   out.weights = normalised(w);
   std::vector<double> trust(n, 0.0);
   for (int i = 0; i < n; ++i) trust[i] = total > 0.0 ? std::min(1.0, n * out.weights[i]) : 0.0;
-  if (options_.fusion != "information" || !fuseInformation(prior_mean, by_index, out.weights, trust, &out)) {
+  if (options_.fusion != "information" ||
+      !fuseInformation(prior_mean, by_index, out.weights, trust, &out)) {
     fuseAverage(by_index, out.weights, &out);
   }
   out.feedback.mean = out.mean;

@@ -4,11 +4,12 @@
 //
 // Step protocol (step k = 1, 2, ...), identical in both deployments:
 //   1. the master sends DpfStepInput{k, motion_k, features_k, feedback_{k-1}} to every local;
-//   2. local i applies feedback_{k-1} (re-initialise if listed, else shift onto the master
-//      mean when feedback is on), predicts with motion_k, updates with its block of
-//      features_k, and answers DpfLocalEstimate{i, k, ...};
+//   2. local i applies feedback_{k-1} (re-initialise if listed, else reweight or moment-match
+//      onto the master's estimate when feedback is on), predicts with motion_k, updates with
+//      its block of features_k, and answers DpfLocalEstimate{i, k, ...};
 //   3. the master fuses the N estimates of step k (in index order) into DpfMasterOutput_k,
-//      whose feedback goes out with step k + 1.
+//      whose feedback goes out with step k + 1. A local whose prior (its prediction) is not
+//      the master's prediction is flagged and not fused that step (dpf.fault_prior_chi2).
 // Each local filter owns its generator, seeded from (seed, index), so the result does not
 // depend on which thread or process runs which local filter.
 
