@@ -202,17 +202,46 @@ TEST(DpfMaster, InformationFusionAddsWhatEachLocalLearned) {
 TEST(DpfMaster, GainedInformationKeepsOnlyTheDirectionsWithAGain) {
   // Gain diag(3, -1, 0): only x was learned. The vector's y and heading components are not
   // information (with the clipped gain ~0 there they would move the estimate without bound).
-  Eigen::Matrix3d information;
+  Eigen::Matrix3d information, not_gained;
   Eigen::Vector3d vector;
   gainedInformation(Eigen::Vector3d(4.0, 1.0, 1.0).asDiagonal(),
                     Eigen::Vector3d(1.0, 2.0, 1.0).asDiagonal(), Eigen::Vector3d(3.0, 5.0, 7.0),
-                    &information, &vector);
+                    &information, &vector, &not_gained);
+  EXPECT_TRUE(not_gained.isApprox(Eigen::Vector3d(0.0, 1.0, 1.0).asDiagonal().toDenseMatrix(),
+                                  1e-12))
+      << not_gained;
   EXPECT_TRUE(information.isApprox(Eigen::Vector3d(3.0, 0.0, 0.0).asDiagonal().toDenseMatrix(),
                                    1e-12))
       << information;
   EXPECT_NEAR(vector.x(), 3.0, 1e-12);
   EXPECT_NEAR(vector.y(), 0.0, 1e-12);
   EXPECT_NEAR(vector.z(), 0.0, 1e-12);
+}
+
+TEST(DpfMaster, WhereALocalGainedNoInformationTheMasterTakesItsMeanMoveTimesItsWeight) {
+  // Local 0: prior N(0, I); posterior at (1, 0.5, 0) with covariance diag(0.5, 2, 1): it
+  // learned x (information 1 -> 2, i.e. measured x = 2) but its cloud widened along y while its
+  // weighting moved it 0.5 m. Local 1 saw nothing. Both weigh 0.5.
+  DpfOptions o;
+  o.local_filters = 2;
+  DpfMaster master(o);
+  DpfLocalEstimate a = estimateOf(0, 1, Pose2(1.0, 0.5, 0.0), 2.0, 0.9);
+  DpfLocalEstimate b = estimateOf(1, 1, Pose2::Zero(), 2.0, 0.9);
+  b.innovations = 0;
+  b.nis_sum = 0.0;
+  for (DpfLocalEstimate* e : {&a, &b}) {
+    e->prior_mean = Pose2::Zero();
+    e->prior_covariance = Eigen::Matrix3d::Identity();
+  }
+  a.covariance = Eigen::Vector3d(0.5, 2.0, 1.0).asDiagonal();
+  b.covariance = Eigen::Matrix3d::Identity();
+  const auto out = master.fuse(1, MotionInput(), {a, b});
+  ASSERT_NEAR(out.weights[0], 0.5, 1e-9);
+  EXPECT_NEAR(out.mean.x(), 1.0, 1e-6);   // prior 0 (information 1) + measurement 2 (1)
+  EXPECT_NEAR(out.mean.y(), 0.25, 1e-6);  // 0.5 x its 0.5 m move
+  EXPECT_NEAR(out.mean.z(), 0.0, 1e-6);
+  EXPECT_NEAR(out.covariance(0, 0), 0.5, 1e-6);
+  EXPECT_NEAR(out.covariance(1, 1), 1.0, 1e-6);  // no information gained along y
 }
 
 TEST(DpfMaster, ALocalWhosePriorDisagreesWithTheMastersIsNotFusedThenIsolated) {

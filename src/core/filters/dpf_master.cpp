@@ -57,18 +57,20 @@ Eigen::Matrix3d regularised(const Eigen::Matrix3d& m) {
 
 void gainedInformation(const Eigen::Matrix3d& posterior_info, const Eigen::Matrix3d& prior_info,
                        const Eigen::Vector3d& vector, Eigen::Matrix3d* information,
-                       Eigen::Vector3d* projected) {
+                       Eigen::Vector3d* projected, Eigen::Matrix3d* not_gained) {
   const Eigen::Matrix3d gain = posterior_info - prior_info;
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(0.5 * (gain + gain.transpose()));
   const double floor = 1e-9 * std::max(posterior_info.trace(), 0.0);
   information->setZero();
   projected->setZero();
+  not_gained->setIdentity();
   for (int k = 0; k < 3; ++k) {
     const double lambda = eigen.eigenvalues()(k);
     if (!(lambda > floor)) continue;  // nothing learned along this direction
     const Eigen::Vector3d u = eigen.eigenvectors().col(k);
     *information += lambda * u * u.transpose();
     *projected += u * u.dot(vector);
+    *not_gained -= u * u.transpose();
   }
 }
 
@@ -198,6 +200,7 @@ bool DpfMaster::fuseInformation(const Pose2& prior_mean,
   // Linearised at the master's prior: information and information vector relative to it.
   Eigen::Matrix3d information = regularised(prior_cov).inverse();
   Eigen::Vector3d vector = Eigen::Vector3d::Zero();
+  Eigen::Vector3d shift = Eigen::Vector3d::Zero();
   for (int i = 0; i < n; ++i) {
     const DpfLocalEstimate& e = *locals[i];
     const double trust = trusts[i];
@@ -208,22 +211,25 @@ bool DpfMaster::fuseInformation(const Pose2& prior_mean,
     // vector, both kept only along the directions where it gained information (a particle
     // posterior can be broader than its prior along some direction; the vector's component
     // there is not information, and dividing it by a clipped, near-zero gain would throw the
-    // master's estimate far away).
-    Eigen::Matrix3d gained;
+    // master's estimate far away). Along those other directions the local's weighting may
+    // still have moved its cloud (e.g. at a loop closure): the master takes that move of the
+    // posterior mean itself, weighted by w_i (so bounded by the largest move), not a vector.
+    Eigen::Matrix3d gained, not_gained;
     Eigen::Vector3d gained_vector;
     gainedInformation(posterior_info, prior_info,
                       posterior_info * difference(e.mean, prior_mean) -
                           prior_info * difference(e.prior_mean, prior_mean),
-                      &gained, &gained_vector);
+                      &gained, &gained_vector, &not_gained);
     information += trust * gained;
     vector += trust * gained_vector;
+    shift += weights[i] * not_gained * difference(e.mean, e.prior_mean);
   }
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(information);
   if (!(eigen.eigenvalues().minCoeff() > 0.0) || !information.allFinite()) return false;
   out->covariance = information.inverse();
   const Eigen::Vector3d correction = out->covariance * vector;
-  if (!correction.allFinite()) return false;
-  out->mean = prior_mean + correction;
+  if (!correction.allFinite() || !shift.allFinite()) return false;
+  out->mean = prior_mean + correction + shift;
   out->mean.z() = wrapAngle(out->mean.z());
   return true;
 }
