@@ -35,7 +35,7 @@ struct DpfOptions {
   // other local filters added, so that pose and map stay paired (the particles whose map agrees
   // with the fused pose survive resampling). moment: the cloud is moved and scaled onto the
   // master's mean and covariance (maps untouched; breaks the pose-map correlation). The default
-  // is the shipped config's (reweight): fault-free on the simulator 0.66 m ATE against
+  // is the shipped config's (reweight): fault-free on the simulator 0.52 m ATE against
   // moment's 4.06 m (10 seeds, docs/results.md).
   std::string feedback_mode = "reweight";
   double innovation_smoothing = 0.3;  // exponential smoothing of each local's mean NIS
