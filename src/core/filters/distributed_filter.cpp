@@ -33,6 +33,7 @@ void validate(const DpfOptions& o) {
   require("dpf.innovation_smoothing", o.innovation_smoothing, 1e-3, 1.0);
   require("dpf.fault_nis", o.fault_nis, 0.0, 1e9);
   require("dpf.fault_neff_ratio", o.fault_neff_ratio, 0.0, 1.0);
+  require("dpf.fault_prior_chi2", o.fault_prior_chi2, 0.0, 1e9);
   require("dpf.suspect_weight", o.suspect_weight, 0.0, 1.0);
   require("dpf.isolate_after_steps", o.isolate_after_steps, 1, 1000000);
   require("dpf.step_timeout_s", o.step_timeout_s, 1e-3, 1e6);

@@ -1,5 +1,6 @@
 #include "rbpf_slam/core/filters/dpf_master.h"
 
+#include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 #include <Eigen/LU>
 #include <algorithm>
@@ -52,14 +53,27 @@ Eigen::Matrix3d regularised(const Eigen::Matrix3d& m) {
   return 0.5 * (m + m.transpose()) + Eigen::Vector3d(1e-8, 1e-8, 1e-10).asDiagonal().toDenseMatrix();
 }
 
-/// The positive semidefinite part of a symmetric matrix.
-Eigen::Matrix3d positivePart(const Eigen::Matrix3d& m) {
-  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(0.5 * (m + m.transpose()));
-  const Eigen::Vector3d values = eigen.eigenvalues().cwiseMax(0.0);
-  return eigen.eigenvectors() * values.asDiagonal() * eigen.eigenvectors().transpose();
+}  // namespace
+
+void gainedInformation(const Eigen::Matrix3d& posterior_info, const Eigen::Matrix3d& prior_info,
+                       const Eigen::Vector3d& vector, Eigen::Matrix3d* information,
+                       Eigen::Vector3d* projected, Eigen::Matrix3d* not_gained) {
+  const Eigen::Matrix3d gain = posterior_info - prior_info;
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(0.5 * (gain + gain.transpose()));
+  const double floor = 1e-9 * std::max(posterior_info.trace(), 0.0);
+  information->setZero();
+  projected->setZero();
+  not_gained->setIdentity();
+  for (int k = 0; k < 3; ++k) {
+    const double lambda = eigen.eigenvalues()(k);
+    if (!(lambda > floor)) continue;  // nothing learned along this direction
+    const Eigen::Vector3d u = eigen.eigenvectors().col(k);
+    *information += lambda * u * u.transpose();
+    *projected += u * u.dot(vector);
+    *not_gained -= u * u.transpose();
+  }
 }
 
-}  // namespace
 
 std::vector<double> innovationWeights(const std::vector<double>& mean_nis) {
   std::vector<double> w;
@@ -131,16 +145,26 @@ DpfMasterOutput DpfMaster::fuse(long step, const MotionInput& motion,
   DpfMasterOutput out;
   out.step = step;
   out.feedback.step = step;
+  // The master's prediction: its last estimate moved by the step's odometry. Every local
+  // predicted from the master's last estimate (the feedback) with the same odometry, so its
+  // prior must agree with this one; the information fusion below adds what each local gained
+  // relative to its prior, which is only valid when that prior is the master's.
+  const Pose2 prior_mean = compose(last_.mean, motion.delta);
   // Fault detection: what the weighting looks at decides what counts as a fault.
   const bool watch_innovation = options_.weighting != "neff";
   const bool watch_neff = options_.weighting != "innovation";
   for (int i = 0; i < n; ++i) {
     DpfLocalHealth& h = health_[i];
-    h.suspect = (watch_innovation && nis[i] > options_.fault_nis) ||
+    const DpfLocalEstimate& e = *by_index[i];
+    const Pose2 d = difference(e.prior_mean, prior_mean);
+    h.prior_nis = d.dot(regularised(e.prior_covariance + last_.covariance).ldlt().solve(d));
+    h.inconsistent = options_.fault_prior_chi2 > 0.0 &&
+                     !(h.prior_nis <= options_.fault_prior_chi2);  // NaN: inconsistent
+    h.suspect = h.inconsistent || (watch_innovation && nis[i] > options_.fault_nis) ||
                 (watch_neff && neff[i] < options_.fault_neff_ratio);
     h.suspect_steps = h.suspect ? h.suspect_steps + 1 : 0;
     if (!h.suspect) continue;
-    w[i] *= options_.suspect_weight;
+    w[i] *= h.inconsistent ? 0.0 : options_.suspect_weight;
     if (h.suspect_steps >= options_.isolate_after_steps) {
       w[i] = 0.0;
       out.feedback.reinitialise.push_back(i);
@@ -149,9 +173,15 @@ DpfMasterOutput DpfMaster::fuse(long step, const MotionInput& motion,
       ++h.isolations;
     }
   }
+  // Trust of each local's information gain: min(1, N w_i); none when every local is suspect
+  // of a fault with weight 0 (the master then predicts only: normalising would let them in).
+  double total = 0.0;
+  for (double x : w) total += std::isfinite(x) && x > 0.0 ? x : 0.0;
   out.weights = normalised(w);
-  const Pose2 prior_mean = compose(last_.mean, motion.delta);
-  if (options_.fusion != "information" || !fuseInformation(prior_mean, by_index, out.weights, &out)) {
+  std::vector<double> trust(n, 0.0);
+  for (int i = 0; i < n; ++i) trust[i] = total > 0.0 ? std::min(1.0, n * out.weights[i]) : 0.0;
+  if (options_.fusion != "information" ||
+      !fuseInformation(prior_mean, by_index, out.weights, trust, &out)) {
     fuseAverage(by_index, out.weights, &out);
   }
   out.feedback.mean = out.mean;
@@ -162,29 +192,44 @@ DpfMasterOutput DpfMaster::fuse(long step, const MotionInput& motion,
 
 bool DpfMaster::fuseInformation(const Pose2& prior_mean,
                                 const std::vector<const DpfLocalEstimate*>& locals,
-                                const std::vector<double>& weights, DpfMasterOutput* out) const {
+                                const std::vector<double>& weights,
+                                const std::vector<double>& trusts, DpfMasterOutput* out) const {
   const int n = static_cast<int>(locals.size());
   Eigen::Matrix3d prior_cov = Eigen::Matrix3d::Zero();
   for (int i = 0; i < n; ++i) prior_cov += weights[i] * locals[i]->prior_covariance;
   // Linearised at the master's prior: information and information vector relative to it.
   Eigen::Matrix3d information = regularised(prior_cov).inverse();
   Eigen::Vector3d vector = Eigen::Vector3d::Zero();
+  Eigen::Vector3d shift = Eigen::Vector3d::Zero();
   for (int i = 0; i < n; ++i) {
     const DpfLocalEstimate& e = *locals[i];
-    const double trust = std::min(1.0, n * weights[i]);
-    if (e.innovations == 0 || trust <= 0.0) continue;  // it learned nothing this step
+    const double trust = trusts[i];
+    if (e.innovations == 0 || !(trust > 0.0)) continue;  // it learned nothing this step
     const Eigen::Matrix3d posterior_info = regularised(e.covariance).inverse();
     const Eigen::Matrix3d prior_info = regularised(e.prior_covariance).inverse();
-    information += trust * positivePart(posterior_info - prior_info);
-    vector += trust * (posterior_info * difference(e.mean, prior_mean) -
-                       prior_info * difference(e.prior_mean, prior_mean));
+    // What it learned: posterior minus prior information, and the matching information
+    // vector, both kept only along the directions where it gained information (a particle
+    // posterior can be broader than its prior along some direction; the vector's component
+    // there is not information, and dividing it by a clipped, near-zero gain would throw the
+    // master's estimate far away). Along those other directions the local's weighting may
+    // still have moved its cloud (e.g. at a loop closure): the master takes that move of the
+    // posterior mean itself, weighted by w_i (so bounded by the largest move), not a vector.
+    Eigen::Matrix3d gained, not_gained;
+    Eigen::Vector3d gained_vector;
+    gainedInformation(posterior_info, prior_info,
+                      posterior_info * difference(e.mean, prior_mean) -
+                          prior_info * difference(e.prior_mean, prior_mean),
+                      &gained, &gained_vector, &not_gained);
+    information += trust * gained;
+    vector += trust * gained_vector;
+    shift += weights[i] * not_gained * difference(e.mean, e.prior_mean);
   }
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(information);
   if (!(eigen.eigenvalues().minCoeff() > 0.0) || !information.allFinite()) return false;
   out->covariance = information.inverse();
   const Eigen::Vector3d correction = out->covariance * vector;
-  if (!correction.allFinite()) return false;
-  out->mean = prior_mean + correction;
+  if (!correction.allFinite() || !shift.allFinite()) return false;
+  out->mean = prior_mean + correction + shift;
   out->mean.z() = wrapAngle(out->mean.z());
   return true;
 }

@@ -4,11 +4,12 @@
 //
 // Step protocol (step k = 1, 2, ...), identical in both deployments:
 //   1. the master sends DpfStepInput{k, motion_k, features_k, feedback_{k-1}} to every local;
-//   2. local i applies feedback_{k-1} (re-initialise if listed, else shift onto the master
-//      mean when feedback is on), predicts with motion_k, updates with its block of
-//      features_k, and answers DpfLocalEstimate{i, k, ...};
+//   2. local i applies feedback_{k-1} (re-initialise if listed, else reweight or moment-match
+//      onto the master's estimate when feedback is on), predicts with motion_k, updates with
+//      its block of features_k, and answers DpfLocalEstimate{i, k, ...};
 //   3. the master fuses the N estimates of step k (in index order) into DpfMasterOutput_k,
-//      whose feedback goes out with step k + 1.
+//      whose feedback goes out with step k + 1. A local whose prior (its prediction) is not
+//      the master's prediction is flagged and not fused that step (dpf.fault_prior_chi2).
 // Each local filter owns its generator, seeded from (seed, index), so the result does not
 // depend on which thread or process runs which local filter.
 
@@ -60,6 +61,8 @@ struct DpfLocalHealth {
   double smoothed_nis = 2.0;  // exponential average of the mean NIS (2 dof: expectation 2)
   int suspect_steps = 0;      // consecutive steps flagged
   bool suspect = false;
+  double prior_nis = 0.0;     // this step's Mahalanobis^2 of its prior against the master's
+  bool inconsistent = false;  // prior_nis > fault_prior_chi2: not fused this step
   long isolations = 0;
 };
 

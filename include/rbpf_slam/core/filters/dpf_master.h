@@ -20,6 +20,14 @@ std::vector<double> neffWeights(const std::vector<double>& neff_ratio);
 std::vector<double> mixedWeights(const std::vector<double>& innovation,
                                  const std::vector<double>& neff, double alpha);
 
+/// The information a local filter gained in one step, (posterior_info - prior_info), and its
+/// information vector, both restricted to the eigendirections of the difference with a
+/// positive eigenvalue (the vector's components elsewhere are dropped, not divided by ~0);
+/// `not_gained` is the projector onto the other directions.
+void gainedInformation(const Eigen::Matrix3d& posterior_info, const Eigen::Matrix3d& prior_info,
+                       const Eigen::Vector3d& vector, Eigen::Matrix3d* information,
+                       Eigen::Vector3d* projected, Eigen::Matrix3d* not_gained);
+
 class DpfMaster {
  public:
   explicit DpfMaster(const DpfOptions& options);
@@ -34,10 +42,13 @@ class DpfMaster {
 
  private:
   /// Information fusion: the master's prior plus, for each local filter, its trust
-  /// min(1, N w_i) times the information it gained this step (posterior minus prior, in
-  /// information form). Returns false when the result is not positive definite.
+  /// (min(1, N w_i); 0 for all when every weight is 0) times the information it gained this
+  /// step (posterior minus prior, in information form, gainedInformation), plus, along the
+  /// directions where a local gained no information, w_i times the move of its posterior
+  /// mean from its prior mean. Returns false when the result is not positive definite.
   bool fuseInformation(const Pose2& prior_mean, const std::vector<const DpfLocalEstimate*>& locals,
-                       const std::vector<double>& weights, DpfMasterOutput* out) const;
+                       const std::vector<double>& weights, const std::vector<double>& trusts,
+                       DpfMasterOutput* out) const;
 
   const DpfOptions options_;
   std::vector<DpfLocalHealth> health_;

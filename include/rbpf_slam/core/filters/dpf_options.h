@@ -35,13 +35,19 @@ struct DpfOptions {
   // other local filters added, so that pose and map stay paired (the particles whose map agrees
   // with the fused pose survive resampling). moment: the cloud is moved and scaled onto the
   // master's mean and covariance (maps untouched; breaks the pose-map correlation). The default
-  // is the shipped config's (moment): reweight is 4x more accurate fault-free on the simulator
-  // but keeps a fault out less well and diverged on MRCLAM robot 2 with the fault
-  // (docs/results.md).
-  std::string feedback_mode = "moment";
+  // is the shipped config's (reweight): fault-free on the simulator 0.52 m ATE against
+  // moment's 4.06 m (10 seeds, docs/results.md).
+  std::string feedback_mode = "reweight";
   double innovation_smoothing = 0.3;  // exponential smoothing of each local's mean NIS
   double fault_nis = 8.0;          // smoothed mean NIS (2 dof, expected 2) above this: suspect
   double fault_neff_ratio = 0.02;  // Neff / particles below this: suspect
+  // Prior consistency (the precondition of the information fusion: every local predicts from
+  // the master's last estimate with the same odometry): a local whose predicted pose differs
+  // from the master's prediction by more than this Mahalanobis^2 (3 dof; 16.27: 99.9%) under
+  // its prior covariance plus the master's last covariance has a faulty process. It is
+  // suspect, and its information gain (relative to a prior the master does not share) is not
+  // fused this step. 0: off.
+  double fault_prior_chi2 = 16.27;
   double suspect_weight = 0.05;    // a suspect local's weight is multiplied by this
   int isolate_after_steps = 3;     // consecutive suspect steps before isolation + re-init
   double step_timeout_s = 10.0;    // dpf_master_node: wait this long for every local's answer
