@@ -6,9 +6,11 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "rbpf_slam/core/filters/estimator_rule.h"
 #include "rbpf_slam/core/filters/fastslam2.h"
@@ -403,6 +405,41 @@ TEST(HinfFastSlam, InfiniteGammaWithMarginalWeightsIsFastSlam2) {
   const RunResult fastslam = runCircle(options, 9, 0.05, 0.002);
   EXPECT_DOUBLE_EQ(hinf.ate, fastslam.ate);
   EXPECT_DOUBLE_EQ(relative.ate, fastslam.ate);
+}
+
+// Each new landmark of a step starts at its own observation, whatever the rule's weight scale
+// (a shadowed index once made every new landmark of a step copy observation
+// int(weightNoiseScale()), i.e. observation 1 for FastSLAM 2.0).
+TEST(HinfFastSlam, NewLandmarksOfAStepStartAtTheirOwnObservations) {
+  for (const std::string weight : {"marginal", "attenuated"}) {
+    for (const std::string variant : {"fastslam2", "hinf_fastslam"}) {
+      FilterOptions options = circleOptions(variant);
+      options.particles = 5;
+      options.hinf.mode = "relative";
+      options.hinf.theta_pose = 0.8;
+      options.hinf.weight = weight;
+      std::unique_ptr<SlamFilter> filter = createFilter(options);
+      filter->reset(Pose2::Zero());
+      FeatureSet set;
+      const std::vector<Eigen::Vector2d> points = {{3.0, 0.0}, {0.0, 4.0}, {-2.0, -2.0}};
+      for (const Eigen::Vector2d& q : points) {
+        PointFeature f;
+        f.range = q.norm();
+        f.bearing = std::atan2(q.y(), q.x());
+        f.covariance = Eigen::Vector2d(1e-4, 1e-6).asDiagonal();
+        set.points.push_back(f);  // id -1: the filter associates
+      }
+      filter->update(set);
+      const std::vector<LandmarkEstimate> map = filter->landmarks();
+      ASSERT_EQ(map.size(), points.size()) << variant << ", weight " << weight;
+      for (const Eigen::Vector2d& q : points) {
+        double nearest = INFINITY;
+        for (const LandmarkEstimate& lm : map) nearest = std::min(nearest, (lm.mean - q).norm());
+        EXPECT_LT(nearest, 0.05) << variant << ", weight " << weight << ": no landmark at ("
+                                 << q.x() << ", " << q.y() << ")";
+      }
+    }
+  }
 }
 
 }  // namespace
