@@ -16,6 +16,7 @@
 #include "rbpf_slam/core/filters/fastslam2.h"
 #include "rbpf_slam/core/filters/hinf_fastslam.h"
 #include "rbpf_slam/core/filters/slam_filter.h"
+#include "rbpf_slam/core/motion/motion_model.h"
 #include "rbpf_slam/core/random.h"
 
 namespace rbpf_slam {
@@ -245,6 +246,57 @@ TEST(HinfRelative, IsScaleFree) {
   const Attenuation<3> none = HinfRule(relative).attenuatePose(p, ekf);
   EXPECT_EQ(none.covariance, ekf);
   EXPECT_EQ(none.correction_scale, Eigen::Matrix3d::Identity());
+}
+
+TEST(HinfRelative, EkfProposalCovarianceKeepsTheHinfMean) {
+  const Eigen::Matrix3d p = Eigen::Vector3d(0.04, 0.04, 0.01).asDiagonal();
+  Eigen::Matrix<double, 2, 3> h;
+  h << -0.8, -0.6, 0.0, 0.12, -0.16, -1.0;
+  const Eigen::Matrix2d r = Eigen::Vector2d(0.01, 0.0004).asDiagonal();
+  const Eigen::Matrix3d ekf = ekfCorrection<3>(p, h, r).covariance;
+  HinfOptions o;
+  o.mode = "relative";
+  o.theta_pose = 0.9;
+  o.proposal_covariance = "hinf";
+  const Attenuation<3> paper = HinfRule(o).attenuatePose(p, ekf);
+  o.proposal_covariance = "ekf";
+  const Attenuation<3> drawn = HinfRule(o).attenuatePose(p, ekf);
+  EXPECT_EQ(drawn.covariance, ekf);
+  EXPECT_EQ(drawn.correction_scale, paper.correction_scale);
+  EXPECT_GT((paper.covariance - ekf).norm(), 1e-6);  // P+ is wider than the EKF's
+  EXPECT_GT((drawn.correction_scale - Eigen::Matrix3d::Identity()).norm(), 1e-3);
+}
+
+TEST(MotionRandomWalk, GrowsWithTheStepDuration) {
+  // A stationary step of dt seconds: only the floors and the random walk remain.
+  MotionOptions o;
+  o.alpha1 = o.alpha2 = o.alpha3 = o.alpha4 = 0.0;
+  o.min_sigma_xy_m = 0.01;
+  o.min_sigma_theta_rad = 0.02;
+  o.sigma_xy_per_sqrt_s = 0.03;
+  o.sigma_theta_per_sqrt_s = 0.05;
+  for (const std::string model : {"odometry", "diff_drive"}) {
+    o.model = model;
+    const std::unique_ptr<MotionModel> m = createMotionModel(o);
+    MotionInput motion;
+    for (double dt : {0.0, 1.0, 40.0}) {
+      motion.dt = dt;
+      const Eigen::Matrix3d c = m->covariance(Pose2::Zero(), motion);
+      EXPECT_NEAR(c(0, 0), 1e-4 + dt * 9e-4, 1e-12) << model << " dt " << dt;
+      EXPECT_NEAR(c(2, 2), 4e-4 + dt * 25e-4, 1e-12) << model << " dt " << dt;
+    }
+    motion.dt = 40.0;
+    Rng rng(5);
+    double sq = 0.0;
+    const int n = 20000;
+    for (int i = 0; i < n; ++i) {
+      const double z = m->sample(Pose2::Zero(), motion, rng).z();
+      sq += z * z;
+    }
+    EXPECT_NEAR(std::sqrt(sq / n), std::sqrt(4e-4 + 40.0 * 25e-4), 0.01) << model;
+  }
+  o.sigma_theta_per_sqrt_s = -1.0;
+  EXPECT_THROW(createMotionModel(o), std::invalid_argument);
 }
 
 TEST(HinfOptions, BadValuesAreRejectedByName) {
