@@ -15,6 +15,20 @@ void requireNonNegative(const char* name, double value) {
   }
 }
 
+/// Variances of the diffusion added to every step, position and heading (before the noise
+/// scale): the per-step floors plus a random walk growing with the step's duration.
+double dtOf(const MotionInput& motion) {
+  return std::isfinite(motion.dt) && motion.dt > 0.0 ? motion.dt : 0.0;
+}
+double floorVarianceXy(const MotionOptions& o, const MotionInput& motion) {
+  return o.min_sigma_xy_m * o.min_sigma_xy_m +
+         dtOf(motion) * o.sigma_xy_per_sqrt_s * o.sigma_xy_per_sqrt_s;
+}
+double floorVarianceTheta(const MotionOptions& o, const MotionInput& motion) {
+  return o.min_sigma_theta_rad * o.min_sigma_theta_rad +
+         dtOf(motion) * o.sigma_theta_per_sqrt_s * o.sigma_theta_per_sqrt_s;
+}
+
 /// Odometry model of Thrun, Burgard & Fox (rot1, trans, rot2 with alpha noise).
 class OdometryMotionModel : public MotionModel {
  public:
@@ -37,9 +51,11 @@ class OdometryMotionModel : public MotionModel {
     Pose2 next(previous.x() + trans_hat * std::cos(heading),
                previous.y() + trans_hat * std::sin(heading),
                wrapAngle(previous.z() + rot1_hat + rot2_hat));
-    next.x() += sampleGaussian(rng, motion.noise_scale * options_.min_sigma_xy_m);
-    next.y() += sampleGaussian(rng, motion.noise_scale * options_.min_sigma_xy_m);
-    next.z() = wrapAngle(next.z() + sampleGaussian(rng, motion.noise_scale * options_.min_sigma_theta_rad));
+    const double sigma_xy = std::sqrt(floorVarianceXy(options_, motion));
+    const double sigma_theta = std::sqrt(floorVarianceTheta(options_, motion));
+    next.x() += sampleGaussian(rng, motion.noise_scale * sigma_xy);
+    next.y() += sampleGaussian(rng, motion.noise_scale * sigma_xy);
+    next.z() = wrapAngle(next.z() + sampleGaussian(rng, motion.noise_scale * sigma_theta));
     return next;
   }
 
@@ -57,9 +73,9 @@ class OdometryMotionModel : public MotionModel {
         trans * std::cos(heading), std::sin(heading), 0.0,
         1.0, 0.0, 1.0;
     Eigen::Matrix3d cov = v * variances.asDiagonal() * v.transpose();
-    cov(0, 0) += options_.min_sigma_xy_m * options_.min_sigma_xy_m;
-    cov(1, 1) += options_.min_sigma_xy_m * options_.min_sigma_xy_m;
-    cov(2, 2) += options_.min_sigma_theta_rad * options_.min_sigma_theta_rad;
+    cov(0, 0) += floorVarianceXy(options_, motion);
+    cov(1, 1) += floorVarianceXy(options_, motion);
+    cov(2, 2) += floorVarianceTheta(options_, motion);
     return motion.noise_scale * motion.noise_scale * cov;
   }
 
@@ -94,9 +110,11 @@ class DiffDriveMotionModel : public MotionModel {
     const double l = left + sampleGaussian(rng, motion.noise_scale * sigma_left);
     const double r = right + sampleGaussian(rng, motion.noise_scale * sigma_right);
     Pose2 next = integrate(previous, l, r);
-    next.x() += sampleGaussian(rng, motion.noise_scale * options_.min_sigma_xy_m);
-    next.y() += sampleGaussian(rng, motion.noise_scale * options_.min_sigma_xy_m);
-    next.z() = wrapAngle(next.z() + sampleGaussian(rng, motion.noise_scale * options_.min_sigma_theta_rad));
+    const double sigma_xy = std::sqrt(floorVarianceXy(options_, motion));
+    const double sigma_theta = std::sqrt(floorVarianceTheta(options_, motion));
+    next.x() += sampleGaussian(rng, motion.noise_scale * sigma_xy);
+    next.y() += sampleGaussian(rng, motion.noise_scale * sigma_xy);
+    next.z() = wrapAngle(next.z() + sampleGaussian(rng, motion.noise_scale * sigma_theta));
     return next;
   }
 
@@ -118,9 +136,9 @@ class DiffDriveMotionModel : public MotionModel {
     const Eigen::Vector2d variances(sigma_left * sigma_left, sigma_right * sigma_right);
     Eigen::Matrix3d cov = motion.noise_scale * motion.noise_scale * j *
                           variances.asDiagonal() * j.transpose();
-    cov(0, 0) += options_.min_sigma_xy_m * options_.min_sigma_xy_m;
-    cov(1, 1) += options_.min_sigma_xy_m * options_.min_sigma_xy_m;
-    cov(2, 2) += options_.min_sigma_theta_rad * options_.min_sigma_theta_rad;
+    cov(0, 0) += floorVarianceXy(options_, motion);
+    cov(1, 1) += floorVarianceXy(options_, motion);
+    cov(2, 2) += floorVarianceTheta(options_, motion);
     return cov;
   }
 
@@ -164,6 +182,8 @@ void validate(const MotionOptions& options) {
   requireNonNegative("wheel_alpha2", options.wheel_alpha2);
   requireNonNegative("min_sigma_xy_m", options.min_sigma_xy_m);
   requireNonNegative("min_sigma_theta_rad", options.min_sigma_theta_rad);
+  requireNonNegative("sigma_xy_per_sqrt_s", options.sigma_xy_per_sqrt_s);
+  requireNonNegative("sigma_theta_per_sqrt_s", options.sigma_theta_per_sqrt_s);
   if (!(options.wheel_base_m > 0.0)) {
     throw std::invalid_argument("motion.wheel_base_m = " + std::to_string(options.wheel_base_m) +
                                 " is out of range (0, inf)");

@@ -20,6 +20,8 @@ void readMotion(YamlSection section, core::MotionOptions* o) {
   section.read("wheel_alpha2", &o->wheel_alpha2, 0.0, 10.0);
   section.read("min_sigma_xy_m", &o->min_sigma_xy_m, 0.0, 1.0);
   section.read("min_sigma_theta_rad", &o->min_sigma_theta_rad, 0.0, 1.0);
+  section.read("sigma_xy_per_sqrt_s", &o->sigma_xy_per_sqrt_s, 0.0, 10.0);
+  section.read("sigma_theta_per_sqrt_s", &o->sigma_theta_per_sqrt_s, 0.0, 10.0);
   section.finish();
 }
 
@@ -87,11 +89,15 @@ void readExistence(YamlSection section, core::ExistenceOptions* o) {
 
 void readHinf(YamlSection section, core::HinfOptions* o) {
   // Config values are finite; 1e12 is the EKF for any realistic covariance.
+  section.read("mode", &o->mode, {"relative", "absolute"});
+  section.read("theta_pose", &o->theta_pose, 0.0, 0.999999);
+  section.read("theta_landmark", &o->theta_landmark, 0.0, 0.999999);
   section.read("gamma_position", &o->gamma_position, 1e-12, 1e12);
   section.read("gamma_heading", &o->gamma_heading, 1e-12, 1e12);
   section.read("gamma_landmark", &o->gamma_landmark, 1e-12, 1e12);
   section.read("gain", &o->gain, {"posterior", "prior"});
-  section.read("weight", &o->weight, {"pointwise", "marginal"});
+  section.read("proposal_covariance", &o->proposal_covariance, {"hinf", "ekf"});
+  section.read("weight", &o->weight, {"pointwise", "marginal", "attenuated"});
   section.read("max_inflation", &o->max_inflation, 1.0, 1e12);
   section.finish();
 }

@@ -6,14 +6,17 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "rbpf_slam/core/filters/estimator_rule.h"
 #include "rbpf_slam/core/filters/fastslam2.h"
 #include "rbpf_slam/core/filters/hinf_fastslam.h"
 #include "rbpf_slam/core/filters/slam_filter.h"
+#include "rbpf_slam/core/motion/motion_model.h"
 #include "rbpf_slam/core/random.h"
 
 namespace rbpf_slam {
@@ -174,6 +177,128 @@ TEST(HinfCorrection, FallsBackToTheEkfWhenTheConditionFails) {
   EXPECT_TRUE(c.covariance.allFinite());
 }
 
+TEST(HinfRelative, IsTheEkfWithTheNoiseScaledByOneMinusTheta) {
+  // Gamma^-1 = theta P^-1: P+ = ((1 - theta) P^-1 + H^T R^-1 H)^-1, and the posterior gain
+  // P+ H^T R^-1 is the EKF gain of the same prior with R (1 - theta).
+  Rng rng(17);
+  for (int trial = 0; trial < 20; ++trial) {
+    const Eigen::Matrix3d p = randomCovariance(rng);
+    Eigen::Matrix<double, 2, 3> h;
+    for (int i = 0; i < 6; ++i) h(i / 3, i % 3) = sampleGaussian(rng, 1.0);
+    const Eigen::Matrix2d r = Eigen::Vector2d(0.3, 0.7).asDiagonal();
+    for (double theta : {0.0, 0.5, 0.9, 0.99}) {
+      const Correction<3> ekf = ekfCorrection<3>(p, h, r);
+      const Attenuation<3> a =
+          hinfAttenuationInformation<3>(ekf.covariance, relativeGammaInverse<3>(p, theta), true);
+      ASSERT_FALSE(a.fallback) << "theta " << theta;
+      const Eigen::Matrix3d information =
+          (1.0 - theta) * p.inverse() + h.transpose() * r.inverse() * h;
+      EXPECT_LT((a.covariance - information.inverse()).norm(), 1e-8 * (1.0 + information.inverse().norm()));
+      const Correction<3> scaled = ekfCorrection<3>(p, h, (1.0 - theta) * r);
+      EXPECT_LT((a.correction_scale * ekf.gain - scaled.gain).norm(), 1e-8 * (1.0 + scaled.gain.norm()))
+          << "theta " << theta;
+      // The covariance never grows beyond 1 / (1 - theta) times the EKF's.
+      const Eigen::Matrix3d slack = ekf.covariance / (1.0 - theta) - a.covariance;
+      EXPECT_GE(Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(slack).eigenvalues().minCoeff(),
+                -1e-9);
+    }
+  }
+}
+
+TEST(HinfRelative, IsScaleFree) {
+  // The same problem in other units (P and R times s): the absolute gamma that suits one scale
+  // fails the condition at another, the relative rule scales P+ by s and keeps the gain.
+  const Eigen::Matrix3d p = Eigen::Vector3d(0.04, 0.04, 0.01).asDiagonal();
+  Eigen::Matrix<double, 2, 3> h;
+  h << -0.8, -0.6, 0.0, 0.12, -0.16, -1.0;
+  const Eigen::Matrix2d r = Eigen::Vector2d(0.01, 0.0004).asDiagonal();
+  HinfOptions relative;
+  relative.mode = "relative";
+  relative.theta_pose = 0.9;
+  relative.theta_landmark = 0.5;
+  HinfOptions absolute = relative;
+  absolute.mode = "absolute";
+  absolute.gamma_position = 0.05;
+  absolute.gamma_heading = 0.05;
+  absolute.gamma_landmark = 0.05;
+  const HinfRule rel(relative), abs(absolute);
+  const Attenuation<3> base = rel.attenuatePose(p, ekfCorrection<3>(p, h, r).covariance);
+  ASSERT_FALSE(base.fallback);
+  const Eigen::Matrix2d pl = Eigen::Vector2d(0.02, 0.01).asDiagonal();
+  const Correction<2> base_landmark = rel.correctLandmark(pl, h.leftCols<2>(), r);
+  ASSERT_FALSE(base_landmark.fallback);
+  bool absolute_failed_somewhere = false;
+  for (double s : {1e-4, 1e-2, 1.0, 1e2, 1e4}) {
+    const Eigen::Matrix3d ekf = ekfCorrection<3>(s * p, h, s * r).covariance;
+    const Attenuation<3> a = rel.attenuatePose(s * p, ekf);
+    EXPECT_FALSE(a.fallback) << "scale " << s;
+    EXPECT_LT((a.covariance / s - base.covariance).norm(), 1e-9 * base.covariance.norm());
+    EXPECT_LT((a.correction_scale - base.correction_scale).norm(), 1e-9);
+    const Correction<2> l = rel.correctLandmark(s * pl, h.leftCols<2>(), s * r);
+    EXPECT_FALSE(l.fallback) << "scale " << s;
+    EXPECT_LT((l.gain - base_landmark.gain).norm(), 1e-9);
+    absolute_failed_somewhere = absolute_failed_somewhere || abs.attenuatePose(s * p, ekf).fallback;
+  }
+  EXPECT_TRUE(absolute_failed_somewhere);
+  // theta 0 is the EKF exactly.
+  relative.theta_pose = 0.0;
+  const Eigen::Matrix3d ekf = ekfCorrection<3>(p, h, r).covariance;
+  const Attenuation<3> none = HinfRule(relative).attenuatePose(p, ekf);
+  EXPECT_EQ(none.covariance, ekf);
+  EXPECT_EQ(none.correction_scale, Eigen::Matrix3d::Identity());
+}
+
+TEST(HinfRelative, EkfProposalCovarianceKeepsTheHinfMean) {
+  const Eigen::Matrix3d p = Eigen::Vector3d(0.04, 0.04, 0.01).asDiagonal();
+  Eigen::Matrix<double, 2, 3> h;
+  h << -0.8, -0.6, 0.0, 0.12, -0.16, -1.0;
+  const Eigen::Matrix2d r = Eigen::Vector2d(0.01, 0.0004).asDiagonal();
+  const Eigen::Matrix3d ekf = ekfCorrection<3>(p, h, r).covariance;
+  HinfOptions o;
+  o.mode = "relative";
+  o.theta_pose = 0.9;
+  o.proposal_covariance = "hinf";
+  const Attenuation<3> paper = HinfRule(o).attenuatePose(p, ekf);
+  o.proposal_covariance = "ekf";
+  const Attenuation<3> drawn = HinfRule(o).attenuatePose(p, ekf);
+  EXPECT_EQ(drawn.covariance, ekf);
+  EXPECT_EQ(drawn.correction_scale, paper.correction_scale);
+  EXPECT_GT((paper.covariance - ekf).norm(), 1e-6);  // P+ is wider than the EKF's
+  EXPECT_GT((drawn.correction_scale - Eigen::Matrix3d::Identity()).norm(), 1e-3);
+}
+
+TEST(MotionRandomWalk, GrowsWithTheStepDuration) {
+  // A stationary step of dt seconds: only the floors and the random walk remain.
+  MotionOptions o;
+  o.alpha1 = o.alpha2 = o.alpha3 = o.alpha4 = 0.0;
+  o.min_sigma_xy_m = 0.01;
+  o.min_sigma_theta_rad = 0.02;
+  o.sigma_xy_per_sqrt_s = 0.03;
+  o.sigma_theta_per_sqrt_s = 0.05;
+  for (const std::string model : {"odometry", "diff_drive"}) {
+    o.model = model;
+    const std::unique_ptr<MotionModel> m = createMotionModel(o);
+    MotionInput motion;
+    for (double dt : {0.0, 1.0, 40.0}) {
+      motion.dt = dt;
+      const Eigen::Matrix3d c = m->covariance(Pose2::Zero(), motion);
+      EXPECT_NEAR(c(0, 0), 1e-4 + dt * 9e-4, 1e-12) << model << " dt " << dt;
+      EXPECT_NEAR(c(2, 2), 4e-4 + dt * 25e-4, 1e-12) << model << " dt " << dt;
+    }
+    motion.dt = 40.0;
+    Rng rng(5);
+    double sq = 0.0;
+    const int n = 20000;
+    for (int i = 0; i < n; ++i) {
+      const double z = m->sample(Pose2::Zero(), motion, rng).z();
+      sq += z * z;
+    }
+    EXPECT_NEAR(std::sqrt(sq / n), std::sqrt(4e-4 + 40.0 * 25e-4), 0.01) << model;
+  }
+  o.sigma_theta_per_sqrt_s = -1.0;
+  EXPECT_THROW(createMotionModel(o), std::invalid_argument);
+}
+
 TEST(HinfOptions, BadValuesAreRejectedByName) {
   FilterOptions options;
   options.variant = "hinf_fastslam";
@@ -190,6 +315,12 @@ TEST(HinfOptions, BadValuesAreRejectedByName) {
   EXPECT_THROW(createFilter(options), std::invalid_argument);
   options.hinf.gain = "prior";
   options.hinf.gamma_landmark = NAN;
+  EXPECT_THROW(createFilter(options), std::invalid_argument);
+  options.hinf.gamma_landmark = 1.0;
+  options.hinf.theta_pose = 1.0;  // removes all the prior information: no solution
+  EXPECT_THROW(createFilter(options), std::invalid_argument);
+  options.hinf.theta_pose = 0.5;
+  options.hinf.mode = "scaled";
   EXPECT_THROW(createFilter(options), std::invalid_argument);
 }
 
@@ -300,6 +431,7 @@ TEST(HinfFastSlam, StaysAccurateWhenTheMeasurementNoiseIsOverstated) {
 
 TEST(HinfFastSlam, CountsFallbacksAndNeverPublishesNaN) {
   FilterOptions options = circleOptions("hinf_fastslam");
+  options.hinf.mode = "absolute";
   options.hinf.gamma_landmark = 1e-9;  // 1 / gamma beyond any landmark's information
   options.hinf.gamma_position = options.hinf.gamma_heading = 1e-9;
   const RunResult r = runCircle(options, 5, 0.05, 0.002);
@@ -313,13 +445,53 @@ TEST(HinfFastSlam, CountsFallbacksAndNeverPublishesNaN) {
 
 TEST(HinfFastSlam, InfiniteGammaWithMarginalWeightsIsFastSlam2) {
   FilterOptions options = circleOptions("hinf_fastslam");
+  options.hinf.mode = "absolute";
   options.hinf.gamma_landmark = options.hinf.gamma_position = INFINITY;
   options.hinf.gamma_heading = INFINITY;
   options.hinf.weight = "marginal";
   const RunResult hinf = runCircle(options, 9, 0.05, 0.002);
+  options.hinf.mode = "relative";  // theta 0: the EKF as well
+  options.hinf.theta_pose = options.hinf.theta_landmark = 0.0;
+  const RunResult relative = runCircle(options, 9, 0.05, 0.002);
   options.variant = "fastslam2";
   const RunResult fastslam = runCircle(options, 9, 0.05, 0.002);
   EXPECT_DOUBLE_EQ(hinf.ate, fastslam.ate);
+  EXPECT_DOUBLE_EQ(relative.ate, fastslam.ate);
+}
+
+// Each new landmark of a step starts at its own observation, whatever the rule's weight scale
+// (a shadowed index once made every new landmark of a step copy observation
+// int(weightNoiseScale()), i.e. observation 1 for FastSLAM 2.0).
+TEST(HinfFastSlam, NewLandmarksOfAStepStartAtTheirOwnObservations) {
+  for (const std::string weight : {"marginal", "attenuated"}) {
+    for (const std::string variant : {"fastslam2", "hinf_fastslam"}) {
+      FilterOptions options = circleOptions(variant);
+      options.particles = 5;
+      options.hinf.mode = "relative";
+      options.hinf.theta_pose = 0.8;
+      options.hinf.weight = weight;
+      std::unique_ptr<SlamFilter> filter = createFilter(options);
+      filter->reset(Pose2::Zero());
+      FeatureSet set;
+      const std::vector<Eigen::Vector2d> points = {{3.0, 0.0}, {0.0, 4.0}, {-2.0, -2.0}};
+      for (const Eigen::Vector2d& q : points) {
+        PointFeature f;
+        f.range = q.norm();
+        f.bearing = std::atan2(q.y(), q.x());
+        f.covariance = Eigen::Vector2d(1e-4, 1e-6).asDiagonal();
+        set.points.push_back(f);  // id -1: the filter associates
+      }
+      filter->update(set);
+      const std::vector<LandmarkEstimate> map = filter->landmarks();
+      ASSERT_EQ(map.size(), points.size()) << variant << ", weight " << weight;
+      for (const Eigen::Vector2d& q : points) {
+        double nearest = INFINITY;
+        for (const LandmarkEstimate& lm : map) nearest = std::min(nearest, (lm.mean - q).norm());
+        EXPECT_LT(nearest, 0.05) << variant << ", weight " << weight << ": no landmark at ("
+                                 << q.x() << ", " << q.y() << ")";
+      }
+    }
+  }
 }
 
 }  // namespace

@@ -129,6 +129,19 @@ TEST(SlamConfig, LandmarksHinfConfigSelectsHinfFastSlam) {
   EXPECT_GT(c.filter.hinf.gamma_heading, 0.0);
   EXPECT_GT(c.filter.hinf.gamma_landmark, 0.0);
   EXPECT_EQ(c.filter.hinf.gain, "posterior");
+  // The code defaults are the shipped config's (the unit tests of test_hinf_fastslam rely on
+  // them); gamma_landmark is 1e12 in YAML, infinity in the code: both the EKF.
+  const core::HinfOptions defaults;
+  EXPECT_EQ(c.filter.hinf.mode, defaults.mode);
+  EXPECT_DOUBLE_EQ(c.filter.hinf.theta_pose, defaults.theta_pose);
+  EXPECT_DOUBLE_EQ(c.filter.hinf.theta_landmark, defaults.theta_landmark);
+  EXPECT_DOUBLE_EQ(c.filter.hinf.gamma_position, defaults.gamma_position);
+  EXPECT_DOUBLE_EQ(c.filter.hinf.gamma_heading, defaults.gamma_heading);
+  EXPECT_GE(c.filter.hinf.gamma_landmark, 1e12);
+  EXPECT_EQ(c.filter.hinf.gain, defaults.gain);
+  EXPECT_EQ(c.filter.hinf.proposal_covariance, defaults.proposal_covariance);
+  EXPECT_EQ(c.filter.hinf.weight, defaults.weight);
+  EXPECT_DOUBLE_EQ(c.filter.hinf.max_inflation, defaults.max_inflation);
   EXPECT_EQ(c.filter.existence.visible_range_m, 0.0);  // documented: off on MRCLAM
   EXPECT_EQ(c.filter.existence.max_count, 10);
   EXPECT_EQ(core::createFilter(c.filter)->variant(), "hinf_fastslam");

@@ -42,11 +42,27 @@ void validate(const HinfOptions& o) {
     throw std::invalid_argument("hinf.max_inflation = " + std::to_string(o.max_inflation) +
                                 " must be >= 1");
   }
+  if (o.mode != "relative" && o.mode != "absolute") {
+    throw std::invalid_argument("hinf.mode = '" + o.mode + "' must be relative or absolute");
+  }
+  if (!(o.theta_pose >= 0.0 && o.theta_pose < 1.0)) {
+    throw std::invalid_argument("hinf.theta_pose = " + std::to_string(o.theta_pose) +
+                                " must be in [0, 1)");
+  }
+  if (!(o.theta_landmark >= 0.0 && o.theta_landmark < 1.0)) {
+    throw std::invalid_argument("hinf.theta_landmark = " + std::to_string(o.theta_landmark) +
+                                " must be in [0, 1)");
+  }
+  if (o.proposal_covariance != "hinf" && o.proposal_covariance != "ekf") {
+    throw std::invalid_argument("hinf.proposal_covariance = '" + o.proposal_covariance +
+                                "' must be hinf or ekf");
+  }
   if (o.gain != "posterior" && o.gain != "prior") {
     throw std::invalid_argument("hinf.gain = '" + o.gain + "' must be posterior or prior");
   }
-  if (o.weight != "pointwise" && o.weight != "marginal") {
-    throw std::invalid_argument("hinf.weight = '" + o.weight + "' must be pointwise or marginal");
+  if (o.weight != "pointwise" && o.weight != "marginal" && o.weight != "attenuated") {
+    throw std::invalid_argument("hinf.weight = '" + o.weight +
+                                "' must be pointwise, marginal or attenuated");
   }
 }
 
@@ -64,38 +80,69 @@ Correction<N> ekfCorrection(const Eigen::Matrix<double, N, N>& p,
 }
 
 template <int N>
-Attenuation<N> hinfAttenuation(const Eigen::Matrix<double, N, N>& ekf_covariance,
-                               const Eigen::Matrix<double, N, 1>& gamma, bool posterior_gain,
-                               double max_inflation) {
+Attenuation<N> hinfAttenuationInformation(const Eigen::Matrix<double, N, N>& ekf_covariance,
+                                          const Eigen::Matrix<double, N, N>& gamma_inverse,
+                                          bool posterior_gain, double max_inflation) {
   Attenuation<N> a;
   a.covariance = ekf_covariance;
-  if (gamma.array().isInf().all()) return a;
-  const Eigen::Matrix<double, N, N> gamma_inv(gamma.cwiseInverse().asDiagonal());
+  if (gamma_inverse.isZero(0.0)) return a;
   const Eigen::Matrix<double, N, N> identity = Eigen::Matrix<double, N, N>::Identity();
-  // I - Gamma^-1 P_ekf is similar to the symmetric I - Gamma^-1/2 P_ekf Gamma^-1/2, whose
-  // smallest eigenvalue is 1 / (the largest inflation of P+ over P_ekf): <= 0 means the
-  // H-infinity condition fails, below 1 / max_inflation that gamma is too close to its bound
-  // (the corrections would be amplified without limit).
-  const Eigen::Matrix<double, N, N> root_inv(gamma.cwiseInverse().cwiseSqrt().asDiagonal());
-  const Eigen::Matrix<double, N, N> similar = identity - root_inv * ekf_covariance * root_inv;
-  const double smallest = Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, N, N>>(
-                              symmetrize<N>(similar), Eigen::EigenvaluesOnly)
-                              .eigenvalues()
-                              .minCoeff();
-  const Eigen::FullPivLU<Eigen::Matrix<double, N, N>> lu(identity - gamma_inv * ekf_covariance);
-  if (smallest * max_inflation >= 1.0 && lu.isInvertible()) {
-    const Eigen::Matrix<double, N, N> covariance = symmetrize<N>(ekf_covariance * lu.inverse());
-    // The H-infinity condition: the new covariance must be positive definite.
-    if (positiveDefinite<N>(covariance)) {
-      a.covariance = covariance;
-      if (posterior_gain) a.correction_scale = (identity - ekf_covariance * gamma_inv).inverse();
-      if (a.correction_scale.allFinite()) return a;
+  // P+ = (P_ekf^-1 - Gamma^-1)^-1 = P_ekf (I - Gamma^-1 P_ekf)^-1. With P_ekf = L L^T,
+  // I - Gamma^-1 P_ekf is similar to the symmetric I - L^T Gamma^-1 L, whose smallest
+  // eigenvalue is 1 / (the largest inflation of P+ over P_ekf): <= 0 means the H-infinity
+  // condition fails, below 1 / max_inflation that Gamma is too close to its bound (the
+  // corrections would be amplified without limit).
+  const Eigen::LLT<Eigen::Matrix<double, N, N>> llt(symmetrize<N>(ekf_covariance));
+  if (llt.info() == Eigen::Success && gamma_inverse.allFinite()) {
+    const Eigen::Matrix<double, N, N> l = llt.matrixL();
+    const Eigen::Matrix<double, N, N> similar = identity - l.transpose() * gamma_inverse * l;
+    const double smallest = Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, N, N>>(
+                                symmetrize<N>(similar), Eigen::EigenvaluesOnly)
+                                .eigenvalues()
+                                .minCoeff();
+    const Eigen::FullPivLU<Eigen::Matrix<double, N, N>> lu(identity -
+                                                           gamma_inverse * ekf_covariance);
+    if (smallest * max_inflation >= 1.0 && smallest > 0.0 && lu.isInvertible()) {
+      const Eigen::Matrix<double, N, N> covariance =
+          symmetrize<N>(ekf_covariance * lu.inverse());
+      // The H-infinity condition: the new covariance must be positive definite.
+      if (positiveDefinite<N>(covariance)) {
+        a.covariance = covariance;
+        if (posterior_gain) a.correction_scale = (identity - ekf_covariance * gamma_inverse).inverse();
+        if (a.correction_scale.allFinite()) return a;
+      }
     }
   }
   a.covariance = ekf_covariance;
   a.correction_scale.setIdentity();
   a.fallback = true;
   return a;
+}
+
+template <int N>
+Attenuation<N> hinfAttenuation(const Eigen::Matrix<double, N, N>& ekf_covariance,
+                               const Eigen::Matrix<double, N, 1>& gamma, bool posterior_gain,
+                               double max_inflation) {
+  if (gamma.array().isInf().all()) {
+    Attenuation<N> a;
+    a.covariance = ekf_covariance;
+    return a;
+  }
+  const Eigen::Matrix<double, N, N> gamma_inv(gamma.cwiseInverse().asDiagonal());
+  return hinfAttenuationInformation<N>(ekf_covariance, gamma_inv, posterior_gain, max_inflation);
+}
+
+template <int N>
+Eigen::Matrix<double, N, N> relativeGammaInverse(const Eigen::Matrix<double, N, N>& prior,
+                                                 double theta) {
+  Eigen::Matrix<double, N, N> zero = Eigen::Matrix<double, N, N>::Zero();
+  if (!(theta > 0.0)) return zero;
+  const Eigen::LLT<Eigen::Matrix<double, N, N>> llt(symmetrize<N>(prior));
+  if (llt.info() != Eigen::Success) return zero;
+  const Eigen::Matrix<double, N, N> information =
+      llt.solve(Eigen::Matrix<double, N, N>::Identity());
+  if (!information.allFinite()) return zero;
+  return symmetrize<N>(theta * information);
 }
 
 template <int N>
@@ -118,6 +165,12 @@ template Correction<3> ekfCorrection<3>(const Eigen::Matrix3d&, const Eigen::Mat
                                         const Eigen::Matrix2d&);
 template Attenuation<3> hinfAttenuation<3>(const Eigen::Matrix3d&, const Eigen::Vector3d&, bool,
                                            double);
+template Attenuation<2> hinfAttenuationInformation<2>(const Eigen::Matrix2d&,
+                                                      const Eigen::Matrix2d&, bool, double);
+template Attenuation<3> hinfAttenuationInformation<3>(const Eigen::Matrix3d&,
+                                                      const Eigen::Matrix3d&, bool, double);
+template Eigen::Matrix2d relativeGammaInverse<2>(const Eigen::Matrix2d&, double);
+template Eigen::Matrix3d relativeGammaInverse<3>(const Eigen::Matrix3d&, double);
 template Correction<2> hinfCorrection<2>(const Eigen::Matrix2d&, const Eigen::Matrix2d&,
                                          const Eigen::Matrix2d&, const Eigen::Vector2d&, bool,
                                          double);
@@ -125,7 +178,8 @@ template Correction<3> hinfCorrection<3>(const Eigen::Matrix3d&, const Eigen::Ma
                                          const Eigen::Matrix2d&, const Eigen::Vector3d&, bool,
                                          double);
 
-Attenuation<3> EstimatorRule::attenuatePose(const Eigen::Matrix3d& ekf_covariance) const {
+Attenuation<3> EstimatorRule::attenuatePose(const Eigen::Matrix3d& /*prior_covariance*/,
+                                            const Eigen::Matrix3d& ekf_covariance) const {
   Attenuation<3> a;
   a.covariance = ekf_covariance;
   return a;
@@ -136,17 +190,49 @@ Correction<2> EkfRule::correctLandmark(const Eigen::Matrix2d& p, const Eigen::Ma
   return ekfCorrection<2>(p, h, r);
 }
 
+// In relative mode P+^-1 = P_ekf^-1 - theta P^-1 >= (1 - theta) P_ekf^-1 (P_ekf <= P): the
+// inflation is bounded by 1 / (1 - theta) by construction, so max_inflation does not apply.
+constexpr double kNoInflationGuard = std::numeric_limits<double>::infinity();
+
 HinfRule::HinfRule(const HinfOptions& options) : options_(options) { validate(options_); }
 
-Attenuation<3> HinfRule::attenuatePose(const Eigen::Matrix3d& ekf_covariance) const {
-  const Eigen::Vector3d gamma(options_.gamma_position, options_.gamma_position,
-                              options_.gamma_heading);
-  return hinfAttenuation<3>(ekf_covariance, gamma, options_.gain == "posterior",
-                            options_.max_inflation);
+Attenuation<3> HinfRule::attenuatePose(const Eigen::Matrix3d& prior_covariance,
+                                       const Eigen::Matrix3d& ekf_covariance) const {
+  Attenuation<3> a;
+  if (options_.mode == "relative") {
+    a = hinfAttenuationInformation<3>(
+        ekf_covariance, relativeGammaInverse<3>(prior_covariance, options_.theta_pose),
+        options_.gain == "posterior", kNoInflationGuard);
+  } else {
+    const Eigen::Vector3d gamma(options_.gamma_position, options_.gamma_position,
+                                options_.gamma_heading);
+    a = hinfAttenuation<3>(ekf_covariance, gamma, options_.gain == "posterior",
+                           options_.max_inflation);
+  }
+  if (options_.proposal_covariance == "ekf") a.covariance = ekf_covariance;
+  return a;
+}
+
+double HinfRule::weightNoiseScale() const {
+  if (options_.weight == "attenuated" && options_.mode == "relative") {
+    return 1.0 - options_.theta_pose;
+  }
+  return 1.0;
 }
 
 Correction<2> HinfRule::correctLandmark(const Eigen::Matrix2d& p, const Eigen::Matrix2d& h,
                                         const Eigen::Matrix2d& r) const {
+  if (options_.mode == "relative") {
+    Correction<2> c = ekfCorrection<2>(p, h, r);
+    if (!c.ok) return c;
+    const Attenuation<2> a = hinfAttenuationInformation<2>(
+        c.covariance, relativeGammaInverse<2>(p, options_.theta_landmark),
+        options_.gain == "posterior", kNoInflationGuard);
+    c.gain = a.correction_scale * c.gain;
+    c.covariance = a.covariance;
+    c.fallback = a.fallback;
+    return c;
+  }
   return hinfCorrection<2>(p, h, r, Eigen::Vector2d::Constant(options_.gamma_landmark),
                            options_.gain == "posterior", options_.max_inflation);
 }

@@ -304,7 +304,8 @@ FastSlam2::Proposal FastSlam2::refineProposal(const LandmarkMap& map, const Pose
     if (m.index >= 0 && m.distance2 < a.gate_chi2) {
       // Proposal: refine the pose Gaussian with this observation (Montemerlo 2003, eq. 3.7).
       const Eigen::Matrix<double, 2, 3>& h = m.prediction.h_pose;
-      const Eigen::Matrix2d s = h * q.cov * h.transpose() + m.landmark_innovation_cov;
+      const Eigen::Matrix2d s =
+          h * q.cov * h.transpose() + rule_->weightNoiseScale() * m.landmark_innovation_cov;
       Eigen::Matrix2d s_inv;
       const Eigen::Vector2d v = innovation(o.z, m.prediction.z);
       const double ll = logGaussian2(v, s, &s_inv);
@@ -318,7 +319,9 @@ FastSlam2::Proposal FastSlam2::refineProposal(const LandmarkMap& map, const Pose
       q.matched.emplace_back(static_cast<int>(k), m.index);
     } else if (m.index < 0 || m.distance2 > a.new_landmark_chi2) {
       // Likelihood of a new landmark: as if observed at the new-landmark threshold.
-      q.log_likelihood += -0.5 * a.new_landmark_chi2 - 0.5 * std::log(o.noise.determinant()) - kLog2Pi;
+      const double scale = rule_->weightNoiseScale();  // as for a match (1: FastSLAM 2.0)
+      q.log_likelihood += -0.5 * a.new_landmark_chi2 -
+                          0.5 * std::log(scale * scale * o.noise.determinant()) - kLog2Pi;
       q.fresh.push_back(static_cast<int>(k));
     }
     // Between the gate and the new-landmark threshold: ambiguous, left out.
@@ -369,7 +372,7 @@ FastSlam2::ParticleUpdate FastSlam2::updateParticle(Particle* particle,
   if (rule_->attenuatesPose() && !matched.empty()) {
     // H-infinity proposal (Havangi eqs. 20-23, every matched landmark of the step stacked, the
     // landmark's uncertainty counted in R as in FastSLAM 2.0).
-    const Attenuation<3> h = rule_->attenuatePose(cov);
+    const Attenuation<3> h = rule_->attenuatePose(motion_cov, cov);
     if (h.correction_scale != Eigen::Matrix3d::Identity()) {
       Eigen::Vector3d shift = mean - predicted_mean;
       shift.z() = wrapAngle(shift.z());

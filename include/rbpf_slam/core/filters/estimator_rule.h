@@ -15,6 +15,22 @@ namespace core {
 /// Options of the H-infinity rule (Havangi et al., section IV; config section
 /// `hinf`).
 struct HinfOptions {
+  /// How Gamma is set. "relative": scale-free, Gamma = P / theta with P the
+  /// covariance before the step (the motion prediction for the pose, the landmark's previous
+  /// covariance for a landmark), i.e. Gamma^-1 = theta P^-1: the step removes the fraction
+  /// theta of the prior information, P+ = ((1 - theta) P^-1 + H^T R^-1 H)^-1. The condition
+  /// holds for every theta < 1 whatever the units and scale of the problem, and the posterior
+  /// gain is then the EKF gain with R scaled by (1 - theta): it undoes an overstated R by up
+  /// to the factor 1 / (1 - theta). "absolute" (default, as config/landmarks_hinf.yaml):
+  /// Gamma = diag(gamma_*) below. Relative theta_pose 0.8 with the EKF draw is the better car
+  /// setting but costs MRCLAM runs (docs/results.md), so it is not the default.
+  std::string mode = "absolute";
+  /// theta of the pose proposal and of the landmark filters in "relative" mode, in [0, 1)
+  /// (0: the EKF). theta_pose: the best of 0.5 / 0.8 / 0.9 / 0.95 / 0.97 / 0.99 on
+  /// worlds/havangi_car.yaml (benchmarks/run_experiments, docs/results.md); the landmark
+  /// attenuation is off.
+  double theta_pose = 0.8;
+  double theta_landmark = 0.0;
   /// Attenuation gamma of the pose proposal (eqs. 22, 23) and of the landmark
   /// filters (eqs. 33, 34). The H-infinity covariance is P+ = (P^-1 + H^T R^-1
   /// H - Gamma^-1)^-1: 1 / gamma is taken off the information of each state
@@ -32,11 +48,20 @@ struct HinfOptions {
   /// H^T + R)^-1 (eqs. 20, 31 as printed: the Kalman form, on the H-infinity
   /// covariance of the previous step).
   std::string gain = "posterior";
+  /// Covariance the pose is drawn from (eq. 24): "hinf", the H-infinity P+ as in the paper; or
+  /// "ekf", the EKF's posterior of the same step, around the H-infinity mean. P+ bounds the
+  /// worst-case error rather than being the spread of the posterior; with an overstated R it is
+  /// up to 1 / (1 - theta) times the prediction and, the weights being flat then, drawing from
+  /// it is a random walk that wide. Default "hinf" (the paper), as the shipped config.
+  std::string proposal_covariance = "hinf";
   /// Importance weight: "marginal", N(z; z_hat, H P H^T + R) accumulated over
   /// the sequential proposal updates as in FastSLAM 2.0; or "pointwise", eq. 36
-  /// evaluated at the drawn pose: p(z | s) p(s | s_prev, u) / q(s).
+  /// evaluated at the drawn pose: p(z | s) p(s | s_prev, u) / q(s); or "attenuated" (relative
+  /// mode), the marginal likelihood of the model whose gain the H-infinity step applies:
+  /// N(z; z_hat, H P H^T + (1 - theta_pose) R), R with the landmark's part.
   std::string weight = "marginal";
-  /// Guard of the H-infinity condition: a step whose covariance P+ would exceed this many
+  /// Guard of the H-infinity condition ("absolute" mode; in "relative" mode the inflation is
+  /// at most 1 / (1 - theta) by construction): a step whose covariance P+ would exceed this many
   /// times the EKF's in some direction (gamma too close to its bound, corrections amplified as
   /// much) falls back to the EKF like a failed condition, and is counted.
   double max_inflation = 4.0;
@@ -79,6 +104,17 @@ template <int N>
 Attenuation<N> hinfAttenuation(const Eigen::Matrix<double, N, N>& ekf_covariance,
                                const Eigen::Matrix<double, N, 1>& gamma, bool posterior_gain,
                                double max_inflation = std::numeric_limits<double>::infinity());
+/// The same with a full Gamma^-1 (symmetric, positive semidefinite; zero: the EKF).
+template <int N>
+Attenuation<N> hinfAttenuationInformation(
+    const Eigen::Matrix<double, N, N>& ekf_covariance,
+    const Eigen::Matrix<double, N, N>& gamma_inverse, bool posterior_gain,
+    double max_inflation = std::numeric_limits<double>::infinity());
+/// Scale-free Gamma^-1 = theta P^-1 of a prior covariance P (zero when theta is 0 or P is
+/// not positive definite).
+template <int N>
+Eigen::Matrix<double, N, N> relativeGammaInverse(const Eigen::Matrix<double, N, N>& prior,
+                                                 double theta);
 
 /// The H-infinity update of one measurement with attenuation Gamma =
 /// diag(gamma): the EKF update followed by hinfAttenuation (gain =
@@ -101,7 +137,9 @@ class EstimatorRule {
   /// as in eq. 14, so it does not depend on how many landmarks were seen nor on
   /// their order.
   virtual bool attenuatesPose() const { return false; }
-  virtual Attenuation<3> attenuatePose(const Eigen::Matrix3d& ekf_covariance) const;
+  /// prior_covariance: the motion prediction's, before any measurement of the step.
+  virtual Attenuation<3> attenuatePose(const Eigen::Matrix3d& prior_covariance,
+                                       const Eigen::Matrix3d& ekf_covariance) const;
   /// Landmark filter: landmark covariance p, d h / d landmark, measurement
   /// noise r.
   virtual Correction<2> correctLandmark(const Eigen::Matrix2d& p, const Eigen::Matrix2d& h,
@@ -109,6 +147,9 @@ class EstimatorRule {
   /// True: weigh particles by eq. 36 at the drawn pose instead of the marginal
   /// likelihood.
   virtual bool pointwiseWeights() const { return false; }
+  /// Marginal weight N(v; H P H^T + k R): the factor k on the measurement's (and landmark's)
+  /// part of the innovation covariance; 1 for FastSLAM 2.0.
+  virtual double weightNoiseScale() const { return 1.0; }
 };
 
 /// FastSLAM 2.0 (Montemerlo et al. 2003): EKF everywhere.
@@ -124,10 +165,12 @@ class HinfRule : public EstimatorRule {
  public:
   explicit HinfRule(const HinfOptions& options);
   bool attenuatesPose() const override { return true; }
-  Attenuation<3> attenuatePose(const Eigen::Matrix3d& ekf_covariance) const override;
+  Attenuation<3> attenuatePose(const Eigen::Matrix3d& prior_covariance,
+                               const Eigen::Matrix3d& ekf_covariance) const override;
   Correction<2> correctLandmark(const Eigen::Matrix2d& p, const Eigen::Matrix2d& h,
                                 const Eigen::Matrix2d& r) const override;
   bool pointwiseWeights() const override { return options_.weight == "pointwise"; }
+  double weightNoiseScale() const override;
 
  private:
   const HinfOptions options_;

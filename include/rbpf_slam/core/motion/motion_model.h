@@ -46,6 +46,12 @@ struct MotionOptions {
   // Floors so that a stationary robot keeps a little diffusion.
   double min_sigma_xy_m = 0.002;
   double min_sigma_theta_rad = 0.001;
+  // Random walk with the step's duration (MotionInput::dt): variance dt * sigma^2 added to the
+  // floors above. Unlike the alphas, which see only the net increment between two filter
+  // steps, it keeps growing while the robot goes unobserved and wanders (e.g. tens of seconds
+  // between landmark sightings). 0: off.
+  double sigma_xy_per_sqrt_s = 0.0;      // m / sqrt(s)
+  double sigma_theta_per_sqrt_s = 0.0;   // rad / sqrt(s)
 };
 
 /// A probabilistic motion model p(x_t | x_{t-1}, u_t).
