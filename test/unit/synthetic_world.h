@@ -13,6 +13,18 @@
 namespace rbpf_slam {
 namespace core {
 
+/// The infinite line through a and b in normal form (rho >= 0, normal angle), in their frame.
+inline Eigen::Vector2d lineThrough(const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+  const Eigen::Vector2d d = (b - a).normalized();
+  Eigen::Vector2d n(-d.y(), d.x());
+  double rho = n.dot(a);
+  if (rho < 0) {
+    rho = -rho;
+    n = -n;
+  }
+  return Eigen::Vector2d(rho, std::atan2(n.y(), n.x()));
+}
+
 /// A rectangular room with posts, observed as infinite walls with visible extents and points.
 struct SyntheticWorld {
   std::vector<std::pair<Eigen::Vector2d, Eigen::Vector2d>> walls{
@@ -25,16 +37,10 @@ struct SyntheticWorld {
     const Pose2 inv = inverse(pose);
     for (const auto& [a, b] : walls) {
       const Eigen::Vector2d ra = transformPoint(inv, a), rb = transformPoint(inv, b);
-      const Eigen::Vector2d d = (rb - ra).normalized();
-      Eigen::Vector2d n(-d.y(), d.x());
-      double rho = n.dot(ra);
-      if (rho < 0) {
-        rho = -rho;
-        n = -n;
-      }
+      const Eigen::Vector2d line = lineThrough(ra, rb);
       LineFeature f;
-      f.rho = rho + sampleGaussian(rng, sigma_rho);
-      f.theta = wrapAngle(std::atan2(n.y(), n.x()) + sampleGaussian(rng, sigma_theta));
+      f.rho = line.x() + sampleGaussian(rng, sigma_rho);
+      f.theta = wrapAngle(line.y() + sampleGaussian(rng, sigma_theta));
       f.covariance = Eigen::Vector2d(sigma_rho * sigma_rho, sigma_theta * sigma_theta).asDiagonal();
       f.start = ra;
       f.end = rb;

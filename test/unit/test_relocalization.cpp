@@ -19,16 +19,9 @@ LandmarkMap mapOf(const std::vector<std::pair<Eigen::Vector2d, Eigen::Vector2d>>
                   const std::vector<Eigen::Vector2d>& posts) {
   LandmarkMap map;
   for (const auto& [a, b] : walls) {
-    const Eigen::Vector2d d = (b - a).normalized();
-    Eigen::Vector2d n(-d.y(), d.x());
-    double rho = n.dot(a);
-    if (rho < 0) {
-      rho = -rho;
-      n = -n;
-    }
     Landmark lm;
     lm.type = LandmarkType::kLine;
-    lm.mean << rho, std::atan2(n.y(), n.x());
+    lm.mean = lineThrough(a, b);
     lm.covariance = Eigen::Vector2d(0.01 * 0.01, 0.005 * 0.005).asDiagonal();
     lm.extent_min = std::min(alongLine(lm.mean, a), alongLine(lm.mean, b));
     lm.extent_max = std::max(alongLine(lm.mean, a), alongLine(lm.mean, b));
