@@ -208,6 +208,8 @@ void readScanMatching(YamlSection section, core::ScanMatcherOptions* o) {
   section.read("max_residual_rms_m", &o->max_residual_rms_m, 1e-4, 10.0);
   section.read("max_range_m", &o->max_range_m, 0.1, 1000.0);
   section.read("rotation_guess_rad", &o->rotation_guess_rad, 0.0, 1.6);
+  section.read("search_below_inlier_ratio", &o->search_below_inlier_ratio, 0.0, 1.0);
+  section.read("search_step_rad", &o->search_step_rad, 0.01, 1.6);
   section.read("min_information", &o->min_information, 0.0, 1e9);
   section.read("max_correction_m", &o->max_correction_m, 0.0, 100.0);
   section.read("max_correction_rad", &o->max_correction_rad, 0.0, 3.2);

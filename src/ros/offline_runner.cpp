@@ -336,11 +336,11 @@ OfflineSummary OfflineRunner::run() {
       const core::UpdateStats& u = pipeline_.session().lastStats();
       const core::Pose2 p = pipeline_.session().trajectory().back().pose;
       std::fprintf(stderr,
-                   "t=%.2f lines=%zu points=%zu assoc=%d new=%d neff=%.1f resampled=%d "
+                   "t=%.2f lines=%zu points=%zu assoc=%d new=%d neff=%.1f resampled=%d reloc=%d "
                    "pose=(%.2f %.2f %.1fdeg) %.2fms match=%d (%.3f %.3f %.4f) inl=%.2f rms=%.3f info=%.1f\n",
                    stamp.toSec(), pipeline_.lastFeatures().lines.size(),
                    pipeline_.lastFeatures().points.size(), u.associated, u.new_landmarks, u.neff,
-                   u.resampled ? 1 : 0, p.x(), p.y(), p.z() * 180 / M_PI, ms,
+                   u.resampled ? 1 : 0, u.relocalized, p.x(), p.y(), p.z() * 180 / M_PI, ms,
                    pipeline_.lastMatch().ok ? 1 : 0, pipeline_.lastMatch().delta.x(),
                    pipeline_.lastMatch().delta.y(), pipeline_.lastMatch().delta.z(),
                    pipeline_.lastMatch().inlier_ratio, pipeline_.lastMatch().residual_rms_m,

@@ -128,6 +128,8 @@ void validate(const ScanMatcherOptions& o) {
   require("max_residual_rms_m", o.max_residual_rms_m, 1e-4, 10.0);
   require("max_range_m", o.max_range_m, 0.1, 1000.0);
   require("rotation_guess_rad", o.rotation_guess_rad, 0.0, 1.6);
+  require("search_below_inlier_ratio", o.search_below_inlier_ratio, 0.0, 1.0);
+  require("search_step_rad", o.search_step_rad, 0.01, 1.6);
   require("min_information", o.min_information, 0.0, 1e9);
   require("max_correction_m", o.max_correction_m, 0.0, 100.0);
   require("max_correction_rad", o.max_correction_rad, 0.0, 3.2);
@@ -165,10 +167,21 @@ ScanMatchResult ScanMatcher::match(const std::vector<Eigen::Vector2d>& reference
   ScanMatchResult best;
   if (reference.size() < 10 || current.size() < 10 || !initial_delta.allFinite()) return best;
   const std::vector<Eigen::Vector2d> normals = normalsOf(reference);
+  best = matchAround(reference, normals, current, initial_delta);
+  // Wheel odometry can be 15-25 deg off over one in-place turn (Intel, ACES); ICP converges
+  // only within a few degrees, so a start 10 deg off ends in a wrong minimum that still pairs
+  // a quarter of the points. A poor or failed match is retried from a fan of rotations.
+  if (options_.search_below_inlier_ratio > 0.0 &&
+      (!best.ok || best.inlier_ratio < options_.search_below_inlier_ratio)) {
+    std::vector<double> offsets;
+    const int n = static_cast<int>(std::floor(options_.max_correction_rad / options_.search_step_rad));
+    for (int k = -n; k <= n; ++k) offsets.push_back(k * options_.search_step_rad);
+    const ScanMatchResult searched = matchFromStarts(reference, normals, current, initial_delta, offsets);
+    if (searched.ok && (!best.ok || score(searched) > score(best))) best = searched;
+  }
   // From odometry first; only if that fails, from rest: wheel odometry has glitches (repeated
   // or out-of-order stamps put the Intel log's odometry 4.5 m off between two scans), and
   // then a start at the odometry guess cannot converge or is rejected as too far from it.
-  best = matchAround(reference, normals, current, initial_delta);
   if (!best.ok) {
     const ScanMatchResult from_rest = matchAround(reference, normals, current, Pose2::Zero());
     // Degenerate (a corridor): the motion along it would be the start's zero, not a measurement.
@@ -180,34 +193,43 @@ ScanMatchResult ScanMatcher::match(const std::vector<Eigen::Vector2d>& reference
   return best;
 }
 
+double ScanMatcher::score(const ScanMatchResult& r) {
+  return (r.ok ? 10.0 : 0.0) + r.inlier_ratio - r.residual_rms_m;
+}
+
 ScanMatchResult ScanMatcher::matchAround(const std::vector<Eigen::Vector2d>& reference,
                                          const std::vector<Eigen::Vector2d>& normals,
                                          const std::vector<Eigen::Vector2d>& current,
                                          const Pose2& guess) const {
-  ScanMatchResult best;
-  std::vector<Pose2> starts{guess};
+  std::vector<double> offsets{0.0};
   if (options_.rotation_guess_rad > 0.0) {
-    for (double sign : {-1.0, 1.0}) {
-      Pose2 s = guess;
-      s.z() = wrapAngle(s.z() + sign * options_.rotation_guess_rad);
-      starts.push_back(s);
-    }
+    offsets.push_back(-options_.rotation_guess_rad);
+    offsets.push_back(options_.rotation_guess_rad);
   }
-  // Prefer accepted results; keep the best rejected one for diagnostics.
+  return matchFromStarts(reference, normals, current, guess, offsets);
+}
+
+ScanMatchResult ScanMatcher::matchFromStarts(const std::vector<Eigen::Vector2d>& reference,
+                                             const std::vector<Eigen::Vector2d>& normals,
+                                             const std::vector<Eigen::Vector2d>& current,
+                                             const Pose2& guess,
+                                             const std::vector<double>& offsets) const {
+  ScanMatchResult best;
+  // Prefer accepted results within the correction bound; keep the best rejected one for
+  // diagnostics.
   double best_score = -1e300;
-  for (const Pose2& start : starts) {
-    const ScanMatchResult r = matchFrom(reference, normals, current, start);
-    const double score = (r.ok ? 10.0 : 0.0) + r.inlier_ratio - r.residual_rms_m;
-    if (score > best_score) {
-      best_score = score;
-      best = r;
+  for (double offset : offsets) {
+    Pose2 start = guess;
+    start.z() = wrapAngle(start.z() + offset);
+    ScanMatchResult r = matchFrom(reference, normals, current, start);
+    if (r.ok) {
+      const Pose2 correction = between(guess, r.delta);
+      r.ok = correction.head<2>().norm() <= options_.max_correction_m &&
+             std::fabs(correction.z()) <= options_.max_correction_rad;
     }
-  }
-  if (best.ok) {
-    const Pose2 correction = between(guess, best.delta);
-    if (correction.head<2>().norm() > options_.max_correction_m ||
-        std::fabs(correction.z()) > options_.max_correction_rad) {
-      best.ok = false;
+    if (score(r) > best_score) {
+      best_score = score(r);
+      best = r;
     }
   }
   return best;

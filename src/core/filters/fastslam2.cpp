@@ -448,8 +448,9 @@ UpdateStats FastSlam2::update(const FeatureSet& features) {
     results[i] = updateParticle(&p, predicted, motion_cov, observations);
     if (mapping_) results[i].removed = manageExistence(options_.existence, &p.map, p.pose, step_);
     stats.fallbacks += results[i].fallbacks;
-    stats_.relocalizations += results[i].relocalized;
+    stats.relocalized += results[i].relocalized;
   }
+  stats_.relocalizations += stats.relocalized;
   for (auto& p : particles_) p.path = std::make_shared<PathNode>(p.pose, std::move(p.path));
   stats_.fallbacks += stats.fallbacks;
   weighAndResample(&stats);

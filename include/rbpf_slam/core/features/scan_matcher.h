@@ -19,6 +19,11 @@ struct ScanMatcherOptions {
   double max_residual_rms_m = 0.08;    // mean residual of the final pairing
   double max_range_m = 15.0;           // farther returns are too sparse to pair
   double rotation_guess_rad = 0.2;     // also start from odometry rotated by +-this (0: off)
+  double search_below_inlier_ratio = 0.0;  // when the best match from those starts pairs fewer
+                                       // points than this (or none is accepted), also start
+                                       // from every rotation within +-max_correction_rad of
+                                       // odometry (0: off) ...
+  double search_step_rad = 0.1;        // ... this far apart
   double min_information = 3.0;        // translation information floor; below: that direction
                                        // is degenerate (corridor) and taken from odometry
   double prior_weight_xy = 0.5;        // pull toward the odometry guess, in point-pair units
@@ -59,12 +64,20 @@ class ScanMatcher {
   const ScanMatcherOptions& options() const { return options_; }
 
  private:
+  /// The best accepted match from starts at guess turned by each of offsets; not ok if it
+  /// ends farther than max_correction from guess.
+  ScanMatchResult matchFromStarts(const std::vector<Eigen::Vector2d>& reference,
+                                  const std::vector<Eigen::Vector2d>& normals,
+                                  const std::vector<Eigen::Vector2d>& current, const Pose2& guess,
+                                  const std::vector<double>& offsets) const;
   /// The best of the starts at guess and guess turned by +-rotation_guess_rad; not ok if it
   /// ends farther than max_correction from guess.
   ScanMatchResult matchAround(const std::vector<Eigen::Vector2d>& reference,
                               const std::vector<Eigen::Vector2d>& normals,
                               const std::vector<Eigen::Vector2d>& current,
                               const Pose2& guess) const;
+  /// Ranks results: accepted first, then more paired points and a smaller residual.
+  static double score(const ScanMatchResult& r);
   ScanMatchResult matchFrom(const std::vector<Eigen::Vector2d>& reference,
                             const std::vector<Eigen::Vector2d>& normals,
                             const std::vector<Eigen::Vector2d>& current, const Pose2& start) const;

@@ -50,6 +50,7 @@ struct UpdateStats {
   int new_landmarks = 0;         // best particle: landmarks created
   int weight_resets = 0;         // all-zero or NaN weights reset to uniform
   int fallbacks = 0;             // variant-specific numeric fallbacks (e.g. H-inf -> EKF)
+  int relocalized = 0;           // particles whose proposal started from a searched correction
 };
 
 /// Running totals since construction or reset.
