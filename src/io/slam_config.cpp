@@ -163,6 +163,7 @@ void readDpf(YamlSection section, core::DpfOptions* o) {
   section.read("fault_prior_chi2", &o->fault_prior_chi2, 0.0, 1e9);
   section.read("suspect_weight", &o->suspect_weight, 0.0, 1.0);
   section.read("isolate_after_steps", &o->isolate_after_steps, 1, 1000000);
+  section.read("readmit_after_steps", &o->readmit_after_steps, 0, 1000000);
   section.read("step_timeout_s", &o->step_timeout_s, 1e-3, 1e6);
   section.finish();
 }

@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
@@ -295,6 +296,107 @@ TEST(DpfMaster, ALocalWhosePriorDisagreesWithTheMastersIsNotFusedThenIsolated) {
   EXPECT_TRUE(out.mean.isApprox(p, 1e-9)) << out.mean.transpose();
 }
 
+TEST(DpfMaster, SegmentMahalanobisIsTheDistanceToTheNearestPointOfTheSegment) {
+  const Eigen::Matrix3d unit = Eigen::Matrix3d::Identity();
+  const Eigen::Vector3d v(4.0, 0.0, 0.0);
+  EXPECT_NEAR(segmentMahalanobis(Eigen::Vector3d(2.0, 0.0, 0.0), v, unit), 0.0, 1e-12);
+  EXPECT_NEAR(segmentMahalanobis(Eigen::Vector3d(5.0, 0.0, 0.0), v, unit), 1.0, 1e-12);
+  EXPECT_NEAR(segmentMahalanobis(Eigen::Vector3d(-1.0, 0.0, 0.0), v, unit), 1.0, 1e-12);
+  EXPECT_NEAR(segmentMahalanobis(Eigen::Vector3d(2.0, 1.0, 0.0), v, unit), 1.0, 1e-12);
+  EXPECT_NEAR(segmentMahalanobis(Eigen::Vector3d(2.0, 1.0, 0.0), v, 4.0 * unit), 0.25, 1e-12);
+  EXPECT_NEAR(segmentMahalanobis(Eigen::Vector3d(0.0, 3.0, 0.0), Eigen::Vector3d::Zero(), unit),
+              9.0, 1e-12);
+}
+
+/// Weight of local 2 at each step of a run where local 2's prior is 3 m off (alternating
+/// sides: off the master's prediction and off its own last posterior) at the `faulty` steps,
+/// and everything is healthy otherwise.
+std::vector<double> weightsOfAFaultyLocal(int readmit_after_steps, const std::vector<int>& faulty,
+                                          int steps) {
+  DpfOptions o;
+  o.local_filters = 3;
+  o.isolate_after_steps = 2;
+  o.readmit_after_steps = readmit_after_steps;
+  DpfMaster master(o);
+  auto local = [](int index, long step, const Pose2& prior) {
+    DpfLocalEstimate e = estimateOf(index, step, prior, 2.0, 0.9);
+    e.prior_mean = prior;
+    e.prior_covariance = 0.01 * Eigen::Matrix3d::Identity();
+    e.covariance = 0.005 * Eigen::Matrix3d::Identity();
+    return e;
+  };
+  std::vector<double> weights;
+  Pose2 m = Pose2::Zero();
+  for (int k = 1; k <= steps; ++k) {
+    const bool fault = std::find(faulty.begin(), faulty.end(), k) != faulty.end();
+    const Pose2 off(k % 2 ? 3.0 : -3.0, 0.0, 0.0);
+    const auto out = master.fuse(k, MotionInput(), {local(0, k, m), local(1, k, m),
+                                                    local(2, k, fault ? m + off : m)});
+    weights.push_back(out.weights[2]);
+    m = out.mean;
+  }
+  return weights;
+}
+
+TEST(DpfMaster, ALocalIsolatedForAProcessFaultIsFusedAgainOnlyAfterReadmitAfterStepsCleanSteps) {
+  // Faulty at steps 1-2: isolated at step 2; healthy from step 3 on. Readmitted after 3
+  // unflagged steps (3, 4, 5): fused from step 6.
+  auto w = weightsOfAFaultyLocal(3, {1, 2}, 7);
+  for (int k = 1; k <= 5; ++k) EXPECT_EQ(w[k - 1], 0.0) << "step " << k;
+  EXPECT_GT(w[5], 0.2);
+  EXPECT_GT(w[6], 0.2);
+  // A flagged step during the probation (step 4) restarts the count: fused from step 8.
+  w = weightsOfAFaultyLocal(3, {1, 2, 4}, 8);
+  for (int k = 1; k <= 7; ++k) EXPECT_EQ(w[k - 1], 0.0) << "step " << k;
+  EXPECT_GT(w[7], 0.2);
+  // readmit_after_steps = 0 (the behaviour before): fused on its first unflagged step.
+  w = weightsOfAFaultyLocal(0, {1, 2}, 3);
+  EXPECT_GT(w[2], 0.2);
+}
+
+TEST(DpfMaster, APriorOnItsOwnLastPosteriorMovedByTheOdometryIsNoProcessFault) {
+  // Local 2 keeps a correction of its own that the master did not take (its NIS flags it,
+  // e.g. at a loop closure): its next prior is its posterior moved by the odometry, off the
+  // master's prediction but no process fault; isolated for it, it is not kept out afterwards.
+  // Local 1's prior is off both: a process fault.
+  DpfOptions o;
+  o.local_filters = 3;
+  o.isolate_after_steps = 2;
+  o.readmit_after_steps = 5;
+  DpfMaster master(o);
+  auto local = [](int index, long step, const Pose2& prior, const Pose2& posterior, double nis) {
+    DpfLocalEstimate e = estimateOf(index, step, posterior, nis, 0.9);
+    e.prior_mean = prior;
+    e.prior_covariance = 0.01 * Eigen::Matrix3d::Identity();
+    e.covariance = 0.005 * Eigen::Matrix3d::Identity();
+    return e;
+  };
+  const Pose2 zero = Pose2::Zero();
+  auto out = master.fuse(1, MotionInput(), {local(0, 1, zero, zero, 2.0),
+                                            local(1, 1, zero, zero, 2.0),
+                                            local(2, 1, zero, Pose2(2.0, 0.0, 0.0), 60.0)});
+  EXPECT_TRUE(master.health()[2].suspect);  // its NIS
+  MotionInput motion;
+  motion.delta = Pose2(1.0, 0.0, 0.0);
+  const Pose2 predicted = compose(out.mean, motion.delta);
+  out = master.fuse(2, motion, {local(0, 2, predicted, predicted, 2.0),
+                                local(1, 2, predicted + Pose2(0.0, 2.0, 0.0),
+                                      predicted + Pose2(0.0, 2.0, 0.0), 2.0),
+                                local(2, 2, Pose2(3.0, 0.0, 0.0), Pose2(3.0, 0.0, 0.0), 60.0)});
+  EXPECT_TRUE(master.health()[2].inconsistent);  // off the master's prediction ...
+  EXPECT_LT(master.health()[2].process_nis, 1.0);  // ... but on its own process
+  EXPECT_TRUE(master.health()[1].inconsistent);
+  EXPECT_GT(master.health()[1].process_nis, o.fault_prior_chi2);
+  ASSERT_EQ(out.feedback.reinitialise.size(), 1u);  // local 2: flagged twice
+  EXPECT_EQ(out.feedback.reinitialise[0], 2);
+  EXPECT_EQ(master.health()[2].probation_steps, 0);
+  // Step 3, everyone healthy: local 2 is fused at once.
+  const Pose2 m = out.mean;
+  out = master.fuse(3, MotionInput(), {local(0, 3, m, m, 2.0), local(1, 3, m, m, 2.0),
+                                       local(2, 3, m, m, 2.0)});
+  EXPECT_GT(out.weights[2], 0.2);
+}
+
 /// A synthetic run: a robot driving a circle of radius 10 m among 24 posts with known ids,
 /// noisy odometry, range-bearing observations within 8 m.
 struct SyntheticRun {
@@ -469,6 +571,9 @@ TEST(DpfOptions, OutOfRangeValuesAreNamed) {
   }
   o = dpfOptions();
   o.dpf.fault.local_index = 3;  // only 3 local filters: 0..2
+  EXPECT_THROW(createFilter(o), std::invalid_argument);
+  o = dpfOptions();
+  o.dpf.readmit_after_steps = -1;
   EXPECT_THROW(createFilter(o), std::invalid_argument);
 }
 

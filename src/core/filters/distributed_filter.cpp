@@ -36,6 +36,7 @@ void validate(const DpfOptions& o) {
   require("dpf.fault_prior_chi2", o.fault_prior_chi2, 0.0, 1e9);
   require("dpf.suspect_weight", o.suspect_weight, 0.0, 1.0);
   require("dpf.isolate_after_steps", o.isolate_after_steps, 1, 1000000);
+  require("dpf.readmit_after_steps", o.readmit_after_steps, 0, 1000000);
   require("dpf.step_timeout_s", o.step_timeout_s, 1e-3, 1e6);
   require("fault.start_step", o.fault.start_step, 1, 1e9);
   require("fault.local_index", o.fault.local_index, 0, o.local_filters - 1);

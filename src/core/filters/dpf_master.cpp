@@ -74,6 +74,15 @@ void gainedInformation(const Eigen::Matrix3d& posterior_info, const Eigen::Matri
   }
 }
 
+double segmentMahalanobis(const Eigen::Vector3d& r, const Eigen::Vector3d& v,
+                          const Eigen::Matrix3d& covariance) {
+  const Eigen::LDLT<Eigen::Matrix3d> ldlt(covariance);
+  const Eigen::Vector3d sv = ldlt.solve(v);
+  const double vv = v.dot(sv);
+  const double t = vv > 0.0 ? std::clamp(r.dot(sv) / vv, 0.0, 1.0) : 0.0;
+  const Eigen::Vector3d d = r - t * v;
+  return d.dot(ldlt.solve(d));
+}
 
 std::vector<double> innovationWeights(const std::vector<double>& mean_nis) {
   std::vector<double> w;
@@ -157,12 +166,36 @@ DpfMasterOutput DpfMaster::fuse(long step, const MotionInput& motion,
     DpfLocalHealth& h = health_[i];
     const DpfLocalEstimate& e = *by_index[i];
     const Pose2 d = difference(e.prior_mean, prior_mean);
-    h.prior_nis = d.dot(regularised(e.prior_covariance + last_.covariance).ldlt().solve(d));
+    const Eigen::Matrix3d s = regularised(e.prior_covariance + last_.covariance);
+    h.prior_nis = d.dot(s.ldlt().solve(d));
+    // Its process: the local started from a point between its own last posterior and the
+    // master's last estimate (the feedback reweights its cloud towards the master), so a
+    // healthy process predicts onto the segment between those two moved by the odometry. A
+    // prior off that segment (not merely off the master's prediction, which a local that
+    // kept its own correction, e.g. at a loop closure, is too) is a process fault.
+    h.process_nis = h.prior_nis;
+    if (h.has_last_mean) {
+      const Pose2 own = difference(compose(h.last_mean, motion.delta), prior_mean);
+      h.process_nis = segmentMahalanobis(d, own, s);
+    }
+    const bool process_fault = options_.fault_prior_chi2 > 0.0 &&
+                               !(h.process_nis <= options_.fault_prior_chi2);  // NaN: fault
+    h.last_mean = e.mean;
+    h.has_last_mean = true;
     h.inconsistent = options_.fault_prior_chi2 > 0.0 &&
                      !(h.prior_nis <= options_.fault_prior_chi2);  // NaN: inconsistent
     h.suspect = h.inconsistent || (watch_innovation && nis[i] > options_.fault_nis) ||
                 (watch_neff && neff[i] < options_.fault_neff_ratio);
     h.suspect_steps = h.suspect ? h.suspect_steps + 1 : 0;
+    h.streak_process_fault = h.suspect && (h.streak_process_fault || process_fault);
+    // Readmission after an isolation for a process fault: not fused until it has been
+    // unflagged for readmit_after_steps consecutive steps (a flagged step restarts the count).
+    // A persistent process fault passes the checks now and then (e.g. when a gap in the data
+    // inflates every covariance); one clean step must not let it back in.
+    if (h.probation_steps > 0) {
+      w[i] = 0.0;
+      h.probation_steps = h.suspect ? options_.readmit_after_steps : h.probation_steps - 1;
+    }
     if (!h.suspect) continue;
     w[i] *= h.inconsistent ? 0.0 : options_.suspect_weight;
     if (h.suspect_steps >= options_.isolate_after_steps) {
@@ -170,6 +203,8 @@ DpfMasterOutput DpfMaster::fuse(long step, const MotionInput& motion,
       out.feedback.reinitialise.push_back(i);
       h.suspect_steps = 0;
       h.smoothed_nis = 2.0;
+      if (h.streak_process_fault) h.probation_steps = options_.readmit_after_steps;
+      h.streak_process_fault = false;
       ++h.isolations;
     }
   }

@@ -64,6 +64,11 @@ struct DpfLocalHealth {
   double prior_nis = 0.0;     // this step's Mahalanobis^2 of its prior against the master's
   bool inconsistent = false;  // prior_nis > fault_prior_chi2: not fused this step
   long isolations = 0;
+  double process_nis = 0.0;   // ... of its prior against its process (see DpfMaster::fuse)
+  bool has_last_mean = false;  // last_mean is the local's posterior of the previous step
+  Pose2 last_mean = Pose2::Zero();
+  bool streak_process_fault = false;  // a process fault among the current flagged steps
+  int probation_steps = 0;    // after an isolation: unflagged steps needed before it is fused
 };
 
 /// What the master produced for one step.

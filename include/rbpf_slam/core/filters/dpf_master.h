@@ -11,6 +11,12 @@
 namespace rbpf_slam {
 namespace core {
 
+/// Mahalanobis^2 under `covariance` of r from the nearest point of the segment from 0 to v
+/// (the master's process check: 0 is its prediction, v a local's own last posterior moved by
+/// the odometry, r the local's prior).
+double segmentMahalanobis(const Eigen::Vector3d& r, const Eigen::Vector3d& v,
+                          const Eigen::Matrix3d& covariance);
+
 /// Innovation method (Won et al., the paper's eq. 4 reference): w_i proportional to
 /// 1 / (mean NIS of local i); a larger innovation means a worse local filter.
 std::vector<double> innovationWeights(const std::vector<double>& mean_nis);

@@ -50,6 +50,14 @@ struct DpfOptions {
   double fault_prior_chi2 = 16.27;
   double suspect_weight = 0.05;    // a suspect local's weight is multiplied by this
   int isolate_after_steps = 3;     // consecutive suspect steps before isolation + re-init
+  // Readmission after an isolation for a process fault (a flagged step whose prior is neither
+  // the master's prediction nor its own last posterior moved by the odometry, under
+  // fault_prior_chi2): the re-initialised local is not fused (weight 0) until it has gone this
+  // many consecutive steps unflagged; a flagged step restarts the count. A persistent fault
+  // passes the checks now and then (e.g. the prior check when a gap in the data inflates every
+  // covariance), and one clean step used to let it back in. 0: off (fused again on its first
+  // unflagged step, the behaviour before dpf4).
+  int readmit_after_steps = 10;
   double step_timeout_s = 10.0;    // dpf_master_node: wait this long for every local's answer
   FaultInjectorOptions fault;
 };
