@@ -150,6 +150,32 @@ TEST_F(CorruptedStretch, ParticlesComeFromTheSetBeforeTheCorruption) {
   EXPECT_LT(robust_error, 0.5 * plain_error) << robust_error << " vs " << plain_error;
 }
 
+// A particle kept from an older set skipped the steps since that set: its path gets them from
+// the intermediate path (sampled in the replay, or the estimated means without it), so the best
+// particle's path has one pose per update and no jump, like FastSLAM 2.0's, and offline_slam
+// can write it as the trajectory (it falls back to the online estimate on a length mismatch).
+TEST_F(CorruptedStretch, KeptParticlesHaveOnePosePerUpdate) {
+  for (const bool replay : {true, false}) {
+    FilterOptions o = options("robust_fastslam2");
+    o.robust.intermediate_path = replay;
+    RobustFastSlam2 robust(o);
+    run(&robust);
+    std::map<int, int> by_origin;
+    for (int origin : robust.origins()) ++by_origin[origin];
+    ASSERT_GT(by_origin[20], 0) << "the scenario must keep particles from the older set";
+    const std::vector<Pose2> path = robust.bestPath();
+    ASSERT_EQ(path.size(), 31u) << "replay " << replay;
+    for (size_t k = 1; k < path.size(); ++k) {
+      const double stride = (path[k].head<2>() - path[k - 1].head<2>()).norm();
+      EXPECT_LT(stride, 0.5) << "step " << k + 1 << ", replay " << replay;
+    }
+    // Exact odometry along x: the path stays near the truth x = 0.2 step, skipped steps too.
+    for (size_t k = 0; k < path.size(); ++k) {
+      EXPECT_NEAR(path[k].x(), 0.2 * (k + 1), 0.5) << "step " << k + 1 << ", replay " << replay;
+    }
+  }
+}
+
 TEST_F(CorruptedStretch, MemoryStaysBoundedOverALongRun) {
   FilterOptions o = options("robust_fastslam2");
   o.particles = 10;

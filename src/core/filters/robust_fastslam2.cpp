@@ -143,10 +143,20 @@ UpdateStats RobustFastSlam2::robustUpdate(const std::vector<Observation>& observ
     origins_[i] = set.step;
     if (set.step < t - 1) {
       ++robust_stats_.from_older_sets;
+      // The path of the kept particle ends at the set's step: its skipped poses are the
+      // intermediate path (sampled during the replay, else the estimated means), so that the
+      // path has one pose per update like every FastSLAM 2.0 particle's.
+      std::vector<Pose2> skipped;
       if (options_.robust.intermediate_path && mapping()) {
-        replayIntermediatePath(&next.back(), candidate_start[kept[i]], set.step);
+        skipped = replayIntermediatePath(&next.back(), candidate_start[kept[i]], set.step);
+      } else {
+        skipped = intermediateMeans(candidate_start[kept[i]], next.back().pose, set.step);
+      }
+      for (const Pose2& pose : skipped) {
+        next.back().path = std::make_shared<PathNode>(pose, std::move(next.back().path));
       }
     }
+    next.back().path = std::make_shared<PathNode>(next.back().pose, std::move(next.back().path));
   }
   stats.associated = candidate_counts[kept[0]].associated;
   stats.new_landmarks = candidate_counts[kept[0]].created;
@@ -216,17 +226,34 @@ double RobustFastSlam2::updateCandidate(Particle* particle, const Pose2& predict
   return log_likelihood;
 }
 
-void RobustFastSlam2::replayIntermediatePath(Particle* particle, const Pose2& start, int from) {
+IntermediatePath RobustFastSlam2::intermediatePath(const Pose2& start, const Pose2& end,
+                                                   int from) const {
   const std::vector<const StepRecord*> records = memory_.records(from, step_);
-  if (records.size() < 2) return;
+  if (records.size() < 2) return IntermediatePath();
   std::vector<Pose2> increments;
   std::vector<Eigen::Matrix3d> covariances;
   for (const StepRecord* r : records) {
     increments.push_back(r->motion.delta);
     covariances.push_back(incrementCovariance(r->motion));
   }
-  const IntermediatePath path = estimateIntermediatePath(
-      start, particle->pose, increments, covariances, options_.robust.path_iterations);
+  return estimateIntermediatePath(start, end, increments, covariances,
+                                  options_.robust.path_iterations);
+}
+
+std::vector<Pose2> RobustFastSlam2::intermediateMeans(const Pose2& start, const Pose2& end,
+                                                     int from) const {
+  std::vector<Pose2> means = intermediatePath(start, end, from).means;
+  // No usable records (cannot happen for a set within the window): hold the start pose.
+  if (means.empty() && step_ - from > 1) means.assign(step_ - from - 1, start);
+  return means;
+}
+
+std::vector<Pose2> RobustFastSlam2::replayIntermediatePath(Particle* particle, const Pose2& start,
+                                                           int from) {
+  const std::vector<const StepRecord*> records = memory_.records(from, step_);
+  const IntermediatePath path = intermediatePath(start, particle->pose, from);
+  if (path.means.empty()) return intermediateMeans(start, particle->pose, from);
+  std::vector<Pose2> poses = path.means;
   // Sec. IV: from t - 1 back to t - s + 1, each pose sampled FastSLAM 2.0-style from its
   // Gaussian and the stored observations, which update the map (relocated objects that do not
   // match become new landmarks).
@@ -236,9 +263,11 @@ void RobustFastSlam2::replayIntermediatePath(Particle* particle, const Pose2& st
     const std::vector<Observation>& observations = records[j]->observations;
     if (observations.empty()) continue;
     updateParticle(&replay, path.means[j], path.covariances[j], observations);
+    poses[j] = replay.pose;
     ++robust_stats_.replayed_steps;
   }
   particle->map = replay.map;
+  return poses;
 }
 
 }  // namespace core

@@ -9,6 +9,7 @@
 
 #include "rbpf_slam/core/filters/ancestor_sets.h"
 #include "rbpf_slam/core/filters/fastslam2.h"
+#include "rbpf_slam/core/filters/intermediate_path.h"
 #include "rbpf_slam/core/tracking/landmark_tracker.h"
 
 namespace rbpf_slam {
@@ -52,9 +53,15 @@ class RobustFastSlam2 : public FastSlam2 {
                          const std::vector<Observation>& observations, int old_id_limit,
                          ParticleUpdate* counts);
   void forgetHistory();
+  /// The intermediate path (sec. IV) between `start`, a pose of the set of step `from`, and
+  /// `end`, the pose of the current step; empty when fewer than two records join them.
+  IntermediatePath intermediatePath(const Pose2& start, const Pose2& end, int from) const;
+  /// Its means, one per skipped step (from + 1 .. current - 1).
+  std::vector<Pose2> intermediateMeans(const Pose2& start, const Pose2& end, int from) const;
   /// Samples the skipped poses of a particle drawn from the set of step `from` and replays the
-  /// stored observations into its map, from the latest step back (sec. IV).
-  void replayIntermediatePath(Particle* particle, const Pose2& start, int from);
+  /// stored observations into its map, from the latest step back (sec. IV). Returns the skipped
+  /// poses in step order (sampled where a step had observations, else the estimated mean).
+  std::vector<Pose2> replayIntermediatePath(Particle* particle, const Pose2& start, int from);
 
   LandmarkTracker tracker_;
   AncestorMemory memory_;
