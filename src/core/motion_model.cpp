@@ -2,18 +2,16 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
+
+#include "rbpf_slam/core/require_range.h"
 
 namespace rbpf_slam {
 namespace core {
 namespace {
 
-void requireNonNegative(const char* name, double value) {
-  if (!(value >= 0.0) || !std::isfinite(value)) {
-    throw std::invalid_argument(std::string("motion.") + name + " = " + std::to_string(value) +
-                                " is out of range [0, inf)");
-  }
-}
+constexpr double kInfinity = std::numeric_limits<double>::infinity();
 
 /// Variances of the diffusion added to every step, position and heading (before the noise
 /// scale): the per-step floors plus a random walk growing with the step's duration.
@@ -174,20 +172,20 @@ void validate(const MotionOptions& options) {
     throw std::invalid_argument("motion.model = '" + options.model +
                                 "' is unknown (allowed: odometry, diff_drive)");
   }
-  requireNonNegative("alpha1", options.alpha1);
-  requireNonNegative("alpha2", options.alpha2);
-  requireNonNegative("alpha3", options.alpha3);
-  requireNonNegative("alpha4", options.alpha4);
-  requireNonNegative("wheel_alpha1", options.wheel_alpha1);
-  requireNonNegative("wheel_alpha2", options.wheel_alpha2);
-  requireNonNegative("min_sigma_xy_m", options.min_sigma_xy_m);
-  requireNonNegative("min_sigma_theta_rad", options.min_sigma_theta_rad);
-  requireNonNegative("sigma_xy_per_sqrt_s", options.sigma_xy_per_sqrt_s);
-  requireNonNegative("sigma_theta_per_sqrt_s", options.sigma_theta_per_sqrt_s);
-  if (!(options.wheel_base_m > 0.0)) {
-    throw std::invalid_argument("motion.wheel_base_m = " + std::to_string(options.wheel_base_m) +
-                                " is out of range (0, inf)");
-  }
+  const auto nonNegative = [](const char* name, double value) {
+    requireRange(std::string("motion.") + name, value, 0.0, kInfinity, false, true);
+  };
+  nonNegative("alpha1", options.alpha1);
+  nonNegative("alpha2", options.alpha2);
+  nonNegative("alpha3", options.alpha3);
+  nonNegative("alpha4", options.alpha4);
+  nonNegative("wheel_alpha1", options.wheel_alpha1);
+  nonNegative("wheel_alpha2", options.wheel_alpha2);
+  nonNegative("min_sigma_xy_m", options.min_sigma_xy_m);
+  nonNegative("min_sigma_theta_rad", options.min_sigma_theta_rad);
+  nonNegative("sigma_xy_per_sqrt_s", options.sigma_xy_per_sqrt_s);
+  nonNegative("sigma_theta_per_sqrt_s", options.sigma_theta_per_sqrt_s);
+  requireRange("motion.wheel_base_m", options.wheel_base_m, 0.0, kInfinity, true, true);
 }
 
 std::unique_ptr<MotionModel> createMotionModel(const MotionOptions& options) {

@@ -12,29 +12,13 @@
 #include <stdexcept>
 #include <string>
 
+#include "rbpf_slam/core/require_range.h"
+
 namespace rbpf_slam {
 namespace core {
 namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
-
-std::string formatNumber(double value) {
-  std::ostringstream out;
-  out << value;
-  return out.str();
-}
-
-/// Throws unless lo <= value <= hi (strict at an open end); value NaN always throws.
-void requireRange(const char* name, double value, double lo, double hi, bool lo_open = false,
-                  bool hi_open = false) {
-  const bool above_lo = lo_open ? value > lo : value >= lo;
-  const bool below_hi = hi_open ? value < hi : value <= hi;
-  if (!(above_lo && below_hi)) {
-    throw std::invalid_argument(std::string("laser_features.") + name + " = " +
-                                formatNumber(value) + " is out of range " + (lo_open ? "(" : "[") +
-                                formatNumber(lo) + ", " + formatNumber(hi) + (hi_open ? ")" : "]"));
-  }
-}
 
 /// A run of beams [first, last] (scan indices) with the moments of the points it fits.
 struct Segment {
@@ -417,22 +401,22 @@ void validate(const LaserExtractorOptions& o) {
     throw std::invalid_argument("laser_features.method = '" + o.method +
                                 "' is not one of: incremental, split_and_merge");
   }
-  requireRange("sigma_range_m", o.sigma_range_m, 0.0, 10.0, true);
-  requireRange("max_mean_sq_residual_m2", o.max_mean_sq_residual_m2, 0.0, 1.0, true);
-  requireRange("split_distance_m", o.split_distance_m, 0.0, 10.0, true);
-  requireRange("max_point_gap_m", o.max_point_gap_m, 0.0, 100.0, true);
-  requireRange("min_points_per_line", o.min_points_per_line, 2, 100000);
-  requireRange("min_line_length_m", o.min_line_length_m, 0.0, 1000.0);
-  requireRange("merge_angle_rad", o.merge_angle_rad, 0.0, 0.5 * M_PI);
-  requireRange("merge_distance_m", o.merge_distance_m, 0.0, 10.0);
-  requireRange("corner_min_angle_rad", o.corner_min_angle_rad, 0.0, 0.5 * M_PI);
-  requireRange("corner_max_gap_m", o.corner_max_gap_m, 0.0, 10.0);
-  requireRange("cluster_max_width_m", o.cluster_max_width_m, 0.0, 10.0, true);
-  requireRange("cluster_min_points", o.cluster_min_points, 1, 100000);
-  requireRange("cluster_isolation_m", o.cluster_isolation_m, 0.0, 100.0, true);
-  requireRange("sigma_point_range_m", o.sigma_point_range_m, 0.0, 10.0, true);
-  requireRange("sigma_point_bearing_rad", o.sigma_point_bearing_rad, 0.0, M_PI, true);
-  requireRange("max_range_m", o.max_range_m, 0.0, 1e6);
+  requireRange("laser_features.sigma_range_m", o.sigma_range_m, 0.0, 10.0, true);
+  requireRange("laser_features.max_mean_sq_residual_m2", o.max_mean_sq_residual_m2, 0.0, 1.0, true);
+  requireRange("laser_features.split_distance_m", o.split_distance_m, 0.0, 10.0, true);
+  requireRange("laser_features.max_point_gap_m", o.max_point_gap_m, 0.0, 100.0, true);
+  requireRange("laser_features.min_points_per_line", o.min_points_per_line, 2, 100000);
+  requireRange("laser_features.min_line_length_m", o.min_line_length_m, 0.0, 1000.0);
+  requireRange("laser_features.merge_angle_rad", o.merge_angle_rad, 0.0, 0.5 * M_PI);
+  requireRange("laser_features.merge_distance_m", o.merge_distance_m, 0.0, 10.0);
+  requireRange("laser_features.corner_min_angle_rad", o.corner_min_angle_rad, 0.0, 0.5 * M_PI);
+  requireRange("laser_features.corner_max_gap_m", o.corner_max_gap_m, 0.0, 10.0);
+  requireRange("laser_features.cluster_max_width_m", o.cluster_max_width_m, 0.0, 10.0, true);
+  requireRange("laser_features.cluster_min_points", o.cluster_min_points, 1, 100000);
+  requireRange("laser_features.cluster_isolation_m", o.cluster_isolation_m, 0.0, 100.0, true);
+  requireRange("laser_features.sigma_point_range_m", o.sigma_point_range_m, 0.0, 10.0, true);
+  requireRange("laser_features.sigma_point_bearing_rad", o.sigma_point_bearing_rad, 0.0, M_PI, true);
+  requireRange("laser_features.max_range_m", o.max_range_m, 0.0, 1e6);
 }
 
 LaserLineExtractor::LaserLineExtractor(const LaserExtractorOptions& options) : options_(options) {

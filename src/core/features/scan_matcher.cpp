@@ -7,6 +7,8 @@
 #include <string>
 #include <unordered_map>
 
+#include "rbpf_slam/core/require_range.h"
+
 namespace rbpf_slam {
 namespace core {
 namespace {
@@ -114,29 +116,22 @@ std::vector<Eigen::Vector2d> normalsOf(const std::vector<Eigen::Vector2d>& point
 }  // namespace
 
 void validate(const ScanMatcherOptions& o) {
-  auto require = [](const char* name, double v, double lo, double hi) {
-    if (!(v >= lo && v <= hi)) {
-      throw std::invalid_argument(std::string("scan_matching.") + name + " = " +
-                                  std::to_string(v) + " is out of range [" + std::to_string(lo) +
-                                  ", " + std::to_string(hi) + "]");
-    }
-  };
-  require("max_iterations", o.max_iterations, 1, 1000);
-  require("max_correspondence_m", o.max_correspondence_m, 1e-3, 10.0);
-  require("min_correspondence_m", o.min_correspondence_m, 1e-3, o.max_correspondence_m);
-  require("min_inlier_ratio", o.min_inlier_ratio, 0.0, 1.0);
-  require("max_residual_rms_m", o.max_residual_rms_m, 1e-4, 10.0);
-  require("max_range_m", o.max_range_m, 0.1, 1000.0);
-  require("rotation_guess_rad", o.rotation_guess_rad, 0.0, 1.6);
-  require("search_below_inlier_ratio", o.search_below_inlier_ratio, 0.0, 1.0);
-  require("search_step_rad", o.search_step_rad, 0.01, 1.6);
-  require("min_information", o.min_information, 0.0, 1e9);
-  require("max_correction_m", o.max_correction_m, 0.0, 100.0);
-  require("max_correction_rad", o.max_correction_rad, 0.0, 3.2);
-  require("noise_scale", o.noise_scale, 1e-3, 10.0);
-  require("submap_scans", o.submap_scans, 1, 100);
-  require("prior_weight_xy", o.prior_weight_xy, 0.0, 1e6);
-  require("prior_weight_theta", o.prior_weight_theta, 0.0, 1e6);
+  requireRange("scan_matching.max_iterations", o.max_iterations, 1, 1000);
+  requireRange("scan_matching.max_correspondence_m", o.max_correspondence_m, 1e-3, 10.0);
+  requireRange("scan_matching.min_correspondence_m", o.min_correspondence_m, 1e-3, o.max_correspondence_m);
+  requireRange("scan_matching.min_inlier_ratio", o.min_inlier_ratio, 0.0, 1.0);
+  requireRange("scan_matching.max_residual_rms_m", o.max_residual_rms_m, 1e-4, 10.0);
+  requireRange("scan_matching.max_range_m", o.max_range_m, 0.1, 1000.0);
+  requireRange("scan_matching.rotation_guess_rad", o.rotation_guess_rad, 0.0, 1.6);
+  requireRange("scan_matching.search_below_inlier_ratio", o.search_below_inlier_ratio, 0.0, 1.0);
+  requireRange("scan_matching.search_step_rad", o.search_step_rad, 0.01, 1.6);
+  requireRange("scan_matching.min_information", o.min_information, 0.0, 1e9);
+  requireRange("scan_matching.max_correction_m", o.max_correction_m, 0.0, 100.0);
+  requireRange("scan_matching.max_correction_rad", o.max_correction_rad, 0.0, 3.2);
+  requireRange("scan_matching.noise_scale", o.noise_scale, 1e-3, 10.0);
+  requireRange("scan_matching.submap_scans", o.submap_scans, 1, 100);
+  requireRange("scan_matching.prior_weight_xy", o.prior_weight_xy, 0.0, 1e6);
+  requireRange("scan_matching.prior_weight_theta", o.prior_weight_theta, 0.0, 1e6);
 }
 
 std::vector<Eigen::Vector2d> scanPointsInBase(const RangeScan& scan, double max_range_m) {

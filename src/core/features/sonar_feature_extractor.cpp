@@ -10,6 +10,7 @@
 #include <string>
 
 #include "sonar_fitting.h"
+#include "rbpf_slam/core/require_range.h"
 
 namespace rbpf_slam {
 namespace core {
@@ -20,53 +21,43 @@ constexpr double kClockJumpBackS = 1.0;   // stamps going back more than this cl
 constexpr double kMaxOdomCoordinateM = 1e6;  // beyond: a broken odometry pose, readings dropped
 constexpr double kMaxEchoDistanceM = 100.0;  // echoes taken farther away are not extracted from
 
-void requireRange(const char* name, double value, double lo, double hi, bool lo_open = false) {
-  const bool above = lo_open ? value > lo : value >= lo;
-  if (!(above && value <= hi)) {
-    std::ostringstream out;
-    out << "sonar_features." << name << " = " << value << " is out of range "
-        << (lo_open ? "(" : "[") << lo << ", " << hi << "]";
-    throw std::invalid_argument(out.str());
-  }
-}
-
 }  // namespace
 
 void validate(const SonarExtractorOptions& o) {
-  requireRange("min_range_m", o.min_range_m, 0.0, 100.0);
-  requireRange("max_range_m", o.max_range_m, 0.0, 100.0);
+  requireRange("sonar_features.min_range_m", o.min_range_m, 0.0, 100.0);
+  requireRange("sonar_features.max_range_m", o.max_range_m, 0.0, 100.0);
   if (o.max_range_m > 0.0 && o.max_range_m <= o.min_range_m) {
     throw std::invalid_argument("sonar_features.max_range_m must exceed min_range_m (or be 0)");
   }
-  requireRange("max_range_margin_m", o.max_range_margin_m, 0.0, 10.0);
-  requireRange("cone_rad", o.cone_rad, 0.0, 3.0);
-  requireRange("sigma_range_m", o.sigma_range_m, 0.0, 10.0, true);
-  requireRange("isolated_jump_m", o.isolated_jump_m, 0.0, 100.0, true);
-  requireRange("window_distance_m", o.window_distance_m, 0.0, 1000.0, true);
-  requireRange("window_time_s", o.window_time_s, 0.0, 1e6, true);
-  requireRange("max_echoes", o.max_echoes, 1, 100000);
-  requireRange("min_echo_spacing_m", o.min_echo_spacing_m, 0.0, 10.0);
-  requireRange("extract_distance_m", o.extract_distance_m, 0.0, 1000.0);
-  requireRange("extract_angle_rad", o.extract_angle_rad, 0.0, 10.0);
-  requireRange("hough_rho_step_m", o.hough_rho_step_m, 0.005, 1.0);
-  requireRange("hough_theta_step_rad", o.hough_theta_step_rad, 0.002, 0.5);
-  requireRange("min_line_echoes", o.min_line_echoes, 3, 100000);
-  requireRange("min_line_length_m", o.min_line_length_m, 0.0, 100.0);
-  requireRange("line_inlier_m", o.line_inlier_m, 0.0, 10.0, true);
-  requireRange("cone_margin_rad", o.cone_margin_rad, 0.0, 1.0);
-  requireRange("line_max_incidence_rad", o.line_max_incidence_rad, 0.0, 1.5);
-  requireRange("max_line_sigma_rho_m", o.max_line_sigma_rho_m, 0.0, 100.0, true);
-  requireRange("max_line_sigma_theta_rad", o.max_line_sigma_theta_rad, 0.0, 3.2, true);
-  requireRange("line_sigma_rho_m", o.line_sigma_rho_m, 0.0, 100.0, true);
-  requireRange("line_sigma_theta_rad", o.line_sigma_theta_rad, 0.0, 3.2, true);
-  requireRange("point_cell_m", o.point_cell_m, 0.01, 1.0);
-  requireRange("min_point_echoes", o.min_point_echoes, 3, 100000);
-  requireRange("min_point_baseline_m", o.min_point_baseline_m, 0.0, 100.0);
-  requireRange("point_inlier_m", o.point_inlier_m, 0.0, 10.0, true);
-  requireRange("max_point_sigma_m", o.max_point_sigma_m, 0.0, 100.0, true);
-  requireRange("max_contradiction_ratio", o.max_contradiction_ratio, 0.0, 1000.0);
-  requireRange("point_sigma_range_m", o.point_sigma_range_m, 0.0, 100.0, true);
-  requireRange("point_sigma_bearing_rad", o.point_sigma_bearing_rad, 0.0, 3.2, true);
+  requireRange("sonar_features.max_range_margin_m", o.max_range_margin_m, 0.0, 10.0);
+  requireRange("sonar_features.cone_rad", o.cone_rad, 0.0, 3.0);
+  requireRange("sonar_features.sigma_range_m", o.sigma_range_m, 0.0, 10.0, true);
+  requireRange("sonar_features.isolated_jump_m", o.isolated_jump_m, 0.0, 100.0, true);
+  requireRange("sonar_features.window_distance_m", o.window_distance_m, 0.0, 1000.0, true);
+  requireRange("sonar_features.window_time_s", o.window_time_s, 0.0, 1e6, true);
+  requireRange("sonar_features.max_echoes", o.max_echoes, 1, 100000);
+  requireRange("sonar_features.min_echo_spacing_m", o.min_echo_spacing_m, 0.0, 10.0);
+  requireRange("sonar_features.extract_distance_m", o.extract_distance_m, 0.0, 1000.0);
+  requireRange("sonar_features.extract_angle_rad", o.extract_angle_rad, 0.0, 10.0);
+  requireRange("sonar_features.hough_rho_step_m", o.hough_rho_step_m, 0.005, 1.0);
+  requireRange("sonar_features.hough_theta_step_rad", o.hough_theta_step_rad, 0.002, 0.5);
+  requireRange("sonar_features.min_line_echoes", o.min_line_echoes, 3, 100000);
+  requireRange("sonar_features.min_line_length_m", o.min_line_length_m, 0.0, 100.0);
+  requireRange("sonar_features.line_inlier_m", o.line_inlier_m, 0.0, 10.0, true);
+  requireRange("sonar_features.cone_margin_rad", o.cone_margin_rad, 0.0, 1.0);
+  requireRange("sonar_features.line_max_incidence_rad", o.line_max_incidence_rad, 0.0, 1.5);
+  requireRange("sonar_features.max_line_sigma_rho_m", o.max_line_sigma_rho_m, 0.0, 100.0, true);
+  requireRange("sonar_features.max_line_sigma_theta_rad", o.max_line_sigma_theta_rad, 0.0, 3.2, true);
+  requireRange("sonar_features.line_sigma_rho_m", o.line_sigma_rho_m, 0.0, 100.0, true);
+  requireRange("sonar_features.line_sigma_theta_rad", o.line_sigma_theta_rad, 0.0, 3.2, true);
+  requireRange("sonar_features.point_cell_m", o.point_cell_m, 0.01, 1.0);
+  requireRange("sonar_features.min_point_echoes", o.min_point_echoes, 3, 100000);
+  requireRange("sonar_features.min_point_baseline_m", o.min_point_baseline_m, 0.0, 100.0);
+  requireRange("sonar_features.point_inlier_m", o.point_inlier_m, 0.0, 10.0, true);
+  requireRange("sonar_features.max_point_sigma_m", o.max_point_sigma_m, 0.0, 100.0, true);
+  requireRange("sonar_features.max_contradiction_ratio", o.max_contradiction_ratio, 0.0, 1000.0);
+  requireRange("sonar_features.point_sigma_range_m", o.point_sigma_range_m, 0.0, 100.0, true);
+  requireRange("sonar_features.point_sigma_bearing_rad", o.point_sigma_bearing_rad, 0.0, 3.2, true);
 }
 
 SonarFeatureExtractor::SonarFeatureExtractor(const SonarExtractorOptions& options)

@@ -4,19 +4,14 @@
 #include <stdexcept>
 #include <thread>
 
+#include "rbpf_slam/core/require_range.h"
+
 namespace rbpf_slam {
 namespace core {
 
 void validate(const DpfOptions& o) {
-  auto require = [](const char* name, double value, double min, double max) {
-    if (!(value >= min && value <= max)) {
-      throw std::invalid_argument(std::string(name) + " = " + std::to_string(value) +
-                                  " is out of range [" + std::to_string(min) + ", " +
-                                  std::to_string(max) + "]");
-    }
-  };
-  require("dpf.local_filters", o.local_filters, 1, 64);
-  require("dpf.threads", o.threads, 0, 64);
+  requireRange("dpf.local_filters", o.local_filters, 1, 64);
+  requireRange("dpf.threads", o.threads, 0, 64);
   if (o.weighting != "innovation" && o.weighting != "neff" && o.weighting != "mixed") {
     throw std::invalid_argument("dpf.weighting = '" + o.weighting +
                                 "' is not one of innovation, neff, mixed");
@@ -28,20 +23,20 @@ void validate(const DpfOptions& o) {
     throw std::invalid_argument("dpf.feedback_mode = '" + o.feedback_mode +
                                 "' is not one of reweight, moment");
   }
-  require("dpf.mix_innovation", o.mix_innovation, 0.0, 1.0);
-  require("dpf.feedback_inflation", o.feedback_inflation, 1.0, 100.0);
-  require("dpf.innovation_smoothing", o.innovation_smoothing, 1e-3, 1.0);
-  require("dpf.fault_nis", o.fault_nis, 0.0, 1e9);
-  require("dpf.fault_neff_ratio", o.fault_neff_ratio, 0.0, 1.0);
-  require("dpf.fault_prior_chi2", o.fault_prior_chi2, 0.0, 1e9);
-  require("dpf.suspect_weight", o.suspect_weight, 0.0, 1.0);
-  require("dpf.isolate_after_steps", o.isolate_after_steps, 1, 1000000);
-  require("dpf.readmit_after_steps", o.readmit_after_steps, 0, 1000000);
-  require("dpf.step_timeout_s", o.step_timeout_s, 1e-3, 1e6);
-  require("fault.start_step", o.fault.start_step, 1, 1e9);
-  require("fault.local_index", o.fault.local_index, 0, o.local_filters - 1);
-  require("fault.sigma_xy_m", o.fault.sigma_xy_m, 0.0, 100.0);
-  require("fault.sigma_theta_rad", o.fault.sigma_theta_rad, 0.0, 10.0);
+  requireRange("dpf.mix_innovation", o.mix_innovation, 0.0, 1.0);
+  requireRange("dpf.feedback_inflation", o.feedback_inflation, 1.0, 100.0);
+  requireRange("dpf.innovation_smoothing", o.innovation_smoothing, 1e-3, 1.0);
+  requireRange("dpf.fault_nis", o.fault_nis, 0.0, 1e9);
+  requireRange("dpf.fault_neff_ratio", o.fault_neff_ratio, 0.0, 1.0);
+  requireRange("dpf.fault_prior_chi2", o.fault_prior_chi2, 0.0, 1e9);
+  requireRange("dpf.suspect_weight", o.suspect_weight, 0.0, 1.0);
+  requireRange("dpf.isolate_after_steps", o.isolate_after_steps, 1, 1000000);
+  requireRange("dpf.readmit_after_steps", o.readmit_after_steps, 0, 1000000);
+  requireRange("dpf.step_timeout_s", o.step_timeout_s, 1e-3, 1e6);
+  requireRange("fault.start_step", o.fault.start_step, 1, 1e9);
+  requireRange("fault.local_index", o.fault.local_index, 0, o.local_filters - 1);
+  requireRange("fault.sigma_xy_m", o.fault.sigma_xy_m, 0.0, 100.0);
+  requireRange("fault.sigma_theta_rad", o.fault.sigma_theta_rad, 0.0, 10.0);
 }
 
 DpfCoordinator::DpfCoordinator(const FilterOptions& options)

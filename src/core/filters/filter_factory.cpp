@@ -12,17 +12,11 @@
 #include "rbpf_slam/core/filters/robust_fastslam2.h"
 #include "rbpf_slam/core/filters/slam_filter.h"
 #include "rbpf_slam/core/grid/grid_pf.h"
+#include "rbpf_slam/core/require_range.h"
 
 namespace rbpf_slam {
 namespace core {
 namespace {
-
-void requireRange(const std::string& name, double value, double min, double max) {
-  if (!(value >= min && value <= max)) {
-    throw std::invalid_argument(name + " = " + std::to_string(value) + " is out of range [" +
-                                std::to_string(min) + ", " + std::to_string(max) + "]");
-  }
-}
 
 }  // namespace
 

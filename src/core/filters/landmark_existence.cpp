@@ -5,6 +5,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "rbpf_slam/core/require_range.h"
+
 namespace rbpf_slam {
 namespace core {
 
@@ -63,27 +65,15 @@ int manageExistence(const ExistenceOptions& o, std::shared_ptr<LandmarkMap>* map
 }
 
 void validate(const ExistenceOptions& o) {
-  auto fail = [](const std::string& key, double value, const std::string& range) {
-    throw std::invalid_argument("existence." + key + " = " + std::to_string(value) +
-                                " is out of range " + range);
-  };
-  if (o.min_observations < 1 || o.min_observations > 1000) {
-    fail("min_observations", o.min_observations, "[1, 1000]");
+  requireRange("existence.min_observations", o.min_observations, 1, 1000);
+  requireRange("existence.tentative_updates", o.tentative_updates, 1, 1000000);
+  requireRange("existence.visible_range_m", o.visible_range_m, 0.0, 1000.0);
+  if (o.visible_range_m > 0.0) {
+    requireRange("existence.visible_min_range_m (at most visible_range_m)", o.visible_min_range_m,
+                 0.0, o.visible_range_m);
   }
-  if (o.tentative_updates < 1 || o.tentative_updates > 1000000) {
-    fail("tentative_updates", o.tentative_updates, "[1, 1000000]");
-  }
-  if (!(o.visible_range_m >= 0.0 && o.visible_range_m <= 1000.0)) {
-    fail("visible_range_m", o.visible_range_m, "[0, 1000]");
-  }
-  if (!(o.visible_min_range_m >= 0.0 && o.visible_min_range_m <= o.visible_range_m) &&
-      o.visible_range_m > 0.0) {
-    fail("visible_min_range_m", o.visible_min_range_m, "[0, visible_range_m]");
-  }
-  if (!(o.visible_fov_rad > 0.0 && o.visible_fov_rad <= 2.0 * M_PI)) {
-    fail("visible_fov_rad", o.visible_fov_rad, "(0, 2 pi]");
-  }
-  if (o.max_count < 1 || o.max_count > 1000000) fail("max_count", o.max_count, "[1, 1000000]");
+  requireRange("existence.visible_fov_rad", o.visible_fov_rad, 0.0, 2.0 * M_PI, true);
+  requireRange("existence.max_count", o.max_count, 1, 1000000);
 }
 
 }  // namespace core

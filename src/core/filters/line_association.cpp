@@ -1,6 +1,7 @@
 #include "rbpf_slam/core/filters/line_association.h"
 
 #include "rbpf_slam/core/filters/measurement_models.h"
+#include "rbpf_slam/core/require_range.h"
 
 #include <cmath>
 #include <limits>
@@ -10,13 +11,6 @@
 namespace rbpf_slam {
 namespace core {
 namespace {
-
-void requireRange(const std::string& name, double value, double min, double max) {
-  if (!(value >= min && value <= max)) {
-    throw std::invalid_argument(name + " = " + std::to_string(value) + " is out of range [" +
-                                std::to_string(min) + ", " + std::to_string(max) + "]");
-  }
-}
 
 }  // namespace
 

@@ -9,6 +9,7 @@
 #include "rbpf_slam/core/filters/fastslam2.h"
 #include "rbpf_slam/core/filters/landmark_map.h"
 #include "rbpf_slam/core/filters/measurement_models.h"
+#include "rbpf_slam/core/require_range.h"
 
 namespace rbpf_slam {
 namespace core {
@@ -191,24 +192,17 @@ int support(const std::vector<Constraint>& constraints, const Eigen::Vector2d& t
 }  // namespace
 
 void validate(const RelocalizationOptions& o) {
-  auto require = [](const std::string& key, double value, double lo, double hi) {
-    if (!(value >= lo && value <= hi)) {
-      throw std::invalid_argument("relocalization." + key + " = " + std::to_string(value) +
-                                  " is out of range [" + std::to_string(lo) + ", " +
-                                  std::to_string(hi) + "]");
-    }
-  };
-  require("search_xy_m", o.search_xy_m, 0.0, 20.0);
-  require("search_theta_rad", o.search_theta_rad, 0.0, 1.0);
-  require("min_unmatched", o.min_unmatched, 1, 1000);
-  require("min_unmatched_ratio", o.min_unmatched_ratio, 0.0, 1.0);
-  require("min_matches", o.min_matches, 1, 1000);
-  require("min_gain", o.min_gain, 1, 1000);
-  require("min_matched_ratio", o.min_matched_ratio, 0.0, 1.0);
-  require("min_landmark_age", o.min_landmark_age, 0, 1000000);
-  require("line_tolerance_m", o.line_tolerance_m, 1e-3, 10.0);
-  require("angle_tolerance_rad", o.angle_tolerance_rad, 1e-4, 1.0);
-  require("point_tolerance_m", o.point_tolerance_m, 1e-3, 10.0);
+  requireRange("relocalization.search_xy_m", o.search_xy_m, 0.0, 20.0);
+  requireRange("relocalization.search_theta_rad", o.search_theta_rad, 0.0, 1.0);
+  requireRange("relocalization.min_unmatched", o.min_unmatched, 1, 1000);
+  requireRange("relocalization.min_unmatched_ratio", o.min_unmatched_ratio, 0.0, 1.0);
+  requireRange("relocalization.min_matches", o.min_matches, 1, 1000);
+  requireRange("relocalization.min_gain", o.min_gain, 1, 1000);
+  requireRange("relocalization.min_matched_ratio", o.min_matched_ratio, 0.0, 1.0);
+  requireRange("relocalization.min_landmark_age", o.min_landmark_age, 0, 1000000);
+  requireRange("relocalization.line_tolerance_m", o.line_tolerance_m, 1e-3, 10.0);
+  requireRange("relocalization.angle_tolerance_rad", o.angle_tolerance_rad, 1e-4, 1.0);
+  requireRange("relocalization.point_tolerance_m", o.point_tolerance_m, 1e-3, 10.0);
 }
 
 PoseCorrection searchPoseCorrection(const LandmarkMap& map, const Pose2& pose,

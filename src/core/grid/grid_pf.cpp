@@ -5,44 +5,37 @@
 #include <string>
 
 #include "rbpf_slam/core/filters/resampling.h"
+#include "rbpf_slam/core/require_range.h"
 
 namespace rbpf_slam {
 namespace core {
 namespace {
 
-void requireRange(const std::string& name, double value, double min, double max) {
-  if (!(value >= min && value <= max)) {
-    throw std::invalid_argument("grid." + name + " = " + std::to_string(value) +
-                                " is out of range [" + std::to_string(min) + ", " +
-                                std::to_string(max) + "]");
-  }
-}
-
 }  // namespace
 
 void validate(const GridOptions& o) {
-  requireRange("resolution_m", o.resolution_m, 1e-3, 10.0);
-  requireRange("size_x_m", o.size_x_m, o.resolution_m, 1e5);
-  requireRange("size_y_m", o.size_y_m, o.resolution_m, 1e5);
-  requireRange("tile_cells", o.tile_cells, 4, 1024);
+  requireRange("grid.resolution_m", o.resolution_m, 1e-3, 10.0);
+  requireRange("grid.size_x_m", o.size_x_m, o.resolution_m, 1e5);
+  requireRange("grid.size_y_m", o.size_y_m, o.resolution_m, 1e5);
+  requireRange("grid.tile_cells", o.tile_cells, 4, 1024);
   if (o.size_x_m / o.resolution_m * (o.size_y_m / o.resolution_m) > 4e9) {
     throw std::invalid_argument("grid.size_x_m * grid.size_y_m / grid.resolution_m^2 exceeds "
                                 "4e9 cells: raise the resolution or shrink the map");
   }
-  requireRange("log_odds_occupied", o.log_odds_occupied, 0.0, 100.0);
-  requireRange("log_odds_free", o.log_odds_free, -100.0, 0.0);
-  requireRange("log_odds_clamp", o.log_odds_clamp, 0.01, 100.0);
-  requireRange("cone_arc_thickness_m", o.cone_arc_thickness_m, 0.0, 10.0);
-  requireRange("cone_max_range_m", o.cone_max_range_m, 0.0, 1000.0);
-  requireRange("max_range_margin_m", o.max_range_margin_m, 0.0, 100.0);
-  requireRange("no_echo_free_range_m", o.no_echo_free_range_m, 0.0, 1000.0);
-  requireRange("cone_fov_rad", o.cone_fov_rad, 0.0, 3.1);
-  requireRange("laser_max_range_m", o.laser_max_range_m, 0.01, 1000.0);
-  requireRange("laser_no_return_free_m", o.laser_no_return_free_m, 0.0, 1000.0);
-  requireRange("laser_beam_step", o.laser_beam_step, 1, 1000);
-  requireRange("match_f", o.match_f, 1e-6, 1e9);
-  requireRange("match_occupied_weight", o.match_occupied_weight, 0.0, 1e6);
-  requireRange("match_free_weight", o.match_free_weight, 0.0, 1e6);
+  requireRange("grid.log_odds_occupied", o.log_odds_occupied, 0.0, 100.0);
+  requireRange("grid.log_odds_free", o.log_odds_free, -100.0, 0.0);
+  requireRange("grid.log_odds_clamp", o.log_odds_clamp, 0.01, 100.0);
+  requireRange("grid.cone_arc_thickness_m", o.cone_arc_thickness_m, 0.0, 10.0);
+  requireRange("grid.cone_max_range_m", o.cone_max_range_m, 0.0, 1000.0);
+  requireRange("grid.max_range_margin_m", o.max_range_margin_m, 0.0, 100.0);
+  requireRange("grid.no_echo_free_range_m", o.no_echo_free_range_m, 0.0, 1000.0);
+  requireRange("grid.cone_fov_rad", o.cone_fov_rad, 0.0, 3.1);
+  requireRange("grid.laser_max_range_m", o.laser_max_range_m, 0.01, 1000.0);
+  requireRange("grid.laser_no_return_free_m", o.laser_no_return_free_m, 0.0, 1000.0);
+  requireRange("grid.laser_beam_step", o.laser_beam_step, 1, 1000);
+  requireRange("grid.match_f", o.match_f, 1e-6, 1e9);
+  requireRange("grid.match_occupied_weight", o.match_occupied_weight, 0.0, 1e6);
+  requireRange("grid.match_free_weight", o.match_free_weight, 0.0, 1e6);
 }
 
 double matchLocalMap(const std::vector<LocalMapCell>& local, const Pose2& pose,

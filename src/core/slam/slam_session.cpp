@@ -1,17 +1,17 @@
 #include "rbpf_slam/core/slam/slam_session.h"
 
 #include <cmath>
+#include <limits>
 #include <stdexcept>
+
+#include "rbpf_slam/core/require_range.h"
 
 namespace rbpf_slam {
 namespace core {
 
 void validate(const SessionOptions& o) {
-  auto check = [](const char* name, double v) {
-    if (!(v >= 0.0) || !std::isfinite(v)) {
-      throw std::invalid_argument(std::string(name) + " = " + std::to_string(v) +
-                                  " is out of range [0, inf)");
-    }
+  const auto check = [](const char* name, double value) {
+    requireRange(name, value, 0.0, std::numeric_limits<double>::infinity(), false, true);
   };
   check("linear_update", o.linear_update_m);
   check("angular_update", o.angular_update_rad);
@@ -21,16 +21,9 @@ void validate(const SessionOptions& o) {
     throw std::invalid_argument("gap_action = '" + o.gap_action +
                                 "' is not one of: inflate, reset");
   }
-  if (!(o.gap_noise_inflation >= 1.0 && o.gap_noise_inflation <= 1000.0)) {
-    throw std::invalid_argument("gap_noise_inflation = " + std::to_string(o.gap_noise_inflation) +
-                                " is out of range [1, 1000]");
-  }
+  requireRange("gap_noise_inflation", o.gap_noise_inflation, 1.0, 1000.0);
   check("reset_on_time_jump_back", o.reset_on_time_jump_back_s);
-  if (o.reset_after_frames_back < 1 || o.reset_after_frames_back > 1000) {
-    throw std::invalid_argument("reset_after_frames_back = " +
-                                std::to_string(o.reset_after_frames_back) +
-                                " is out of range [1, 1000]");
-  }
+  requireRange("reset_after_frames_back", o.reset_after_frames_back, 1, 1000);
 }
 
 SlamSession::SlamSession(std::unique_ptr<SlamFilter> filter, const SessionOptions& options)

@@ -7,18 +7,11 @@
 #include <string>
 
 #include "rbpf_slam/core/filters/measurement_models.h"
+#include "rbpf_slam/core/require_range.h"
 
 namespace rbpf_slam {
 namespace core {
 namespace {
-
-void requireRange(const std::string& name, double value, double min, double max) {
-  if (!(value >= min && value <= max)) {
-    throw std::invalid_argument("tracker." + name + " = " + std::to_string(value) +
-                                " is out of range [" + std::to_string(min) + ", " +
-                                std::to_string(max) + "]");
-  }
-}
 
 /// The observation model of landmark `m` (point or line) from `pose`.
 Prediction observationModel(LandmarkType type, const Pose2& pose, const Eigen::Vector2d& m,
@@ -29,11 +22,11 @@ Prediction observationModel(LandmarkType type, const Pose2& pose, const Eigen::V
 }  // namespace
 
 void validate(const LandmarkTrackerOptions& o) {
-  requireRange("gate_chi2", o.gate_chi2, 0.1, 1000.0);
-  requireRange("new_landmark_chi2", o.new_landmark_chi2, o.gate_chi2, 1000.0);
-  requireRange("forget_after_steps", o.forget_after_steps, 1, 100000);
-  requireRange("forget_distance_m", o.forget_distance_m, 0.1, 1e4);
-  requireRange("max_landmarks", o.max_landmarks, 1, 1000);
+  requireRange("tracker.gate_chi2", o.gate_chi2, 0.1, 1000.0);
+  requireRange("tracker.new_landmark_chi2", o.new_landmark_chi2, o.gate_chi2, 1000.0);
+  requireRange("tracker.forget_after_steps", o.forget_after_steps, 1, 100000);
+  requireRange("tracker.forget_distance_m", o.forget_distance_m, 0.1, 1e4);
+  requireRange("tracker.max_landmarks", o.max_landmarks, 1, 1000);
 }
 
 LandmarkTracker::LandmarkTracker(const LandmarkTrackerOptions& options) : options_(options) {
