@@ -118,7 +118,8 @@ std::vector<Eigen::Vector2d> normalsOf(const std::vector<Eigen::Vector2d>& point
 void validate(const ScanMatcherOptions& o) {
   requireRange("scan_matching.max_iterations", o.max_iterations, 1, 1000);
   requireRange("scan_matching.max_correspondence_m", o.max_correspondence_m, 1e-3, 10.0);
-  requireRange("scan_matching.min_correspondence_m", o.min_correspondence_m, 1e-3, o.max_correspondence_m);
+  requireRange("scan_matching.min_correspondence_m", o.min_correspondence_m, 1e-3,
+               o.max_correspondence_m);
   requireRange("scan_matching.min_inlier_ratio", o.min_inlier_ratio, 0.0, 1.0);
   requireRange("scan_matching.max_residual_rms_m", o.max_residual_rms_m, 1e-4, 10.0);
   requireRange("scan_matching.max_range_m", o.max_range_m, 0.1, 1000.0);
@@ -169,9 +170,11 @@ ScanMatchResult ScanMatcher::match(const std::vector<Eigen::Vector2d>& reference
   if (options_.search_below_inlier_ratio > 0.0 &&
       (!best.ok || best.inlier_ratio < options_.search_below_inlier_ratio)) {
     std::vector<double> offsets;
-    const int n = static_cast<int>(std::floor(options_.max_correction_rad / options_.search_step_rad));
+    const int n =
+        static_cast<int>(std::floor(options_.max_correction_rad / options_.search_step_rad));
     for (int k = -n; k <= n; ++k) offsets.push_back(k * options_.search_step_rad);
-    const ScanMatchResult searched = matchFromStarts(reference, normals, current, initial_delta, offsets);
+    const ScanMatchResult searched =
+        matchFromStarts(reference, normals, current, initial_delta, offsets);
     if (searched.ok && (!best.ok || score(searched) > score(best))) best = searched;
   }
   // From odometry first; only if that fails, from rest: wheel odometry has glitches (repeated
