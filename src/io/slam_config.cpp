@@ -53,6 +53,7 @@ void readRobust(YamlSection section, core::RobustOptions* o) {
   section.read("ancestor_sets", &o->ancestor_sets, 1, 100);
   section.read("ancestor_spacing_steps", &o->ancestor_spacing_steps, 1, 100000);
   section.read("window_steps", &o->window_steps, 1, 100000);
+  section.read("min_old_observations", &o->min_old_observations, 0, 1000);
   section.read("intermediate_path", &o->intermediate_path);
   section.read("path_iterations", &o->path_iterations, 1, 100);
   section.finish();

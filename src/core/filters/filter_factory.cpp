@@ -29,6 +29,7 @@ void validate(const RobustOptions& o) {
   requireRange("robust.ancestor_sets", o.ancestor_sets, 1, 100);
   requireRange("robust.ancestor_spacing_steps", o.ancestor_spacing_steps, 1, 100000);
   requireRange("robust.window_steps", o.window_steps, 1, 100000);
+  requireRange("robust.min_old_observations", o.min_old_observations, 0, 1000);
   requireRange("robust.path_iterations", o.path_iterations, 1, 100);
 }
 

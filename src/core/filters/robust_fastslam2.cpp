@@ -1,6 +1,7 @@
 #include "rbpf_slam/core/filters/robust_fastslam2.h"
 
 #include <Eigen/Dense>
+#include <algorithm>
 #include <cmath>
 #include <utility>
 
@@ -78,7 +79,16 @@ UpdateStats RobustFastSlam2::update(const FeatureSet& features) {
       ancestors.push_back(set);
   }
   UpdateStats stats;
-  if (ancestors.size() > 1 && step - last_robust_step_ >= options_.robust.ancestor_spacing_steps) {
+  const bool eligible =
+      ancestors.size() > 1 && step - last_robust_step_ >= options_.robust.ancestor_spacing_steps;
+  // Too few observations of landmarks every set knows: z_t cannot tell a candidate propagated
+  // over the skipped steps from one of S_{t-1}, so the robust step would keep older candidates
+  // by their spread alone, dropping what the skipped observations taught. A plain step instead.
+  const bool informed =
+      eligible && oldLandmarkObservations(observations, ancestors, step) >=
+                      options_.robust.min_old_observations;
+  if (eligible && !informed) ++robust_stats_.fallbacks;
+  if (informed) {
     stats = robustUpdate(observations, ancestors);
     stats.features_rejected = rejected;
     stats.features_in = static_cast<int>(features.lines.size() + features.points.size());
@@ -224,6 +234,41 @@ double RobustFastSlam2::updateCandidate(Particle* particle, const Pose2& predict
   for (int k : fresh) addLandmark(&writable, particle->pose, observations[k]);
   counts->created = static_cast<int>(fresh.size());
   return log_likelihood;
+}
+
+int RobustFastSlam2::oldLandmarkObservations(const std::vector<Observation>& observations,
+                                             const std::vector<const AncestorSet*>& ancestors,
+                                             int step) const {
+  if (observations.empty()) return 0;
+  const int old_id_limit = ancestors.back()->next_landmark_id;
+  int most = 0;
+  for (const AncestorSet* set : ancestors) {
+    if (set->particles.empty()) continue;
+    // The set's most probable particle, moved by the odometry mean over the skipped steps with
+    // the propagated covariance (as its candidates are, eq. 8): no random draw, so a fallback
+    // step is FastSLAM 2.0's step exactly.
+    size_t best = 0;
+    for (size_t i = 1; i < set->weights.size() && i < set->particles.size(); ++i) {
+      if (set->weights[i] > set->weights[best]) best = i;
+    }
+    const Particle& particle = set->particles[best];
+    Pose2 mean = particle.pose;
+    Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+    for (const StepRecord* r : memory_.records(set->step, step)) {
+      const Eigen::Matrix3d f = composeJacobianFirst(mean, r->motion.delta);
+      cov = f * cov * f.transpose() + motion_model_->covariance(mean, r->motion);
+      mean = motion_model_->mean(mean, r->motion);
+    }
+    const LandmarkMap& map = *particle.map;
+    int count = 0;
+    for (const Observation& o : observations) {
+      const Match m = associate(map, mean, cov, o);
+      if (m.index < 0 || m.distance2 >= options_.association.gate_chi2) continue;
+      if (o.known_id >= 0 || map[m.index].id < old_id_limit) ++count;
+    }
+    most = std::max(most, count);
+  }
+  return most;
 }
 
 IntermediatePath RobustFastSlam2::intermediatePath(const Pose2& start, const Pose2& end,

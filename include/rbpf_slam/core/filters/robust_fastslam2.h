@@ -3,7 +3,9 @@
 // tracker reports a new landmark, draws M particles from each of K ancestor sets (eq. 8),
 // weights all M x K by the current observations, keeps M (Fig. 3, 4), and fills the path a
 // particle skipped by the intermediate path estimate, replaying the stored observations into
-// its map (sec. IV). Between such steps it is exactly FastSLAM 2.0.
+// its map (sec. IV). Between such steps it is exactly FastSLAM 2.0, and so is a step whose
+// observations include fewer than robust.min_old_observations of landmarks every set knows
+// (sparse sensors: z_t could not weigh the sets' candidates against each other).
 
 #include <vector>
 
@@ -21,6 +23,8 @@ struct RobustStats {
   long robust_steps = 0;     // steps sampled from several ancestor sets
   long from_older_sets = 0;  // particles kept at robust steps that came from an older set
   long replayed_steps = 0;   // intermediate steps replayed into particles' maps
+  long fallbacks = 0;        // events with older sets that took a plain FastSLAM 2.0 step, having
+                             // fewer than robust.min_old_observations old-landmark observations
 };
 
 class RobustFastSlam2 : public FastSlam2 {
@@ -52,6 +56,11 @@ class RobustFastSlam2 : public FastSlam2 {
   double updateCandidate(Particle* particle, const Pose2& mean, const Eigen::Matrix3d& cov,
                          const std::vector<Observation>& observations, int old_id_limit,
                          ParticleUpdate* counts);
+  /// The most observations at `step` that the most probable particle of one ancestor set, moved
+  /// over the skipped steps, associates with landmarks older than the oldest set (known to every
+  /// set): the evidence z_t holds to weigh the candidates of the sets against each other.
+  int oldLandmarkObservations(const std::vector<Observation>& observations,
+                              const std::vector<const AncestorSet*>& ancestors, int step) const;
   void forgetHistory();
   /// The intermediate path (sec. IV) between `start`, a pose of the set of step `from`, and
   /// `end`, the pose of the current step; empty when fewer than two records join them.
