@@ -15,6 +15,16 @@ namespace rbpf_slam {
 namespace core {
 namespace {
 
+/// The point feature of a post seen from pose (noise-free, the tests' usual covariance).
+PointFeature postSeenFrom(const Pose2& pose, const Eigen::Vector2d& post) {
+  const Prediction p = predictPoint(pose, post);
+  PointFeature f;
+  f.range = p.z.x();
+  f.bearing = p.z.y();
+  f.covariance = Eigen::Vector2d(0.01, 0.0004).asDiagonal();
+  return f;
+}
+
 AncestorSet setAt(int step, int particles) {
   AncestorSet set;
   set.step = step;
@@ -213,12 +223,8 @@ void drivePastPosts(SlamFilter* filter, int steps) {
     FeatureSet features;
     for (int k = 1; k <= 20; ++k) {
       const Eigen::Vector2d post(3.0 * k, k % 2 == 0 ? 2.0 : -2.0);
-      const Prediction p = predictPoint(truth, post);
-      if (p.z.x() > 4.0 || std::fabs(p.z.y()) > M_PI / 2) continue;
-      PointFeature f;
-      f.range = p.z.x();
-      f.bearing = p.z.y();
-      f.covariance = Eigen::Vector2d(0.01, 0.0004).asDiagonal();
+      const PointFeature f = postSeenFrom(truth, post);
+      if (f.range > 4.0 || std::fabs(f.bearing) > M_PI / 2) continue;
       features.points.push_back(f);
     }
     filter->update(features);
@@ -333,12 +339,7 @@ void driveSparse(SlamFilter* filter, int steps) {
     if (step % 8 < 4) {  // a new post, 2 m ahead, for 4 steps out of 8
       const Pose2 first = compose(truth, Pose2(-0.2 * (step % 8), 0.0, -0.01 * (step % 8)));
       const Eigen::Vector2d post = transformPoint(first, Eigen::Vector2d(2.0, 0.5));
-      const Prediction p = predictPoint(truth, post);
-      PointFeature f;
-      f.range = p.z.x();
-      f.bearing = p.z.y();
-      f.covariance = Eigen::Vector2d(0.01, 0.0004).asDiagonal();
-      features.points.push_back(f);
+      features.points.push_back(postSeenFrom(truth, post));
     }
     filter->update(features);
   }
@@ -400,12 +401,7 @@ TEST(RobustFastSlam2, EventsWithOldLandmarksInViewAreRobustSteps) {
     std::vector<Eigen::Vector2d> posts = old_posts;
     if (step % 6 == 0) posts.emplace_back(truth.x() + 2.0, -0.5 - 0.1 * step);  // new, once
     for (const Eigen::Vector2d& post : posts) {
-      const Prediction p = predictPoint(truth, post);
-      PointFeature f;
-      f.range = p.z.x();
-      f.bearing = p.z.y();
-      f.covariance = Eigen::Vector2d(0.01, 0.0004).asDiagonal();
-      features.points.push_back(f);
+      features.points.push_back(postSeenFrom(truth, post));
     }
     robust.update(features);
   }
