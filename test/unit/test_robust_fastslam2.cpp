@@ -346,12 +346,9 @@ void driveSparse(SlamFilter* filter, int steps) {
 }
 
 TEST(RobustFastSlam2, SparseEventsTakeFastSlam2Steps) {
-  FilterOptions o;
-  o.particles = 20;
-  o.use_lines = false;
-  o.robust.ancestor_sets = 3;
-  o.robust.ancestor_spacing_steps = 2;
+  FilterOptions o = postOptions();
   o.robust.window_steps = 25;
+  o.robust.min_old_observations = FilterOptions().robust.min_old_observations;
   ASSERT_GE(o.robust.min_old_observations, 1);  // the shipped default falls back
   o.variant = "fastslam2";
   auto plain = createFilter(o);
@@ -380,12 +377,7 @@ TEST(RobustFastSlam2, SparseEventsTakeFastSlam2Steps) {
 // Enough old landmarks in view (three posts seen since the start, and a new one every 6 steps):
 // the events are robust steps, not fallbacks.
 TEST(RobustFastSlam2, EventsWithOldLandmarksInViewAreRobustSteps) {
-  FilterOptions o;
-  o.variant = "robust_fastslam2";
-  o.particles = 20;
-  o.use_lines = false;
-  o.robust.ancestor_sets = 3;
-  o.robust.ancestor_spacing_steps = 2;
+  FilterOptions o = postOptions();
   o.robust.window_steps = 25;
   o.robust.min_old_observations = 3;
   RobustFastSlam2 robust(o);

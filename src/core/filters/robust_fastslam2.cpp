@@ -13,6 +13,12 @@ namespace rbpf_slam {
 namespace core {
 namespace {
 
+/// An observation of a landmark older than the oldest ancestor set (or with a known id): one
+/// every set's particles can hold, so it weighs candidates of different sets fairly.
+bool knownToEverySet(const Observation& o, const Landmark& landmark, int old_id_limit) {
+  return o.known_id >= 0 || landmark.id < old_id_limit;
+}
+
 constexpr double kLog2Pi = 1.8378770664093453;
 
 }  // namespace
@@ -121,11 +127,7 @@ UpdateStats RobustFastSlam2::robustUpdate(const std::vector<Observation>& observ
       // Eq. 8: x_t ~ p(x_t | x_{t-s}, u_{t-s+1:t}), as a Gaussian propagated over the steps.
       Pose2 mean = candidate.pose;
       Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
-      for (const StepRecord* r : records) {
-        const Eigen::Matrix3d f = composeJacobianFirst(mean, r->motion.delta);
-        cov = f * cov * f.transpose() + motion_model_->covariance(mean, r->motion);
-        mean = motion_model_->mean(mean, r->motion);
-      }
+      propagate(records, &mean, &cov);
       candidate_start.push_back(candidate.pose);
       candidate_counts.emplace_back();
       candidate.log_weight = updateCandidate(&candidate, mean, cov, observations, old_id_limit,
@@ -211,7 +213,7 @@ double RobustFastSlam2::updateCandidate(Particle* particle, const Pose2& predict
     if (!(det > 0.0) || !std::isfinite(det)) continue;
     const Eigen::Matrix2d s_inv = s.inverse();
     const Eigen::Vector2d v = innovation(o.z, m.prediction.z);
-    const bool old = o.known_id >= 0 || map[m.index].id < old_id_limit;
+    const bool old = knownToEverySet(o, map[m.index], old_id_limit);
     log_likelihood += old ? -0.5 * v.dot(s_inv * v) - 0.5 * std::log(det) - kLog2Pi : log_new;
     const Eigen::Matrix<double, 3, 2> gain = cov * h.transpose() * s_inv;
     mean += gain * v;
@@ -236,6 +238,15 @@ double RobustFastSlam2::updateCandidate(Particle* particle, const Pose2& predict
   return log_likelihood;
 }
 
+void RobustFastSlam2::propagate(const std::vector<const StepRecord*>& records, Pose2* mean,
+                                Eigen::Matrix3d* cov) const {
+  for (const StepRecord* r : records) {
+    const Eigen::Matrix3d f = composeJacobianFirst(*mean, r->motion.delta);
+    *cov = f * *cov * f.transpose() + motion_model_->covariance(*mean, r->motion);
+    *mean = motion_model_->mean(*mean, r->motion);
+  }
+}
+
 int RobustFastSlam2::oldLandmarkObservations(const std::vector<Observation>& observations,
                                              const std::vector<const AncestorSet*>& ancestors,
                                              int step) const {
@@ -254,17 +265,13 @@ int RobustFastSlam2::oldLandmarkObservations(const std::vector<Observation>& obs
     const Particle& particle = set->particles[best];
     Pose2 mean = particle.pose;
     Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
-    for (const StepRecord* r : memory_.records(set->step, step)) {
-      const Eigen::Matrix3d f = composeJacobianFirst(mean, r->motion.delta);
-      cov = f * cov * f.transpose() + motion_model_->covariance(mean, r->motion);
-      mean = motion_model_->mean(mean, r->motion);
-    }
+    propagate(memory_.records(set->step, step), &mean, &cov);
     const LandmarkMap& map = *particle.map;
     int count = 0;
     for (const Observation& o : observations) {
       const Match m = associate(map, mean, cov, o);
       if (m.index < 0 || m.distance2 >= options_.association.gate_chi2) continue;
-      if (o.known_id >= 0 || map[m.index].id < old_id_limit) ++count;
+      if (knownToEverySet(o, map[m.index], old_id_limit)) ++count;
     }
     most = std::max(most, count);
   }
