@@ -29,6 +29,13 @@ Eigen::Matrix3d randomCovariance(Rng& rng) {
   return a * a.transpose() + 0.5 * Eigen::Matrix3d::Identity();
 }
 
+/// A measurement Jacobian with standard normal entries (row by row, as the tests drew it).
+Eigen::Matrix<double, 2, 3> randomJacobian(Rng& rng) {
+  Eigen::Matrix<double, 2, 3> h;
+  for (int i = 0; i < 6; ++i) h(i / 3, i % 3) = sampleGaussian(rng, 1.0);
+  return h;
+}
+
 TEST(HinfCorrection, DiagonalCaseMatchesHandComputation) {
   // P = diag(4, 1), H = I, R = diag(1, 0.25), gamma = 2:
   // P+ = diag(1 / (1/4 + 1 - 1/2), 1 / (1 + 4 - 1/2)) = diag(4/3, 2/9).
@@ -86,8 +93,7 @@ TEST(HinfCorrection, CovarianceMatchesInformationFormForPoseJacobians) {
   Rng rng(3);
   for (int trial = 0; trial < 20; ++trial) {
     const Eigen::Matrix3d p = randomCovariance(rng);
-    Eigen::Matrix<double, 2, 3> h;
-    for (int i = 0; i < 6; ++i) h(i / 3, i % 3) = sampleGaussian(rng, 1.0);
+    const Eigen::Matrix<double, 2, 3> h = randomJacobian(rng);
     const Eigen::Matrix2d r = Eigen::Vector2d(0.3, 0.7).asDiagonal();
     const Eigen::Vector3d gamma(20.0, 20.0, 40.0);
     const Eigen::Matrix3d information = p.inverse() + h.transpose() * r.inverse() * h -
@@ -183,8 +189,7 @@ TEST(HinfRelative, IsTheEkfWithTheNoiseScaledByOneMinusTheta) {
   Rng rng(17);
   for (int trial = 0; trial < 20; ++trial) {
     const Eigen::Matrix3d p = randomCovariance(rng);
-    Eigen::Matrix<double, 2, 3> h;
-    for (int i = 0; i < 6; ++i) h(i / 3, i % 3) = sampleGaussian(rng, 1.0);
+    const Eigen::Matrix<double, 2, 3> h = randomJacobian(rng);
     const Eigen::Matrix2d r = Eigen::Vector2d(0.3, 0.7).asDiagonal();
     for (double theta : {0.0, 0.5, 0.9, 0.99}) {
       const Correction<3> ekf = ekfCorrection<3>(p, h, r);
