@@ -88,6 +88,17 @@ void readExistence(YamlSection section, core::ExistenceOptions* o) {
   section.finish();
 }
 
+void readHeadingPrior(YamlSection section, core::HeadingPriorOptions* o) {
+  section.read("enabled", &o->enabled);
+  section.read("learn_direction", &o->learn_direction);
+  section.read("learn_updates", &o->learn_updates, 1, 100000);
+  section.read("direction_rad", &o->direction_rad, -M_PI, M_PI);
+  section.read("tolerance_rad", &o->tolerance_rad, 1e-4, 0.785);
+  section.read("sigma_rad", &o->sigma_rad, 1e-5, 1.0);
+  section.read("min_lines", &o->min_lines, 1, 1000);
+  section.finish();
+}
+
 void readHinf(YamlSection section, core::HinfOptions* o) {
   // Config values are finite; 1e12 is the EKF for any realistic covariance.
   section.read("mode", &o->mode, {"relative", "absolute"});
@@ -316,6 +327,7 @@ SlamConfig parseSlamConfigTree(const YAML::Node& root, const std::string& source
   readExistence(top.section("existence"), &f.existence);
   readRelocalization(top.section("relocalization"), &f.relocalization);
   readHinf(top.section("hinf"), &f.hinf);
+  readHeadingPrior(top.section("heading_prior"), &f.heading_prior);
   readLineSlam(top, &f);
   readGrid(top.section("grid"), &f.grid);
   readDpf(top.section("dpf"), &f.dpf);

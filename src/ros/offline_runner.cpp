@@ -380,6 +380,7 @@ OfflineSummary OfflineRunner::run() {
   summary.particles = config_.filter.particles;
   summary.fallbacks = pipeline_.session().filter().stats().fallbacks;
   summary.relocalizations = pipeline_.session().filter().stats().relocalizations;
+  summary.heading_measurements = pipeline_.session().filter().stats().heading_measurements;
   return writeOutputs(summary);
 }
 
@@ -448,6 +449,7 @@ OfflineSummary OfflineRunner::writeOutputs(const OfflineSummary& in) const {
        << "  \"particles\": " << summary.particles << ",\n"
        << "  \"fallbacks\": " << summary.fallbacks << ",\n"
        << "  \"relocalizations\": " << summary.relocalizations << ",\n"
+       << "  \"heading_measurements\": " << summary.heading_measurements << ",\n"
        << "  \"update_ms_mean\": " << summary.update_ms_mean << ",\n"
        << "  \"update_ms_p99\": " << summary.update_ms_p99 << ",\n"
        << "  \"update_ms_max\": " << summary.update_ms_max << ",\n"

@@ -40,6 +40,7 @@ struct OfflineSummary {
   int particles = 0;
   long fallbacks = 0;  // H-infinity steps that fell back to the EKF (since the last reset)
   long relocalizations = 0;  // particle proposals started from a searched pose correction
+  long heading_measurements = 0;  // particle proposals conditioned on the heading prior
   double update_ms_mean = 0.0;
   double update_ms_p99 = 0.0;
   double update_ms_max = 0.0;

@@ -71,7 +71,8 @@ FastSlam2::FastSlam2(const FilterOptions& options, std::unique_ptr<EstimatorRule
     : options_(options),
       motion_model_(createMotionModel(options.motion)),
       rule_(std::move(rule)),
-      rng_(options.seed) {
+      rng_(options.seed),
+      heading_prior_(options.heading_prior) {
   reset(Pose2::Zero());
 }
 
@@ -83,6 +84,7 @@ void FastSlam2::reset(const Pose2& initial_pose) {
   }
   weights_.assign(particles_.size(), 1.0 / particles_.size());
   pending_motion_ = PendingMotion();
+  heading_prior_.reset();
   next_landmark_id_ = 0;
   step_ = 0;
   stats_ = FilterStats();
@@ -443,8 +445,15 @@ UpdateStats FastSlam2::update(const FeatureSet& features) {
       p.pose = motion_model_->sample(p.pose, motion, rng_);
       continue;  // its path node is added below
     }
-    const Pose2 predicted = motion_model_->mean(p.pose, motion);
-    const Eigen::Matrix3d motion_cov = motion_model_->covariance(p.pose, motion);
+    Pose2 predicted = motion_model_->mean(p.pose, motion);
+    Eigen::Matrix3d motion_cov = motion_model_->covariance(p.pose, motion);
+    // Walls along the building's axes measure the heading (heading_prior.h): the prior the
+    // landmarks then refine is the motion prediction conditioned on it.
+    double axis_offset = 0.0;
+    if (heading_prior_.residual(observations, predicted.z(), &axis_offset)) {
+      p.log_weight += heading_prior_.condition(axis_offset, &predicted, &motion_cov);
+      ++stats_.heading_measurements;
+    }
     results[i] = updateParticle(&p, predicted, motion_cov, observations);
     if (mapping_) results[i].removed = manageExistence(options_.existence, &p.map, p.pose, step_);
     stats.fallbacks += results[i].fallbacks;
@@ -456,6 +465,7 @@ UpdateStats FastSlam2::update(const FeatureSet& features) {
   weighAndResample(&stats);
   // Report the association of the particle that now carries the most weight.
   const int best = bestParticle();
+  if (best >= 0) heading_prior_.learn(observations, particles_[best].pose.z());
   if (best >= 0 && best < static_cast<int>(results.size())) {
     stats.associated = results[best].associated;
     stats.new_landmarks = results[best].created;

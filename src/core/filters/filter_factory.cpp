@@ -57,6 +57,7 @@ void validate(const FilterOptions& o) {
   validate(o.tracker);
   validate(o.existence);
   validate(o.relocalization);
+  validate(o.heading_prior);
   validate(o.hinf);
   validate(o.line_association);
   validate(o.multifilter);

@@ -158,6 +158,7 @@ class FastSlam2 : public SlamFilter {
   std::vector<Particle> particles_;
   std::vector<double> weights_;  // normalised, same order as particles_
   PendingMotion pending_motion_;
+  HeadingPrior heading_prior_;
   int next_landmark_id_ = 0;
   bool mapping_ = true;  // false: localization only, the maps stay as they are
   int step_ = 0;

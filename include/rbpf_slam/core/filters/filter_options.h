@@ -5,6 +5,7 @@
 
 #include "rbpf_slam/core/filters/dpf_options.h"
 #include "rbpf_slam/core/filters/estimator_rule.h"
+#include "rbpf_slam/core/filters/heading_prior.h"
 #include "rbpf_slam/core/filters/line_slam_options.h"
 #include "rbpf_slam/core/filters/relocalization.h"
 #include "rbpf_slam/core/grid/grid_options.h"
@@ -69,6 +70,7 @@ struct FilterOptions {
   MotionOptions motion;
   AssociationOptions association;
   RelocalizationOptions relocalization;  // fastslam2 and the variants built on it
+  HeadingPriorOptions heading_prior;     // fastslam2 and hinf_fastslam (line landmarks)
   MeasurementOptions measurement;
   ExistenceOptions existence;
   HinfOptions hinf;  // variant hinf_fastslam only

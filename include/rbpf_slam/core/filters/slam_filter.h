@@ -61,6 +61,7 @@ struct FilterStats {
   long weight_resets = 0;
   long fallbacks = 0;
   long relocalizations = 0;  // particle proposals started from a searched pose correction
+  long heading_measurements = 0;  // particle proposals conditioned on the heading prior
   double last_neff = 0.0;
   int landmarks = 0;  // in the best particle
 };
