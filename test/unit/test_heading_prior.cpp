@@ -63,6 +63,23 @@ TEST(HeadingPrior, LearnsTheDirectionOfARotatedBuilding) {
   EXPECT_FALSE(prior.ready());
 }
 
+// A building that is not rectilinear: walls at 0 and at 68 deg (axis offset -22 deg). The
+// direction is the stronger family's, not a blend that neither family would match.
+TEST(HeadingPrior, AnObliqueWallFamilyDoesNotPullTheDirection) {
+  HeadingPriorOptions options;
+  options.enabled = true;
+  options.learn_updates = 1;
+  HeadingPrior prior(options);
+  const double oblique = 68.0 * M_PI / 180.0;
+  prior.learn({line(0.0, 6.0), line(M_PI, 5.0), line(0.01, 2.0), line(oblique, 4.0),
+               line(oblique + M_PI, 4.0), line(oblique - 0.01, 2.0)},
+              0.0);
+  ASSERT_TRUE(prior.ready());
+  EXPECT_NEAR(prior.direction(), 2.0 * 0.01 / 13.0, 1e-9);
+  double offset = 1.0;
+  EXPECT_FALSE(prior.residual({line(oblique), line(oblique + M_PI)}, 0.0, &offset));
+}
+
 TEST(HeadingPrior, ResidualUsesAxisAlignedLinesOnly) {
   HeadingPrior prior(given(0.0));
   double offset = 0.0;

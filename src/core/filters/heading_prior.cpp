@@ -38,24 +38,40 @@ HeadingPrior::HeadingPrior(const HeadingPriorOptions& options) : options_(option
 void HeadingPrior::reset() {
   direction_ = options_.learn_direction ? std::numeric_limits<double>::quiet_NaN()
                                          : axisOffset(options_.direction_rad);
-  sum_cos_ = sum_sin_ = 0.0;
+  learned_.clear();
   learned_updates_ = 0;
 }
 
 void HeadingPrior::learn(const std::vector<Observation>& observations, double heading_rad) {
   if (!options_.enabled || ready() || !std::isfinite(heading_rad)) return;
-  bool any = false;
+  const std::size_t before = learned_.size();
   for (const Observation& o : observations) {
     if (o.type != LandmarkType::kLine) continue;
-    // Four times the normal's angle folds the four axis directions onto one.
-    const double angle = 4.0 * (o.z.y() + heading_rad);
-    sum_cos_ += lineWeight(o) * std::cos(angle);
-    sum_sin_ += lineWeight(o) * std::sin(angle);
-    any = true;
+    learned_.emplace_back(axisOffset(o.z.y() + heading_rad), lineWeight(o));
   }
-  if (any && ++learned_updates_ >= options_.learn_updates && (sum_cos_ != 0.0 || sum_sin_ != 0.0)) {
-    direction_ = axisOffset(std::atan2(sum_sin_, sum_cos_) / 4.0);
+  if (learned_.size() == before || ++learned_updates_ < options_.learn_updates) return;
+  // The family: the line whose tolerance window holds the most line length ...
+  double best_support = -1.0, centre = 0.0;
+  for (const auto& [candidate, unused] : learned_) {
+    double support = 0.0;
+    for (const auto& [offset, weight] : learned_) {
+      if (std::fabs(axisOffset(offset - candidate)) <= options_.tolerance_rad) support += weight;
+    }
+    if (support > best_support) {
+      best_support = support;
+      centre = candidate;
+    }
   }
+  // ... and its weighted mean, taken relative to that line (offsets wrap at +-pi/4).
+  double sum = 0.0, weight_sum = 0.0;
+  for (const auto& [offset, weight] : learned_) {
+    const double relative = axisOffset(offset - centre);
+    if (std::fabs(relative) > options_.tolerance_rad) continue;
+    sum += weight * relative;
+    weight_sum += weight;
+  }
+  direction_ = axisOffset(centre + sum / weight_sum);
+  learned_.clear();
 }
 
 bool HeadingPrior::residual(const std::vector<Observation>& observations, double heading_rad,

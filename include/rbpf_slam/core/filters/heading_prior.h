@@ -10,6 +10,7 @@
 
 #include <Eigen/Core>
 #include <cmath>
+#include <utility>
 #include <vector>
 
 #include "rbpf_slam/core/geometry.h"
@@ -49,8 +50,10 @@ class HeadingPrior {
   /// True once the direction is known (given, or learned).
   bool ready() const { return std::isfinite(direction_); }
   double direction() const { return direction_; }
-  /// While learning: adds the lines of one update seen at this heading (each weighted by
-  /// its length); fixes the direction after `learn_updates` updates with lines.
+  /// While learning: adds the lines of one update seen at this heading; after `learn_updates`
+  /// updates with lines fixes the direction at the strongest family: the axis offset that
+  /// most line length lies within tolerance_rad of (so walls of a second, oblique family do
+  /// not pull it), refined by the length-weighted mean of that family.
   void learn(const std::vector<Observation>& observations, double heading_rad);
   /// The mean offset from the nearest axis of the lines seen at `heading_rad` that lie within
   /// the tolerance, length-weighted; false when fewer than min_lines do (or not ready).
@@ -63,7 +66,7 @@ class HeadingPrior {
  private:
   HeadingPriorOptions options_;
   double direction_;
-  double sum_cos_ = 0.0, sum_sin_ = 0.0;  // of 4 x angle, length-weighted
+  std::vector<std::pair<double, double>> learned_;  // (axis offset, length) of the lines seen
   int learned_updates_ = 0;
 };
 
