@@ -150,8 +150,7 @@ double finalHeadingError(bool with_prior, long* measurements) {
   Rng rng(5);
   Pose2 truth(-3.0, 0.0, 0.0);
   filter.reset(truth);
-  filter.resetPose(Pose2(-3.0, 0.0, 0.06),
-                   Eigen::Vector3d(1e-4, 1e-4, 0.04 * 0.04).asDiagonal());
+  filter.resetPose(Pose2(-3.0, 0.0, 0.06), Eigen::Vector3d(1e-4, 1e-4, 0.04 * 0.04).asDiagonal());
   for (int k = 0; k < 30; ++k) {
     const Pose2 delta(0.1, 0.0, 0.0);
     truth = compose(truth, delta);

@@ -37,7 +37,7 @@ HeadingPrior::HeadingPrior(const HeadingPriorOptions& options) : options_(option
 
 void HeadingPrior::reset() {
   direction_ = options_.learn_direction ? std::numeric_limits<double>::quiet_NaN()
-                                         : axisOffset(options_.direction_rad);
+                                        : axisOffset(options_.direction_rad);
   learned_.clear();
   learned_updates_ = 0;
 }
