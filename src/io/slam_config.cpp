@@ -91,7 +91,9 @@ void readExistence(YamlSection section, core::ExistenceOptions* o) {
 void readHeadingPrior(YamlSection section, core::HeadingPriorOptions* o) {
   section.read("enabled", &o->enabled);
   section.read("learn_direction", &o->learn_direction);
-  section.read("learn_updates", &o->learn_updates, 1, 100000);
+  section.read("learn_updates", &o->learn_updates, 1, 1000);
+  section.read("min_family_fraction", &o->min_family_fraction, 0.0, 1.0);
+  section.read("max_skew_rad", &o->max_skew_rad, 0.0, 0.6);
   section.read("direction_rad", &o->direction_rad, -M_PI, M_PI);
   section.read("tolerance_rad", &o->tolerance_rad, 1e-4, 0.785);
   section.read("sigma_rad", &o->sigma_rad, 1e-5, 1.0);

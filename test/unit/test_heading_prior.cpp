@@ -29,22 +29,21 @@ HeadingPriorOptions given(double direction) {
   return o;
 }
 
-TEST(HeadingPrior, AxisOffsetFoldsTheFourAxes) {
-  EXPECT_NEAR(axisOffset(0.1), 0.1, 1e-12);
-  EXPECT_NEAR(axisOffset(M_PI / 2 + 0.1), 0.1, 1e-12);
-  EXPECT_NEAR(axisOffset(M_PI - 0.1), -0.1, 1e-12);
-  EXPECT_NEAR(axisOffset(-M_PI + 0.05), 0.05, 1e-12);
-  EXPECT_NEAR(axisOffset(-3 * M_PI / 2 - 0.2), -0.2, 1e-12);
-  EXPECT_NEAR(axisOffset(M_PI / 4 + 0.01), -M_PI / 4 + 0.01, 1e-12);  // the nearer axis
+TEST(HeadingPrior, HalfTurnOffsetFoldsOppositeNormals) {
+  EXPECT_NEAR(halfTurnOffset(0.1), 0.1, 1e-12);
+  EXPECT_NEAR(halfTurnOffset(M_PI + 0.1), 0.1, 1e-12);  // the same wall, normal reversed
+  EXPECT_NEAR(halfTurnOffset(-M_PI + 0.05), 0.05, 1e-12);
+  EXPECT_NEAR(halfTurnOffset(M_PI / 2 + 0.1), -M_PI / 2 + 0.1, 1e-12);
+  EXPECT_NEAR(halfTurnOffset(-3 * M_PI - 0.2), -0.2, 1e-12);
 }
 
-TEST(HeadingPrior, LearnsTheDirectionOfARotatedBuilding) {
+TEST(HeadingPrior, LearnsBothFamiliesOfARotatedBuilding) {
   HeadingPriorOptions options;
   options.enabled = true;
   options.learn_updates = 3;
   HeadingPrior prior(options);
   // Walls of a building turned by 0.4 rad, seen from heading 0.1: normals at 0.3 + k pi/2 in
-  // the base frame; a diagonal wall and a short clutter line pull a little.
+  // the base frame; a short diagonal line is clutter.
   const std::vector<Observation> seen{line(0.3), line(0.3 + M_PI / 2), line(0.3 - M_PI),
                                       line(0.3 + 0.6, 0.3), line(0.31, 4.0)};
   for (int k = 0; k < 2; ++k) {
@@ -55,16 +54,22 @@ TEST(HeadingPrior, LearnsTheDirectionOfARotatedBuilding) {
   EXPECT_FALSE(prior.ready());
   prior.learn(seen, 0.1);
   ASSERT_TRUE(prior.ready());
-  EXPECT_NEAR(prior.direction(), 0.4, 0.01);
-  // Learning stops once the direction is fixed; reset() forgets it.
-  prior.learn({line(0.0)}, 0.0);
-  EXPECT_NEAR(prior.direction(), 0.4, 0.01);
+  EXPECT_NEAR(prior.families()[0], 0.405, 1e-9);  // (2 x 0.4 + 4 x 0.41) / 8 per update
+  // The second family (one line at 0.4 + pi/2) is within 0.05 rad of the perpendicular: snapped.
+  EXPECT_NEAR(prior.families()[1], halfTurnOffset(0.405 + M_PI / 2), 1e-9);
+  // Learning stops once the families are fixed; reset() forgets them.
+  prior.learn({line(0.0), line(M_PI / 2)}, 0.0, true);
+  EXPECT_NEAR(prior.families()[0], 0.405, 1e-9);
   prior.reset();
   EXPECT_FALSE(prior.ready());
+  // A loaded map is learned at once (conclude).
+  prior.learn({line(0.2), line(0.2 + M_PI / 2)}, 0.0, true);
+  ASSERT_TRUE(prior.ready());
+  EXPECT_NEAR(prior.families()[0], 0.2, 1e-9);
 }
 
-// A building that is not rectilinear: walls at 0 and at 68 deg (axis offset -22 deg). The
-// direction is the stronger family's, not a blend that neither family would match.
+// A building that is not rectilinear: walls at 0 and at 68 deg. The first family is the
+// stronger one, not a blend that neither would match; the oblique walls measure nothing.
 TEST(HeadingPrior, AnObliqueWallFamilyDoesNotPullTheDirection) {
   HeadingPriorOptions options;
   options.enabled = true;
@@ -75,30 +80,83 @@ TEST(HeadingPrior, AnObliqueWallFamilyDoesNotPullTheDirection) {
                line(oblique + M_PI, 4.0), line(oblique - 0.01, 2.0)},
               0.0);
   ASSERT_TRUE(prior.ready());
-  EXPECT_NEAR(prior.direction(), 2.0 * 0.01 / 13.0, 1e-9);
+  EXPECT_NEAR(prior.families()[0], 2.0 * 0.01 / 13.0, 1e-9);
+  EXPECT_NEAR(prior.families()[1], halfTurnOffset(prior.families()[0] + M_PI / 2), 1e-9);
   double offset = 1.0;
-  EXPECT_FALSE(prior.residual({line(oblique), line(oblique + M_PI)}, 0.0, &offset));
+  EXPECT_FALSE(prior.residual({line(oblique), line(oblique + M_PI)}, 0.0, 0.0, &offset));
 }
 
-TEST(HeadingPrior, ResidualUsesAxisAlignedLinesOnly) {
+// Walls at 0 and 85 deg: the second family is learned where it is, so its walls measure the
+// heading without the 5 deg bias an assumed perpendicular would give; at 88 deg it is snapped.
+TEST(HeadingPrior, ANearlyPerpendicularFamilyIsLearnedWhereItIs) {
+  HeadingPriorOptions options;
+  options.enabled = true;
+  options.learn_updates = 1;
+  HeadingPrior prior(options);
+  const double skewed = 85.0 * M_PI / 180.0;
+  prior.learn({line(0.0, 6.0), line(M_PI, 5.0), line(skewed, 4.0), line(skewed - M_PI, 3.0)}, 0.0);
+  ASSERT_TRUE(prior.ready());
+  EXPECT_NEAR(prior.families()[0], 0.0, 1e-9);
+  EXPECT_NEAR(prior.families()[1], skewed, 1e-9);
+  double offset = 1.0;
+  ASSERT_TRUE(prior.residual({line(skewed), line(skewed + M_PI)}, 0.0, 0.0, &offset));
+  EXPECT_NEAR(offset, 0.0, 1e-9);
+  // Within 0.05 rad of the perpendicular (88 deg) the exact perpendicular is taken.
+  HeadingPrior near(options);
+  const double almost = 88.0 * M_PI / 180.0;
+  near.learn({line(0.0, 6.0), line(almost, 4.0)}, 0.0);
+  ASSERT_TRUE(near.ready());
+  EXPECT_NEAR(near.families()[1], halfTurnOffset(M_PI / 2), 1e-9);
+}
+
+// Clutter at every angle (no families holding 40% of the length): nothing is fixed, and
+// learning starts again, so a later rectilinear stretch still sets the families.
+TEST(HeadingPrior, NoFamiliesFromClutterLearningStartsAgain) {
+  HeadingPriorOptions options;
+  options.enabled = true;
+  options.learn_updates = 2;
+  HeadingPrior prior(options);
+  std::vector<Observation> clutter;
+  for (int k = 0; k < 9; ++k) clutter.push_back(line(k * 0.17));  // 0 .. 1.36 rad
+  prior.learn(clutter, 0.0);
+  prior.learn(clutter, 0.0);
+  EXPECT_FALSE(prior.ready());
+  prior.learn({line(0.2), line(0.2 + M_PI / 2)}, 0.0);
+  EXPECT_FALSE(prior.ready());  // the clutter was forgotten: one update of two so far
+  prior.learn({line(0.2), line(0.2 - M_PI / 2)}, 0.0);
+  ASSERT_TRUE(prior.ready());
+  EXPECT_NEAR(prior.families()[0], 0.2, 1e-9);
+  // Lines with a non-finite angle or extent are skipped, not learned as NaN.
+  prior.reset();
+  Observation broken = line(std::nan(""));
+  prior.learn({broken, line(0.3), line(0.3 + M_PI / 2)}, 0.0, true);
+  ASSERT_TRUE(prior.ready());
+  EXPECT_NEAR(prior.families()[0], 0.3, 1e-9);
+}
+
+TEST(HeadingPrior, ResidualScoresEveryParticleOnTheSameLines) {
   HeadingPrior prior(given(0.0));
   double offset = 0.0;
-  // Two walls 0.02 rad off the axes at this heading, one diagonal wall ignored.
+  // Two walls 0.02 rad off the families at this heading, one diagonal wall ignored.
   const std::vector<Observation> seen{line(0.02), line(M_PI / 2 + 0.02), line(0.5)};
-  ASSERT_TRUE(prior.residual(seen, 0.0, &offset));
+  ASSERT_TRUE(prior.residual(seen, 0.0, 0.0, &offset));
   EXPECT_NEAR(offset, 0.02, 1e-12);
-  ASSERT_TRUE(prior.residual(seen, -0.05, &offset));  // the heading moves every line
+  ASSERT_TRUE(prior.residual(seen, 0.0, -0.05, &offset));  // the heading moves every line
   EXPECT_NEAR(offset, -0.03, 1e-12);
-  // One aligned line is fewer than min_lines (2); lines beyond the tolerance do not count.
-  EXPECT_FALSE(prior.residual({line(0.02), line(0.5)}, 0.0, &offset));
-  EXPECT_FALSE(prior.residual(seen, 0.2, &offset));
+  // A particle 0.2 rad off is scored on the lines picked at the reference, beyond the
+  // tolerance: it is not spared the measurement by having left it.
+  ASSERT_TRUE(prior.residual(seen, 0.0, 0.2, &offset));
+  EXPECT_NEAR(offset, 0.22, 1e-12);
+  // One line within tolerance is fewer than min_lines (2); at a reference 0.2 rad off none is.
+  EXPECT_FALSE(prior.residual({line(0.02), line(0.5)}, 0.0, 0.0, &offset));
+  EXPECT_FALSE(prior.residual(seen, 0.2, 0.2, &offset));
   // Off, or not yet learned: no measurement.
   HeadingPriorOptions off = given(0.0);
   off.enabled = false;
-  EXPECT_FALSE(HeadingPrior(off).residual(seen, 0.0, &offset));
+  EXPECT_FALSE(HeadingPrior(off).residual(seen, 0.0, 0.0, &offset));
   HeadingPriorOptions learning;
   learning.enabled = true;
-  EXPECT_FALSE(HeadingPrior(learning).residual(seen, 0.0, &offset));
+  EXPECT_FALSE(HeadingPrior(learning).residual(seen, 0.0, 0.0, &offset));
 }
 
 TEST(HeadingPrior, ConditionIsTheKalmanUpdateOfTheHeading) {
@@ -133,6 +191,27 @@ TEST(HeadingPrior, OutOfRangeOptionsAreNamed) {
   o = HeadingPriorOptions();
   o.min_lines = 0;
   EXPECT_THROW(validate(o), std::invalid_argument);
+  o = HeadingPriorOptions();
+  o.min_family_fraction = 1.5;
+  EXPECT_THROW(validate(o), std::invalid_argument);
+  o = HeadingPriorOptions();
+  o.learn_updates = 1001;
+  EXPECT_THROW(validate(o), std::invalid_argument);
+  o = HeadingPriorOptions();
+  o.max_skew_rad = 1.0;
+  EXPECT_THROW(validate(o), std::invalid_argument);
+  // A variant that does not use it says so instead of ignoring it.
+  FilterOptions filter;
+  filter.variant = "multifilter_smc";
+  filter.heading_prior.enabled = true;
+  try {
+    validate(filter);
+    FAIL() << "heading prior accepted for multifilter_smc";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("heading_prior.enabled"), std::string::npos);
+  }
+  filter.variant = "hinf_fastslam";
+  EXPECT_NO_THROW(validate(filter));
 }
 
 // Particles that start with a heading error (spread 0.04 rad around +0.06 rad) in an

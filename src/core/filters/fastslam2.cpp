@@ -439,6 +439,17 @@ UpdateStats FastSlam2::update(const FeatureSet& features) {
   stats.features_in = static_cast<int>(features.lines.size() + features.points.size());
   const MotionInput motion = pending_motion_.take();
   std::vector<ParticleUpdate> results(particles_.size());
+  // The heading prior picks its lines at the filter's predicted heading, the same for every
+  // particle, so that all are weighed on the same lines.
+  double reference_heading = 0.0;
+  if (heading_prior_.ready()) {
+    double s = 0.0, c = 0.0;
+    for (size_t i = 0; i < particles_.size(); ++i) {
+      s += weights_[i] * std::sin(particles_[i].pose.z());
+      c += weights_[i] * std::cos(particles_[i].pose.z());
+    }
+    reference_heading = wrapAngle(std::atan2(s, c) + motion.delta.z());
+  }
   for (size_t i = 0; i < particles_.size(); ++i) {
     Particle& p = particles_[i];
     if (observations.empty()) {
@@ -450,7 +461,7 @@ UpdateStats FastSlam2::update(const FeatureSet& features) {
     // Walls along the building's axes measure the heading (heading_prior.h): the prior the
     // landmarks then refine is the motion prediction conditioned on it.
     double axis_offset = 0.0;
-    if (heading_prior_.residual(observations, predicted.z(), &axis_offset)) {
+    if (heading_prior_.residual(observations, reference_heading, predicted.z(), &axis_offset)) {
       p.log_weight += heading_prior_.condition(axis_offset, &predicted, &motion_cov);
       ++stats_.heading_measurements;
     }
@@ -465,7 +476,7 @@ UpdateStats FastSlam2::update(const FeatureSet& features) {
   weighAndResample(&stats);
   // Report the association of the particle that now carries the most weight.
   const int best = bestParticle();
-  if (best >= 0) heading_prior_.learn(observations, particles_[best].pose.z());
+  if (!heading_prior_.ready()) heading_prior_.learn(observations, estimate().mean.z());
   if (best >= 0 && best < static_cast<int>(results.size())) {
     stats.associated = results[best].associated;
     stats.new_landmarks = results[best].created;
@@ -582,6 +593,7 @@ bool FastSlam2::resetPose(const Pose2& pose, const Eigen::Matrix3d& covariance) 
   }
   weights_.assign(particles_.size(), 1.0 / particles_.size());
   pending_motion_ = PendingMotion();
+  if (!heading_prior_.ready()) heading_prior_.reset();  // lines learned at the old pose
   return true;
 }
 
@@ -607,6 +619,19 @@ bool FastSlam2::loadMap(const std::vector<LandmarkEstimate>& landmarks) {
   }
   for (auto& p : particles_) p.map = map;  // shared until a particle writes to it
   next_landmark_id_ = std::max(next_landmark_id_, max_id + 1);
+  // The heading prior's wall families are the loaded map's (its frame is the one that counts).
+  heading_prior_.reset();
+  std::vector<Observation> walls;
+  for (const LandmarkEstimate& e : landmarks) {
+    if (e.type != LandmarkType::kLine) continue;
+    Observation o;
+    o.type = LandmarkType::kLine;
+    o.z = e.mean;
+    o.start = e.start;
+    o.end = e.end;
+    walls.push_back(o);
+  }
+  heading_prior_.learn(walls, 0.0, /*conclude=*/true);
   stats_.landmarks = map->size();
   return true;
 }

@@ -37,6 +37,11 @@ void validate(const FilterOptions& o) {
   bool known = false;
   for (const auto& v : availableVariants()) known = known || v == o.variant;
   if (!known) throw std::invalid_argument("variant = '" + o.variant + "' is not implemented");
+  if (o.heading_prior.enabled && o.variant != "fastslam2" && o.variant != "hinf_fastslam" &&
+      o.variant != "robust_fastslam2") {
+    throw std::invalid_argument("heading_prior.enabled = true is not implemented for variant '" +
+                                o.variant + "' (fastslam2, hinf_fastslam, robust_fastslam2 only)");
+  }
   requireRange("particles", o.particles, 1, 100000);
   requireRange("resample_threshold", o.resample_threshold, 0.0, 1.0);
   requireRange("proposal_sample_scale", o.proposal_sample_scale, 1e-3, 1.0);

@@ -137,7 +137,8 @@ class EstimatorRule {
   /// as in eq. 14, so it does not depend on how many landmarks were seen nor on
   /// their order.
   virtual bool attenuatesPose() const { return false; }
-  /// prior_covariance: the motion prediction's, before any measurement of the step.
+  /// prior_covariance: the motion prediction's, before any landmark measurement of the step
+  /// (conditioned on the heading prior's measurement when that is on: heading_prior.h).
   virtual Attenuation<3> attenuatePose(const Eigen::Matrix3d& prior_covariance,
                                        const Eigen::Matrix3d& ekf_covariance) const;
   /// Landmark filter: landmark covariance p, d h / d landmark, measurement

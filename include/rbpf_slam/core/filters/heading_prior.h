@@ -1,14 +1,20 @@
 #pragma once
 // Heading prior of rectilinear buildings ("Manhattan world"): most walls run along two
-// perpendicular directions, so every line landmark seen along one of them measures the robot's
-// absolute heading modulo 90 deg. FastSLAM with lines otherwise holds the heading only
-// relative to the particle's own (drifting) map; this bounds the drift between loop closures.
+// directions, usually perpendicular, so every line seen along one of them measures the robot's
+// absolute heading (modulo the half turn), with no data association. FastSLAM with lines
+// otherwise holds the heading only relative to the particle's own (drifting) map; this bounds
+// the drift between loop closures.
 //
-// The dominant direction is learned from the first updates' lines (the start pose is exact)
-// or given. A line whose normal lies within `tolerance_rad` of an axis counts, others (diagonal
-// walls, clutter) are ignored, so a building that is not rectilinear only loses the benefit.
+// The two wall families are learned from the lines of the first scans (directions modulo pi,
+// in the map frame): the strongest family, and the strongest one within max_skew_rad of its
+// perpendicular if it holds enough line length and lies more than 0.05 rad off the exact
+// perpendicular (else the exact perpendicular is taken).
+// A line within tolerance_rad of a family measures the heading; others (walls of a third
+// direction, clutter) are ignored, so where the assumption fails the filter loses the benefit.
+// Used by FastSlam2::update: fastslam2, hinf_fastslam, and the plain steps of robust_fastslam2.
 
 #include <Eigen/Core>
+#include <array>
 #include <cmath>
 #include <utility>
 #include <vector>
@@ -22,51 +28,65 @@ struct Observation;
 
 struct HeadingPriorOptions {
   bool enabled = false;
-  // The dominant wall direction in the map frame, modulo pi/2: learned from the lines of the
-  // first `learn_updates` updates that have lines (each at the best particle's heading), or
-  // given as direction_rad (the map frame starts at the first pose, so 0 when the robot
-  // starts parallel to a wall).
+  // Learn the families from the lines of the first `learn_updates` updates that have lines
+  // (each at the filter's estimated heading), or take direction_rad (the first family; the
+  // second is its perpendicular) in the map frame.
   bool learn_direction = true;
   int learn_updates = 5;
+  // Learning keeps the families only if they hold at least this fraction of the learned line
+  // length; otherwise it starts again over the next learn_updates scans.
+  double min_family_fraction = 0.4;
+  double max_skew_rad = 0.35;  // the second family within this of the first's perpendicular
   double direction_rad = 0.0;
-  double tolerance_rad = 0.1;  // a line whose normal is within this of an axis counts
-  double sigma_rad = 0.02;     // noise of the heading measured from one update's lines
-  int min_lines = 2;           // fewer axis-aligned lines in an update: no measurement
+  double tolerance_rad = 0.1;  // a line within this of a family measures the heading
+  double sigma_rad = 0.01;     // noise of the heading measured from one update's lines
+  int min_lines = 2;           // fewer such lines in an update: no measurement
 };
 
 /// Throws std::invalid_argument naming the first out-of-range field.
 void validate(const HeadingPriorOptions& options);
 
-/// The angle wrapped into [-pi/4, pi/4): its offset from the nearest of four axes at 0 rad.
-double axisOffset(double angle_rad);
+/// The angle wrapped into [-pi/2, pi/2): a line direction (a normal and its opposite are the
+/// same wall).
+double halfTurnOffset(double angle_rad);
 
 class HeadingPrior {
  public:
   explicit HeadingPrior(const HeadingPriorOptions& options);
 
-  /// Forgets a learned direction (a new map).
+  /// Forgets learned families and any learning in progress (a new map).
   void reset();
   bool enabled() const { return options_.enabled; }
-  /// True once the direction is known (given, or learned).
-  bool ready() const { return std::isfinite(direction_); }
-  double direction() const { return direction_; }
+  /// True once the families are known (given, or learned).
+  bool ready() const { return ready_; }
+  /// The two families' normal directions in the map frame, modulo pi.
+  const std::array<double, 2>& families() const { return families_; }
   /// While learning: adds the lines of one update seen at this heading; after `learn_updates`
-  /// updates with lines fixes the direction at the strongest family: the axis offset that
-  /// most line length lies within tolerance_rad of (so walls of a second, oblique family do
-  /// not pull it), refined by the length-weighted mean of that family.
-  void learn(const std::vector<Observation>& observations, double heading_rad);
-  /// The mean offset from the nearest axis of the lines seen at `heading_rad` that lie within
-  /// the tolerance, length-weighted; false when fewer than min_lines do (or not ready).
-  bool residual(const std::vector<Observation>& observations, double heading_rad,
-                double* offset_rad) const;
+  /// updates with lines (at once with `conclude`, e.g. for a loaded map) fixes the families.
+  void learn(const std::vector<Observation>& observations, double heading_rad,
+             bool conclude = false);
+  /// The length-weighted mean offset from their family, at `heading_rad`, of the lines that lie
+  /// within tolerance of a family at `reference_rad`. Every particle passes the same reference
+  /// (the filter's heading), so all are scored on the same lines; false when fewer than
+  /// min_lines qualify (or not ready).
+  bool residual(const std::vector<Observation>& observations, double reference_rad,
+                double heading_rad, double* offset_rad) const;
   /// Conditions the Gaussian (mean, cov) on the heading measurement "heading = mean.z() -
   /// offset" with noise sigma_rad; returns its log-likelihood (the weight factor).
   double condition(double offset_rad, Pose2* mean, Eigen::Matrix3d* cov) const;
 
  private:
+  /// The family of a map-frame line direction (index), or -1 beyond tolerance of both.
+  int familyOf(double direction_rad) const;
+  /// The offset with the most length within tolerance among `samples` (optionally only those
+  /// within max_skew_rad of `around`), refined by their weighted mean; returns that support.
+  double strongest(const std::vector<std::pair<double, double>>& samples, const double* around,
+                   double* direction) const;
+
   HeadingPriorOptions options_;
-  double direction_;
-  std::vector<std::pair<double, double>> learned_;  // (axis offset, length) of the lines seen
+  bool ready_ = false;
+  std::array<double, 2> families_{{0.0, 0.0}};
+  std::vector<std::pair<double, double>> learned_;  // (direction mod pi, length) of lines seen
   int learned_updates_ = 0;
 };
 
