@@ -21,6 +21,14 @@ Observation line(double theta, double length = 2.0) {
   return o;
 }
 
+// Learning the families over this many updates with lines.
+HeadingPriorOptions learning(int updates) {
+  HeadingPriorOptions o;
+  o.enabled = true;
+  o.learn_updates = updates;
+  return o;
+}
+
 HeadingPriorOptions given(double direction) {
   HeadingPriorOptions o;
   o.enabled = true;
@@ -38,9 +46,7 @@ TEST(HeadingPrior, HalfTurnOffsetFoldsOppositeNormals) {
 }
 
 TEST(HeadingPrior, LearnsBothFamiliesOfARotatedBuilding) {
-  HeadingPriorOptions options;
-  options.enabled = true;
-  options.learn_updates = 3;
+  const HeadingPriorOptions options = learning(3);
   HeadingPrior prior(options);
   // Walls of a building turned by 0.4 rad, seen from heading 0.1: normals at 0.3 + k pi/2 in
   // the base frame; a short diagonal line is clutter.
@@ -71,9 +77,7 @@ TEST(HeadingPrior, LearnsBothFamiliesOfARotatedBuilding) {
 // A building that is not rectilinear: walls at 0 and at 68 deg. The first family is the
 // stronger one, not a blend that neither would match; the oblique walls measure nothing.
 TEST(HeadingPrior, AnObliqueWallFamilyDoesNotPullTheDirection) {
-  HeadingPriorOptions options;
-  options.enabled = true;
-  options.learn_updates = 1;
+  const HeadingPriorOptions options = learning(1);
   HeadingPrior prior(options);
   const double oblique = 68.0 * M_PI / 180.0;
   prior.learn({line(0.0, 6.0), line(M_PI, 5.0), line(0.01, 2.0), line(oblique, 4.0),
@@ -89,9 +93,7 @@ TEST(HeadingPrior, AnObliqueWallFamilyDoesNotPullTheDirection) {
 // Walls at 0 and 85 deg: the second family is learned where it is, so its walls measure the
 // heading without the 5 deg bias an assumed perpendicular would give; at 88 deg it is snapped.
 TEST(HeadingPrior, ANearlyPerpendicularFamilyIsLearnedWhereItIs) {
-  HeadingPriorOptions options;
-  options.enabled = true;
-  options.learn_updates = 1;
+  const HeadingPriorOptions options = learning(1);
   HeadingPrior prior(options);
   const double skewed = 85.0 * M_PI / 180.0;
   prior.learn({line(0.0, 6.0), line(M_PI, 5.0), line(skewed, 4.0), line(skewed - M_PI, 3.0)}, 0.0);
@@ -112,9 +114,7 @@ TEST(HeadingPrior, ANearlyPerpendicularFamilyIsLearnedWhereItIs) {
 // Clutter at every angle (no families holding 40% of the length): nothing is fixed, and
 // learning starts again, so a later rectilinear stretch still sets the families.
 TEST(HeadingPrior, NoFamiliesFromClutterLearningStartsAgain) {
-  HeadingPriorOptions options;
-  options.enabled = true;
-  options.learn_updates = 2;
+  const HeadingPriorOptions options = learning(2);
   HeadingPrior prior(options);
   std::vector<Observation> clutter;
   for (int k = 0; k < 9; ++k) clutter.push_back(line(k * 0.17));  // 0 .. 1.36 rad
@@ -154,9 +154,7 @@ TEST(HeadingPrior, ResidualScoresEveryParticleOnTheSameLines) {
   HeadingPriorOptions off = given(0.0);
   off.enabled = false;
   EXPECT_FALSE(HeadingPrior(off).residual(seen, 0.0, 0.0, &offset));
-  HeadingPriorOptions learning;
-  learning.enabled = true;
-  EXPECT_FALSE(HeadingPrior(learning).residual(seen, 0.0, 0.0, &offset));
+  EXPECT_FALSE(HeadingPrior(learning(5)).residual(seen, 0.0, 0.0, &offset));
 }
 
 TEST(HeadingPrior, ConditionIsTheKalmanUpdateOfTheHeading) {
@@ -185,21 +183,16 @@ TEST(HeadingPrior, OutOfRangeOptionsAreNamed) {
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("heading_prior.tolerance_rad"), std::string::npos);
   }
-  o = HeadingPriorOptions();
-  o.sigma_rad = 0.0;
-  EXPECT_THROW(validate(o), std::invalid_argument);
-  o = HeadingPriorOptions();
-  o.min_lines = 0;
-  EXPECT_THROW(validate(o), std::invalid_argument);
-  o = HeadingPriorOptions();
-  o.min_family_fraction = 1.5;
-  EXPECT_THROW(validate(o), std::invalid_argument);
-  o = HeadingPriorOptions();
-  o.learn_updates = 1001;
-  EXPECT_THROW(validate(o), std::invalid_argument);
-  o = HeadingPriorOptions();
-  o.max_skew_rad = 1.0;
-  EXPECT_THROW(validate(o), std::invalid_argument);
+  const auto rejected = [](void (*change)(HeadingPriorOptions*)) {
+    HeadingPriorOptions bad;
+    change(&bad);
+    EXPECT_THROW(validate(bad), std::invalid_argument);
+  };
+  rejected([](HeadingPriorOptions* b) { b->sigma_rad = 0.0; });
+  rejected([](HeadingPriorOptions* b) { b->min_lines = 0; });
+  rejected([](HeadingPriorOptions* b) { b->min_family_fraction = 1.5; });
+  rejected([](HeadingPriorOptions* b) { b->learn_updates = 1001; });
+  rejected([](HeadingPriorOptions* b) { b->max_skew_rad = 1.0; });
   // A variant that does not use it says so instead of ignoring it.
   FilterOptions filter;
   filter.variant = "multifilter_smc";
