@@ -288,11 +288,21 @@ def main():
     ap.add_argument('--perfect-odometry', action='store_true',
                     help='diagnostic: /odom and /tf odom -> base_link are the interpolated '
                     'reference at the ring times (no drift) instead of the input\'s')
+    ap.add_argument('--odometry-from', metavar='BAG',
+                    help='take /odom and /tf from this bag instead (another odometry-noise draw of '
+                         'the same log, e.g. carmen_to_bag --seed K; its stamps must match)')
     ap.add_argument('--check', action='store_true',
                     help='compare with the input bag\'s own rings at the scan stamps')
     args = ap.parse_args()
 
     scans, scan_t, odo, odo_t, mounts, static, rings = read_input(args.bag)
+    if not len(mounts):
+        sys.exit('%s: no base_link -> sonar_i transforms in /tf_static' % args.bag)
+    odometry_bag = args.odometry_from or args.bag
+    if args.odometry_from:
+        _, _, odo, odo_t, _, _, _ = read_input(args.odometry_from)
+        if not len(odo):
+            sys.exit('%s: no /odom messages' % args.odometry_from)
     ref_t, ref_p = read_tum(args.reference)
     # Scans and reference share stamps; keep the scans that have a reference pose.
     idx = np.searchsorted(ref_t, scan_t)
@@ -352,7 +362,7 @@ def main():
     with open(ref_out + '.ref.tum', 'w') as f:
         for t, p in zip(ring_t, P):
             f.write('%.6f %.6f %.6f 0 0 0 %.9f %.9f\n' % (t, p[0], p[1], math.sin(p[2] / 2), math.cos(p[2] / 2)))
-    with rosbag.Bag(args.bag) as src, rosbag.Bag(args.output, 'w') as out:
+    with rosbag.Bag(odometry_bag) as src, rosbag.Bag(args.output, 'w') as out:
         out.write('/tf_static', static, static.transforms[0].header.stamp)
         import copy
         odo_msg = tf_msg = None

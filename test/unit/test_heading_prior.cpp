@@ -113,6 +113,42 @@ TEST(HeadingPrior, ANearlyPerpendicularFamilyIsLearnedWhereItIs) {
 
 // Clutter at every angle (no families holding 40% of the length): nothing is fixed, and
 // learning starts again, so a later rectilinear stretch still sets the families.
+// max_skew_rad 0: one direction modulo a quarter turn from both families' lines together, the
+// second exactly perpendicular. (Learning them one by one would take the first from its own
+// lines only, 0.2 here, and ignore what the perpendicular walls say.)
+TEST(HeadingPrior, PerpendicularFamiliesAreLearnedTogether) {
+  HeadingPriorOptions options = learning(1);
+  options.max_skew_rad = 0.0;
+  HeadingPrior prior(options);
+  prior.learn({line(0.2, 3.0), line(0.26 + M_PI / 2, 2.0), line(0.2 - M_PI, 1.0)}, 0.0);
+  ASSERT_TRUE(prior.ready());
+  const double expected = (0.2 * 3.0 + 0.26 * 2.0 + 0.2 * 1.0) / 6.0;
+  EXPECT_NEAR(prior.families()[0], expected, 1e-9);
+  EXPECT_NEAR(std::fabs(halfTurnOffset(prior.families()[1] - prior.families()[0])), M_PI / 2, 1e-9);
+}
+
+TEST(HeadingPrior, DriftVarianceGrowsWithMotionAndTheCorrectionIsAKalmanStep) {
+  HeadingPriorOptions options = given(0.0);
+  options.drift_tracking = true;
+  options.sigma_rad = 0.05;
+  options.drift_per_rad = 0.1;
+  options.drift_per_m = 0.02;
+  options.min_lines = 1;
+  HeadingPrior prior(options);
+  EXPECT_EQ(prior.driftVariance(), 0.0);
+  EXPECT_EQ(prior.correctDrift({line(0.04)}, 0.0), 0.0);  // no uncertainty yet: no correction
+  prior.predictDrift(-0.5, 2.0);                           // turned 0.5 rad, drove 2 m
+  const double variance = 0.01 * 0.5 + 0.0004 * 2.0;
+  EXPECT_NEAR(prior.driftVariance(), variance, 1e-15);
+  prior.predictDrift(std::nan(""), 1.0);  // a broken motion is skipped
+  EXPECT_NEAR(prior.driftVariance(), variance, 1e-15);
+  // The wall at 0.04 rad off its family, seen at heading 0: the heading is 0.04 too high.
+  const double gain = variance / (variance + 0.0025);
+  EXPECT_NEAR(prior.correctDrift({line(0.04)}, 0.0), -gain * 0.04, 1e-12);
+  EXPECT_NEAR(prior.driftVariance(), variance * (1.0 - gain), 1e-15);
+  EXPECT_EQ(prior.correctDrift({line(0.5)}, 0.0), 0.0);  // beyond tolerance: no measurement
+}
+
 TEST(HeadingPrior, NoFamiliesFromClutterLearningStartsAgain) {
   const HeadingPriorOptions options = learning(2);
   HeadingPrior prior(options);
@@ -193,6 +229,8 @@ TEST(HeadingPrior, OutOfRangeOptionsAreNamed) {
   rejected([](HeadingPriorOptions* b) { b->min_family_fraction = 1.5; });
   rejected([](HeadingPriorOptions* b) { b->learn_updates = 1001; });
   rejected([](HeadingPriorOptions* b) { b->max_skew_rad = 1.0; });
+  rejected([](HeadingPriorOptions* b) { b->drift_per_rad = -0.1; });
+  rejected([](HeadingPriorOptions* b) { b->drift_per_m = std::nan(""); });
   // A variant that does not use it says so instead of ignoring it.
   FilterOptions filter;
   filter.variant = "multifilter_smc";
@@ -205,6 +243,15 @@ TEST(HeadingPrior, OutOfRangeOptionsAreNamed) {
   }
   filter.variant = "hinf_fastslam";
   EXPECT_NO_THROW(validate(filter));
+  filter.heading_prior.drift_tracking = true;
+  EXPECT_NO_THROW(validate(filter));
+  filter.variant = "robust_fastslam2";  // its robust steps would not follow the correction
+  try {
+    validate(filter);
+    FAIL() << "drift tracking accepted for robust_fastslam2";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("heading_prior.drift_tracking"), std::string::npos);
+  }
 }
 
 // Particles that start with a heading error (spread 0.04 rad around +0.06 rad) in an
@@ -233,6 +280,52 @@ double finalHeadingError(bool with_prior, long* measurements) {
   }
   *measurements = filter.stats().heading_measurements;
   return std::fabs(wrapAngle(filter.estimate().mean.z() - truth.z()));
+}
+
+// Odometry that over-reports every turn by 8% while the robot circles in the room, one wall
+// seen per update (sonar-like), motion noise far below the drift, and landmarks made nearly
+// uninformative (covariance x 1e4) so that only the heading prior can hold the heading. The
+// per-particle prior cannot follow a drift the particles do not spread over; drift tracking does.
+double driftHeadingError(bool drift_tracking) {
+  FilterOptions options;
+  options.particles = 20;
+  options.seed = 3;
+  options.use_points = false;
+  options.motion.alpha1 = options.motion.alpha2 = 1e-6;
+  options.motion.alpha3 = options.motion.alpha4 = 1e-6;
+  options.motion.min_sigma_xy_m = 1e-3;
+  options.motion.min_sigma_theta_rad = 1e-4;
+  options.measurement.covariance_inflation = 1e4;
+  options.heading_prior = given(0.0);
+  options.heading_prior.tolerance_rad = 0.3;
+  options.heading_prior.sigma_rad = 0.05;
+  options.heading_prior.min_lines = 1;
+  options.heading_prior.drift_tracking = drift_tracking;
+  options.heading_prior.drift_per_rad = 0.05;
+  FastSlam2 filter(options);
+  SyntheticWorld world;
+  Rng rng(8);
+  Pose2 truth(0.0, -2.5, 0.0);
+  filter.reset(truth);
+  for (int k = 0; k < 120; ++k) {
+    const Pose2 step(0.1, 0.0, 0.05);
+    truth = compose(truth, step);
+    MotionInput motion;
+    motion.delta = Pose2(0.1, 0.0, 0.05 * 1.08);
+    filter.predict(motion);
+    FeatureSet seen = world.observe(truth, rng, 0.02, 0.03);
+    seen.points.clear();
+    seen.lines = {seen.lines[k % 4]};
+    filter.update(seen);
+  }
+  return std::fabs(wrapAngle(filter.estimate().mean.z() - truth.z()));
+}
+
+TEST(HeadingPrior, DriftTrackingFollowsAnOdometryTurnBias) {
+  const double per_particle = driftHeadingError(false);
+  const double tracked = driftHeadingError(true);
+  EXPECT_GT(per_particle, 0.2);  // 0.48 rad of drift in all
+  EXPECT_LT(tracked, 0.05) << "per particle " << per_particle;
 }
 
 TEST(HeadingPrior, FastSlamRecoversAStartHeadingErrorFromTheWalls) {

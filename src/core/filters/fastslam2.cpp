@@ -450,6 +450,14 @@ UpdateStats FastSlam2::update(const FeatureSet& features) {
     }
     reference_heading = wrapAngle(std::atan2(s, c) + motion.delta.z());
   }
+  // Drift tracking: one correction of the mean heading, the same for every particle.
+  double drift_turn = 0.0;
+  if (heading_prior_.tracksDrift()) {
+    const double scale = motion.noise_scale * motion.noise_scale;
+    heading_prior_.predictDrift(motion.delta.z() * scale, motion.delta.head<2>().norm() * scale);
+    drift_turn = heading_prior_.correctDrift(observations, reference_heading);
+    reference_heading = wrapAngle(reference_heading + drift_turn);
+  }
   for (size_t i = 0; i < particles_.size(); ++i) {
     Particle& p = particles_[i];
     if (observations.empty()) {
@@ -457,6 +465,7 @@ UpdateStats FastSlam2::update(const FeatureSet& features) {
       continue;  // its path node is added below
     }
     Pose2 predicted = motion_model_->mean(p.pose, motion);
+    predicted.z() = wrapAngle(predicted.z() + drift_turn);
     Eigen::Matrix3d motion_cov = motion_model_->covariance(p.pose, motion);
     // Walls along the building's axes measure the heading (heading_prior.h): the prior the
     // landmarks then refine is the motion prediction conditioned on it.

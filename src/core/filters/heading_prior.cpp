@@ -28,6 +28,13 @@ double lineWeight(const Observation& o) {
   return std::max(0.01, length);
 }
 
+/// The angle wrapped into [-period/2, period/2).
+double wrapOffset(double angle_rad, double period) {
+  double offset = std::fmod(angle_rad + period / 2.0, period);
+  if (offset < 0.0) offset += period;
+  return offset - period / 2.0;
+}
+
 }  // namespace
 
 void validate(const HeadingPriorOptions& o) {
@@ -38,13 +45,11 @@ void validate(const HeadingPriorOptions& o) {
   requireRange("heading_prior.tolerance_rad", o.tolerance_rad, 1e-4, M_PI / 4.0, false, true);
   requireRange("heading_prior.sigma_rad", o.sigma_rad, 1e-5, 1.0);
   requireRange("heading_prior.min_lines", o.min_lines, 1, 1000);
+  requireRange("heading_prior.drift_per_rad", o.drift_per_rad, 0.0, 10.0);
+  requireRange("heading_prior.drift_per_m", o.drift_per_m, 0.0, 10.0);
 }
 
-double halfTurnOffset(double angle_rad) {
-  double offset = std::fmod(angle_rad + M_PI / 2.0, M_PI);
-  if (offset < 0.0) offset += M_PI;
-  return offset - M_PI / 2.0;
-}
+double halfTurnOffset(double angle_rad) { return wrapOffset(angle_rad, M_PI); }
 
 HeadingPrior::HeadingPrior(const HeadingPriorOptions& options) : options_(options) { reset(); }
 
@@ -54,16 +59,18 @@ void HeadingPrior::reset() {
                halfTurnOffset(options_.direction_rad + M_PI / 2.0)};
   learned_.clear();
   learned_updates_ = 0;
+  drift_variance_ = 0.0;
 }
 
 double HeadingPrior::strongest(const std::vector<std::pair<double, double>>& samples,
-                               const double* around, double* direction) const {
+                               const double* around, double period,
+                               double* direction) const {
   double best_support = 0.0, centre = 0.0;
   for (const auto& [candidate, unused] : samples) {
-    if (around && std::fabs(halfTurnOffset(candidate - *around)) > options_.max_skew_rad) continue;
+    if (around && std::fabs(wrapOffset(candidate - *around, period)) > options_.max_skew_rad) continue;
     double support = 0.0;
     for (const auto& [other, weight] : samples) {
-      if (std::fabs(halfTurnOffset(other - candidate)) <= options_.tolerance_rad) support += weight;
+      if (std::fabs(wrapOffset(other - candidate, period)) <= options_.tolerance_rad) support += weight;
     }
     if (support > best_support) {
       best_support = support;
@@ -71,15 +78,15 @@ double HeadingPrior::strongest(const std::vector<std::pair<double, double>>& sam
     }
   }
   if (best_support <= 0.0) return 0.0;
-  // The family's weighted mean, taken relative to its centre (directions wrap at +-pi/2).
+  // The family's weighted mean, taken relative to its centre (directions wrap at +-period/2).
   double sum = 0.0, weight_sum = 0.0;
   for (const auto& [other, weight] : samples) {
-    const double relative = halfTurnOffset(other - centre);
+    const double relative = wrapOffset(other - centre, period);
     if (std::fabs(relative) > options_.tolerance_rad) continue;
     sum += weight * relative;
     weight_sum += weight;
   }
-  *direction = halfTurnOffset(centre + sum / weight_sum);
+  *direction = wrapOffset(centre + sum / weight_sum, period);
   return best_support;
 }
 
@@ -95,15 +102,21 @@ void HeadingPrior::learn(const std::vector<Observation>& observations, double he
   if (++learned_updates_ < options_.learn_updates && !conclude) return;
   double total = 0.0;
   for (const auto& sample : learned_) total += sample.second;
-  double first = 0.0, second = 0.0;
-  const double first_support = strongest(learned_, nullptr, &first);
-  const double perpendicular = halfTurnOffset(first + M_PI / 2.0);
-  double second_support = strongest(learned_, &perpendicular, &second);
-  if (second_support < kMinSecondFamilyFraction * total) {
-    second = perpendicular;  // not seen (a corridor): assume the perpendicular
-    second_support = 0.0;
-  } else if (std::fabs(halfTurnOffset(second - perpendicular)) <= kPerpendicularSnapRad) {
-    second = perpendicular;
+  double first = 0.0, second = 0.0, first_support = 0.0, second_support = 0.0;
+  if (options_.max_skew_rad <= 0.0) {
+    // Exactly perpendicular families: both learned together, directions modulo a quarter turn.
+    first_support = strongest(learned_, nullptr, M_PI / 2.0, &first);
+    second = halfTurnOffset(first + M_PI / 2.0);
+  } else {
+    first_support = strongest(learned_, nullptr, M_PI, &first);
+    const double perpendicular = halfTurnOffset(first + M_PI / 2.0);
+    second_support = strongest(learned_, &perpendicular, M_PI, &second);
+    if (second_support < kMinSecondFamilyFraction * total) {
+      second = perpendicular;  // not seen (a corridor): assume the perpendicular
+      second_support = 0.0;
+    } else if (std::fabs(halfTurnOffset(second - perpendicular)) <= kPerpendicularSnapRad) {
+      second = perpendicular;
+    }
   }
   const bool found = first_support + second_support >= options_.min_family_fraction * total;
   learned_.clear();
@@ -156,6 +169,22 @@ double HeadingPrior::condition(double offset_rad, Pose2* mean, Eigen::Matrix3d* 
   const Eigen::Matrix3d updated = *cov - gain * cov->row(2);
   *cov = 0.5 * (updated + updated.transpose());
   return -0.5 * (offset_rad * offset_rad / s + std::log(2.0 * M_PI * s));
+}
+
+void HeadingPrior::predictDrift(double rotation_rad, double translation_m) {
+  if (!std::isfinite(rotation_rad) || !std::isfinite(translation_m)) return;
+  drift_variance_ += options_.drift_per_rad * options_.drift_per_rad * std::fabs(rotation_rad) +
+                     options_.drift_per_m * options_.drift_per_m * std::fabs(translation_m);
+}
+
+double HeadingPrior::correctDrift(const std::vector<Observation>& observations,
+                                  double reference_rad) {
+  double offset = 0.0;
+  if (!residual(observations, reference_rad, reference_rad, &offset)) return 0.0;
+  // h = heading, z = reference - offset: the innovation is -offset.
+  const double gain = drift_variance_ / (drift_variance_ + options_.sigma_rad * options_.sigma_rad);
+  drift_variance_ *= 1.0 - gain;
+  return -gain * offset;
 }
 
 }  // namespace core

@@ -12,6 +12,15 @@
 // A line within tolerance_rad of a family measures the heading; others (walls of a third
 // direction, clutter) are ignored, so where the assumption fails the filter loses the benefit.
 // Used by FastSlam2::update: fastslam2, hinf_fastslam, and the plain steps of robust_fastslam2.
+//
+// Each particle's motion prediction is conditioned on the measurement (a 1-D Kalman step with
+// that step's motion noise) and the particle weighed by its likelihood. That corrects drift only
+// as far as the motion noise spreads the particles' headings: enough with laser increments, not
+// with sonar's few lines and low motion noise. With drift_tracking, one Kalman filter also
+// follows the error of the filter's mean heading, its variance growing with the angle turned and
+// the distance driven (drift_per_rad, drift_per_m); each measurement first turns every particle
+// by the same correction, then weighs them as above. The lines are then used twice (for the
+// common drift and for the particles' spread), an approximation that sigma_rad absorbs.
 
 #include <Eigen/Core>
 #include <array>
@@ -36,11 +45,16 @@ struct HeadingPriorOptions {
   // Learning keeps the families only if they hold at least this fraction of the learned line
   // length; otherwise it starts again over the next learn_updates scans.
   double min_family_fraction = 0.4;
-  double max_skew_rad = 0.35;  // the second family within this of the first's perpendicular
+  // The second family within this of the first's perpendicular; 0: exactly perpendicular,
+  // both families learned together (directions modulo a quarter turn).
+  double max_skew_rad = 0.35;
   double direction_rad = 0.0;
   double tolerance_rad = 0.1;  // a line within this of a family measures the heading
   double sigma_rad = 0.01;     // noise of the heading measured from one update's lines
   int min_lines = 2;           // fewer such lines in an update: no measurement
+  bool drift_tracking = false;  // follow the mean heading's drift (above)
+  double drift_per_rad = 0.02;  // ... which grows by this (1 sigma) per sqrt(rad) turned, rad
+  double drift_per_m = 0.005;   // ... and by this per sqrt(m) driven, rad
 };
 
 /// Throws std::invalid_argument naming the first out-of-range field.
@@ -57,6 +71,7 @@ class HeadingPrior {
   /// Forgets learned families and any learning in progress (a new map).
   void reset();
   bool enabled() const { return options_.enabled; }
+  bool tracksDrift() const { return options_.enabled && options_.drift_tracking; }
   /// True once the families are known (given, or learned).
   bool ready() const { return ready_; }
   /// The two families' normal directions in the map frame, modulo pi.
@@ -74,20 +89,31 @@ class HeadingPrior {
   /// Conditions the Gaussian (mean, cov) on the heading measurement "heading = mean.z() -
   /// offset" with noise sigma_rad; returns its log-likelihood (the weight factor).
   double condition(double offset_rad, Pose2* mean, Eigen::Matrix3d* cov) const;
+  /// drift_tracking: the mean heading's error variance grows with a motion of this rotation and
+  /// translation (rad, m).
+  void predictDrift(double rotation_rad, double translation_m);
+  /// drift_tracking: the turn (rad) that corrects the filter's mean heading `reference_rad` from
+  /// this update's lines (a Kalman step on the error variance); 0 without a measurement (or not
+  /// ready).
+  double correctDrift(const std::vector<Observation>& observations, double reference_rad);
+  /// drift_tracking: the variance of the mean heading's error, rad^2.
+  double driftVariance() const { return drift_variance_; }
 
  private:
   /// The family of a map-frame line direction (index), or -1 beyond tolerance of both.
   int familyOf(double direction_rad) const;
   /// The offset with the most length within tolerance among `samples` (optionally only those
   /// within max_skew_rad of `around`), refined by their weighted mean; returns that support.
+  /// Directions are taken modulo `period` (pi: one family; pi/2: two perpendicular ones).
   double strongest(const std::vector<std::pair<double, double>>& samples, const double* around,
-                   double* direction) const;
+                   double period, double* direction) const;
 
   HeadingPriorOptions options_;
   bool ready_ = false;
   std::array<double, 2> families_{{0.0, 0.0}};
   std::vector<std::pair<double, double>> learned_;  // (direction mod pi, length) of lines seen
   int learned_updates_ = 0;
+  double drift_variance_ = 0.0;
 };
 
 }  // namespace core
