@@ -98,6 +98,7 @@ void readHeadingPrior(YamlSection section, core::HeadingPriorOptions* o) {
   section.read("tolerance_rad", &o->tolerance_rad, 1e-4, 0.785);
   section.read("sigma_rad", &o->sigma_rad, 1e-5, 1.0);
   section.read("min_lines", &o->min_lines, 1, 1000);
+  section.read("outlier_ratio", &o->outlier_ratio, 0.0, 0.999);
   section.read("drift_tracking", &o->drift_tracking);
   section.read("drift_per_rad", &o->drift_per_rad, 0.0, 10.0);
   section.read("drift_per_m", &o->drift_per_m, 0.0, 10.0);

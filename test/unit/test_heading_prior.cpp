@@ -149,6 +149,43 @@ TEST(HeadingPrior, DriftVarianceGrowsWithMotionAndTheCorrectionIsAKalmanStep) {
   EXPECT_EQ(prior.correctDrift({line(0.5)}, 0.0), 0.0);  // beyond tolerance: no measurement
 }
 
+// With outlier_ratio, a measurement is weighted by the probability that it is right: one
+// implausible line (8 sigma off) barely turns the heading, a plausible one nearly as much as the
+// plain Kalman step.
+TEST(HeadingPrior, AnImplausibleLineMovesTheHeadingLittleWithAnOutlierRatio) {
+  HeadingPriorOptions options = given(0.0);
+  options.drift_tracking = true;
+  options.sigma_rad = 0.05;
+  options.tolerance_rad = 0.7;
+  options.min_lines = 1;
+  options.drift_per_rad = 0.05;
+  const auto correction = [&](double outlier_ratio, double offset) {
+    HeadingPriorOptions o = options;
+    o.outlier_ratio = outlier_ratio;
+    HeadingPrior prior(o);
+    prior.predictDrift(1.0, 0.0);  // variance 0.0025, as sigma_rad^2
+    return prior.correctDrift({line(offset)}, 0.0);
+  };
+  EXPECT_NEAR(correction(0.0, 0.4), -0.2, 1e-12);  // the Kalman step: half-way
+  EXPECT_LT(std::fabs(correction(0.3, 0.4)), 0.002);
+  const double s = 0.005;
+  const double inlier_density = std::exp(-0.5 * 0.02 * 0.02 / s) / std::sqrt(2 * M_PI * s);
+  const double inlier = 0.7 * inlier_density / (0.7 * inlier_density + 0.3 / 1.4);
+  EXPECT_NEAR(correction(0.3, 0.02), -inlier * 0.5 * 0.02, 1e-12);
+  EXPECT_GT(inlier, 0.9);
+  // The particle's weight is the mixture's likelihood, and its heading moves as above.
+  HeadingPriorOptions o = options;
+  o.outlier_ratio = 0.3;
+  HeadingPrior prior(o);
+  Pose2 mean(0.0, 0.0, 0.4);
+  Eigen::Matrix3d cov = Eigen::Vector3d(0.01, 0.01, 0.0025).asDiagonal();
+  const double ll = prior.condition(0.4, &mean, &cov);
+  const double far_density = std::exp(-0.5 * 0.16 / s) / std::sqrt(2 * M_PI * s);
+  EXPECT_NEAR(ll, std::log(0.7 * far_density + 0.3 / 1.4), 1e-12);
+  EXPECT_GT(mean.z(), 0.398);
+  EXPECT_GE(cov(2, 2), 0.0025 * 0.99);  // an outlier leaves the uncertainty
+}
+
 TEST(HeadingPrior, NoFamiliesFromClutterLearningStartsAgain) {
   const HeadingPriorOptions options = learning(2);
   HeadingPrior prior(options);
@@ -168,6 +205,14 @@ TEST(HeadingPrior, NoFamiliesFromClutterLearningStartsAgain) {
   prior.learn({broken, line(0.3), line(0.3 + M_PI / 2)}, 0.0, true);
   ASSERT_TRUE(prior.ready());
   EXPECT_NEAR(prior.families()[0], 0.3, 1e-9);
+  // A wide measuring tolerance (sonar: 0.7 rad) does not widen what learning calls a family, or
+  // any clutter would pass for one (perpendicular families: a quarter turn is only 1.57 rad).
+  HeadingPriorOptions wide = learning(1);
+  wide.tolerance_rad = 0.7;
+  wide.max_skew_rad = 0.0;
+  HeadingPrior wide_prior(wide);
+  wide_prior.learn(clutter, 0.0);
+  EXPECT_FALSE(wide_prior.ready());
 }
 
 TEST(HeadingPrior, ResidualScoresEveryParticleOnTheSameLines) {
@@ -230,6 +275,7 @@ TEST(HeadingPrior, OutOfRangeOptionsAreNamed) {
   rejected([](HeadingPriorOptions* b) { b->learn_updates = 1001; });
   rejected([](HeadingPriorOptions* b) { b->max_skew_rad = 1.0; });
   rejected([](HeadingPriorOptions* b) { b->drift_per_rad = -0.1; });
+  rejected([](HeadingPriorOptions* b) { b->outlier_ratio = 1.0; });
   rejected([](HeadingPriorOptions* b) { b->drift_per_m = std::nan(""); });
   // A variant that does not use it says so instead of ignoring it.
   FilterOptions filter;

@@ -19,6 +19,9 @@ constexpr double kMinSecondFamilyFraction = 0.1;
 // (ACES, seeds 1-6: 0.30 m learned, 0.23 m perpendicular), while a wall family clearly off it
 // (e.g. 85 deg) is kept where it is.
 constexpr double kPerpendicularSnapRad = 0.05;
+// Learning counts a line towards a family within this (or tolerance_rad if smaller): a wide
+// measuring tolerance (sonar) must not let clutter pass for a family.
+constexpr double kLearnToleranceRad = 0.1;
 
 // A line's weight: its observed length, at least 1 cm so that a line without extent counts a
 // little; 0 (ignored) when non-finite.
@@ -45,6 +48,7 @@ void validate(const HeadingPriorOptions& o) {
   requireRange("heading_prior.tolerance_rad", o.tolerance_rad, 1e-4, M_PI / 4.0, false, true);
   requireRange("heading_prior.sigma_rad", o.sigma_rad, 1e-5, 1.0);
   requireRange("heading_prior.min_lines", o.min_lines, 1, 1000);
+  requireRange("heading_prior.outlier_ratio", o.outlier_ratio, 0.0, 1.0, false, true);
   requireRange("heading_prior.drift_per_rad", o.drift_per_rad, 0.0, 10.0);
   requireRange("heading_prior.drift_per_m", o.drift_per_m, 0.0, 10.0);
 }
@@ -65,12 +69,13 @@ void HeadingPrior::reset() {
 double HeadingPrior::strongest(const std::vector<std::pair<double, double>>& samples,
                                const double* around, double period,
                                double* direction) const {
+  const double tolerance = std::min(options_.tolerance_rad, kLearnToleranceRad);
   double best_support = 0.0, centre = 0.0;
   for (const auto& [candidate, unused] : samples) {
     if (around && std::fabs(wrapOffset(candidate - *around, period)) > options_.max_skew_rad) continue;
     double support = 0.0;
     for (const auto& [other, weight] : samples) {
-      if (std::fabs(wrapOffset(other - candidate, period)) <= options_.tolerance_rad) support += weight;
+      if (std::fabs(wrapOffset(other - candidate, period)) <= tolerance) support += weight;
     }
     if (support > best_support) {
       best_support = support;
@@ -82,7 +87,7 @@ double HeadingPrior::strongest(const std::vector<std::pair<double, double>>& sam
   double sum = 0.0, weight_sum = 0.0;
   for (const auto& [other, weight] : samples) {
     const double relative = wrapOffset(other - centre, period);
-    if (std::fabs(relative) > options_.tolerance_rad) continue;
+    if (std::fabs(relative) > tolerance) continue;
     sum += weight * relative;
     weight_sum += weight;
   }
@@ -160,15 +165,36 @@ bool HeadingPrior::residual(const std::vector<Observation>& observations, double
   return true;
 }
 
+double HeadingPrior::inlierProbability(double offset_rad, double s, double* log_likelihood) const {
+  const double log_inlier = -0.5 * (offset_rad * offset_rad / s + std::log(2.0 * M_PI * s));
+  if (options_.outlier_ratio <= 0.0) {
+    *log_likelihood = log_inlier;
+    return 1.0;
+  }
+  // A wrong line (clutter, a badly fitted wall) is as likely anywhere within the tolerance.
+  const double log_outlier =
+      std::log(options_.outlier_ratio / (2.0 * options_.tolerance_rad));
+  const double log_in = std::log(1.0 - options_.outlier_ratio) + log_inlier;
+  const double top = std::max(log_in, log_outlier);
+  *log_likelihood = top + std::log(std::exp(log_in - top) + std::exp(log_outlier - top));
+  return std::exp(log_in - *log_likelihood);
+}
+
 double HeadingPrior::condition(double offset_rad, Pose2* mean, Eigen::Matrix3d* cov) const {
   // h(x) = heading, z = mean.z() - offset: the innovation is -offset.
   const double s = (*cov)(2, 2) + options_.sigma_rad * options_.sigma_rad;
+  double log_likelihood = 0.0;
+  const double inlier = inlierProbability(offset_rad, s, &log_likelihood);
+  // The Kalman step weighted by the probability that the measurement is right, and the mixture's
+  // spread (moment matching; exactly the Kalman step when outlier_ratio is 0).
   const Eigen::Vector3d gain = cov->col(2) / s;
-  *mean -= gain * offset_rad;
+  const Eigen::Vector3d shift = gain * offset_rad;
+  *mean -= inlier * shift;
   mean->z() = wrapAngle(mean->z());
-  const Eigen::Matrix3d updated = *cov - gain * cov->row(2);
+  const Eigen::Matrix3d updated = *cov - inlier * gain * cov->row(2) +
+                                  inlier * (1.0 - inlier) * shift * shift.transpose();
   *cov = 0.5 * (updated + updated.transpose());
-  return -0.5 * (offset_rad * offset_rad / s + std::log(2.0 * M_PI * s));
+  return log_likelihood;
 }
 
 void HeadingPrior::predictDrift(double rotation_rad, double translation_m) {
@@ -181,10 +207,15 @@ double HeadingPrior::correctDrift(const std::vector<Observation>& observations,
                                   double reference_rad) {
   double offset = 0.0;
   if (!residual(observations, reference_rad, reference_rad, &offset)) return 0.0;
-  // h = heading, z = reference - offset: the innovation is -offset.
-  const double gain = drift_variance_ / (drift_variance_ + options_.sigma_rad * options_.sigma_rad);
-  drift_variance_ *= 1.0 - gain;
-  return -gain * offset;
+  // h = heading, z = reference - offset: the innovation is -offset. As condition(), weighted by
+  // the probability that the measurement is right.
+  const double s = drift_variance_ + options_.sigma_rad * options_.sigma_rad;
+  double unused = 0.0;
+  const double inlier = inlierProbability(offset, s, &unused);
+  const double shift = drift_variance_ / s * offset;
+  drift_variance_ += -inlier * drift_variance_ * drift_variance_ / s +
+                     inlier * (1.0 - inlier) * shift * shift;
+  return -inlier * shift;
 }
 
 }  // namespace core

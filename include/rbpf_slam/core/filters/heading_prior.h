@@ -52,6 +52,10 @@ struct HeadingPriorOptions {
   double tolerance_rad = 0.1;  // a line within this of a family measures the heading
   double sigma_rad = 0.01;     // noise of the heading measured from one update's lines
   int min_lines = 2;           // fewer such lines in an update: no measurement
+  // Probability that an update's measurement is wrong (clutter, a badly fitted wall), spread
+  // evenly over the tolerance: the update is then weighted by the probability that it is right,
+  // so one wrong line moves the heading little. 0: every measurement trusted.
+  double outlier_ratio = 0.0;
   bool drift_tracking = false;  // follow the mean heading's drift (above)
   double drift_per_rad = 0.02;  // ... which grows by this (1 sigma) per sqrt(rad) turned, rad
   double drift_per_m = 0.005;   // ... and by this per sqrt(m) driven, rad
@@ -87,7 +91,8 @@ class HeadingPrior {
   bool residual(const std::vector<Observation>& observations, double reference_rad,
                 double heading_rad, double* offset_rad) const;
   /// Conditions the Gaussian (mean, cov) on the heading measurement "heading = mean.z() -
-  /// offset" with noise sigma_rad; returns its log-likelihood (the weight factor).
+  /// offset" with noise sigma_rad (and outlier_ratio); returns its log-likelihood (the weight
+  /// factor).
   double condition(double offset_rad, Pose2* mean, Eigen::Matrix3d* cov) const;
   /// drift_tracking: the mean heading's error variance grows with a motion of this rotation and
   /// translation (rad, m).
@@ -102,6 +107,9 @@ class HeadingPrior {
  private:
   /// The family of a map-frame line direction (index), or -1 beyond tolerance of both.
   int familyOf(double direction_rad) const;
+  /// The probability that a measurement `offset_rad` with innovation variance s is right, and
+  /// the log-likelihood of the measurement (inlier Gaussian mixed with the outlier density).
+  double inlierProbability(double offset_rad, double s, double* log_likelihood) const;
   /// The offset with the most length within tolerance among `samples` (optionally only those
   /// within max_skew_rad of `around`), refined by their weighted mean; returns that support.
   /// Directions are taken modulo `period` (pi: one family; pi/2: two perpendicular ones).
