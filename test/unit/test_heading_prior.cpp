@@ -29,6 +29,18 @@ HeadingPriorOptions learning(int updates) {
   return o;
 }
 
+// Known families at 0 and pi/2, drift tracking on, one line enough.
+HeadingPriorOptions tracking(double sigma, double drift_per_rad) {
+  HeadingPriorOptions o;
+  o.enabled = true;
+  o.learn_direction = false;
+  o.drift_tracking = true;
+  o.min_lines = 1;
+  o.sigma_rad = sigma;
+  o.drift_per_rad = drift_per_rad;
+  return o;
+}
+
 HeadingPriorOptions given(double direction) {
   HeadingPriorOptions o;
   o.enabled = true;
@@ -128,12 +140,8 @@ TEST(HeadingPrior, PerpendicularFamiliesAreLearnedTogether) {
 }
 
 TEST(HeadingPrior, DriftVarianceGrowsWithMotionAndTheCorrectionIsAKalmanStep) {
-  HeadingPriorOptions options = given(0.0);
-  options.drift_tracking = true;
-  options.sigma_rad = 0.05;
-  options.drift_per_rad = 0.1;
+  HeadingPriorOptions options = tracking(0.05, 0.1);
   options.drift_per_m = 0.02;
-  options.min_lines = 1;
   HeadingPrior prior(options);
   EXPECT_EQ(prior.driftVariance(), 0.0);
   EXPECT_EQ(prior.correctDrift({line(0.04)}, 0.0), 0.0);  // no uncertainty yet: no correction
@@ -150,15 +158,11 @@ TEST(HeadingPrior, DriftVarianceGrowsWithMotionAndTheCorrectionIsAKalmanStep) {
 }
 
 // With outlier_ratio, a measurement is weighted by the probability that it is right: one
-// implausible line (8 sigma off) barely turns the heading, a plausible one nearly as much as the
+// implausible line (6 sigma off) barely turns the heading, a plausible one nearly as much as the
 // plain Kalman step.
 TEST(HeadingPrior, AnImplausibleLineMovesTheHeadingLittleWithAnOutlierRatio) {
-  HeadingPriorOptions options = given(0.0);
-  options.drift_tracking = true;
-  options.sigma_rad = 0.05;
+  HeadingPriorOptions options = tracking(0.05, 0.05);
   options.tolerance_rad = 0.7;
-  options.min_lines = 1;
-  options.drift_per_rad = 0.05;
   const auto correction = [&](double outlier_ratio, double offset) {
     HeadingPriorOptions o = options;
     o.outlier_ratio = outlier_ratio;
