@@ -145,7 +145,7 @@ TEST(HeadingPrior, DriftVarianceGrowsWithMotionAndTheCorrectionIsAKalmanStep) {
   HeadingPrior prior(options);
   EXPECT_EQ(prior.driftVariance(), 0.0);
   EXPECT_EQ(prior.correctDrift({line(0.04)}, 0.0), 0.0);  // no uncertainty yet: no correction
-  prior.predictDrift(-0.5, 2.0);                           // turned 0.5 rad, drove 2 m
+  prior.predictDrift(-0.5, 2.0);                          // turned 0.5 rad, drove 2 m
   const double variance = 0.01 * 0.5 + 0.0004 * 2.0;
   EXPECT_NEAR(prior.driftVariance(), variance, 1e-15);
   prior.predictDrift(std::nan(""), 1.0);  // a broken motion is skipped

@@ -67,12 +67,12 @@ void HeadingPrior::reset() {
 }
 
 double HeadingPrior::strongest(const std::vector<std::pair<double, double>>& samples,
-                               const double* around, double period,
-                               double* direction) const {
+                               const double* around, double period, double* direction) const {
   const double tolerance = std::min(options_.tolerance_rad, kLearnToleranceRad);
   double best_support = 0.0, centre = 0.0;
   for (const auto& [candidate, unused] : samples) {
-    if (around && std::fabs(wrapOffset(candidate - *around, period)) > options_.max_skew_rad) continue;
+    if (around && std::fabs(wrapOffset(candidate - *around, period)) > options_.max_skew_rad)
+      continue;
     double support = 0.0;
     for (const auto& [other, weight] : samples) {
       if (std::fabs(wrapOffset(other - candidate, period)) <= tolerance) support += weight;
@@ -172,8 +172,7 @@ double HeadingPrior::inlierProbability(double offset_rad, double s, double* log_
     return 1.0;
   }
   // A wrong line (clutter, a badly fitted wall) is as likely anywhere within the tolerance.
-  const double log_outlier =
-      std::log(options_.outlier_ratio / (2.0 * options_.tolerance_rad));
+  const double log_outlier = std::log(options_.outlier_ratio / (2.0 * options_.tolerance_rad));
   const double log_in = std::log(1.0 - options_.outlier_ratio) + log_inlier;
   const double top = std::max(log_in, log_outlier);
   *log_likelihood = top + std::log(std::exp(log_in - top) + std::exp(log_outlier - top));
@@ -191,8 +190,8 @@ double HeadingPrior::condition(double offset_rad, Pose2* mean, Eigen::Matrix3d* 
   const Eigen::Vector3d shift = gain * offset_rad;
   *mean -= inlier * shift;
   mean->z() = wrapAngle(mean->z());
-  const Eigen::Matrix3d updated = *cov - inlier * gain * cov->row(2) +
-                                  inlier * (1.0 - inlier) * shift * shift.transpose();
+  const Eigen::Matrix3d updated =
+      *cov - inlier * gain * cov->row(2) + inlier * (1.0 - inlier) * shift * shift.transpose();
   *cov = 0.5 * (updated + updated.transpose());
   return log_likelihood;
 }
@@ -213,8 +212,8 @@ double HeadingPrior::correctDrift(const std::vector<Observation>& observations,
   double unused = 0.0;
   const double inlier = inlierProbability(offset, s, &unused);
   const double shift = drift_variance_ / s * offset;
-  drift_variance_ += -inlier * drift_variance_ * drift_variance_ / s +
-                     inlier * (1.0 - inlier) * shift * shift;
+  drift_variance_ +=
+      -inlier * drift_variance_ * drift_variance_ / s + inlier * (1.0 - inlier) * shift * shift;
   return -inlier * shift;
 }
 
