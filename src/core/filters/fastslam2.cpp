@@ -603,6 +603,7 @@ bool FastSlam2::resetPose(const Pose2& pose, const Eigen::Matrix3d& covariance) 
   weights_.assign(particles_.size(), 1.0 / particles_.size());
   pending_motion_ = PendingMotion();
   if (!heading_prior_.ready()) heading_prior_.reset();  // lines learned at the old pose
+  heading_prior_.setDriftVariance(c(2, 2));             // the given heading's uncertainty
   return true;
 }
 

@@ -103,6 +103,10 @@ class HeadingPrior {
   double correctDrift(const std::vector<Observation>& observations, double reference_rad);
   /// drift_tracking: the variance of the mean heading's error, rad^2.
   double driftVariance() const { return drift_variance_; }
+  /// drift_tracking: the mean heading was set anew (e.g. an initial pose) with this variance.
+  void setDriftVariance(double variance_rad2) {
+    if (std::isfinite(variance_rad2) && variance_rad2 >= 0.0) drift_variance_ = variance_rad2;
+  }
 
  private:
   /// The family of a map-frame line direction (index), or -1 beyond tolerance of both.
