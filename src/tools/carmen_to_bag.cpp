@@ -17,12 +17,14 @@
 #include <cstdlib>
 #include <iostream>
 #include <map>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "rbpf_slam/core/geometry.h"
 #include "rbpf_slam/io/carmen.h"
+#include "rbpf_slam/io/tool_arguments.h"
 #include "rbpf_slam/io/trajectory.h"
 #include "rbpf_slam/ros/conversions.h"
 
@@ -32,7 +34,6 @@ namespace io = rbpf_slam::io;
 namespace core = rbpf_slam::core;
 namespace rosbridge = rbpf_slam::rosbridge;
 
-constexpr int kUsageError = 2;
 constexpr double kStampOffsetS = 1262304000.0;  // 2010-01-01, as in the shared bags
 constexpr double kRangeMinM = 0.02;
 constexpr double kRangeMaxM = 50.0;
@@ -232,19 +233,11 @@ void writeBag(const Arguments& arguments, const io::CarmenLog& log,
 }  // namespace
 
 int main(int argc, char** argv) {
-  Arguments arguments;
-  try {
-    for (int i = 1; i < argc; ++i) {
-      if (std::string(argv[i]) == "-h" || std::string(argv[i]) == "--help") {
-        std::cout << kUsage;
-        return 0;
-      }
-    }
-    arguments = parseArguments(argc, argv);
-  } catch (const std::invalid_argument& error) {
-    std::cerr << "carmen_to_bag: " << error.what() << "\n" << kUsage;
-    return kUsageError;
-  }
+  int exit_status = 0;
+  const std::optional<Arguments> parsed =
+      io::parseToolArguments("carmen_to_bag", kUsage, argc, argv, parseArguments, &exit_status);
+  if (!parsed) return exit_status;
+  const Arguments& arguments = *parsed;
 
   try {
     ros::Time::init();
@@ -271,7 +264,7 @@ int main(int argc, char** argv) {
               << "\n";
   } catch (const std::exception& error) {
     std::cerr << "carmen_to_bag: " << error.what() << "\n";
-    return kUsageError;
+    return io::kUsageExitStatus;
   }
   return 0;
 }

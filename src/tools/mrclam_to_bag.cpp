@@ -21,12 +21,14 @@
 #include <cstdlib>
 #include <fstream>
 #include <iostream>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "rbpf_slam/core/geometry.h"
 #include "rbpf_slam/io/mrclam.h"
+#include "rbpf_slam/io/tool_arguments.h"
 #include "rbpf_slam/io/trajectory.h"
 #include "rbpf_slam/ros/conversions.h"
 
@@ -36,7 +38,6 @@ namespace io = rbpf_slam::io;
 namespace core = rbpf_slam::core;
 namespace rosbridge = rbpf_slam::rosbridge;
 
-constexpr int kUsageError = 2;
 
 const char kUsage[] =
     "usage: mrclam_to_bag DATASET_DIR ROBOT OUT.bag [--known-ids] [--duration S]\n"
@@ -240,19 +241,11 @@ void writeLandmarks(const std::string& path, const Arguments& arguments,
 }  // namespace
 
 int main(int argc, char** argv) {
-  Arguments arguments;
-  try {
-    for (int i = 1; i < argc; ++i) {
-      if (std::string(argv[i]) == "-h" || std::string(argv[i]) == "--help") {
-        std::cout << kUsage;
-        return 0;
-      }
-    }
-    arguments = parseArguments(argc, argv);
-  } catch (const std::invalid_argument& error) {
-    std::cerr << "mrclam_to_bag: " << error.what() << "\n" << kUsage;
-    return kUsageError;
-  }
+  int exit_status = 0;
+  const std::optional<Arguments> parsed =
+      io::parseToolArguments("mrclam_to_bag", kUsage, argc, argv, parseArguments, &exit_status);
+  if (!parsed) return exit_status;
+  const Arguments& arguments = *parsed;
 
   try {
     ros::Time::init();

@@ -16,10 +16,12 @@
 #include <cmath>
 #include <cstdlib>
 #include <iostream>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
+#include "rbpf_slam/io/tool_arguments.h"
 #include "rbpf_slam/io/trajectory.h"
 #include "rbpf_slam/io/victoria_park.h"
 #include "rbpf_slam/ros/conversions.h"
@@ -114,19 +116,11 @@ rbpf_slam::FeatureArray featureMessage(const io::VictoriaPose& pose, const ros::
 }  // namespace
 
 int main(int argc, char** argv) {
-  Arguments arguments;
-  try {
-    for (int i = 1; i < argc; ++i) {
-      if (std::string(argv[i]) == "-h" || std::string(argv[i]) == "--help") {
-        std::cout << kUsage;
-        return 0;
-      }
-    }
-    arguments = parseArguments(argc, argv);
-  } catch (const std::invalid_argument& error) {
-    std::cerr << "victoria_park_to_bag: " << error.what() << "\n" << kUsage;
-    return 2;
-  }
+  int exit_status = 0;
+  const std::optional<Arguments> parsed =
+      io::parseToolArguments("victoria_park_to_bag", kUsage, argc, argv, parseArguments, &exit_status);
+  if (!parsed) return exit_status;
+  const Arguments& arguments = *parsed;
   try {
     ros::Time::init();
     const io::VictoriaParkLog log = io::loadVictoriaPark(arguments.input);
