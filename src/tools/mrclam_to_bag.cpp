@@ -38,7 +38,6 @@ namespace io = rbpf_slam::io;
 namespace core = rbpf_slam::core;
 namespace rosbridge = rbpf_slam::rosbridge;
 
-
 const char kUsage[] =
     "usage: mrclam_to_bag DATASET_DIR ROBOT OUT.bag [--known-ids] [--duration S]\n"
     "                     [--sigma-range-m F] [--sigma-range-per-m F] [--sigma-bearing-rad F]\n"

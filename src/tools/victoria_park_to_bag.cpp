@@ -117,8 +117,8 @@ rbpf_slam::FeatureArray featureMessage(const io::VictoriaPose& pose, const ros::
 
 int main(int argc, char** argv) {
   int exit_status = 0;
-  const std::optional<Arguments> parsed =
-      io::parseToolArguments("victoria_park_to_bag", kUsage, argc, argv, parseArguments, &exit_status);
+  const std::optional<Arguments> parsed = io::parseToolArguments(
+      "victoria_park_to_bag", kUsage, argc, argv, parseArguments, &exit_status);
   if (!parsed) return exit_status;
   const Arguments& arguments = *parsed;
   try {
