@@ -29,7 +29,6 @@ void readAssociation(YamlSection section, core::AssociationOptions* o) {
   section.read("gate_chi2", &o->gate_chi2, 0.1, 1000.0);
   section.read("new_landmark_chi2", &o->new_landmark_chi2, 0.1, 1000.0);
   section.read("line_overlap_margin_m", &o->line_overlap_margin_m, 0.0, 100.0);
-  section.read("min_observations_to_keep", &o->min_observations_to_keep, 1, 1000);
   section.finish();
 }
 

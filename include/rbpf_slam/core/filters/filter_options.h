@@ -20,7 +20,6 @@ struct AssociationOptions {
   double gate_chi2 = 9.21;          // Mahalanobis^2 gate (99% for 2 dof)
   double new_landmark_chi2 = 13.8;  // beyond every gate by this much: a new landmark
   double line_overlap_margin_m = 1.0;  // a line matches only if the segments come this close
-  int min_observations_to_keep = 1;    // (reserved for pruning)
 };
 
 /// Measurement noise assumed by the filter when a feature carries no covariance of its own.
