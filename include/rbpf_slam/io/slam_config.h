@@ -30,7 +30,6 @@ struct RosOptions {
   double sonar_cloud_max_range = 5.0;             // cloud: the transducers' maximum range, m
   double transform_publish_period = 0.05;  // s; 0 disables tf publishing
   double transform_tolerance = 0.1;        // s, how far map -> odom is post-dated
-  double tf_wait_timeout = 0.2;            // s the offline runner and node wait for tf
   int queue_size = 20;
   bool publish_particles = true;
   std::string map_save_prefix = "rbpf_slam_map";  // ~save_map with no path: PREFIX.{yaml,pgm}
