@@ -458,6 +458,9 @@ UpdateStats FastSlam2::update(const FeatureSet& features) {
     drift_turn = heading_prior_.correctDrift(observations, reference_heading);
     reference_heading = wrapAngle(reference_heading + drift_turn);
   }
+  // The walls that measure the heading, picked once at the filter's heading for every particle.
+  const HeadingPrior::LineSelection heading_lines =
+      heading_prior_.select(observations, reference_heading);
   for (size_t i = 0; i < particles_.size(); ++i) {
     Particle& p = particles_[i];
     if (observations.empty()) {
@@ -470,7 +473,7 @@ UpdateStats FastSlam2::update(const FeatureSet& features) {
     // Walls along the building's axes measure the heading (heading_prior.h): the prior the
     // landmarks then refine is the motion prediction conditioned on it.
     double axis_offset = 0.0;
-    if (heading_prior_.residual(observations, reference_heading, predicted.z(), &axis_offset)) {
+    if (heading_prior_.residual(heading_lines, predicted.z(), &axis_offset)) {
       p.log_weight += heading_prior_.condition(axis_offset, &predicted, &motion_cov);
       ++stats_.heading_measurements;
     }

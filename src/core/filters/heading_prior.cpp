@@ -144,25 +144,36 @@ int HeadingPrior::familyOf(double direction_rad) const {
   return family;
 }
 
-bool HeadingPrior::residual(const std::vector<Observation>& observations, double reference_rad,
-                            double heading_rad, double* offset_rad) const {
-  if (!options_.enabled || !ready_ || !std::isfinite(reference_rad) ||
-      !std::isfinite(heading_rad)) {
-    return false;
-  }
-  double sum = 0.0, weight = 0.0;
-  int count = 0;
+HeadingPrior::LineSelection HeadingPrior::select(const std::vector<Observation>& observations,
+                                                 double reference_rad) const {
+  LineSelection selection;
+  if (!options_.enabled || !ready_ || !std::isfinite(reference_rad)) return selection;
   for (const Observation& o : observations) {
     if (o.type != LandmarkType::kLine || lineWeight(o) <= 0.0) continue;
     const int family = familyOf(o.z.y() + reference_rad);
-    if (family < 0) continue;
-    sum += lineWeight(o) * halfTurnOffset(o.z.y() + heading_rad - families_[family]);
-    weight += lineWeight(o);
-    ++count;
+    if (family >= 0) selection.lines.push_back({o.z.y(), families_[family], lineWeight(o)});
   }
-  if (count < options_.min_lines) return false;
+  return selection;
+}
+
+bool HeadingPrior::residual(const LineSelection& selection, double heading_rad,
+                            double* offset_rad) const {
+  if (!std::isfinite(heading_rad) ||
+      static_cast<int>(selection.lines.size()) < options_.min_lines) {
+    return false;
+  }
+  double sum = 0.0, weight = 0.0;
+  for (const LineSelection::Line& l : selection.lines) {
+    sum += l.weight * halfTurnOffset(l.observed_rad + heading_rad - l.family_rad);
+    weight += l.weight;
+  }
   *offset_rad = sum / weight;
   return true;
+}
+
+bool HeadingPrior::residual(const std::vector<Observation>& observations, double reference_rad,
+                            double heading_rad, double* offset_rad) const {
+  return residual(select(observations, reference_rad), heading_rad, offset_rad);
 }
 
 double HeadingPrior::inlierProbability(double offset_rad, double s, double* log_likelihood) const {

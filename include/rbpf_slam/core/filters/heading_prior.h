@@ -90,6 +90,17 @@ class HeadingPrior {
   /// min_lines qualify (or not ready).
   bool residual(const std::vector<Observation>& observations, double reference_rad,
                 double heading_rad, double* offset_rad) const;
+  /// The lines residual() uses, picked once at `reference_rad`: each line's observed direction,
+  /// its family's direction and its weight. Empty when not enabled or not ready.
+  struct LineSelection {
+    struct Line {
+      double observed_rad, family_rad, weight;
+    };
+    std::vector<Line> lines;
+  };
+  LineSelection select(const std::vector<Observation>& observations, double reference_rad) const;
+  /// residual() on lines already selected: one selection per update serves every particle.
+  bool residual(const LineSelection& selection, double heading_rad, double* offset_rad) const;
   /// Conditions the Gaussian (mean, cov) on the heading measurement "heading = mean.z() -
   /// offset" with noise sigma_rad (and outlier_ratio); returns its log-likelihood (the weight
   /// factor).
