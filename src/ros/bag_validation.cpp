@@ -14,13 +14,11 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "rbpf_slam/ros/node_support.h"
+
 namespace rbpf_slam {
 namespace rosbridge {
 namespace {
-
-std::string stripSlash(const std::string& frame) {
-  return !frame.empty() && frame[0] == '/' ? frame.substr(1) : frame;
-}
 
 /// Keeps the running state of one stream while the bag is read.
 struct StreamState {

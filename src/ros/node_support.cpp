@@ -3,6 +3,10 @@
 namespace rbpf_slam {
 namespace rosbridge {
 
+std::string stripSlash(const std::string& name) {
+  return !name.empty() && name[0] == '/' ? name.substr(1) : name;
+}
+
 void ThrottledWarnings::warn(const std::string& cause, const std::string& message) {
   const ros::WallTime now = ros::WallTime::now();
   auto it = last_.find(cause);

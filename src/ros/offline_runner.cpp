@@ -1,19 +1,19 @@
 #include "rbpf_slam/ros/offline_runner.h"
 
+#include <geometry_msgs/PoseWithCovarianceStamped.h>
 #include <rosbag/bag.h>
 #include <rosbag/view.h>
 #include <sys/stat.h>
 #include <tf2/buffer_core.h>
 #include <tf2/exceptions.h>
-#include <geometry_msgs/PoseWithCovarianceStamped.h>
 #include <tf2_msgs/TFMessage.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <chrono>
+#include <cstdio>
 #include <ctime>
 #include <filesystem>
-#include <cstdio>
 #include <fstream>
 #include <iomanip>
 #include <limits>
@@ -22,13 +22,14 @@
 #include <sstream>
 
 #include "rbpf_slam/core/grid/grid_map_data.h"
+#include "rbpf_slam/io/evaluation.h"
 #include "rbpf_slam/io/grid_map_file.h"
 #include "rbpf_slam/io/landmark_file.h"
-#include "rbpf_slam/io/evaluation.h"
 #include "rbpf_slam/io/map_image.h"
 #include "rbpf_slam/io/trajectory.h"
 #include "rbpf_slam/ros/conversions.h"
 #include "rbpf_slam/ros/markers.h"
+#include "rbpf_slam/ros/node_support.h"
 
 namespace rbpf_slam {
 namespace rosbridge {
@@ -36,10 +37,6 @@ namespace {
 
 constexpr double kCloudAxisTolerance = 0.05;  // m: a cloud point lies on its transducer's axis
 constexpr double kLandmarkPointRadius = 0.1;  // m: a point landmark's disc in map.pgm
-
-std::string stripSlash(const std::string& s) {
-  return !s.empty() && s[0] == '/' ? s.substr(1) : s;
-}
 
 bool topicIs(const std::string& topic, const std::string& name) {
   return stripSlash(topic) == stripSlash(name);
@@ -77,9 +74,19 @@ class ProgressBar {
   double last_ = -1.0;
 };
 
+/// An odometry transform (odom -> base) as the bag holds it.
+struct OdometryArrival {
+  ros::Time received;  // the bag's time of the message
+  double stamp = 0.0;  // the transform's stamp, s
+};
+
 /// Loads every transform of the bag; repeated stamps of a child frame (common in converted
 /// logs) are skipped here instead of letting tf2 warn for each. Returns how many were skipped.
-long loadTransforms(const rosbag::Bag& bag, tf2::BufferCore* buffer) {
+/// The stamps of odom_frame -> base_frame (the odometry) go to odometry, in bag order, each
+/// with the time the bag received it.
+long loadTransforms(const rosbag::Bag& bag, const std::string& odom_frame,
+                    const std::string& base_frame, tf2::BufferCore* buffer,
+                    std::vector<OdometryArrival>* odometry) {
   std::map<std::string, ros::Time> last_stamp;
   long skipped = 0;
   rosbag::View view(bag, rosbag::TopicQuery(std::vector<std::string>{"/tf", "/tf_static", "tf",
@@ -90,16 +97,20 @@ long loadTransforms(const rosbag::Bag& bag, tf2::BufferCore* buffer) {
     const bool is_static = topicIs(m.getTopic(), "tf_static");
     for (const auto& t : msg->transforms) {
       const std::string key = t.header.frame_id + ">" + t.child_frame_id;
+      const bool is_odometry = !is_static && stripSlash(t.header.frame_id) == odom_frame &&
+                               stripSlash(t.child_frame_id) == base_frame;
       if (!is_static) {
         auto it = last_stamp.find(key);
         if (it != last_stamp.end() && t.header.stamp <= it->second) {
-          ++skipped;
+          ++skipped;  // tf2 has it (or a newer one) already; a node still sees it arrive
+          if (is_odometry) odometry->push_back({m.getTime(), t.header.stamp.toSec()});
           continue;
         }
         last_stamp[key] = t.header.stamp;
       }
       try {
         buffer->setTransform(t, "bag", is_static);
+        if (is_odometry) odometry->push_back({m.getTime(), t.header.stamp.toSec()});
       } catch (const std::exception&) {
         // malformed transform (NaN, empty frame): tf2 rejects it; nothing to keep
         ++skipped;
@@ -212,9 +223,11 @@ OfflineSummary OfflineRunner::run() {
   summary.bag_duration_s = (bag_end - bag_begin).toSec();
   // The whole bag's tf fits in memory for the bags this runner is meant for (hours of 2D data).
   tf2::BufferCore tf(ros::Duration(std::max(summary.bag_duration_s + 60.0, 10.0)));
-  summary.skipped_transforms = loadTransforms(bag, &tf);
-
   const io::RosOptions& ros_options = config_.ros;
+  std::vector<OdometryArrival> odometry;
+  summary.skipped_transforms = loadTransforms(bag, stripSlash(ros_options.odom_frame),
+                                              stripSlash(ros_options.base_frame), &tf, &odometry);
+  std::size_t next_odometry = 0;  // the next odometry transform to tell the session of
   std::string sensor_topic;  // the raw sensor topic of the front end, if any
   if (config_.frontend == "laser") sensor_topic = ros_options.scan_topic;
   if (config_.frontend == "sonar") {
@@ -277,6 +290,16 @@ OfflineSummary OfflineRunner::run() {
     } catch (const tf2::TransformException&) {
       ++summary.dropped_no_tf;
       continue;
+    }
+    // The session learns of the odometry as a node would: what the bag received up to this
+    // frame, and on until a stamp after the frame's (the transform that made the lookup
+    // possible; a node's MessageFilter waits for it).
+    bool bracketed = false;
+    while (next_odometry < odometry.size() &&
+           (odometry[next_odometry].received <= m.getTime() || !bracketed)) {
+      const double t = odometry[next_odometry++].stamp;
+      pipeline_.session().addOdometryStamp(t);
+      bracketed = bracketed || t > stamp.toSec();
     }
     const auto t0 = std::chrono::steady_clock::now();
     core::FrameResult result;

@@ -70,6 +70,7 @@ SlamNode::SlamNode(ros::NodeHandle nh, ros::NodeHandle private_nh,
     sonar_input_ = subscribeFiltered(ros_options.sonar_topic, &SlamNode::sonarCallback);
   }
   features_input_ = subscribeFiltered(ros_options.features_topic, &SlamNode::featuresCallback);
+  odometry_tf_subscriber_ = nh_.subscribe("/tf", 100, &SlamNode::odometryTfCallback, this);
 
   pose_publisher_ = private_nh_.advertise<geometry_msgs::PoseWithCovarianceStamped>("pose", 10);
   trajectory_publisher_ = private_nh_.advertise<nav_msgs::Path>("trajectory", 1, true);
@@ -219,6 +220,16 @@ void SlamNode::featuresCallback(const FeatureArray::ConstPtr& msg) {
   const auto t0 = std::chrono::steady_clock::now();
   const core::FrameResult result = pipeline_.processFeatures(features, odom_pose);
   handleResult(result, msg->header.stamp, millisecondsSince(t0));
+}
+
+void SlamNode::odometryTfCallback(const tf2_msgs::TFMessage::ConstPtr& msg) {
+  const std::string odom = stripSlash(config_.ros.odom_frame);
+  const std::string base = stripSlash(config_.ros.base_frame);
+  for (const auto& t : msg->transforms) {
+    if (stripSlash(t.child_frame_id) == base && stripSlash(t.header.frame_id) == odom) {
+      pipeline_.session().addOdometryStamp(t.header.stamp.toSec());
+    }
+  }
 }
 
 void SlamNode::frameNotInTf(const std_msgs::Header& header, const std::string& tf_error) {
@@ -519,6 +530,7 @@ bool SlamNode::checkClock() {
 
 void SlamNode::publishDiagnostics(const ros::WallTimerEvent&) {
   diagnostics_.setPaused(paused_);
+  diagnostics_.setOdometryGaps(pipeline_.session().gaps());
   const ros::Time now = ros::Time::now();
   diagnostics_publisher_.publish(diagnostics_.report(
       now.isZero() ? ros::Time(ros::WallTime::now().toSec()) : now,

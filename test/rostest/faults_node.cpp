@@ -4,8 +4,9 @@
 // class at a time and checks the named outcome: the message is dropped with its cause counted
 // in /diagnostics, or processed without harm; afterwards the node keeps updating. Throughout,
 // nothing non-finite may be published and map -> odom never repeats a stamp within one run
-// of the clock. Finally the clock jumps back (a bag loop): the node must clear its map, count
-// a reset and map again.
+// of the clock. Then the clock jumps back (a bag loop): the node must clear its map, count
+// a reset and map again. Last, 35 s without scans while odometry flows must not count as an
+// odometry gap in /diagnostics, 35 s without odometry must.
 
 #include <diagnostic_msgs/DiagnosticArray.h>
 #include <geometry_msgs/PoseWithCovarianceStamped.h>
@@ -364,6 +365,24 @@ TEST_F(FaultsTest, H_ClockJumpBackClearsTheMapAndMappingRestarts) {
   EXPECT_TRUE(caughtUp()) << "no mapping after the loop";
   settle();
   EXPECT_GE(observer_->landmarks(), 4u) << "the walls were not mapped again";
+}
+
+// laser_fastslam2.yaml has max_time_gap 30 s: a gap is odometry silent that long, not scans.
+TEST_F(FaultsTest, I_NoScansWhileOdometryFlowsIsNoGapAnOdometryOutageIs) {
+  settle();
+  const long gaps_before = observer_->diagnostic("odometry gaps");
+  ASSERT_GE(gaps_before, 0) << "no 'odometry gaps' in /diagnostics";
+  for (int i = 0; i < 70; ++i) robot_->tick();  // 35 s of odometry without a scan
+  robot_->drive(2);
+  EXPECT_TRUE(caughtUp());
+  settle();
+  EXPECT_EQ(observer_->diagnostic("odometry gaps"), gaps_before) << "35 s without scans";
+  for (int i = 0; i < 70; ++i) robot_->tick(false);  // 35 s without odometry (nor scans)
+  robot_->drive(2);
+  EXPECT_TRUE(caughtUp());
+  settle();
+  EXPECT_EQ(observer_->diagnostic("odometry gaps"), gaps_before + 1) << "35 s without odometry";
+  expectRecovers("an odometry outage");
 }
 
 TEST_F(FaultsTest, Z_NothingNonFiniteAndNoRepeatedTransformStamps) {

@@ -1,13 +1,14 @@
 #!/usr/bin/env bash
 # Corrupted copies of the bundled real slices (test/tools/corrupt_bag.py: invalid ranges, stale
-# and duplicate stamps, a 30 s tf gap, empty and unknown frames, malformed messages, a 3 m
+# and duplicate stamps, a tf gap (a tenth of the bag), empty and unknown frames, malformed messages, a 3 m
 # odometry jump, then the bag's start again with its own stamps) through offline_slam and
 # through rbpf_slam_node (rosbag play --clock), for each case below: the laser front end on
 # the Intel and the ACES slice, the sonar front end (Range messages) on the Intel slice, and
 # range-bearing features on 150 s of MRCLAM robot 1 (converted at test time from
 # ../shared/data/mrclam6; skipped when that is not there).
 # Fails if either crashes, writes or publishes anything non-finite, stops updating after any
-# fault window, or does not start a new map at the loop.
+# fault window, or does not start a new map at the loop; and offline_slam, if its gap check
+# misses the tf gap or counts frames far apart as a gap while the odometry flows (1b).
 #   test/scripts/corrupted_bag.sh [CASE ...]     (default: every case)
 # A CASE may also be BAG:CONFIG:LANDMARKS for any bag (CONFIG a name in config/, LANDMARKS 1 if
 # the map must hold landmarks at the end), e.g. ../shared/data/aces.bag:laser_fastslam2:1;
@@ -51,6 +52,19 @@ fi
 # 1. The offline runner.
 "$bin/offline_slam" --bag "$work/corrupt.bag" --config "$config" --output "$work/offline" \
   --no-progress --verbose >"$work/offline.log" 2>&1 || { echo "FAIL: offline_slam exited non-zero"; tail "$work/offline.log"; return 1; }
+
+# 1b. The gap check measures how long the odometry was silent, not the frames: with
+# max_time_gap at half the tf gap's length the corrupted bag has a gap and the original none
+# (although frames may be further apart: the MRCLAM slice goes 24 and 27 s without a sighting).
+local gap_limit
+gap_limit=$(/usr/bin/python3 -c "import json; w = json.load(open('$work/windows.json'))['tf_gap']; print(0.5 * (w[1] - w[0]))")
+for input in corrupt original; do
+  local input_bag="$work/corrupt.bag"
+  [ $input = original ] && input_bag="$bag"
+  "$bin/offline_slam" --bag "$input_bag" --config "$config" --output "$work/gap_$input" \
+    --no-progress --set max_time_gap="$gap_limit" >"$work/gap_$input.log" 2>&1 \
+    || { echo "FAIL: offline_slam (max_time_gap $gap_limit, $input bag) exited non-zero"; tail "$work/gap_$input.log"; return 1; }
+done
 
 # 2. The node, with the bag played at 10x and its outputs recorded.
 cat >"$work/run.launch" <<LAUNCH
@@ -133,6 +147,12 @@ for name, (lo, hi) in windows.items():
         fail("offline: no update after the %s window" % name)
 if summary["resets"] < 1:
     fail("offline: no new map at the loop (resets = %d)" % summary["resets"])
+gaps = {k: json.load(open("%s/gap_%s/summary.json" % (work, k)))["gaps"] for k in ("corrupt", "original")}
+if gaps["corrupt"] < 1:
+    fail("offline: the tf gap was not seen as an odometry gap (max_time_gap half its length)")
+if gaps["original"] != 0:
+    fail("offline: %d gaps in the original bag with max_time_gap half the tf gap's length "
+         "(frames far apart with the odometry flowing are no gap)" % gaps["original"])
 print("offline: %d updates, %d resets, %d rejected, %d malformed, %d without tf, %d landmarks"
       % (summary["updates"], summary["resets"], summary["rejected"],
          summary["dropped_bad_message"], summary["dropped_no_tf"], summary["landmarks"]))

@@ -81,8 +81,11 @@ namespace rbpf_slam {
 namespace {
 
 /// Spread (RMS distance from the mean) of the particles after one 0.5 m step taken `gap_s`
-/// after the first frame.
-double spreadAfterGap(const std::string& action, double gap_s, long* gaps, long* resets) {
+/// after the first frame. With odometry_period_s > 0 the session is told of odometry every
+/// odometry_period_s between the frames, except in (hole_start, hole_end).
+double spreadAfterGap(const std::string& action, double gap_s, long* gaps, long* resets,
+                      double odometry_period_s = 0.0, double hole_start = 0.0,
+                      double hole_end = 0.0) {
   core::FilterOptions filter;
   filter.particles = 200;
   filter.seed = 3;
@@ -90,6 +93,11 @@ double spreadAfterGap(const std::string& action, double gap_s, long* gaps, long*
   options.max_time_gap_s = 30.0;
   options.gap_action = action;
   core::SlamSession session(core::createFilter(filter), options);
+  if (odometry_period_s > 0.0) {
+    for (double t = 1.0; t <= 1.0 + gap_s + odometry_period_s; t += odometry_period_s) {
+      if (t <= hole_start || t >= hole_end) session.addOdometryStamp(t);
+    }
+  }
   session.process(1.0, core::Pose2(0.0, 0.0, 0.0), core::FeatureSet());
   session.process(1.0 + gap_s, core::Pose2(0.5, 0.0, 0.0), core::FeatureSet());
   *gaps = session.gaps();
@@ -113,6 +121,74 @@ TEST(SlamSession, ATimeGapInflatesTheMotionNoiseOrResets) {
   spreadAfterGap("reset", 60.0, &gaps, &resets);
   EXPECT_EQ(gaps, 1);
   EXPECT_EQ(resets, 1);
+}
+
+TEST(SlamSession, FramesFarApartWithOdometryInBetweenAreNoGap) {
+  // A landmark camera reports only sightings: 60 s without a frame while the odometry kept
+  // coming at 10 Hz is no gap; a 40 s hole in that odometry is, as is 60 s with no odometry
+  // stamps known at all (then the frames' spacing is all there is).
+  long gaps = 0, resets = 0;
+  const double normal = spreadAfterGap("inflate", 1.0, &gaps, &resets);
+  const double covered = spreadAfterGap("inflate", 60.0, &gaps, &resets, 0.1);
+  EXPECT_EQ(gaps, 0);
+  EXPECT_NEAR(covered, normal, 0.5 * normal);
+  const double holed = spreadAfterGap("inflate", 60.0, &gaps, &resets, 0.1, 10.0, 50.0);
+  EXPECT_EQ(gaps, 1);
+  EXPECT_GT(holed, 2.0 * normal);
+  spreadAfterGap("reset", 60.0, &gaps, &resets, 0.1, 10.0, 50.0);
+  EXPECT_EQ(resets, 1);
+  spreadAfterGap("inflate", 60.0, &gaps, &resets, 0.1, 10.0, 35.0);  // 25 s: below 30 s
+  EXPECT_EQ(gaps, 0);
+}
+
+TEST(SlamSession, AClockJumpBackForgetsTheOldRunsOdometry) {
+  // Odometry every 0.1 s over 1-100 s (frames until 30 s), then the bag starts over at 1 s,
+  // with odometry until 20 s and none for 40 s: the old run's stamps must not fill that hole.
+  core::FilterOptions filter;
+  filter.particles = 10;
+  core::SessionOptions options;
+  options.max_time_gap_s = 30.0;
+  core::SlamSession session(core::createFilter(filter), options);
+  for (double t = 1.0; t <= 100.0; t += 0.1) session.addOdometryStamp(t);
+  for (double t = 10.0; t <= 30.0; t += 10.0) {
+    session.process(t, core::Pose2(0.01 * t, 0.0, 0.0), core::FeatureSet());
+  }
+  for (double t = 1.0; t <= 20.0; t += 1.0) {
+    for (double s = t - 0.9; s <= t + 0.05; s += 0.1) session.addOdometryStamp(s);
+    session.process(t, core::Pose2(0.01 * t, 0.0, 0.0), core::FeatureSet());
+  }
+  ASSERT_EQ(session.resets(), 1);
+  EXPECT_EQ(session.gaps(), 0);
+  for (double t = 60.0; t <= 61.0; t += 0.1) session.addOdometryStamp(t);
+  session.process(61.0, core::Pose2(0.61, 0.0, 0.0), core::FeatureSet());
+  EXPECT_EQ(session.gaps(), 1);
+}
+
+TEST(OdometryStamps, LongestSilenceBracketsTheWindow) {
+  core::OdometryStamps stamps;
+  EXPECT_LT(stamps.longestSilence(0.0, 10.0), 0.0);  // unknown
+  for (double t : {1.0, 2.0, 3.0, 9.0, 9.5, 12.0}) stamps.add(t);
+  stamps.add(std::nan(""));
+  stamps.add(2.0);  // a duplicate
+  EXPECT_EQ(stamps.size(), 6u);
+  EXPECT_DOUBLE_EQ(stamps.longestSilence(2.5, 9.2), 6.0);  // 3 -> 9
+  EXPECT_DOUBLE_EQ(stamps.longestSilence(9.6, 9.7), 2.5);  // 9.5 -> 12 brackets it
+  EXPECT_DOUBLE_EQ(stamps.longestSilence(1.0, 2.0), 1.0);
+  EXPECT_DOUBLE_EQ(stamps.longestSilence(0.0, 1.5), 1.0);    // nothing before 0: from 0 to 1
+  EXPECT_DOUBLE_EQ(stamps.longestSilence(12.0, 20.0), 8.0);  // nothing after 12 yet
+  EXPECT_DOUBLE_EQ(stamps.longestSilence(9.2, 2.5), 6.0);    // order of the ends does not matter
+  stamps.forgetBefore(9.2);                                  // keeps 9, which brackets 9.2
+  EXPECT_EQ(stamps.size(), 3u);
+  EXPECT_DOUBLE_EQ(stamps.longestSilence(9.2, 9.4), 0.5);
+  stamps.clear();
+  EXPECT_LT(stamps.longestSilence(9.2, 9.4), 0.0);
+}
+
+TEST(OdometryStamps, MemoryIsBounded) {
+  core::OdometryStamps stamps(100);
+  for (int i = 0; i < 1000; ++i) stamps.add(0.01 * i);
+  EXPECT_EQ(stamps.size(), 100u);
+  EXPECT_NEAR(stamps.longestSilence(9.0, 9.98), 0.01, 1e-9);
 }
 
 TEST(SlamSession, GapOptionsAreValidated) {

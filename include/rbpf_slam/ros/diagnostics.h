@@ -39,6 +39,8 @@ class SlamDiagnostics {
   /// A message that could not be used; cause is a short fixed phrase ("no tf", "bad scan").
   void recordDrop(const std::string& cause);
   void recordReset() { ++resets_total_; }
+  /// Steps taken across an odometry gap so far (SlamSession::gaps); reported once set.
+  void setOdometryGaps(long total) { odometry_gaps_ = total; }
   void setPaused(bool paused) { paused_ = paused; }
 
   /// The report for the period since the previous call (then the period counters restart).
@@ -52,6 +54,7 @@ class SlamDiagnostics {
   double update_ms_sum_period_ = 0.0;
   std::map<std::string, long> drops_period_, drops_total_;
   bool paused_ = false;
+  long odometry_gaps_ = -1;  // -1: not reported
 };
 
 }  // namespace rosbridge

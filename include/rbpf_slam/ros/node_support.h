@@ -18,6 +18,9 @@
 namespace rbpf_slam {
 namespace rosbridge {
 
+/// A frame or topic name without its leading '/' (tf2 frames carry none; old bags do).
+std::string stripSlash(const std::string& name);
+
 /// ROS_WARN at most once per period for each cause (a short key such as "no tf sonar_3").
 class ThrottledWarnings {
  public:

@@ -14,6 +14,7 @@
 #include <sensor_msgs/PointCloud.h>
 #include <sensor_msgs/Range.h>
 #include <std_srvs/Empty.h>
+#include <tf2_msgs/TFMessage.h>
 #include <tf2_ros/buffer.h>
 #include <tf2_ros/message_filter.h>
 #include <tf2_ros/transform_broadcaster.h>
@@ -56,6 +57,8 @@ class SlamNode {
   void featuresCallback(const FeatureArray::ConstPtr& msg);
   void sonarCallback(const sensor_msgs::Range::ConstPtr& msg);
   void sonarCloudCallback(const sensor_msgs::PointCloud::ConstPtr& msg);
+  /// Tells the session when odom -> base arrived (its gap check is on odometry silences).
+  void odometryTfCallback(const tf2_msgs::TFMessage::ConstPtr& msg);
   /// Subscribes to topic through tf (TfGatedSubscriber) on the odometry frame.
   template <typename Message>
   std::unique_ptr<TfGatedSubscriber<Message>> subscribeFiltered(
@@ -115,6 +118,7 @@ class SlamNode {
   ros::ServiceServer reset_server_, pause_server_, resume_server_, save_map_server_,
       load_map_server_;
   ros::Subscriber initial_pose_subscriber_;
+  ros::Subscriber odometry_tf_subscriber_;  // /tf, for the stamps of odom -> base only
   ros::Publisher diagnostics_publisher_;
   ros::WallTimer diagnostics_timer_;
   SlamDiagnostics diagnostics_{"rbpf_slam_node"};

@@ -61,6 +61,7 @@ void SlamSession::reset() {
   start_pose_.reset();
   has_previous_ = false;
   last_stamp_ = 0.0;
+  odometry_stamps_.clear();  // after a clock jump they would be the old run's
   map_to_odom_ = Pose2::Zero();
   trajectory_.clear();
   frames_back_ = 0;
@@ -119,8 +120,11 @@ FrameResult SlamSession::process(double stamp, const Pose2& odom_pose,
     motion.delta = measured_motion->delta;
     motion.noise_scale = measured_motion->noise_scale;
   }
-  // A long silence or an odometry jump: the increment is not to be trusted as usual.
-  const bool gap = (options_.max_time_gap_s > 0.0 && motion.dt > options_.max_time_gap_s) ||
+  // A long silence of the odometry (or, when its stamps are unknown, of the frames) or an
+  // odometry jump: the increment is not to be trusted as usual.
+  const double odometry_silence = odometry_stamps_.longestSilence(last_stamp_, stamp);
+  const double silence = odometry_silence >= 0.0 ? odometry_silence : motion.dt;
+  const bool gap = (options_.max_time_gap_s > 0.0 && silence > options_.max_time_gap_s) ||
                    (options_.max_odometry_jump_m > 0.0 &&
                     std::hypot(delta.x(), delta.y()) > options_.max_odometry_jump_m);
   if (gap) {
@@ -139,6 +143,7 @@ FrameResult SlamSession::process(double stamp, const Pose2& odom_pose,
   last_stats_ = filter_->update(features);
   last_stamp_ = stamp;
   last_odom_ = odom_pose;
+  odometry_stamps_.forgetBefore(stamp);
   const Pose2 map_pose = filter_->estimate().mean;
   if (map_pose.allFinite()) {
     map_to_odom_ = compose(map_pose, inverse(odom_pose));

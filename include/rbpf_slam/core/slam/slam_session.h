@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "rbpf_slam/core/filters/slam_filter.h"
+#include "rbpf_slam/core/slam/odometry_stamps.h"
 
 namespace rbpf_slam {
 namespace core {
@@ -16,7 +17,9 @@ namespace core {
 struct SessionOptions {
   double linear_update_m = 0.0;     // update only after moving this far (0: every frame)
   double angular_update_rad = 0.0;  // ... or turning this much
-  double max_time_gap_s = 30.0;     // a longer gap between two frames (s) ...
+  double max_time_gap_s = 30.0;     // odometry silent this long (s) between two frames (the
+                                    // stamps given to addOdometryStamp; without any, the time
+                                    // between the frames) ...
   double max_odometry_jump_m = 0.0;  // ... or a longer odometry increment (m; 0: unchecked)
   std::string gap_action = "inflate";  // ... is a gap: "inflate" the motion noise of that step
                                        // by gap_noise_inflation, or "reset" (a new map)
@@ -46,6 +49,10 @@ class SlamSession {
   /// a laser-corrected one); odom_pose still defines the map -> odom correction.
   FrameResult process(double stamp, const Pose2& odom_pose, const FeatureSet& features,
                       const MotionInput* measured_motion = nullptr);
+  /// Records that odometry (odom -> base) was received at stamp: the gap check then measures
+  /// how long the odometry was silent between two frames, not how far apart the frames are
+  /// (sensors such as a landmark camera report only when they see something).
+  void addOdometryStamp(double stamp) { odometry_stamps_.add(stamp); }
   /// The odometry pose of the last frame the filter used.
   const Pose2& lastOdomPose() const { return last_odom_; }
   /// Clears the filter and the history (e.g. after the clock jumped backwards); a prior map
@@ -85,6 +92,7 @@ class SlamSession {
   long resets_ = 0;
   int frames_back_ = 0;
   long gaps_ = 0;  // consecutive frames far behind last_stamp_
+  OdometryStamps odometry_stamps_;  // cleared by reset()
   std::optional<std::vector<LandmarkEstimate>> prior_map_;
   std::optional<std::pair<Pose2, Eigen::Matrix3d>> start_pose_;  // for the first frame
   bool mapping_ = true;
