@@ -264,7 +264,7 @@ int main(int argc, char** argv) {
               << "\n";
   } catch (const std::exception& error) {
     std::cerr << "carmen_to_bag: " << error.what() << "\n";
-    return io::kUsageExitStatus;
+    return 1;  // a runtime failure, as the other converters (2 is for bad arguments)
   }
   return 0;
 }
