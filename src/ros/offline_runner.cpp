@@ -404,6 +404,7 @@ OfflineSummary OfflineRunner::run() {
   summary.fallbacks = pipeline_.session().filter().stats().fallbacks;
   summary.relocalizations = pipeline_.session().filter().stats().relocalizations;
   summary.heading_measurements = pipeline_.session().filter().stats().heading_measurements;
+  summary.robust_steps = pipeline_.session().filter().stats().robust_steps;
   return writeOutputs(summary);
 }
 
@@ -473,6 +474,7 @@ OfflineSummary OfflineRunner::writeOutputs(const OfflineSummary& in) const {
        << "  \"fallbacks\": " << summary.fallbacks << ",\n"
        << "  \"relocalizations\": " << summary.relocalizations << ",\n"
        << "  \"heading_measurements\": " << summary.heading_measurements << ",\n"
+       << "  \"robust_steps\": " << summary.robust_steps << ",\n"
        << "  \"update_ms_mean\": " << summary.update_ms_mean << ",\n"
        << "  \"update_ms_p99\": " << summary.update_ms_p99 << ",\n"
        << "  \"update_ms_max\": " << summary.update_ms_max << ",\n"

@@ -1,10 +1,13 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <memory>
 #include <stdexcept>
+#include <string>
 
 #include "rbpf_slam/core/filters/fastslam2.h"
 #include "rbpf_slam/core/filters/heading_prior.h"
+#include "rbpf_slam/core/filters/robust_fastslam2.h"
 #include "synthetic_world.h"
 
 namespace rbpf_slam {
@@ -295,13 +298,8 @@ TEST(HeadingPrior, OutOfRangeOptionsAreNamed) {
   EXPECT_NO_THROW(validate(filter));
   filter.heading_prior.drift_tracking = true;
   EXPECT_NO_THROW(validate(filter));
-  filter.variant = "robust_fastslam2";  // its robust steps would not follow the correction
-  try {
-    validate(filter);
-    FAIL() << "drift tracking accepted for robust_fastslam2";
-  } catch (const std::invalid_argument& e) {
-    EXPECT_NE(std::string(e.what()).find("heading_prior.drift_tracking"), std::string::npos);
-  }
+  filter.variant = "robust_fastslam2";  // its robust steps follow the correction too
+  EXPECT_NO_THROW(validate(filter));
 }
 
 // Particles that start with a heading error (spread 0.04 rad around +0.06 rad) in an
@@ -336,8 +334,10 @@ double finalHeadingError(bool with_prior, long* measurements) {
 // seen per update (sonar-like), motion noise far below the drift, and landmarks made nearly
 // uninformative (covariance x 1e4) so that only the heading prior can hold the heading. The
 // per-particle prior cannot follow a drift the particles do not spread over; drift tracking does.
-double driftHeadingError(bool drift_tracking) {
+double driftHeadingError(bool drift_tracking, const std::string& variant = "fastslam2",
+                         long* robust_steps = nullptr) {
   FilterOptions options;
+  options.variant = variant;
   options.particles = 20;
   options.seed = 3;
   options.use_points = false;
@@ -352,7 +352,18 @@ double driftHeadingError(bool drift_tracking) {
   options.heading_prior.min_lines = 1;
   options.heading_prior.drift_tracking = drift_tracking;
   options.heading_prior.drift_per_rad = 0.05;
-  FastSlam2 filter(options);
+  // Robust: the tracker forgets a wall after 2 steps, so every wall (each seen every 4th
+  // update) is a new-landmark event; robust steps follow at the ancestor spacing.
+  options.robust.min_old_observations = 0;
+  options.tracker.forget_after_steps = 2;
+  // Built directly: the 1e4 inflation is beyond what validate() lets a config ask for.
+  std::unique_ptr<FastSlam2> made;
+  if (variant == "robust_fastslam2") {
+    made = std::make_unique<RobustFastSlam2>(options);
+  } else {
+    made = std::make_unique<FastSlam2>(options);
+  }
+  FastSlam2& filter = *made;
   SyntheticWorld world;
   Rng rng(8);
   Pose2 truth(0.0, -2.5, 0.0);
@@ -368,6 +379,10 @@ double driftHeadingError(bool drift_tracking) {
     seen.lines = {seen.lines[k % 4]};
     filter.update(seen);
   }
+  if (robust_steps) {
+    const auto* robust = dynamic_cast<const RobustFastSlam2*>(&filter);
+    *robust_steps = robust ? robust->robustStats().robust_steps : 0;
+  }
   return std::fabs(wrapAngle(filter.estimate().mean.z() - truth.z()));
 }
 
@@ -375,6 +390,18 @@ TEST(HeadingPrior, DriftTrackingFollowsAnOdometryTurnBias) {
   const double per_particle = driftHeadingError(false);
   const double tracked = driftHeadingError(true);
   EXPECT_GT(per_particle, 0.2);  // 0.48 rad of drift in all
+  EXPECT_LT(tracked, 0.05) << "per particle " << per_particle;
+}
+
+// The same with the robust filter, whose steps at the tracker's new-landmark events draw
+// candidates from older sets propagated over the recorded odometry: the records carry each
+// step's drift turn, so those candidates follow the correction as well.
+TEST(HeadingPrior, RobustStepsFollowTheDriftCorrection) {
+  long robust_steps = 0;
+  const double per_particle = driftHeadingError(false, "robust_fastslam2");
+  const double tracked = driftHeadingError(true, "robust_fastslam2", &robust_steps);
+  EXPECT_GE(robust_steps, 3);
+  EXPECT_GT(per_particle, 0.2);
   EXPECT_LT(tracked, 0.05) << "per particle " << per_particle;
 }
 

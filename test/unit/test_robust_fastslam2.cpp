@@ -73,6 +73,20 @@ TEST(AncestorMemory, SetsOutsideTheWindowAreNotUsable) {
   EXPECT_TRUE(memory.usable(13).empty());
 }
 
+TEST(AncestorMemory, TheLatestRecordTakesTheStepsDriftTurn) {
+  AncestorMemory memory(2, 1, 10);
+  memory.turnLatestRecord(0.1);  // no record yet: nothing
+  memory.record(recordAt(1));
+  memory.record(recordAt(2));
+  memory.turnLatestRecord(0.05);
+  memory.turnLatestRecord(3.1);  // wraps
+  const std::vector<const StepRecord*> records = memory.records(0, 2);
+  ASSERT_EQ(records.size(), 2u);
+  EXPECT_DOUBLE_EQ(records[0]->motion.delta.z(), 0.0);
+  EXPECT_NEAR(records[1]->motion.delta.z(), 3.15 - 2.0 * M_PI, 1e-12);
+  EXPECT_DOUBLE_EQ(records[1]->motion.delta.x(), 0.2);
+}
+
 TEST(AncestorMemory, SpacingRefusesCloseSets) {
   AncestorMemory memory(4, 5, 100);
   memory.store(setAt(10, 1));

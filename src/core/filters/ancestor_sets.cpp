@@ -19,6 +19,12 @@ void AncestorMemory::record(StepRecord record) {
   dropOld(step);
 }
 
+void AncestorMemory::turnLatestRecord(double turn_rad) {
+  if (records_.empty() || turn_rad == 0.0) return;
+  Pose2& delta = records_.back().motion.delta;
+  delta.z() = wrapAngle(delta.z() + turn_rad);
+}
+
 bool AncestorMemory::canStore(int step) const {
   return max_sets_ > 0 && (sets_.empty() || step - sets_.back().step >= spacing_steps_);
 }

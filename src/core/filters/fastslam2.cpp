@@ -432,13 +432,9 @@ FastSlam2::ParticleUpdate FastSlam2::updateParticle(Particle* particle,
   return result;
 }
 
-UpdateStats FastSlam2::update(const FeatureSet& features) {
-  UpdateStats stats;
-  ++step_;
-  const std::vector<Observation> observations = prepare(features, &stats.features_rejected);
-  stats.features_in = static_cast<int>(features.lines.size() + features.points.size());
-  const MotionInput motion = pending_motion_.take();
-  std::vector<ParticleUpdate> results(particles_.size());
+FastSlam2::HeadingStep FastSlam2::headingStep(const std::vector<Observation>& observations,
+                                              const MotionInput& motion) {
+  HeadingStep step;
   // The heading prior picks its lines at the filter's predicted heading, the same for every
   // particle, so that all are weighed on the same lines.
   double reference_heading = 0.0;
@@ -451,16 +447,27 @@ UpdateStats FastSlam2::update(const FeatureSet& features) {
     reference_heading = wrapAngle(std::atan2(s, c) + motion.delta.z());
   }
   // Drift tracking: one correction of the mean heading, the same for every particle.
-  double drift_turn = 0.0;
   if (heading_prior_.tracksDrift()) {
     const double scale = motion.noise_scale * motion.noise_scale;
     heading_prior_.predictDrift(motion.delta.z() * scale, motion.delta.head<2>().norm() * scale);
-    drift_turn = heading_prior_.correctDrift(observations, reference_heading);
-    reference_heading = wrapAngle(reference_heading + drift_turn);
+    step.drift_turn = heading_prior_.correctDrift(observations, reference_heading);
+    reference_heading = wrapAngle(reference_heading + step.drift_turn);
   }
-  // The walls that measure the heading, picked once at the filter's heading for every particle.
-  const HeadingPrior::LineSelection heading_lines =
-      heading_prior_.select(observations, reference_heading);
+  step.lines = heading_prior_.select(observations, reference_heading);
+  last_drift_turn_ = step.drift_turn;
+  return step;
+}
+
+UpdateStats FastSlam2::update(const FeatureSet& features) {
+  UpdateStats stats;
+  ++step_;
+  const std::vector<Observation> observations = prepare(features, &stats.features_rejected);
+  stats.features_in = static_cast<int>(features.lines.size() + features.points.size());
+  const MotionInput motion = pending_motion_.take();
+  std::vector<ParticleUpdate> results(particles_.size());
+  const HeadingStep heading = headingStep(observations, motion);
+  const double drift_turn = heading.drift_turn;
+  const HeadingPrior::LineSelection& heading_lines = heading.lines;
   for (size_t i = 0; i < particles_.size(); ++i) {
     Particle& p = particles_[i];
     if (observations.empty()) {

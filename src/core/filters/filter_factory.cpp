@@ -42,13 +42,6 @@ void validate(const FilterOptions& o) {
     throw std::invalid_argument("heading_prior.enabled = true is not implemented for variant '" +
                                 o.variant + "' (fastslam2, hinf_fastslam, robust_fastslam2 only)");
   }
-  if (o.heading_prior.enabled && o.heading_prior.drift_tracking &&
-      o.variant == "robust_fastslam2") {
-    // Its robust steps draw from ancestor sets with their own proposal, which the drift
-    // correction does not follow.
-    throw std::invalid_argument(
-        "heading_prior.drift_tracking = true is not implemented for variant 'robust_fastslam2'");
-  }
   requireRange("particles", o.particles, 1, 100000);
   requireRange("resample_threshold", o.resample_threshold, 0.0, 1.0);
   requireRange("proposal_sample_scale", o.proposal_sample_scale, 1e-3, 1.0);

@@ -70,7 +70,11 @@ UpdateStats RobustFastSlam2::update(const FeatureSet& features) {
   record.motion = motion;
   record.observations = observations;
   memory_.record(std::move(record));
-  if (!event.new_landmark) return FastSlam2::update(features);
+  if (!event.new_landmark) {
+    const UpdateStats stats = FastSlam2::update(features);
+    memory_.turnLatestRecord(last_drift_turn_);
+    return stats;
+  }
   ++robust_stats_.tracker_events;
 
   // S_{t-1}, the latest set, is the first ancestor; the stored ones follow, newest first.
@@ -95,20 +99,27 @@ UpdateStats RobustFastSlam2::update(const FeatureSet& features) {
                       options_.robust.min_old_observations;
   if (eligible && !informed) ++robust_stats_.fallbacks;
   if (informed) {
-    stats = robustUpdate(observations, ancestors);
+    stats = robustUpdate(observations, ancestors, motion);
     stats.features_rejected = rejected;
     stats.features_in = static_cast<int>(features.lines.size() + features.points.size());
     last_robust_step_ = step;
   } else {
     stats = FastSlam2::update(features);
+    memory_.turnLatestRecord(last_drift_turn_);
   }
   if (memory_.canStore(latest.step)) memory_.store(std::move(latest));
   return stats;
 }
 
 UpdateStats RobustFastSlam2::robustUpdate(const std::vector<Observation>& observations,
-                                          const std::vector<const AncestorSet*>& ancestors) {
+                                          const std::vector<const AncestorSet*>& ancestors,
+                                          const MotionInput& motion) {
   UpdateStats stats;
+  // The heading prior as in a FastSLAM 2.0 step, at the latest set's heading: the drift turn
+  // goes into this step's record, which every candidate is propagated over (the turns of the
+  // skipped steps are in their records already), and the walls weigh each candidate.
+  const HeadingStep heading = headingStep(observations, motion);
+  memory_.turnLatestRecord(heading.drift_turn);
   ++step_;
   pending_motion_ = PendingMotion();
   const int t = step_;
@@ -130,8 +141,8 @@ UpdateStats RobustFastSlam2::robustUpdate(const std::vector<Observation>& observ
       propagate(records, &mean, &cov);
       candidate_start.push_back(candidate.pose);
       candidate_counts.emplace_back();
-      candidate.log_weight = updateCandidate(&candidate, mean, cov, observations, old_id_limit,
-                                             &candidate_counts.back());
+      candidate.log_weight = updateCandidate(&candidate, mean, cov, observations, heading.lines,
+                                             old_id_limit, &candidate_counts.back());
       candidates.push_back(std::move(candidate));
       candidate_set.push_back(static_cast<int>(k));
     }
@@ -178,19 +189,28 @@ UpdateStats RobustFastSlam2::robustUpdate(const std::vector<Observation>& observ
   ++stats_.resamples;
   ++stats_.updates;
   ++robust_stats_.robust_steps;
+  ++stats_.robust_steps;
   stats_.last_neff = stats.neff;
   stats_.landmarks = particles_[0].map->size();
+  if (!heading_prior_.ready()) heading_prior_.learn(observations, estimate().mean.z());
   return stats;
 }
 
 double RobustFastSlam2::updateCandidate(Particle* particle, const Pose2& predicted_mean,
                                         const Eigen::Matrix3d& predicted_cov,
                                         const std::vector<Observation>& observations,
+                                        const HeadingPrior::LineSelection& heading_lines,
                                         int old_id_limit, ParticleUpdate* counts) {
   const AssociationOptions& a = options_.association;
   Pose2 mean = predicted_mean;
   Eigen::Matrix3d cov = predicted_cov;
   double log_likelihood = 0.0;
+  // Walls along the building's axes measure the heading (as in FastSlam2::update).
+  double axis_offset = 0.0;
+  if (heading_prior_.residual(heading_lines, mean.z(), &axis_offset)) {
+    log_likelihood += heading_prior_.condition(axis_offset, &mean, &cov);
+    ++stats_.heading_measurements;
+  }
   std::vector<std::pair<int, int>> matched;  // (observation, landmark index)
   std::vector<int> fresh;
   const LandmarkMap& map = *particle->map;

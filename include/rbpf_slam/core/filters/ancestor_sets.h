@@ -38,6 +38,10 @@ class AncestorMemory {
   void clear();
   /// Appends the record of a step (steps increase); drops records beyond the window.
   void record(StepRecord record);
+  /// Turns the heading increment of the latest record by turn_rad: the step's drift
+  /// correction, applied to every particle of that step, so that candidates propagated over
+  /// the record later follow it too. Nothing without records.
+  void turnLatestRecord(double turn_rad);
   /// Whether a set of `step` would be far enough from the latest stored one.
   bool canStore(int step) const;
   /// Stores a set (when canStore), dropping the oldest beyond max_sets.

@@ -147,6 +147,16 @@ class FastSlam2 : public SlamFilter {
                        const Observation& observation, const ObservationInMap& seen,
                        const std::vector<int>* candidates) const;
   void addLandmark(LandmarkMap* map, const Pose2& pose, const Observation& observation);
+  /// The heading prior's part of a step, the same for every particle: drift tracking's turn of
+  /// every particle's predicted heading (0 without it), and the walls that measure the heading,
+  /// picked once at the filter's predicted heading after that turn.
+  struct HeadingStep {
+    double drift_turn = 0.0;
+    HeadingPrior::LineSelection lines;
+  };
+  /// Predicts and corrects the drift (when tracked) with this step's motion and observations.
+  HeadingStep headingStep(const std::vector<Observation>& observations, const MotionInput& motion);
+
   /// Returns false when the correction fell back to the EKF.
   bool updateLandmark(LandmarkMap* map, const Match& match, const Pose2& pose,
                       const Observation& observation, double* log_likelihood);
@@ -162,6 +172,7 @@ class FastSlam2 : public SlamFilter {
   int next_landmark_id_ = 0;
   bool mapping_ = true;  // false: localization only, the maps stay as they are
   int step_ = 0;
+  double last_drift_turn_ = 0.0;  // HeadingStep::drift_turn of the latest update()
   FilterStats stats_;
 };
 

@@ -49,12 +49,14 @@ class RobustFastSlam2 : public FastSlam2 {
   /// Odometry increment covariance in the frame of the previous pose.
   Eigen::Matrix3d incrementCovariance(const MotionInput& motion) const;
   UpdateStats robustUpdate(const std::vector<Observation>& observations,
-                           const std::vector<const AncestorSet*>& ancestors);
+                           const std::vector<const AncestorSet*>& ancestors,
+                           const MotionInput& motion);
   /// The FastSLAM 2.0 step of one candidate from its propagated pose Gaussian; returns its
   /// weight, counting only landmarks older than old_id_limit (those every ancestor can know),
   /// so that candidates from older sets are not penalised for lacking newer landmarks.
   double updateCandidate(Particle* particle, const Pose2& mean, const Eigen::Matrix3d& cov,
-                         const std::vector<Observation>& observations, int old_id_limit,
+                         const std::vector<Observation>& observations,
+                         const HeadingPrior::LineSelection& heading_lines, int old_id_limit,
                          ParticleUpdate* counts);
   /// Moves mean and cov over the recorded steps by the odometry mean and its propagated
   /// covariance (eq. 8's Gaussian).
