@@ -322,8 +322,10 @@ def main():
         st = np.array(sorted(rings))
         st = st[(st >= ref_t[0]) & (st <= ref_t[-1])]
         P = reference_along_odometry(ref_t, ref_p, odo_t, odo, st)
+        # Its own random numbers: the bag written below is the same with or without --check.
         em = emulate(grid, P, mounts, fov, args.max_range, args.ray_spacing_deg, step, critical,
-                     args.drop, args.noise, rng, args.range_from == 'base')
+                     args.drop, args.noise, np.random.default_rng([args.seed, 1]),
+                     args.range_from == 'base')
         sh = np.array([[rings[t].get(i, args.max_range) for i in range(len(mounts))] for t in st])
         e_no, s_no = em >= args.max_range - 1e-3, sh >= args.max_range - 1e-3
         both = ~e_no & ~s_no
