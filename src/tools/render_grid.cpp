@@ -27,6 +27,7 @@
 #include "rbpf_slam/io/slam_config.h"
 #include "rbpf_slam/io/trajectory.h"
 #include "rbpf_slam/ros/conversions.h"
+#include "rbpf_slam/ros/node_support.h"
 
 namespace {
 
@@ -38,7 +39,6 @@ const char kUsage[] =
     "  renders the laser scans at the reference poses (nearest within --max-dt, default\n"
     "  0.05 s) with the config's grid options; writes PREFIX.pgm, PREFIX.yaml; prints JSON\n";
 
-std::string stripSlash(const std::string& s) { return !s.empty() && s[0] == '/' ? s.substr(1) : s; }
 
 /// The nearest reference pose within max_dt of stamp; false if none.
 bool referenceAt(const std::vector<rbpf_slam::io::StampedPose>& reference, double stamp,
@@ -63,6 +63,7 @@ bool referenceAt(const std::vector<rbpf_slam::io::StampedPose>& reference, doubl
 int main(int argc, char** argv) {
   namespace core = rbpf_slam::core;
   namespace io = rbpf_slam::io;
+  using rbpf_slam::rosbridge::stripSlash;
   std::string bag_path, reference_path, config_path, output, align_path;
   std::vector<std::string> overrides;
   double max_dt = 0.05;

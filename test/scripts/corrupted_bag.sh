@@ -62,7 +62,7 @@ for input in corrupt original; do
   local input_bag="$work/corrupt.bag"
   [ $input = original ] && input_bag="$bag"
   "$bin/offline_slam" --bag "$input_bag" --config "$config" --output "$work/gap_$input" \
-    --no-progress --set max_time_gap="$gap_limit" >"$work/gap_$input.log" 2>&1 \
+    --no-progress --verbose --set max_time_gap="$gap_limit" >"$work/gap_$input.log" 2>&1 \
     || { echo "FAIL: offline_slam (max_time_gap $gap_limit, $input bag) exited non-zero"; tail "$work/gap_$input.log"; return 1; }
 done
 
@@ -148,8 +148,21 @@ for name, (lo, hi) in windows.items():
 if summary["resets"] < 1:
     fail("offline: no new map at the loop (resets = %d)" % summary["resets"])
 gaps = {k: json.load(open("%s/gap_%s/summary.json" % (work, k)))["gaps"] for k in ("corrupt", "original")}
-if gaps["corrupt"] < 1:
+# The first gap must be met at the first update in or right after the tf hole.
+hole_lo, hole_hi = windows["tf_gap"]
+gap_stamps, all_stamps = [], []
+for line in open(work + "/gap_corrupt.log"):
+    if line.startswith("t=") and " gaps=" in line:
+        t = float(line.split()[0][2:])
+        all_stamps.append(t)
+        if int(line.split(" gaps=")[1].split()[0]) >= 1 and not gap_stamps:
+            gap_stamps.append(t)
+after = [t for t in all_stamps if t >= hole_hi]
+if gaps["corrupt"] < 1 or not gap_stamps:
     fail("offline: the tf gap was not seen as an odometry gap (max_time_gap half its length)")
+elif not (hole_lo <= gap_stamps[0] <= (after[0] if after else float("inf"))):
+    fail("offline: the first odometry gap at %.2f, not at the tf hole (%.2f-%.2f)"
+         % (gap_stamps[0], hole_lo, hole_hi))
 if gaps["original"] != 0:
     fail("offline: %d gaps in the original bag with max_time_gap half the tf gap's length "
          "(frames far apart with the odometry flowing are no gap)" % gaps["original"])

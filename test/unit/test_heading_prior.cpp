@@ -393,9 +393,10 @@ TEST(HeadingPrior, DriftTrackingFollowsAnOdometryTurnBias) {
   EXPECT_LT(tracked, 0.05) << "per particle " << per_particle;
 }
 
-// The same with the robust filter, whose steps at the tracker's new-landmark events draw
-// candidates from older sets propagated over the recorded odometry: the records carry each
-// step's drift turn, so those candidates follow the correction as well.
+// The same with the robust filter, which now takes drift tracking (its robust steps run the
+// heading step too). That candidates from older sets get the recorded turns is tested on the
+// propagation itself (test_robust_fastslam2, AncestorMemory.PropagationAdds...); here few
+// steps lie between the sets and the next step corrects the rest.
 TEST(HeadingPrior, RobustStepsFollowTheDriftCorrection) {
   long robust_steps = 0;
   const double per_particle = driftHeadingError(false, "robust_fastslam2");

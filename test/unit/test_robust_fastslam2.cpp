@@ -75,16 +75,35 @@ TEST(AncestorMemory, SetsOutsideTheWindowAreNotUsable) {
 
 TEST(AncestorMemory, TheLatestRecordTakesTheStepsDriftTurn) {
   AncestorMemory memory(2, 1, 10);
-  memory.turnLatestRecord(0.1);  // no record yet: nothing
+  memory.setLatestDriftTurn(0.1);  // no record yet: nothing
   memory.record(recordAt(1));
   memory.record(recordAt(2));
-  memory.turnLatestRecord(0.05);
-  memory.turnLatestRecord(3.1);  // wraps
+  memory.setLatestDriftTurn(0.05);
   const std::vector<const StepRecord*> records = memory.records(0, 2);
   ASSERT_EQ(records.size(), 2u);
-  EXPECT_DOUBLE_EQ(records[0]->motion.delta.z(), 0.0);
-  EXPECT_NEAR(records[1]->motion.delta.z(), 3.15 - 2.0 * M_PI, 1e-12);
-  EXPECT_DOUBLE_EQ(records[1]->motion.delta.x(), 0.2);
+  EXPECT_DOUBLE_EQ(records[0]->drift_turn_rad, 0.0);
+  EXPECT_DOUBLE_EQ(records[1]->drift_turn_rad, 0.05);
+  EXPECT_DOUBLE_EQ(records[1]->motion.delta.z(), 0.0);  // the odometry itself is kept
+}
+
+// A candidate from an older set is moved over the records as the particles of those steps
+// were: odometry mean plus each step's drift turn (without the turns it would miss the
+// corrections the latest set got).
+TEST(AncestorMemory, PropagationAddsTheRecordedDriftTurns) {
+  MotionOptions motion;
+  const std::unique_ptr<MotionModel> model = createMotionModel(motion);
+  StepRecord a = recordAt(1), b = recordAt(2);
+  a.motion.delta = Pose2(1.0, 0.0, 0.1);
+  b.motion.delta = Pose2(1.0, 0.0, 0.0);
+  a.drift_turn_rad = -0.02;
+  b.drift_turn_rad = -0.03;
+  Pose2 mean = Pose2::Zero();
+  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+  propagateOverRecords(*model, {&a, &b}, &mean, &cov);
+  EXPECT_NEAR(mean.z(), 0.1 - 0.05, 1e-12);
+  EXPECT_NEAR(mean.x(), 1.0 + std::cos(0.08), 1e-12);  // the second step after the first turn
+  EXPECT_NEAR(mean.y(), std::sin(0.08), 1e-12);
+  EXPECT_GT(cov(2, 2), 0.0);
 }
 
 TEST(AncestorMemory, SpacingRefusesCloseSets) {

@@ -166,29 +166,56 @@ TEST(SlamSession, AClockJumpBackForgetsTheOldRunsOdometry) {
 
 TEST(OdometryStamps, LongestSilenceBracketsTheWindow) {
   core::OdometryStamps stamps;
-  EXPECT_LT(stamps.longestSilence(0.0, 10.0), 0.0);  // unknown
+  EXPECT_LT(stamps.longestSilence(0.0, 10.0).length, 0.0);  // unknown
   for (double t : {1.0, 2.0, 3.0, 9.0, 9.5, 12.0}) stamps.add(t);
   stamps.add(std::nan(""));
   stamps.add(2.0);  // a duplicate
   EXPECT_EQ(stamps.size(), 6u);
-  EXPECT_DOUBLE_EQ(stamps.longestSilence(2.5, 9.2), 6.0);  // 3 -> 9
-  EXPECT_DOUBLE_EQ(stamps.longestSilence(9.6, 9.7), 2.5);  // 9.5 -> 12 brackets it
-  EXPECT_DOUBLE_EQ(stamps.longestSilence(1.0, 2.0), 1.0);
-  EXPECT_DOUBLE_EQ(stamps.longestSilence(0.0, 1.5), 1.0);    // nothing before 0: from 0 to 1
-  EXPECT_DOUBLE_EQ(stamps.longestSilence(12.0, 20.0), 8.0);  // nothing after 12 yet
-  EXPECT_DOUBLE_EQ(stamps.longestSilence(9.2, 2.5), 6.0);    // order of the ends does not matter
-  stamps.forgetBefore(9.2);                                  // keeps 9, which brackets 9.2
+  const auto length = [&](double t0, double t1) { return stamps.longestSilence(t0, t1).length; };
+  EXPECT_DOUBLE_EQ(length(2.5, 9.2), 6.0);   // 3 -> 9
+  EXPECT_DOUBLE_EQ(stamps.longestSilence(2.5, 9.2).end, 9.0);
+  EXPECT_DOUBLE_EQ(length(9.6, 9.7), 2.5);   // 9.5 -> 12 brackets it
+  EXPECT_DOUBLE_EQ(length(1.0, 2.0), 1.0);
+  EXPECT_DOUBLE_EQ(length(0.0, 1.5), 1.0);   // nothing before 0: from 0 to 1
+  EXPECT_DOUBLE_EQ(length(12.0, 20.0), 8.0);  // nothing after 12 yet
+  EXPECT_DOUBLE_EQ(length(9.2, 2.5), 6.0);   // order of the ends does not matter
+  // Stretches that ended at or before `ignore_until` were dealt with already.
+  EXPECT_DOUBLE_EQ(stamps.longestSilence(2.5, 9.7, 9.0).length, 2.5);  // 9.5 -> 12, not 3 -> 9
+  stamps.forgetBefore(9.2);  // keeps 9, which brackets 9.2
   EXPECT_EQ(stamps.size(), 3u);
-  EXPECT_DOUBLE_EQ(stamps.longestSilence(9.2, 9.4), 0.5);
+  EXPECT_DOUBLE_EQ(length(9.2, 9.4), 0.5);
   stamps.clear();
-  EXPECT_LT(stamps.longestSilence(9.2, 9.4), 0.0);
+  EXPECT_LT(length(9.2, 9.4), 0.0);
 }
 
-TEST(OdometryStamps, MemoryIsBounded) {
+TEST(OdometryStamps, MemoryIsBoundedAndEvictionIsNoSilence) {
   core::OdometryStamps stamps(100);
   for (int i = 0; i < 1000; ++i) stamps.add(0.01 * i);
   EXPECT_EQ(stamps.size(), 100u);
-  EXPECT_NEAR(stamps.longestSilence(9.0, 9.98), 0.01, 1e-9);
+  EXPECT_NEAR(stamps.longestSilence(9.0, 9.98).length, 0.01, 1e-9);
+  // A window from before the kept stamps: the odometry came until the last one evicted.
+  EXPECT_NEAR(stamps.longestSilence(1.0, 9.5).length, 0.01, 1e-9);
+}
+
+// A 40 s hole in the odometry with frames every second inside it (offline, tf interpolates
+// across it): one gap, and with gap_action reset one new map, not one per frame.
+TEST(SlamSession, OneOdometryHoleIsOneGapHoweverManyFramesFallInIt) {
+  for (const std::string action : {"inflate", "reset"}) {
+    core::FilterOptions filter;
+    filter.particles = 10;
+    core::SessionOptions options;
+    options.max_time_gap_s = 30.0;
+    options.gap_action = action;
+    core::SlamSession session(core::createFilter(filter), options);
+    for (double t = 1.0; t <= 100.0; t += 0.1) {
+      if (t < 20.0 || t > 60.0) session.addOdometryStamp(t);
+    }
+    for (double t = 2.0; t <= 90.0; t += 1.0) {
+      session.process(t, core::Pose2(0.01 * t, 0.0, 0.0), core::FeatureSet());
+    }
+    EXPECT_EQ(session.gaps(), 1) << action;
+    EXPECT_EQ(session.resets(), action == "reset" ? 1 : 0) << action;
+  }
 }
 
 TEST(SlamSession, GapOptionsAreValidated) {

@@ -2,6 +2,8 @@
 
 #include <utility>
 
+#include "rbpf_slam/core/filters/intermediate_path.h"
+
 namespace rbpf_slam {
 namespace core {
 
@@ -19,10 +21,18 @@ void AncestorMemory::record(StepRecord record) {
   dropOld(step);
 }
 
-void AncestorMemory::turnLatestRecord(double turn_rad) {
-  if (records_.empty() || turn_rad == 0.0) return;
-  Pose2& delta = records_.back().motion.delta;
-  delta.z() = wrapAngle(delta.z() + turn_rad);
+void propagateOverRecords(const MotionModel& model, const std::vector<const StepRecord*>& records,
+                          Pose2* mean, Eigen::Matrix3d* cov) {
+  for (const StepRecord* r : records) {
+    const Eigen::Matrix3d f = composeJacobianFirst(*mean, r->motion.delta);
+    *cov = f * *cov * f.transpose() + model.covariance(*mean, r->motion);
+    *mean = model.mean(*mean, r->motion);
+    mean->z() = wrapAngle(mean->z() + r->drift_turn_rad);  // as FastSlam2::update turns it
+  }
+}
+
+void AncestorMemory::setLatestDriftTurn(double turn_rad) {
+  if (!records_.empty()) records_.back().drift_turn_rad = turn_rad;
 }
 
 bool AncestorMemory::canStore(int step) const {

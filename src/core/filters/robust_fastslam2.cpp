@@ -72,7 +72,7 @@ UpdateStats RobustFastSlam2::update(const FeatureSet& features) {
   memory_.record(std::move(record));
   if (!event.new_landmark) {
     const UpdateStats stats = FastSlam2::update(features);
-    memory_.turnLatestRecord(last_drift_turn_);
+    memory_.setLatestDriftTurn(last_drift_turn_);
     return stats;
   }
   ++robust_stats_.tracker_events;
@@ -105,7 +105,7 @@ UpdateStats RobustFastSlam2::update(const FeatureSet& features) {
     last_robust_step_ = step;
   } else {
     stats = FastSlam2::update(features);
-    memory_.turnLatestRecord(last_drift_turn_);
+    memory_.setLatestDriftTurn(last_drift_turn_);
   }
   if (memory_.canStore(latest.step)) memory_.store(std::move(latest));
   return stats;
@@ -117,9 +117,10 @@ UpdateStats RobustFastSlam2::robustUpdate(const std::vector<Observation>& observ
   UpdateStats stats;
   // The heading prior as in a FastSLAM 2.0 step, at the latest set's heading: the drift turn
   // goes into this step's record, which every candidate is propagated over (the turns of the
-  // skipped steps are in their records already), and the walls weigh each candidate.
+  // skipped steps are in their records already), and the walls weigh each candidate
+  // (heading_measurements then counts candidates, M x K per robust step).
   const HeadingStep heading = headingStep(observations, motion);
-  memory_.turnLatestRecord(heading.drift_turn);
+  memory_.setLatestDriftTurn(heading.drift_turn);
   ++step_;
   pending_motion_ = PendingMotion();
   const int t = step_;
@@ -260,11 +261,7 @@ double RobustFastSlam2::updateCandidate(Particle* particle, const Pose2& predict
 
 void RobustFastSlam2::propagate(const std::vector<const StepRecord*>& records, Pose2* mean,
                                 Eigen::Matrix3d* cov) const {
-  for (const StepRecord* r : records) {
-    const Eigen::Matrix3d f = composeJacobianFirst(*mean, r->motion.delta);
-    *cov = f * *cov * f.transpose() + motion_model_->covariance(*mean, r->motion);
-    *mean = motion_model_->mean(*mean, r->motion);
-  }
+  propagateOverRecords(*motion_model_, records, mean, cov);
 }
 
 int RobustFastSlam2::oldLandmarkObservations(const std::vector<Observation>& observations,
@@ -283,6 +280,7 @@ int RobustFastSlam2::oldLandmarkObservations(const std::vector<Observation>& obs
       if (set->weights[i] > set->weights[best]) best = i;
     }
     const Particle& particle = set->particles[best];
+    // (The current step's drift turn is not known yet: its record is not turned here.)
     Pose2 mean = particle.pose;
     Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
     propagate(memory_.records(set->step, step), &mean, &cov);
@@ -305,7 +303,9 @@ IntermediatePath RobustFastSlam2::intermediatePath(const Pose2& start, const Pos
   std::vector<Pose2> increments;
   std::vector<Eigen::Matrix3d> covariances;
   for (const StepRecord* r : records) {
-    increments.push_back(r->motion.delta);
+    Pose2 increment = r->motion.delta;  // with the step's drift turn, as propagate() moves
+    increment.z() = wrapAngle(increment.z() + r->drift_turn_rad);
+    increments.push_back(increment);
     covariances.push_back(incrementCovariance(r->motion));
   }
   return estimateIntermediatePath(start, end, increments, covariances,

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <iterator>
+#include <utility>
 
 namespace rbpf_slam {
 namespace core {
@@ -13,28 +14,47 @@ OdometryStamps::OdometryStamps(std::size_t capacity)
 void OdometryStamps::add(double stamp) {
   if (!std::isfinite(stamp)) return;
   stamps_.insert(stamp);
-  while (stamps_.size() > capacity_) stamps_.erase(stamps_.begin());
+  while (stamps_.size() > capacity_) {
+    evicted_until_ = std::max(evicted_until_, *stamps_.begin());
+    stamps_.erase(stamps_.begin());
+  }
 }
 
-double OdometryStamps::longestSilence(double t0, double t1) const {
-  if (stamps_.empty()) return -1.0;
+OdometryStamps::Silence OdometryStamps::longestSilence(double t0, double t1,
+                                                       double ignore_until) const {
+  Silence longest;
+  if (stamps_.empty() && !std::isfinite(evicted_until_)) return longest;  // unknown
   if (t1 < t0) std::swap(t0, t1);
+  longest.length = 0.0;
+  longest.end = t1;
   auto it = stamps_.upper_bound(t0);  // first stamp after t0
-  double previous = t0;
-  if (it != stamps_.begin()) previous = std::min(*std::prev(it), t0);
-  double longest = 0.0;
+  // The stretch starts at the last stamp at or before t0: kept, or the newest evicted one.
+  double previous = it != stamps_.begin() ? std::min(*std::prev(it), t0) : t0;
+  if (it == stamps_.begin() && std::isfinite(evicted_until_)) previous = evicted_until_;
+  const auto consider = [&](double start, double end) {
+    if (end > ignore_until && end - start > longest.length) {
+      longest.length = end - start;
+      longest.end = end;
+    }
+  };
   for (; it != stamps_.end(); ++it) {
-    longest = std::max(longest, *it - previous);
+    consider(previous, *it);
     previous = *it;
     if (*it >= t1) return longest;  // the first stamp at or after t1 closes the window
   }
-  return std::max(longest, t1 - previous);  // no odometry after t1 (yet)
+  consider(previous, t1);  // no odometry after t1 (yet)
+  return longest;
 }
 
 void OdometryStamps::forgetBefore(double stamp) {
   auto it = stamps_.upper_bound(stamp);
   if (it == stamps_.begin()) return;
   stamps_.erase(stamps_.begin(), std::prev(it));
+}
+
+void OdometryStamps::clear() {
+  stamps_.clear();
+  evicted_until_ = -std::numeric_limits<double>::infinity();
 }
 
 }  // namespace core

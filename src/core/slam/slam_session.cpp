@@ -56,12 +56,17 @@ bool SlamSession::setPose(const Pose2& pose, const Eigen::Matrix3d& covariance) 
 }
 
 void SlamSession::reset() {
+  restart();
+  odometry_stamps_.clear();  // after a clock jump they would be the old run's
+  counted_silence_end_ = -std::numeric_limits<double>::infinity();
+}
+
+void SlamSession::restart() {
   filter_->reset(Pose2::Zero());
   if (prior_map_) filter_->loadMap(*prior_map_);
   start_pose_.reset();
   has_previous_ = false;
   last_stamp_ = 0.0;
-  odometry_stamps_.clear();  // after a clock jump they would be the old run's
   map_to_odom_ = Pose2::Zero();
   trajectory_.clear();
   frames_back_ = 0;
@@ -122,23 +127,35 @@ FrameResult SlamSession::process(double stamp, const Pose2& odom_pose,
   }
   // A long silence of the odometry (or, when its stamps are unknown, of the frames) or an
   // odometry jump: the increment is not to be trusted as usual.
-  const double odometry_silence = odometry_stamps_.longestSilence(last_stamp_, stamp);
-  const double silence = odometry_silence >= 0.0 ? odometry_silence : motion.dt;
-  const bool gap = (options_.max_time_gap_s > 0.0 && silence > options_.max_time_gap_s) ||
-                   (options_.max_odometry_jump_m > 0.0 &&
-                    std::hypot(delta.x(), delta.y()) > options_.max_odometry_jump_m);
-  if (gap) {
+  const double limit = options_.max_time_gap_s;
+  const OdometryStamps::Silence silence = odometry_stamps_.longestSilence(last_stamp_, stamp);
+  const bool stamps_known = silence.length >= 0.0;
+  const bool silent = limit > 0.0 && (stamps_known ? silence.length : motion.dt) > limit;
+  const bool jump = options_.max_odometry_jump_m > 0.0 &&
+                    std::hypot(delta.x(), delta.y()) > options_.max_odometry_jump_m;
+  // Every frame taken inside one silence of the odometry gets the inflated noise (its
+  // increment is interpolated across it), but the silence counts, and resets the map, once.
+  bool new_gap = jump || (silent && !stamps_known);
+  if (silent && stamps_known) {
+    const OdometryStamps::Silence fresh =
+        odometry_stamps_.longestSilence(last_stamp_, stamp, counted_silence_end_);
+    if (fresh.length > limit) {
+      new_gap = true;
+      counted_silence_end_ = fresh.end;
+    }
+  }
+  if (new_gap) {
     ++gaps_;
     if (options_.gap_action == "reset") {
       const long gaps = gaps_;
-      reset();
+      restart();  // the odometry stamps stay: they are still this run's
       gaps_ = gaps;
       return process(stamp, odom_pose, features);  // the first frame of a new map
     }
-    // A measured (scan-matched) increment that was accepted is kept as it is; odometry alone
-    // across a gap gets its noise inflated.
-    if (!measured_motion) motion.noise_scale = options_.gap_noise_inflation;
   }
+  // A measured (scan-matched) increment that was accepted is kept as it is; odometry alone
+  // across a gap gets its noise inflated.
+  if ((silent || jump) && !measured_motion) motion.noise_scale = options_.gap_noise_inflation;
   filter_->predict(motion);
   last_stats_ = filter_->update(features);
   last_stamp_ = stamp;

@@ -26,8 +26,15 @@ struct AncestorSet {
 struct StepRecord {
   int step = 0;
   MotionInput motion;  // increment from the previous step to this one
+  double drift_turn_rad = 0.0;  // the heading prior's drift correction of the step (added to
+                                // every particle's predicted heading after the motion)
   std::vector<Observation> observations;
 };
+
+/// Eq. 8's Gaussian: moves mean and cov over the records by the odometry mean, the record's
+/// drift turn and the motion model's covariance (propagated by the composition's Jacobian).
+void propagateOverRecords(const MotionModel& model, const std::vector<const StepRecord*>& records,
+                          Pose2* mean, Eigen::Matrix3d* cov);
 
 class AncestorMemory {
  public:
@@ -38,10 +45,9 @@ class AncestorMemory {
   void clear();
   /// Appends the record of a step (steps increase); drops records beyond the window.
   void record(StepRecord record);
-  /// Turns the heading increment of the latest record by turn_rad: the step's drift
-  /// correction, applied to every particle of that step, so that candidates propagated over
-  /// the record later follow it too. Nothing without records.
-  void turnLatestRecord(double turn_rad);
+  /// Sets the latest record's drift turn (the correction every particle of that step got), so
+  /// that candidates propagated over the record later get it too. Nothing without records.
+  void setLatestDriftTurn(double turn_rad);
   /// Whether a set of `step` would be far enough from the latest stored one.
   bool canStore(int step) const;
   /// Stores a set (when canStore), dropping the oldest beyond max_sets.

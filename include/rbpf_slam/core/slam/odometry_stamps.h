@@ -4,6 +4,7 @@
 // sensor frames while the odometry kept coming (e.g. 30-80 s without a landmark sighting).
 
 #include <cstddef>
+#include <limits>
 #include <set>
 
 namespace rbpf_slam {
@@ -20,20 +21,28 @@ class OdometryStamps {
   bool empty() const { return stamps_.empty(); }
   std::size_t size() const { return stamps_.size(); }
 
-  /// The longest time (s) within [t0, t1] not bracketed by two consecutive odometry stamps:
-  /// the stamps inside, the last one before t0 and the first one after t1 are joined in
-  /// order; where none lies before t0 (after t1), the interval reaches to t0 (t1). A pose
-  /// interpolated at t1 is only as good as the odometry around it, hence the stamp after t1.
-  /// Negative when no stamp was ever recorded (unknown: the caller falls back to its own rule).
-  double longestSilence(double t0, double t1) const;
+  /// A stretch between two consecutive odometry stamps.
+  struct Silence {
+    double length = -1.0;  // s; negative: unknown (no stamp was ever recorded)
+    double end = 0.0;      // the stamp that ended it (or t1 when none came after it yet)
+  };
+  /// The longest stretch without odometry that overlaps [t0, t1]: the stamps inside, the last
+  /// one before t0 and the first one after t1 are joined in order, so a stretch may reach
+  /// before t0 and past t1 (a pose interpolated at t0 or t1 is only as good as the odometry
+  /// around it). Where no stamp lies before t0 (after t1) the stretch starts at t0 (ends at
+  /// t1). Stretches ending at or before `ignore_until` (already dealt with) do not count.
+  Silence longestSilence(double t0, double t1,
+                         double ignore_until = -std::numeric_limits<double>::infinity()) const;
 
   /// Forgets every stamp before the last one at or before `stamp` (still needed to bracket it).
   void forgetBefore(double stamp);
-  void clear() { stamps_.clear(); }
+  void clear();
 
  private:
   std::size_t capacity_;
   std::set<double> stamps_;
+  // The newest stamp dropped for capacity: the odometry came until then (no silence before).
+  double evicted_until_ = -std::numeric_limits<double>::infinity();
 };
 
 }  // namespace core

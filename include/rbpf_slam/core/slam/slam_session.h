@@ -3,6 +3,7 @@
 // rejects out-of-order input, keeps the trajectory and the map -> odom correction.
 // Shared by rbpf_slam_node and offline_slam so both run the same code path.
 
+#include <limits>
 #include <memory>
 #include <optional>
 #include <string>
@@ -77,10 +78,14 @@ class SlamSession {
   SlamFilter& filter() { return *filter_; }
   double lastStamp() const { return last_stamp_; }
   long resets() const { return resets_; }
-  /// Steps taken across a gap (max_time_gap_s, max_odometry_jump_m).
+  /// Gaps met (max_time_gap_s, max_odometry_jump_m): one odometry silence counts once, however
+  /// many frames fall inside it.
   long gaps() const { return gaps_; }
 
  private:
+  /// reset() but for what is known about the input (the odometry stamps): a new map after a gap.
+  void restart();
+
   std::unique_ptr<SlamFilter> filter_;
   const SessionOptions options_;
   bool has_previous_ = false;
@@ -93,6 +98,8 @@ class SlamSession {
   int frames_back_ = 0;
   long gaps_ = 0;  // consecutive frames far behind last_stamp_
   OdometryStamps odometry_stamps_;  // cleared by reset()
+  double counted_silence_end_ = -std::numeric_limits<double>::infinity();  // end of the last
+                                                                          // silence counted
   std::optional<std::vector<LandmarkEstimate>> prior_map_;
   std::optional<std::pair<Pose2, Eigen::Matrix3d>> start_pose_;  // for the first frame
   bool mapping_ = true;
