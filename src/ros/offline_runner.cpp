@@ -228,7 +228,8 @@ OfflineSummary OfflineRunner::run() {
   summary.skipped_transforms = loadTransforms(bag, stripSlash(ros_options.odom_frame),
                                               stripSlash(ros_options.base_frame), &tf, &odometry);
   std::size_t next_odometry = 0;  // the next odometry transform to tell the session of
-  double last_odometry_fed = -std::numeric_limits<double>::infinity();
+  double last_odometry_fed = -std::numeric_limits<double>::infinity();  // stamp of the last fed
+  double newest_odometry_fed = -std::numeric_limits<double>::infinity();  // ... and the newest
   std::string sensor_topic;  // the raw sensor topic of the front end, if any
   if (config_.frontend == "laser") sensor_topic = ros_options.scan_topic;
   if (config_.frontend == "sonar") {
@@ -297,9 +298,13 @@ OfflineSummary OfflineRunner::run() {
     // possible; a node's MessageFilter waits for it), but not past stamps going back (a loop).
     while (next_odometry < odometry.size()) {
       const OdometryArrival& next = odometry[next_odometry];
-      const bool bracketed = last_odometry_fed >= stamp.toSec();
+      const bool bracketed = newest_odometry_fed >= stamp.toSec();
       if (next.received > m.getTime() && (bracketed || next.stamp < last_odometry_fed)) break;
       pipeline_.session().addOdometryStamp(next.stamp);
+      // A loop (stamps back by more than a second) starts the newest over.
+      newest_odometry_fed = next.stamp < last_odometry_fed - 1.0
+                                ? next.stamp
+                                : std::max(newest_odometry_fed, next.stamp);
       last_odometry_fed = next.stamp;
       ++next_odometry;
     }

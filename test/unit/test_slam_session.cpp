@@ -173,14 +173,14 @@ TEST(OdometryStamps, LongestSilenceBracketsTheWindow) {
   EXPECT_EQ(stamps.size(), 6u);
   const auto length = [&](double t0, double t1) { return stamps.longestSilence(t0, t1).length; };
   EXPECT_DOUBLE_EQ(length(2.5, 9.2), 6.0);   // 3 -> 9
-  EXPECT_DOUBLE_EQ(stamps.longestSilence(2.5, 9.2).end, 9.0);
+  EXPECT_DOUBLE_EQ(stamps.longestSilence(2.5, 9.2).start, 3.0);
   EXPECT_DOUBLE_EQ(length(9.6, 9.7), 2.5);   // 9.5 -> 12 brackets it
   EXPECT_DOUBLE_EQ(length(1.0, 2.0), 1.0);
   EXPECT_DOUBLE_EQ(length(0.0, 1.5), 1.0);   // nothing before 0: from 0 to 1
   EXPECT_DOUBLE_EQ(length(12.0, 20.0), 8.0);  // nothing after 12 yet
   EXPECT_DOUBLE_EQ(length(9.2, 2.5), 6.0);   // order of the ends does not matter
-  // Stretches that ended at or before `ignore_until` were dealt with already.
-  EXPECT_DOUBLE_EQ(stamps.longestSilence(2.5, 9.7, 9.0).length, 2.5);  // 9.5 -> 12, not 3 -> 9
+  // Stretches that started at or before `counted_start` were dealt with already.
+  EXPECT_DOUBLE_EQ(stamps.longestSilence(2.5, 9.7, 3.0).length, 2.5);  // 9.5 -> 12, not 3 -> 9
   stamps.forgetBefore(9.2);  // keeps 9, which brackets 9.2
   EXPECT_EQ(stamps.size(), 3u);
   EXPECT_DOUBLE_EQ(length(9.2, 9.4), 0.5);
@@ -207,15 +207,34 @@ TEST(SlamSession, OneOdometryHoleIsOneGapHoweverManyFramesFallInIt) {
     options.max_time_gap_s = 30.0;
     options.gap_action = action;
     core::SlamSession session(core::createFilter(filter), options);
-    for (double t = 1.0; t <= 100.0; t += 0.1) {
+    for (double t = 1.0; t <= 140.0; t += 0.1) {
       if (t < 20.0 || t > 60.0) session.addOdometryStamp(t);
     }
     for (double t = 2.0; t <= 90.0; t += 1.0) {
       session.process(t, core::Pose2(0.01 * t, 0.0, 0.0), core::FeatureSet());
     }
+    // Frames 40 s apart while the odometry flows: no gap, so the reset kept the stamps.
+    session.process(130.0, core::Pose2(1.3, 0.0, 0.0), core::FeatureSet());
     EXPECT_EQ(session.gaps(), 1) << action;
     EXPECT_EQ(session.resets(), action == "reset" ? 1 : 0) << action;
   }
+}
+
+// A frame inside a hole before the odometry after it has come (its silence provisionally ends
+// at the frame), then the frame after the hole: still one gap.
+TEST(SlamSession, AHoleSeenBeforeItEndsCountsOnce) {
+  core::FilterOptions filter;
+  filter.particles = 10;
+  core::SessionOptions options;
+  options.max_time_gap_s = 30.0;
+  core::SlamSession session(core::createFilter(filter), options);
+  for (double t = 1.0; t < 20.0; t += 0.1) session.addOdometryStamp(t);
+  session.process(10.0, core::Pose2(0.1, 0.0, 0.0), core::FeatureSet());
+  session.process(55.0, core::Pose2(0.55, 0.0, 0.0), core::FeatureSet());
+  EXPECT_EQ(session.gaps(), 1);
+  for (double t = 60.1; t < 62.0; t += 0.1) session.addOdometryStamp(t);
+  session.process(61.0, core::Pose2(0.61, 0.0, 0.0), core::FeatureSet());
+  EXPECT_EQ(session.gaps(), 1);
 }
 
 TEST(SlamSession, GapOptionsAreValidated) {

@@ -21,20 +21,20 @@ void OdometryStamps::add(double stamp) {
 }
 
 OdometryStamps::Silence OdometryStamps::longestSilence(double t0, double t1,
-                                                       double ignore_until) const {
+                                                       double counted_start) const {
   Silence longest;
   if (stamps_.empty() && !std::isfinite(evicted_until_)) return longest;  // unknown
   if (t1 < t0) std::swap(t0, t1);
   longest.length = 0.0;
-  longest.end = t1;
+  longest.start = t0;
   auto it = stamps_.upper_bound(t0);  // first stamp after t0
   // The stretch starts at the last stamp at or before t0: kept, or the newest evicted one.
   double previous = it != stamps_.begin() ? std::min(*std::prev(it), t0) : t0;
   if (it == stamps_.begin() && std::isfinite(evicted_until_)) previous = evicted_until_;
   const auto consider = [&](double start, double end) {
-    if (end > ignore_until && end - start > longest.length) {
+    if (start > counted_start && end - start > longest.length) {
       longest.length = end - start;
-      longest.end = end;
+      longest.start = start;
     }
   };
   for (; it != stamps_.end(); ++it) {

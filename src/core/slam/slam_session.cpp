@@ -58,7 +58,7 @@ bool SlamSession::setPose(const Pose2& pose, const Eigen::Matrix3d& covariance) 
 void SlamSession::reset() {
   restart();
   odometry_stamps_.clear();  // after a clock jump they would be the old run's
-  counted_silence_end_ = -std::numeric_limits<double>::infinity();
+  counted_silence_start_ = -std::numeric_limits<double>::infinity();
 }
 
 void SlamSession::restart() {
@@ -138,10 +138,10 @@ FrameResult SlamSession::process(double stamp, const Pose2& odom_pose,
   bool new_gap = jump || (silent && !stamps_known);
   if (silent && stamps_known) {
     const OdometryStamps::Silence fresh =
-        odometry_stamps_.longestSilence(last_stamp_, stamp, counted_silence_end_);
+        odometry_stamps_.longestSilence(last_stamp_, stamp, counted_silence_start_);
     if (fresh.length > limit) {
       new_gap = true;
-      counted_silence_end_ = fresh.end;
+      counted_silence_start_ = fresh.start;
     }
   }
   if (new_gap) {

@@ -24,15 +24,16 @@ class OdometryStamps {
   /// A stretch between two consecutive odometry stamps.
   struct Silence {
     double length = -1.0;  // s; negative: unknown (no stamp was ever recorded)
-    double end = 0.0;      // the stamp that ended it (or t1 when none came after it yet)
+    double start = 0.0;    // the stamp it began after (t0 when none came before), which names
+                           // it even before it ends
   };
   /// The longest stretch without odometry that overlaps [t0, t1]: the stamps inside, the last
   /// one before t0 and the first one after t1 are joined in order, so a stretch may reach
   /// before t0 and past t1 (a pose interpolated at t0 or t1 is only as good as the odometry
   /// around it). Where no stamp lies before t0 (after t1) the stretch starts at t0 (ends at
-  /// t1). Stretches ending at or before `ignore_until` (already dealt with) do not count.
+  /// t1). Stretches starting at or before `counted_start` (already dealt with) do not count.
   Silence longestSilence(double t0, double t1,
-                         double ignore_until = -std::numeric_limits<double>::infinity()) const;
+                         double counted_start = -std::numeric_limits<double>::infinity()) const;
 
   /// Forgets every stamp before the last one at or before `stamp` (still needed to bracket it).
   void forgetBefore(double stamp);

@@ -98,8 +98,8 @@ class SlamSession {
   int frames_back_ = 0;
   long gaps_ = 0;  // consecutive frames far behind last_stamp_
   OdometryStamps odometry_stamps_;  // cleared by reset()
-  double counted_silence_end_ = -std::numeric_limits<double>::infinity();  // end of the last
-                                                                          // silence counted
+  // Where the last odometry silence counted began (it counts once, whatever frames follow).
+  double counted_silence_start_ = -std::numeric_limits<double>::infinity();
   std::optional<std::vector<LandmarkEstimate>> prior_map_;
   std::optional<std::pair<Pose2, Eigen::Matrix3d>> start_pose_;  // for the first frame
   bool mapping_ = true;
