@@ -265,6 +265,7 @@ void readSonar(YamlSection section, core::SonarExtractorOptions* o) {
   section.read("max_line_sigma_theta_rad", &o->max_line_sigma_theta_rad);
   section.read("line_sigma_rho_m", &o->line_sigma_rho_m);
   section.read("line_sigma_theta_rad", &o->line_sigma_theta_rad);
+  section.read("line_theta_per_length_m", &o->line_theta_per_length_m);
   section.read("extract_points", &o->extract_points);
   section.read("point_cell_m", &o->point_cell_m);
   section.read("min_point_echoes", &o->min_point_echoes);

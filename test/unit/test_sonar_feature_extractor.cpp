@@ -138,6 +138,25 @@ TEST(SonarFeatureExtractor, WallBesideAStraightDriveIsOneLine) {
   EXPECT_NEAR(f.lines[0].covariance(1, 1), std::pow(0.0873, 2), 1e-9);
 }
 
+// line_theta_per_length_m: the direction of a 1.5 m line is trusted to no better than k / 1.5 m.
+TEST(SonarFeatureExtractor, LineDirectionFloorShrinksWithTheLinesLength) {
+  SonarExtractorOptions options;
+  options.line_sigma_theta_rad = 0.01;
+  options.line_theta_per_length_m = 0.3;
+  SonarFeatureExtractor extractor{options};
+  const Pose2 mount(0.0, 0.2, M_PI_2);
+  Pose2 pose(0, 0, 0);
+  for (int i = 0; i < 16; ++i) {
+    pose = Pose2(0.1 * i, 0.0, 0.0);
+    extractor.addReadings({reading(1.3, mount)}, pose, 0.25 * i);
+  }
+  const FeatureSet f = extractor.extract(pose, 4.0);
+  ASSERT_EQ(f.lines.size(), 1u);
+  EXPECT_NEAR(f.lines[0].covariance(1, 1), std::pow(0.3 / 1.5, 2), 1e-9);
+  options.line_theta_per_length_m = -0.1;
+  EXPECT_THROW(validate(options), std::invalid_argument);
+}
+
 TEST(SonarFeatureExtractor, PostPassedByIsTriangulated) {
   // A pole at (1.0, 1.2), heard by a Pioneer-like front-left quarter ring (10, 30, 50, 90 deg)
   // while driving past along x; noise-free echoes, nothing else in the world.

@@ -50,6 +50,7 @@ void validate(const SonarExtractorOptions& o) {
   requireRange("sonar_features.max_line_sigma_theta_rad", o.max_line_sigma_theta_rad, 0.0, 3.2, true);
   requireRange("sonar_features.line_sigma_rho_m", o.line_sigma_rho_m, 0.0, 100.0, true);
   requireRange("sonar_features.line_sigma_theta_rad", o.line_sigma_theta_rad, 0.0, 3.2, true);
+  requireRange("sonar_features.line_theta_per_length_m", o.line_theta_per_length_m, 0.0, 10.0);
   requireRange("sonar_features.point_cell_m", o.point_cell_m, 0.01, 1.0);
   requireRange("sonar_features.min_point_echoes", o.min_point_echoes, 3, 100000);
   requireRange("sonar_features.min_point_baseline_m", o.min_point_baseline_m, 0.0, 100.0);

@@ -260,8 +260,9 @@ bool lineFeature(const SonarExtractorOptions& o, const std::vector<LocalEcho>& e
   line->covariance = fit.covariance;
   line->covariance(0, 0) =
       std::max(line->covariance(0, 0), o.line_sigma_rho_m * o.line_sigma_rho_m);
-  line->covariance(1, 1) =
-      std::max(line->covariance(1, 1), o.line_sigma_theta_rad * o.line_sigma_theta_rad);
+  const double theta_floor =
+      std::max(o.line_sigma_theta_rad, o.line_theta_per_length_m / std::max(hi - lo, 0.01));
+  line->covariance(1, 1) = std::max(line->covariance(1, 1), theta_floor * theta_floor);
   line->rho = fit.rho;
   line->theta = fit.theta;
   if (line->rho < 0.0) {  // the origin lies beyond the wall: flip to rho >= 0

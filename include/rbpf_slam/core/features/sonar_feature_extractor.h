@@ -50,6 +50,9 @@ struct SonarExtractorOptions {
   double max_line_sigma_theta_rad = 0.04;  // ... (too few poses, too short a baseline)
   double line_sigma_rho_m = 0.2;           // covariance floor (Lee, Kim, Chung 2010)
   double line_sigma_theta_rad = 0.0873;    // 5 deg
+  double line_theta_per_length_m = 0.0;    // ... and at least this / the line's length, rad:
+                                           // the cone model's error, which the echo fit does
+                                           // not see, shrinks with the baseline (0: off)
   // Points (corners, edges, posts).
   bool extract_points = true;
   double point_cell_m = 0.1;                // vote grid resolution
