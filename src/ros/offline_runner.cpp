@@ -228,7 +228,7 @@ OfflineSummary OfflineRunner::run() {
   summary.skipped_transforms = loadTransforms(bag, stripSlash(ros_options.odom_frame),
                                               stripSlash(ros_options.base_frame), &tf, &odometry);
   std::size_t next_odometry = 0;  // the next odometry transform to tell the session of
-  double last_odometry_fed = -std::numeric_limits<double>::infinity();  // stamp of the last fed
+  double last_odometry_fed = -std::numeric_limits<double>::infinity();    // stamp of the last fed
   double newest_odometry_fed = -std::numeric_limits<double>::infinity();  // ... and the newest
   std::string sensor_topic;  // the raw sensor topic of the front end, if any
   if (config_.frontend == "laser") sensor_topic = ros_options.scan_topic;
@@ -365,17 +365,18 @@ OfflineSummary OfflineRunner::run() {
     if (options_.verbose && (result == core::FrameResult::kUpdated)) {
       const core::UpdateStats& u = pipeline_.session().lastStats();
       const core::Pose2 p = pipeline_.session().trajectory().back().pose;
-      std::fprintf(stderr,
-                   "t=%.2f lines=%zu points=%zu assoc=%d new=%d neff=%.1f resampled=%d reloc=%d "
-                   "pose=(%.2f %.2f %.1fdeg) %.2fms match=%d (%.3f %.3f %.4f) inl=%.2f rms=%.3f info=%.1f "
-                   "gaps=%ld\n",
-                   stamp.toSec(), pipeline_.lastFeatures().lines.size(),
-                   pipeline_.lastFeatures().points.size(), u.associated, u.new_landmarks, u.neff,
-                   u.resampled ? 1 : 0, u.relocalized, p.x(), p.y(), p.z() * 180 / M_PI, ms,
-                   pipeline_.lastMatch().ok ? 1 : 0, pipeline_.lastMatch().delta.x(),
-                   pipeline_.lastMatch().delta.y(), pipeline_.lastMatch().delta.z(),
-                   pipeline_.lastMatch().inlier_ratio, pipeline_.lastMatch().residual_rms_m,
-                   pipeline_.lastMatch().weakest_information, pipeline_.session().gaps());
+      std::fprintf(
+          stderr,
+          "t=%.2f lines=%zu points=%zu assoc=%d new=%d neff=%.1f resampled=%d reloc=%d "
+          "pose=(%.2f %.2f %.1fdeg) %.2fms match=%d (%.3f %.3f %.4f) inl=%.2f rms=%.3f info=%.1f "
+          "gaps=%ld\n",
+          stamp.toSec(), pipeline_.lastFeatures().lines.size(),
+          pipeline_.lastFeatures().points.size(), u.associated, u.new_landmarks, u.neff,
+          u.resampled ? 1 : 0, u.relocalized, p.x(), p.y(), p.z() * 180 / M_PI, ms,
+          pipeline_.lastMatch().ok ? 1 : 0, pipeline_.lastMatch().delta.x(),
+          pipeline_.lastMatch().delta.y(), pipeline_.lastMatch().delta.z(),
+          pipeline_.lastMatch().inlier_ratio, pipeline_.lastMatch().residual_rms_m,
+          pipeline_.lastMatch().weakest_information, pipeline_.session().gaps());
       // The features of this update, base frame, with the odometry pose they were taken at.
       for (const core::LineFeature& l : pipeline_.lastFeatures().lines) {
         std::fprintf(stderr, "  line t=%.3f odom=(%.4f %.4f %.5f) rho=%.4f theta=%.5f sd=(%.4f %.5f) start=(%.3f %.3f) end=(%.3f %.3f)\n",

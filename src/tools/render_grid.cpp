@@ -39,7 +39,6 @@ const char kUsage[] =
     "  renders the laser scans at the reference poses (nearest within --max-dt, default\n"
     "  0.05 s) with the config's grid options; writes PREFIX.pgm, PREFIX.yaml; prints JSON\n";
 
-
 /// The nearest reference pose within max_dt of stamp; false if none.
 bool referenceAt(const std::vector<rbpf_slam::io::StampedPose>& reference, double stamp,
                  double max_dt, rbpf_slam::core::Pose2* pose) {

@@ -123,6 +123,16 @@ TEST(SlamSession, ATimeGapInflatesTheMotionNoiseOrResets) {
   EXPECT_EQ(resets, 1);
 }
 
+/// 10 particles, max_time_gap 30 s, the given gap_action.
+core::SlamSession gapSession(const std::string& action) {
+  core::FilterOptions filter;
+  filter.particles = 10;
+  core::SessionOptions options;
+  options.max_time_gap_s = 30.0;
+  options.gap_action = action;
+  return core::SlamSession(core::createFilter(filter), options);
+}
+
 TEST(SlamSession, FramesFarApartWithOdometryInBetweenAreNoGap) {
   // A landmark camera reports only sightings: 60 s without a frame while the odometry kept
   // coming at 10 Hz is no gap; a 40 s hole in that odometry is, as is 60 s with no odometry
@@ -144,11 +154,7 @@ TEST(SlamSession, FramesFarApartWithOdometryInBetweenAreNoGap) {
 TEST(SlamSession, AClockJumpBackForgetsTheOldRunsOdometry) {
   // Odometry every 0.1 s over 1-100 s (frames until 30 s), then the bag starts over at 1 s,
   // with odometry until 20 s and none for 40 s: the old run's stamps must not fill that hole.
-  core::FilterOptions filter;
-  filter.particles = 10;
-  core::SessionOptions options;
-  options.max_time_gap_s = 30.0;
-  core::SlamSession session(core::createFilter(filter), options);
+  core::SlamSession session = gapSession("inflate");
   for (double t = 1.0; t <= 100.0; t += 0.1) session.addOdometryStamp(t);
   for (double t = 10.0; t <= 30.0; t += 10.0) {
     session.process(t, core::Pose2(0.01 * t, 0.0, 0.0), core::FeatureSet());
@@ -172,13 +178,13 @@ TEST(OdometryStamps, LongestSilenceBracketsTheWindow) {
   stamps.add(2.0);  // a duplicate
   EXPECT_EQ(stamps.size(), 6u);
   const auto length = [&](double t0, double t1) { return stamps.longestSilence(t0, t1).length; };
-  EXPECT_DOUBLE_EQ(length(2.5, 9.2), 6.0);   // 3 -> 9
+  EXPECT_DOUBLE_EQ(length(2.5, 9.2), 6.0);  // 3 -> 9
   EXPECT_DOUBLE_EQ(stamps.longestSilence(2.5, 9.2).start, 3.0);
-  EXPECT_DOUBLE_EQ(length(9.6, 9.7), 2.5);   // 9.5 -> 12 brackets it
+  EXPECT_DOUBLE_EQ(length(9.6, 9.7), 2.5);  // 9.5 -> 12 brackets it
   EXPECT_DOUBLE_EQ(length(1.0, 2.0), 1.0);
-  EXPECT_DOUBLE_EQ(length(0.0, 1.5), 1.0);   // nothing before 0: from 0 to 1
+  EXPECT_DOUBLE_EQ(length(0.0, 1.5), 1.0);    // nothing before 0: from 0 to 1
   EXPECT_DOUBLE_EQ(length(12.0, 20.0), 8.0);  // nothing after 12 yet
-  EXPECT_DOUBLE_EQ(length(9.2, 2.5), 6.0);   // order of the ends does not matter
+  EXPECT_DOUBLE_EQ(length(9.2, 2.5), 6.0);    // order of the ends does not matter
   // Stretches that started at or before `counted_start` were dealt with already.
   EXPECT_DOUBLE_EQ(stamps.longestSilence(2.5, 9.7, 3.0).length, 2.5);  // 9.5 -> 12, not 3 -> 9
   stamps.forgetBefore(9.2);  // keeps 9, which brackets 9.2
@@ -201,12 +207,7 @@ TEST(OdometryStamps, MemoryIsBoundedAndEvictionIsNoSilence) {
 // across it): one gap, and with gap_action reset one new map, not one per frame.
 TEST(SlamSession, OneOdometryHoleIsOneGapHoweverManyFramesFallInIt) {
   for (const std::string action : {"inflate", "reset"}) {
-    core::FilterOptions filter;
-    filter.particles = 10;
-    core::SessionOptions options;
-    options.max_time_gap_s = 30.0;
-    options.gap_action = action;
-    core::SlamSession session(core::createFilter(filter), options);
+    core::SlamSession session = gapSession(action);
     for (double t = 1.0; t <= 140.0; t += 0.1) {
       if (t < 20.0 || t > 60.0) session.addOdometryStamp(t);
     }
@@ -223,11 +224,7 @@ TEST(SlamSession, OneOdometryHoleIsOneGapHoweverManyFramesFallInIt) {
 // A frame inside a hole before the odometry after it has come (its silence provisionally ends
 // at the frame), then the frame after the hole: still one gap.
 TEST(SlamSession, AHoleSeenBeforeItEndsCountsOnce) {
-  core::FilterOptions filter;
-  filter.particles = 10;
-  core::SessionOptions options;
-  options.max_time_gap_s = 30.0;
-  core::SlamSession session(core::createFilter(filter), options);
+  core::SlamSession session = gapSession("inflate");
   for (double t = 1.0; t < 20.0; t += 0.1) session.addOdometryStamp(t);
   session.process(10.0, core::Pose2(0.1, 0.0, 0.0), core::FeatureSet());
   session.process(55.0, core::Pose2(0.55, 0.0, 0.0), core::FeatureSet());

@@ -116,16 +116,20 @@ TEST(SonarFeatureExtractor, SpacingSkipsRepeatedEchoesOfAStandingTransducer) {
   EXPECT_EQ(extractor.echoes().size(), 4u);
 }
 
-TEST(SonarFeatureExtractor, WallBesideAStraightDriveIsOneLine) {
-  // A wall at y = 1.5 parallel to the drive; a side sonar at 90 deg, 2 cm noise-free.
-  SonarFeatureExtractor extractor{SonarExtractorOptions()};
+/// A wall at y = 1.5 parallel to a 1.5 m drive along x; a side sonar at 90 deg, noise-free.
+FeatureSet wallBesideAStraightDrive(const SonarExtractorOptions& options) {
+  SonarFeatureExtractor extractor{options};
   const Pose2 mount(0.0, 0.2, M_PI_2);
   Pose2 pose(0, 0, 0);
   for (int i = 0; i < 16; ++i) {
     pose = Pose2(0.1 * i, 0.0, 0.0);
     extractor.addReadings({reading(1.3, mount)}, pose, 0.25 * i);
   }
-  const FeatureSet f = extractor.extract(pose, 4.0);
+  return extractor.extract(pose, 4.0);
+}
+
+TEST(SonarFeatureExtractor, WallBesideAStraightDriveIsOneLine) {
+  const FeatureSet f = wallBesideAStraightDrive(SonarExtractorOptions());
   ASSERT_EQ(f.lines.size(), 1u);
   EXPECT_NEAR(f.lines[0].rho, 1.5, 1e-3);
   EXPECT_NEAR(f.lines[0].theta, M_PI_2, 1e-3);
@@ -143,14 +147,7 @@ TEST(SonarFeatureExtractor, LineDirectionFloorShrinksWithTheLinesLength) {
   SonarExtractorOptions options;
   options.line_sigma_theta_rad = 0.01;
   options.line_theta_per_length_m = 0.3;
-  SonarFeatureExtractor extractor{options};
-  const Pose2 mount(0.0, 0.2, M_PI_2);
-  Pose2 pose(0, 0, 0);
-  for (int i = 0; i < 16; ++i) {
-    pose = Pose2(0.1 * i, 0.0, 0.0);
-    extractor.addReadings({reading(1.3, mount)}, pose, 0.25 * i);
-  }
-  const FeatureSet f = extractor.extract(pose, 4.0);
+  const FeatureSet f = wallBesideAStraightDrive(options);
   ASSERT_EQ(f.lines.size(), 1u);
   EXPECT_NEAR(f.lines[0].covariance(1, 1), std::pow(0.3 / 1.5, 2), 1e-9);
   options.line_theta_per_length_m = -0.1;

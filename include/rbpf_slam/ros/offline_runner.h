@@ -41,7 +41,7 @@ struct OfflineSummary {
   long fallbacks = 0;  // H-infinity steps that fell back to the EKF (since the last reset)
   long relocalizations = 0;  // particle proposals started from a searched pose correction
   long heading_measurements = 0;  // particle proposals conditioned on the heading prior
-  long robust_steps = 0;  // robust_fastslam2: steps sampled from several ancestor sets
+  long robust_steps = 0;          // robust_fastslam2: steps sampled from several ancestor sets
   double update_ms_mean = 0.0;
   double update_ms_p99 = 0.0;
   double update_ms_max = 0.0;

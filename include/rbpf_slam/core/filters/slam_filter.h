@@ -62,7 +62,7 @@ struct FilterStats {
   long fallbacks = 0;
   long relocalizations = 0;  // particle proposals started from a searched pose correction
   long heading_measurements = 0;  // particle proposals conditioned on the heading prior
-  long robust_steps = 0;  // robust_fastslam2: steps sampled from several ancestor sets
+  long robust_steps = 0;          // robust_fastslam2: steps sampled from several ancestor sets
   double last_neff = 0.0;
   int landmarks = 0;  // in the best particle
 };
