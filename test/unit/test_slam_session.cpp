@@ -13,13 +13,18 @@
 namespace rbpf_slam {
 namespace {
 
-core::SlamSession makeSession(int frames_back) {
+/// A session over FastSLAM 2.0 with 10 particles.
+core::SlamSession sessionWith(const core::SessionOptions& options) {
   core::FilterOptions filter;
   filter.particles = 10;
+  return core::SlamSession(core::createFilter(filter), options);
+}
+
+core::SlamSession makeSession(int frames_back) {
   core::SessionOptions options;
   options.reset_on_time_jump_back_s = 1.0;
   options.reset_after_frames_back = frames_back;
-  return core::SlamSession(core::createFilter(filter), options);
+  return sessionWith(options);
 }
 
 core::FrameResult frame(core::SlamSession* session, double stamp) {
@@ -123,14 +128,12 @@ TEST(SlamSession, ATimeGapInflatesTheMotionNoiseOrResets) {
   EXPECT_EQ(resets, 1);
 }
 
-/// 10 particles, max_time_gap 30 s, the given gap_action.
+/// max_time_gap 30 s, the given gap_action.
 core::SlamSession gapSession(const std::string& action) {
-  core::FilterOptions filter;
-  filter.particles = 10;
   core::SessionOptions options;
   options.max_time_gap_s = 30.0;
   options.gap_action = action;
-  return core::SlamSession(core::createFilter(filter), options);
+  return sessionWith(options);
 }
 
 TEST(SlamSession, FramesFarApartWithOdometryInBetweenAreNoGap) {

@@ -458,6 +458,14 @@ FastSlam2::HeadingStep FastSlam2::headingStep(const std::vector<Observation>& ob
   return step;
 }
 
+double FastSlam2::conditionOnWalls(const HeadingPrior::LineSelection& lines, Pose2* mean,
+                                   Eigen::Matrix3d* cov) {
+  double axis_offset = 0.0;
+  if (!heading_prior_.residual(lines, mean->z(), &axis_offset)) return 0.0;
+  ++stats_.heading_measurements;
+  return heading_prior_.condition(axis_offset, mean, cov);
+}
+
 UpdateStats FastSlam2::update(const FeatureSet& features) {
   UpdateStats stats;
   ++step_;
@@ -477,13 +485,8 @@ UpdateStats FastSlam2::update(const FeatureSet& features) {
     Pose2 predicted = motion_model_->mean(p.pose, motion);
     predicted.z() = wrapAngle(predicted.z() + drift_turn);
     Eigen::Matrix3d motion_cov = motion_model_->covariance(p.pose, motion);
-    // Walls along the building's axes measure the heading (heading_prior.h): the prior the
-    // landmarks then refine is the motion prediction conditioned on it.
-    double axis_offset = 0.0;
-    if (heading_prior_.residual(heading_lines, predicted.z(), &axis_offset)) {
-      p.log_weight += heading_prior_.condition(axis_offset, &predicted, &motion_cov);
-      ++stats_.heading_measurements;
-    }
+    // The prior the landmarks then refine is the motion prediction conditioned on the walls.
+    p.log_weight += conditionOnWalls(heading_lines, &predicted, &motion_cov);
     results[i] = updateParticle(&p, predicted, motion_cov, observations);
     if (mapping_) results[i].removed = manageExistence(options_.existence, &p.map, p.pose, step_);
     stats.fallbacks += results[i].fallbacks;

@@ -139,7 +139,7 @@ UpdateStats RobustFastSlam2::robustUpdate(const std::vector<Observation>& observ
       // Eq. 8: x_t ~ p(x_t | x_{t-s}, u_{t-s+1:t}), as a Gaussian propagated over the steps.
       Pose2 mean = candidate.pose;
       Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
-      propagate(records, &mean, &cov);
+      propagateOverRecords(*motion_model_, records, &mean, &cov);
       candidate_start.push_back(candidate.pose);
       candidate_counts.emplace_back();
       candidate.log_weight = updateCandidate(&candidate, mean, cov, observations, heading.lines,
@@ -205,13 +205,7 @@ double RobustFastSlam2::updateCandidate(Particle* particle, const Pose2& predict
   const AssociationOptions& a = options_.association;
   Pose2 mean = predicted_mean;
   Eigen::Matrix3d cov = predicted_cov;
-  double log_likelihood = 0.0;
-  // Walls along the building's axes measure the heading (as in FastSlam2::update).
-  double axis_offset = 0.0;
-  if (heading_prior_.residual(heading_lines, mean.z(), &axis_offset)) {
-    log_likelihood += heading_prior_.condition(axis_offset, &mean, &cov);
-    ++stats_.heading_measurements;
-  }
+  double log_likelihood = conditionOnWalls(heading_lines, &mean, &cov);
   std::vector<std::pair<int, int>> matched;  // (observation, landmark index)
   std::vector<int> fresh;
   const LandmarkMap& map = *particle->map;
@@ -259,11 +253,6 @@ double RobustFastSlam2::updateCandidate(Particle* particle, const Pose2& predict
   return log_likelihood;
 }
 
-void RobustFastSlam2::propagate(const std::vector<const StepRecord*>& records, Pose2* mean,
-                                Eigen::Matrix3d* cov) const {
-  propagateOverRecords(*motion_model_, records, mean, cov);
-}
-
 int RobustFastSlam2::oldLandmarkObservations(const std::vector<Observation>& observations,
                                              const std::vector<const AncestorSet*>& ancestors,
                                              int step) const {
@@ -283,7 +272,7 @@ int RobustFastSlam2::oldLandmarkObservations(const std::vector<Observation>& obs
     // (The current step's drift turn is not known yet: its record is not turned here.)
     Pose2 mean = particle.pose;
     Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
-    propagate(memory_.records(set->step, step), &mean, &cov);
+    propagateOverRecords(*motion_model_, memory_.records(set->step, step), &mean, &cov);
     const LandmarkMap& map = *particle.map;
     int count = 0;
     for (const Observation& o : observations) {
@@ -303,7 +292,7 @@ IntermediatePath RobustFastSlam2::intermediatePath(const Pose2& start, const Pos
   std::vector<Pose2> increments;
   std::vector<Eigen::Matrix3d> covariances;
   for (const StepRecord* r : records) {
-    Pose2 increment = r->motion.delta;  // with the step's drift turn, as propagate() moves
+    Pose2 increment = r->motion.delta;  // with the step's drift turn, as propagateOverRecords
     increment.z() = wrapAngle(increment.z() + r->drift_turn_rad);
     increments.push_back(increment);
     covariances.push_back(incrementCovariance(r->motion));

@@ -156,6 +156,11 @@ class FastSlam2 : public SlamFilter {
   };
   /// Predicts and corrects the drift (when tracked) with this step's motion and observations.
   HeadingStep headingStep(const std::vector<Observation>& observations, const MotionInput& motion);
+  /// Walls along the building's axes measure the heading (heading_prior.h): conditions the
+  /// pose Gaussian (mean, cov) on the step's selected lines when they qualify and returns the
+  /// log weight factor (0 when they do not).
+  double conditionOnWalls(const HeadingPrior::LineSelection& lines, Pose2* mean,
+                          Eigen::Matrix3d* cov);
 
   /// Returns false when the correction fell back to the EKF.
   bool updateLandmark(LandmarkMap* map, const Match& match, const Pose2& pose,

@@ -58,10 +58,6 @@ class RobustFastSlam2 : public FastSlam2 {
                          const std::vector<Observation>& observations,
                          const HeadingPrior::LineSelection& heading_lines, int old_id_limit,
                          ParticleUpdate* counts);
-  /// Moves mean and cov over the recorded steps by the odometry mean and its propagated
-  /// covariance (eq. 8's Gaussian).
-  void propagate(const std::vector<const StepRecord*>& records, Pose2* mean,
-                 Eigen::Matrix3d* cov) const;
   /// The most observations at `step` that the most probable particle of one ancestor set, moved
   /// over the skipped steps, associates with landmarks older than the oldest set (known to every
   /// set): the evidence z_t holds to weigh the candidates of the sets against each other.
