@@ -74,7 +74,7 @@ void runStream(benchmark::State& state, const core::FilterOptions& options) {
     }
     updates += static_cast<long>(steps.size());
     if (auto* robust = dynamic_cast<core::RobustFastSlam2*>(filter.get())) {
-      robust_steps += robust->robustStats().robust_steps;
+      robust_steps += robust->stats().robust_steps;
     }
   }
   const double iterations = static_cast<double>(state.iterations());

@@ -381,7 +381,7 @@ double driftHeadingError(bool drift_tracking, const std::string& variant = "fast
   }
   if (robust_steps) {
     const auto* robust = dynamic_cast<const RobustFastSlam2*>(&filter);
-    *robust_steps = robust ? robust->robustStats().robust_steps : 0;
+    *robust_steps = robust ? robust->stats().robust_steps : 0;
   }
   return std::fabs(wrapAngle(filter.estimate().mean.z() - truth.z()));
 }

@@ -190,7 +190,7 @@ TEST_F(CorruptedStretch, ParticlesComeFromTheSetBeforeTheCorruption) {
     EXPECT_TRUE(step == 28 || step == 20) << "origin step " << step << " x" << count;
   }
   EXPECT_GT(by_origin[20], 40) << "most particles should come from S_20";
-  EXPECT_GE(robust.robustStats().robust_steps, 1);
+  EXPECT_GE(robust.stats().robust_steps, 1);
   EXPECT_GT(robust.robustStats().replayed_steps, 0);
   EXPECT_GT(plain_error, 0.08) << "the scenario must corrupt FastSLAM 2.0";
   EXPECT_LT(robust_error, 0.5 * plain_error) << robust_error << " vs " << plain_error;
@@ -242,7 +242,7 @@ TEST_F(CorruptedStretch, MemoryStaysBoundedOverALongRun) {
     ASSERT_LE(robust.memory().storedRecords(), o.robust.window_steps);
     ASSERT_LE(robust.tracker().trackedLandmarks(), o.tracker.max_landmarks);
   }
-  EXPECT_GT(robust.robustStats().robust_steps, 10);
+  EXPECT_GT(robust.stats().robust_steps, 10);
 }
 
 // Drives 0.2 m per step past posts at (3 k, +-2), each seen for a few steps: tracker events.
@@ -280,7 +280,7 @@ TEST(RobustFastSlam2, NewPoseOrMapForgetsTheStoredSets) {
   RobustFastSlam2 robust(postOptions());
   drivePastPosts(&robust, 60);
   ASSERT_GT(robust.memory().storedSets(), 0);
-  ASSERT_GT(robust.robustStats().robust_steps, 0);
+  ASSERT_GT(robust.stats().robust_steps, 0);
   ASSERT_TRUE(robust.resetPose(Pose2(1, 2, 0.3), Eigen::Matrix3d::Identity() * 1e-4));
   EXPECT_EQ(robust.memory().storedSets(), 0);
   EXPECT_EQ(robust.memory().storedRecords(), 0);
@@ -300,7 +300,7 @@ TEST(RobustFastSlam2, LocalizationOnlyLeavesTheMapAlone) {
   ASSERT_TRUE(robust.loadMap(map));
   ASSERT_TRUE(robust.setMapping(false));
   drivePastPosts(&robust, 80);
-  EXPECT_GT(robust.robustStats().robust_steps, 0);
+  EXPECT_GT(robust.stats().robust_steps, 0);
   const std::vector<LandmarkEstimate> after = robust.landmarks();
   ASSERT_EQ(after.size(), map.size());
   for (size_t i = 0; i < map.size(); ++i) {
@@ -391,7 +391,7 @@ TEST(RobustFastSlam2, SparseEventsTakeFastSlam2Steps) {
   driveSparse(&robust, 120);
   EXPECT_GT(robust.robustStats().tracker_events, 10);
   EXPECT_GT(robust.robustStats().fallbacks, 10);
-  EXPECT_EQ(robust.robustStats().robust_steps, 0);
+  EXPECT_EQ(robust.stats().robust_steps, 0);
   EXPECT_EQ(robust.robustStats().from_older_sets, 0);
   EXPECT_TRUE(robust.estimate().mean.isApprox(plain->estimate().mean, 1e-12))
       << robust.estimate().mean.transpose() << " vs " << plain->estimate().mean.transpose();
@@ -401,7 +401,7 @@ TEST(RobustFastSlam2, SparseEventsTakeFastSlam2Steps) {
   o.robust.min_old_observations = 0;
   RobustFastSlam2 unguarded(o);
   driveSparse(&unguarded, 120);
-  EXPECT_GT(unguarded.robustStats().robust_steps, 5);
+  EXPECT_GT(unguarded.stats().robust_steps, 5);
   EXPECT_GT(unguarded.robustStats().from_older_sets, 0);
   EXPECT_EQ(unguarded.robustStats().fallbacks, 0);
   EXPECT_FALSE(unguarded.estimate().mean.isApprox(plain->estimate().mean, 1e-12));
@@ -431,8 +431,8 @@ TEST(RobustFastSlam2, EventsWithOldLandmarksInViewAreRobustSteps) {
     robust.update(features);
   }
   // Only the first events fall back: their oldest set predates the posts.
-  EXPECT_GE(robust.robustStats().robust_steps, 3);
-  EXPECT_GT(robust.robustStats().robust_steps, robust.robustStats().fallbacks);
+  EXPECT_GE(robust.stats().robust_steps, 3);
+  EXPECT_GT(robust.stats().robust_steps, robust.robustStats().fallbacks);
 }
 
 }  // namespace

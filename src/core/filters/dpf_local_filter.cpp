@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "rbpf_slam/core/filters/measurement_models.h"
+#include "rbpf_slam/core/filters/observation.h"
 #include "rbpf_slam/core/filters/resampling.h"
 
 namespace rbpf_slam {
@@ -135,8 +136,7 @@ std::vector<DpfLocalFilter::Observation> DpfLocalFilter::prepare(const FeatureSe
           .asDiagonal();
   for (const auto& point : features.points) {
     if (point.id >= 0 && !owns(point.id)) continue;  // another local filter's block
-    if (point.id < 0 || !std::isfinite(point.range) || !std::isfinite(point.bearing) ||
-        point.range <= 0.0) {
+    if (point.id < 0 || !usablePoint(point)) {
       // Unknown identities: every local filter counts them (blocks need known ids).
       ++*rejected;
       continue;

@@ -56,53 +56,13 @@ void EkfSlam::applyMotion() {
   }
 }
 
-std::vector<EkfSlam::Observation> EkfSlam::prepare(const FeatureSet& features,
-                                                   int* rejected) const {
-  std::vector<Observation> out;
-  *rejected = 0;
-  const MeasurementOptions& m = options_.measurement;
-  auto noiseOf = [&](const Eigen::Matrix2d& given, double sigma_a, double sigma_b) {
-    Eigen::Matrix2d floor = Eigen::Vector2d(sigma_a * sigma_a, sigma_b * sigma_b).asDiagonal();
-    if (m.use_feature_covariance && usableCovariance(symmetric(given))) {
-      return Eigen::Matrix2d(symmetric(given) * m.covariance_inflation + floor);
-    }
-    return floor;
-  };
-  if (options_.use_lines) {
-    for (const auto& line : features.lines) {
-      if (!std::isfinite(line.rho) || !std::isfinite(line.theta) || !line.start.allFinite() ||
-          !line.end.allFinite()) {
-        ++*rejected;
-        continue;
-      }
-      Observation o;
-      o.type = LandmarkType::kLine;
-      double rho = line.rho, theta = line.theta;
-      normalizeLine(rho, theta);
-      o.z << rho, theta;
-      o.noise = noiseOf(line.covariance, m.sigma_rho_m, m.sigma_theta_rad);
-      o.line = line;
-      out.push_back(o);
-    }
-  }
-  if (options_.use_points) {
-    for (const auto& point : features.points) {
-      if (!std::isfinite(point.range) || !std::isfinite(point.bearing) || point.range <= 0.0) {
-        ++*rejected;
-        continue;
-      }
-      Observation o;
-      o.type = LandmarkType::kPoint;
-      o.z << point.range, wrapAngle(point.bearing);
-      o.noise = noiseOf(point.covariance, m.sigma_range_m, m.sigma_bearing_rad);
-      out.push_back(o);
-    }
-  }
-  return out;
-}
-
 GlobalFeature EkfSlam::inMap(const Observation& o, const Pose2& at, int source) const {
-  return globalFeature(o.type, o.line, o.z, at, source);
+  LineFeature line;  // the extent (and, for a line too short to have one, its normal form)
+  line.rho = o.z.x();
+  line.theta = o.z.y();
+  line.start = o.start;
+  line.end = o.end;
+  return globalFeature(o.type, line, o.z, at, source);
 }
 
 UpdateStats EkfSlam::update(const FeatureSet& features) {
@@ -110,7 +70,8 @@ UpdateStats EkfSlam::update(const FeatureSet& features) {
   stats.neff = 1.0;
   stats.features_in = features.lines.size() + features.points.size();
   applyMotion();
-  const std::vector<Observation> observations = prepare(features, &stats.features_rejected);
+  const std::vector<Observation> observations =
+      prepareObservations(features, options_, &stats.features_rejected);
   std::vector<GlobalFeature> global;
   for (int j = 0; j < static_cast<int>(observations.size()); ++j) {
     global.push_back(inMap(observations[j], pose(), j));

@@ -36,10 +36,6 @@ double logGaussianPose(const Pose2& pose, const Pose2& mean, const Eigen::Matrix
 
 Eigen::Matrix2d symmetrize(const Eigen::Matrix2d& m) { return 0.5 * (m + m.transpose()); }
 
-bool finiteCovariance(const Eigen::Matrix2d& c) {
-  return c.allFinite() && c(0, 0) > 0.0 && c(1, 1) > 0.0 && c.determinant() > 0.0;
-}
-
 }  // namespace
 
 PathNode::~PathNode() {
@@ -93,53 +89,6 @@ void FastSlam2::reset(const Pose2& initial_pose) {
 void FastSlam2::predict(const MotionInput& motion) {
   ++stats_.predictions;
   pending_motion_.add(motion);  // several odometry steps between two updates compose
-}
-
-std::vector<Observation> prepareObservations(const FeatureSet& features,
-                                             const FilterOptions& options, int* rejected) {
-  std::vector<Observation> out;
-  const MeasurementOptions& m = options.measurement;
-  *rejected = 0;
-  auto noiseOf = [&](const Eigen::Matrix2d& given, double sigma_a, double sigma_b) {
-    Eigen::Matrix2d floor = Eigen::Vector2d(sigma_a * sigma_a, sigma_b * sigma_b).asDiagonal();
-    if (m.use_feature_covariance && finiteCovariance(symmetrize(given))) {
-      return Eigen::Matrix2d(symmetrize(given) * m.covariance_inflation + floor);
-    }
-    return floor;
-  };
-  if (options.use_lines) {
-    for (const auto& line : features.lines) {
-      Observation o;
-      o.type = LandmarkType::kLine;
-      double rho = line.rho, theta = line.theta;
-      if (!std::isfinite(rho) || !std::isfinite(theta) || !line.start.allFinite() ||
-          !line.end.allFinite()) {
-        ++*rejected;
-        continue;
-      }
-      normalizeLine(rho, theta);
-      o.z << rho, theta;
-      o.noise = noiseOf(line.covariance, m.sigma_rho_m, m.sigma_theta_rad);
-      o.start = line.start;
-      o.end = line.end;
-      out.push_back(o);
-    }
-  }
-  if (options.use_points) {
-    for (const auto& point : features.points) {
-      if (!std::isfinite(point.range) || !std::isfinite(point.bearing) || point.range <= 0.0) {
-        ++*rejected;
-        continue;
-      }
-      Observation o;
-      o.type = LandmarkType::kPoint;
-      o.z << point.range, wrapAngle(point.bearing);
-      o.noise = noiseOf(point.covariance, m.sigma_range_m, m.sigma_bearing_rad);
-      o.known_id = point.id;
-      out.push_back(o);
-    }
-  }
-  return out;
 }
 
 std::vector<Observation> FastSlam2::prepare(const FeatureSet& features, int* rejected) const {

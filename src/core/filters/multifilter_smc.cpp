@@ -7,6 +7,7 @@
 
 #include "rbpf_slam/core/filters/landmark_map.h"
 #include "rbpf_slam/core/filters/measurement_models.h"
+#include "rbpf_slam/core/filters/observation.h"
 #include "rbpf_slam/core/filters/resampling.h"
 
 namespace rbpf_slam {
@@ -168,32 +169,20 @@ void MultiFilterSmc::predict(const MotionInput& motion) {
 std::vector<MultiFilterSmc::LocalFeature> MultiFilterSmc::prepare(const FeatureSet& features,
                                                                   int* rejected) const {
   std::vector<LocalFeature> out;
-  *rejected = 0;
-  if (options_.use_lines) {
-    for (const auto& line : features.lines) {
-      if (!std::isfinite(line.rho) || !std::isfinite(line.theta) || !line.start.allFinite() ||
-          !line.end.allFinite()) {
-        ++*rejected;
-        continue;
-      }
-      LocalFeature f;
-      f.type = LandmarkType::kLine;
-      f.line = line;
-      out.push_back(f);
-    }
-  }
-  if (options_.use_points) {
-    for (const auto& point : features.points) {
-      if (!std::isfinite(point.range) || !std::isfinite(point.bearing) || point.range <= 0.0) {
-        ++*rejected;
-        continue;
-      }
-      LocalFeature f;
-      f.type = LandmarkType::kPoint;
-      f.range_bearing << point.range, point.bearing;
-      out.push_back(f);
-    }
-  }
+  forEachUsableFeature(
+      features, options_.use_lines, options_.use_points, rejected,
+      [&](const LineFeature& line) {
+        LocalFeature f;
+        f.type = LandmarkType::kLine;
+        f.line = line;
+        out.push_back(f);
+      },
+      [&](const PointFeature& point) {
+        LocalFeature f;
+        f.type = LandmarkType::kPoint;
+        f.range_bearing << point.range, point.bearing;
+        out.push_back(f);
+      });
   return out;
 }
 

@@ -94,9 +94,9 @@ UpdateStats RobustFastSlam2::update(const FeatureSet& features) {
   // Too few observations of landmarks every set knows: z_t cannot tell a candidate propagated
   // over the skipped steps from one of S_{t-1}, so the robust step would keep older candidates
   // by their spread alone, dropping what the skipped observations taught. A plain step instead.
+  const int needed = options_.robust.min_old_observations;
   const bool informed =
-      eligible && oldLandmarkObservations(observations, ancestors, step) >=
-                      options_.robust.min_old_observations;
+      eligible && (needed == 0 || oldLandmarkObservations(observations, ancestors, step) >= needed);
   if (eligible && !informed) ++robust_stats_.fallbacks;
   if (informed) {
     stats = robustUpdate(observations, ancestors, motion);
@@ -189,7 +189,6 @@ UpdateStats RobustFastSlam2::robustUpdate(const std::vector<Observation>& observ
   stats.resampled = true;
   ++stats_.resamples;
   ++stats_.updates;
-  ++robust_stats_.robust_steps;
   ++stats_.robust_steps;
   stats_.last_neff = stats.neff;
   stats_.landmarks = particles_[0].map->size();

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "rbpf_slam/core/filters/line_association.h"
+#include "rbpf_slam/core/filters/observation.h"
 #include "rbpf_slam/core/filters/slam_filter.h"
 #include "rbpf_slam/core/motion/motion_model.h"
 
@@ -34,20 +35,12 @@ class EkfSlam : public SlamFilter {
   const Eigen::MatrixXd& covariance() const { return covariance_; }
 
  private:
-  /// A finite feature of the current scan: robot-frame value, noise and extent.
-  struct Observation {
-    LandmarkType type = LandmarkType::kLine;
-    Eigen::Vector2d z = Eigen::Vector2d::Zero();  // (rho, theta) or (range, bearing)
-    Eigen::Matrix2d noise = Eigen::Matrix2d::Identity();
-    LineFeature line;  // lines: the feature itself (extent for ToGlobalFrame)
-  };
   struct LandmarkInfo {
     int id = -1;
     LandmarkType type = LandmarkType::kLine;
     double extent_min = 0.0, extent_max = 0.0;
     int observations = 1;
   };
-  std::vector<Observation> prepare(const FeatureSet& features, int* rejected) const;
   GlobalFeature inMap(const Observation& o, const Pose2& pose, int source) const;
   void applyMotion();
   /// One EKF correction of landmark i by an observation; false when gated out or singular.

@@ -9,6 +9,7 @@
 #include "rbpf_slam/core/filters/estimator_rule.h"
 #include "rbpf_slam/core/filters/landmark_map.h"
 #include "rbpf_slam/core/filters/measurement_models.h"
+#include "rbpf_slam/core/filters/observation.h"
 #include "rbpf_slam/core/filters/slam_filter.h"
 #include "rbpf_slam/core/motion/motion_model.h"
 #include "rbpf_slam/core/random.h"
@@ -36,22 +37,6 @@ struct Particle {
   std::shared_ptr<LandmarkMap> map = std::make_shared<LandmarkMap>();
   std::shared_ptr<PathNode> path;  // pose at each update(), newest first; null before any
 };
-
-/// One observation prepared for the filter: value, noise, type, and extent if a line.
-struct Observation {
-  LandmarkType type = LandmarkType::kPoint;
-  Eigen::Vector2d z = Eigen::Vector2d::Zero();  // (range, bearing) or (rho, theta)
-  Eigen::Matrix2d noise = Eigen::Matrix2d::Identity();
-  Eigen::Vector2d start = Eigen::Vector2d::Zero();  // line extent, base frame
-  Eigen::Vector2d end = Eigen::Vector2d::Zero();
-  int known_id = -1;
-};
-
-/// Feature set -> observations with the noise of options.measurement (the feature's own
-/// covariance plus the floors, or the floors alone), lines only if options.use_lines, points
-/// only if options.use_points; non-finite features are left out and counted in *rejected.
-std::vector<Observation> prepareObservations(const FeatureSet& features,
-                                             const FilterOptions& options, int* rejected);
 
 class FastSlam2 : public SlamFilter {
  public:

@@ -17,10 +17,9 @@
 namespace rbpf_slam {
 namespace core {
 
-/// Running totals of the robust steps.
+/// Running totals of the robust steps (their count is FilterStats::robust_steps).
 struct RobustStats {
   long tracker_events = 0;   // steps at which the tracker started a landmark
-  long robust_steps = 0;     // steps sampled from several ancestor sets
   long from_older_sets = 0;  // particles kept at robust steps that came from an older set
   long replayed_steps = 0;   // intermediate steps replayed into particles' maps
   long fallbacks = 0;        // events with older sets that took a plain FastSLAM 2.0 step, having
