@@ -53,39 +53,21 @@ struct Arguments {
   io::OdometryNoiseOptions noise;
 };
 
-double parseNumber(const std::string& flag, const std::string& text) {
-  char* end = nullptr;
-  const double value = std::strtod(text.c_str(), &end);
-  if (text.empty() || end != text.c_str() + text.size() || !std::isfinite(value)) {
-    throw std::invalid_argument(flag + " needs a number, got '" + text + "'");
-  }
-  return value;
-}
-
 Arguments parseArguments(int argc, char** argv) {
   Arguments arguments;
   std::vector<std::string> positional;
-  for (int i = 1; i < argc; ++i) {
-    const std::string arg = argv[i];
-    const auto next = [&]() -> std::string {
-      if (i + 1 >= argc) throw std::invalid_argument(arg + " needs a value");
-      return argv[++i];
-    };
-    if (arg == "--odom-noise") {
-      arguments.noise.noise_per_unit = parseNumber(arg, next());
-    } else if (arg == "--odom-bias") {
-      arguments.noise.scale_bias = parseNumber(arg, next());
-    } else if (arg == "--seed") {
-      const std::string text = next();
-      char* end = nullptr;
-      arguments.noise.seed = std::strtoull(text.c_str(), &end, 10);
-      if (text.empty() || text[0] == '-' || end != text.c_str() + text.size()) {
-        throw std::invalid_argument("--seed needs a non-negative integer, got '" + text + "'");
-      }
-    } else if (arg.size() > 1 && arg[0] == '-') {
-      throw std::invalid_argument("unknown option " + arg);
+  io::ArgumentCursor cursor(argc, argv);
+  while (cursor.next()) {
+    if (cursor.arg() == "--odom-noise") {
+      arguments.noise.noise_per_unit = cursor.number();
+    } else if (cursor.arg() == "--odom-bias") {
+      arguments.noise.scale_bias = cursor.number();
+    } else if (cursor.arg() == "--seed") {
+      arguments.noise.seed = cursor.count();
+    } else if (cursor.isOption()) {
+      cursor.unknown();
     } else {
-      positional.push_back(arg);
+      positional.push_back(cursor.arg());
     }
   }
   if (positional.size() != 2) {
@@ -96,15 +78,6 @@ Arguments parseArguments(int argc, char** argv) {
   arguments.bag_path = positional[1];
   io::validate(arguments.noise);
   return arguments;
-}
-
-std::string referencePath(const std::string& bag_path) {
-  const std::string suffix = ".bag";
-  if (bag_path.size() > suffix.size() &&
-      bag_path.compare(bag_path.size() - suffix.size(), suffix.size(), suffix) == 0) {
-    return bag_path.substr(0, bag_path.size() - suffix.size()) + ".ref.tum";
-  }
-  return bag_path + ".ref.tum";
 }
 
 ros::Time toRosTime(double log_stamp) { return ros::Time(kStampOffsetS + log_stamp); }
@@ -254,7 +227,7 @@ int main(int argc, char** argv) {
       reference.push_back({kStampOffsetS + pose.stamp, pose.pose});
     }
     writeBag(arguments, log, odometry);
-    const std::string reference_path = referencePath(arguments.bag_path);
+    const std::string reference_path = io::besideBag(arguments.bag_path, ".ref.tum");
     io::writeTum(reference_path, reference);
 
     reportSkipped(log, motion_stats);

@@ -64,38 +64,26 @@ struct Arguments {
   double sigma_bearing_rad = 0.02;
 };
 
-double parseNumber(const std::string& flag, const std::string& text) {
-  char* end = nullptr;
-  const double value = std::strtod(text.c_str(), &end);
-  if (text.empty() || end != text.c_str() + text.size() || !std::isfinite(value) || value < 0) {
-    throw std::invalid_argument(flag + " needs a non-negative number, got '" + text + "'");
-  }
-  return value;
-}
-
 Arguments parseArguments(int argc, char** argv) {
   Arguments arguments;
   std::vector<std::string> positional;
-  for (int i = 1; i < argc; ++i) {
-    const std::string arg = argv[i];
-    const auto next = [&]() -> std::string {
-      if (i + 1 >= argc) throw std::invalid_argument(arg + " needs a value");
-      return argv[++i];
-    };
-    if (arg == "--known-ids") {
+  io::ArgumentCursor cursor(argc, argv);
+  const auto non_negative = [&] { return cursor.number(io::NumberRule::kNonNegative); };
+  while (cursor.next()) {
+    if (cursor.arg() == "--known-ids") {
       arguments.known_ids = true;
-    } else if (arg == "--duration") {
-      arguments.duration_s = parseNumber(arg, next());
-    } else if (arg == "--sigma-range-m") {
-      arguments.sigma_range_m = parseNumber(arg, next());
-    } else if (arg == "--sigma-range-per-m") {
-      arguments.sigma_range_per_m = parseNumber(arg, next());
-    } else if (arg == "--sigma-bearing-rad") {
-      arguments.sigma_bearing_rad = parseNumber(arg, next());
-    } else if (arg.size() > 1 && arg[0] == '-') {
-      throw std::invalid_argument("unknown option " + arg);
+    } else if (cursor.arg() == "--duration") {
+      arguments.duration_s = non_negative();
+    } else if (cursor.arg() == "--sigma-range-m") {
+      arguments.sigma_range_m = non_negative();
+    } else if (cursor.arg() == "--sigma-range-per-m") {
+      arguments.sigma_range_per_m = non_negative();
+    } else if (cursor.arg() == "--sigma-bearing-rad") {
+      arguments.sigma_bearing_rad = non_negative();
+    } else if (cursor.isOption()) {
+      cursor.unknown();
     } else {
-      positional.push_back(arg);
+      positional.push_back(cursor.arg());
     }
   }
   if (positional.size() != 3) {
@@ -114,14 +102,6 @@ Arguments parseArguments(int argc, char** argv) {
     throw std::invalid_argument("feature sigmas must be positive");
   }
   return arguments;
-}
-
-/// OUT.bag -> OUT.suffix (the bag's name without ".bag").
-std::string besideBag(const std::string& bag, const std::string& suffix) {
-  const std::string ext = ".bag";
-  const bool has_ext =
-      bag.size() > ext.size() && bag.compare(bag.size() - ext.size(), ext.size(), ext) == 0;
-  return (has_ext ? bag.substr(0, bag.size() - ext.size()) : bag) + suffix;
 }
 
 nav_msgs::Odometry odometryMessage(const std::string& frame, const core::Pose2& pose, double v_mps,
@@ -260,9 +240,9 @@ int main(int argc, char** argv) {
         io::groupLandmarkMeasurements(data.measurements);
 
     const Counts counts = writeBag(arguments, data, odometry, groups);
-    const std::string reference_path = besideBag(arguments.bag_path, ".ref.tum");
-    const std::string odometry_path = besideBag(arguments.bag_path, ".odom.tum");
-    const std::string landmarks_path = besideBag(arguments.bag_path, ".landmarks.yaml");
+    const std::string reference_path = io::besideBag(arguments.bag_path, ".ref.tum");
+    const std::string odometry_path = io::besideBag(arguments.bag_path, ".odom.tum");
+    const std::string landmarks_path = io::besideBag(arguments.bag_path, ".landmarks.yaml");
     io::writeTum(reference_path, data.ground_truth);
     io::writeTum(odometry_path, odometry);
     writeLandmarks(landmarks_path, arguments, data);

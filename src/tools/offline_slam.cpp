@@ -4,57 +4,79 @@
 //                [--output-bag OUT.bag]  (tf, pose, landmarks, trajectory for rviz)
 
 #include <cstdio>
-#include <cstring>
 #include <iostream>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "rbpf_slam/io/slam_config.h"
+#include "rbpf_slam/io/tool_arguments.h"
 #include "rbpf_slam/ros/offline_runner.h"
 
 namespace {
 
-int usage(const char* message) {
-  std::fprintf(stderr,
-               "offline_slam: %s\nusage: offline_slam --bag IN.bag --config CONFIG.yaml "
-               "--output DIR [--seed N] [--set key=value ...] [--reference REF.tum] "
-               "[--no-progress] [--verbose] [--output-bag OUT.bag]\n",
-               message);
-  return 2;
+namespace io = rbpf_slam::io;
+
+const char kUsage[] =
+    "usage: offline_slam --bag IN.bag --config CONFIG.yaml --output DIR [--seed N]\n"
+    "                    [--set key=value ...] [--reference REF.tum] [--no-progress] [--verbose]\n"
+    "                    [--output-bag OUT.bag]\n"
+    "  --seed N         the filter's seed (as --set seed=N)\n"
+    "  --set key=value  overrides a config key (dotted for sections: motion.alpha1=0.1)\n"
+    "  --reference F    TUM ground truth: ATE in summary.json\n"
+    "  --output-bag F   the input's tf and sensors plus map -> odom, pose, landmarks, trajectory\n"
+    "Writes DIR/trajectory.tum, trajectory_online.tum, landmarks.yaml, summary.json, map.png.\n";
+
+struct Arguments {
+  rbpf_slam::rosbridge::OfflineOptions options;
+  std::string config_path;
+  std::vector<std::string> overrides;
+};
+
+Arguments parseArguments(int argc, char** argv) {
+  Arguments a;
+  io::ArgumentCursor cursor(argc, argv);
+  while (cursor.next()) {
+    const std::string& arg = cursor.arg();
+    if (arg == "--bag") {
+      a.options.bag_path = cursor.value();
+    } else if (arg == "--config") {
+      a.config_path = cursor.value();
+    } else if (arg == "--output") {
+      a.options.output_dir = cursor.value();
+    } else if (arg == "--reference") {
+      a.options.reference_path = cursor.value();
+    } else if (arg == "--seed") {
+      a.overrides.push_back("seed=" + cursor.value());
+    } else if (arg == "--set") {
+      a.overrides.push_back(cursor.value());
+    } else if (arg == "--no-progress") {
+      a.options.progress = false;
+    } else if (arg == "--verbose") {
+      a.options.verbose = true;
+    } else if (arg == "--output-bag") {
+      a.options.output_bag = cursor.value();
+    } else {
+      throw std::invalid_argument("unknown argument '" + arg + "'");
+    }
+  }
+  if (a.options.bag_path.empty() || a.config_path.empty() || a.options.output_dir.empty()) {
+    throw std::invalid_argument("--bag, --config and --output are required");
+  }
+  return a;
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
-  rbpf_slam::rosbridge::OfflineOptions options;
-  std::string config_path;
-  std::vector<std::string> overrides;
-  for (int i = 1; i < argc; ++i) {
-    const std::string arg = argv[i];
-    auto value = [&](const char* name) -> std::string {
-      if (i + 1 >= argc) throw std::invalid_argument(std::string(name) + " needs a value");
-      return argv[++i];
-    };
-    try {
-      if (arg == "--bag") options.bag_path = value("--bag");
-      else if (arg == "--config") config_path = value("--config");
-      else if (arg == "--output") options.output_dir = value("--output");
-      else if (arg == "--reference") options.reference_path = value("--reference");
-      else if (arg == "--seed") overrides.push_back("seed=" + value("--seed"));
-      else if (arg == "--set") overrides.push_back(value("--set"));
-      else if (arg == "--no-progress") options.progress = false;
-      else if (arg == "--verbose") options.verbose = true;
-      else if (arg == "--output-bag") options.output_bag = value("--output-bag");
-      else return usage(("unknown argument '" + arg + "'").c_str());
-    } catch (const std::invalid_argument& e) {
-      return usage(e.what());
-    }
-  }
-  if (options.bag_path.empty() || config_path.empty() || options.output_dir.empty()) {
-    return usage("--bag, --config and --output are required");
-  }
+  int exit_status = 0;
+  const std::optional<Arguments> parsed =
+      io::parseToolArguments("offline_slam", kUsage, argc, argv, parseArguments, &exit_status);
+  if (!parsed) return exit_status;
+  const rbpf_slam::rosbridge::OfflineOptions& options = parsed->options;
   try {
-    const rbpf_slam::io::SlamConfig config = rbpf_slam::io::loadSlamConfig(config_path, overrides);
+    const rbpf_slam::io::SlamConfig config =
+        io::loadSlamConfig(parsed->config_path, parsed->overrides);
     rbpf_slam::rosbridge::OfflineRunner runner(config, options);
     const auto s = runner.run();
     std::printf("offline_slam: %ld updates, %d landmarks, %d particles, %.1f s wall for %.1f s "
@@ -71,7 +93,7 @@ int main(int argc, char** argv) {
     }
   } catch (const std::exception& e) {
     std::fprintf(stderr, "offline_slam: %s\n", e.what());
-    return 1;
+    return io::kFailureExitStatus;
   }
   return 0;
 }

@@ -6,7 +6,7 @@
 // trajectory would give, to compare offline_slam's map.pgm with. --align-to moves the reference
 // so that its pose at the estimate's first stamp is the estimate's first pose (offline_slam's
 // map frame starts at the first odometry pose): both maps are then in the same frame.
-// Exit status: 0 on success, 2 on bad usage or unreadable input.
+// Exit status: 0 on success, 2 on bad usage, 1 for unreadable input or nothing rendered.
 
 #include <rosbag/bag.h>
 #include <rosbag/view.h>
@@ -17,6 +17,7 @@
 #include <cmath>
 #include <cstdio>
 #include <iostream>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -25,13 +26,12 @@
 #include "rbpf_slam/core/grid/inverse_sensor_model.h"
 #include "rbpf_slam/io/grid_map_file.h"
 #include "rbpf_slam/io/slam_config.h"
+#include "rbpf_slam/io/tool_arguments.h"
 #include "rbpf_slam/io/trajectory.h"
 #include "rbpf_slam/ros/conversions.h"
 #include "rbpf_slam/ros/node_support.h"
 
 namespace {
-
-constexpr int kUsageError = 2;
 
 const char kUsage[] =
     "usage: render_grid --bag IN.bag --reference REF.tum --config CONFIG.yaml --output PREFIX\n"
@@ -57,52 +57,57 @@ bool referenceAt(const std::vector<rbpf_slam::io::StampedPose>& reference, doubl
   return found;
 }
 
+struct Arguments {
+  std::string bag_path, reference_path, config_path, output, align_path;
+  std::vector<std::string> overrides;
+  double max_dt = 0.05;
+};
+
+Arguments parseArguments(int argc, char** argv) {
+  Arguments a;
+  rbpf_slam::io::ArgumentCursor cursor(argc, argv);
+  while (cursor.next()) {
+    if (cursor.arg() == "--bag") {
+      a.bag_path = cursor.value();
+    } else if (cursor.arg() == "--reference") {
+      a.reference_path = cursor.value();
+    } else if (cursor.arg() == "--config") {
+      a.config_path = cursor.value();
+    } else if (cursor.arg() == "--output") {
+      a.output = cursor.value();
+    } else if (cursor.arg() == "--set") {
+      a.overrides.push_back(cursor.value());
+    } else if (cursor.arg() == "--align-to") {
+      a.align_path = cursor.value();
+    } else if (cursor.arg() == "--max-dt") {
+      a.max_dt = cursor.number(rbpf_slam::io::NumberRule::kNonNegative);
+    } else {
+      throw std::invalid_argument("unknown argument '" + cursor.arg() + "'");
+    }
+  }
+  if (a.bag_path.empty() || a.reference_path.empty() || a.config_path.empty() || a.output.empty()) {
+    throw std::invalid_argument("--bag, --reference, --config and --output are required");
+  }
+  return a;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   namespace core = rbpf_slam::core;
   namespace io = rbpf_slam::io;
   using rbpf_slam::rosbridge::stripSlash;
-  std::string bag_path, reference_path, config_path, output, align_path;
-  std::vector<std::string> overrides;
-  double max_dt = 0.05;
+  int exit_status = 0;
+  const std::optional<Arguments> parsed =
+      io::parseToolArguments("render_grid", kUsage, argc, argv, parseArguments, &exit_status);
+  if (!parsed) return exit_status;
+  const std::string& bag_path = parsed->bag_path;
+  const std::string& reference_path = parsed->reference_path;
+  const std::string& output = parsed->output;
+  const std::string& align_path = parsed->align_path;
+  const double max_dt = parsed->max_dt;
   try {
-    for (int i = 1; i < argc; ++i) {
-      const std::string arg = argv[i];
-      const auto next = [&]() -> std::string {
-        if (i + 1 >= argc) throw std::invalid_argument(arg + " needs a value");
-        return argv[++i];
-      };
-      if (arg == "-h" || arg == "--help") {
-        std::cout << kUsage;
-        return 0;
-      } else if (arg == "--bag") {
-        bag_path = next();
-      } else if (arg == "--reference") {
-        reference_path = next();
-      } else if (arg == "--config") {
-        config_path = next();
-      } else if (arg == "--output") {
-        output = next();
-      } else if (arg == "--set") {
-        overrides.push_back(next());
-      } else if (arg == "--align-to") {
-        align_path = next();
-      } else if (arg == "--max-dt") {
-        max_dt = std::stod(next());
-      } else {
-        throw std::invalid_argument("unknown argument '" + arg + "'");
-      }
-    }
-    if (bag_path.empty() || reference_path.empty() || config_path.empty() || output.empty()) {
-      throw std::invalid_argument("--bag, --reference, --config and --output are required");
-    }
-  } catch (const std::exception& e) {
-    std::cerr << "render_grid: " << e.what() << "\n" << kUsage;
-    return kUsageError;
-  }
-  try {
-    const io::SlamConfig config = io::loadSlamConfig(config_path, overrides);
+    const io::SlamConfig config = io::loadSlamConfig(parsed->config_path, parsed->overrides);
     const core::GridOptions& options = config.filter.grid;
     core::validate(options);
     std::vector<io::StampedPose> reference = io::readTum(reference_path);
@@ -181,7 +186,7 @@ int main(int argc, char** argv) {
                 scans, unmatched, bad, map.count(65, 100), map.count(0, 19), map.resolution_m);
   } catch (const std::exception& e) {
     std::cerr << "render_grid: " << e.what() << "\n";
-    return kUsageError;
+    return io::kFailureExitStatus;
   }
   return 0;
 }

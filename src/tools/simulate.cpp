@@ -15,10 +15,12 @@
 #include <iostream>
 #include <map>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 #include <string>
 
 #include "rbpf_slam/core/sim/simulator.h"
+#include "rbpf_slam/io/tool_arguments.h"
 #include "rbpf_slam/io/world_yaml.h"
 #include "rbpf_slam/ros/sim_messages.h"
 
@@ -31,11 +33,6 @@ const char kUsage[] =
     "usage: simulate --world WORLD.yaml --output OUT.bag [--seed N] [--duration S]\n"
     "  writes OUT.bag, OUT.ref.tum (ground truth) and OUT.landmarks.yaml (true landmarks)\n";
 
-/// A command line that cannot be understood.
-struct UsageError : std::runtime_error {
-  using std::runtime_error::runtime_error;
-};
-
 struct Arguments {
   std::string world;
   std::string output;
@@ -45,46 +42,24 @@ struct Arguments {
 
 Arguments parseArguments(int argc, char** argv) {
   Arguments arguments;
-  for (int i = 1; i < argc; ++i) {
-    const std::string flag = argv[i];
-    if (flag == "-h" || flag == "--help") {
-      std::cout << kUsage;
-      std::exit(0);
-    }
-    if (i + 1 >= argc) throw UsageError(flag + " needs a value");
-    const std::string value = argv[++i];
-    size_t used = 0;
-    try {
-      if (flag == "--world") {
-        arguments.world = value;
-      } else if (flag == "--output") {
-        arguments.output = value;
-      } else if (flag == "--seed") {
-        arguments.seed = std::stoull(value, &used);
-      } else if (flag == "--duration") {
-        arguments.duration_s = std::stod(value, &used);
-      } else {
-        throw UsageError("unknown option " + flag);
-      }
-    } catch (const std::logic_error&) {
-      used = 0;
-    }
-    const bool numeric = flag == "--seed" || flag == "--duration";
-    if (numeric && (used != value.size() || value.empty() || value[0] == '-')) {
-      throw UsageError(flag + " " + value + " is not a non-negative number");
+  rbpf_slam::io::ArgumentCursor cursor(argc, argv);
+  while (cursor.next()) {
+    if (cursor.arg() == "--world") {
+      arguments.world = cursor.value();
+    } else if (cursor.arg() == "--output") {
+      arguments.output = cursor.value();
+    } else if (cursor.arg() == "--seed") {
+      arguments.seed = cursor.count();
+    } else if (cursor.arg() == "--duration") {
+      arguments.duration_s = cursor.number(rbpf_slam::io::NumberRule::kNonNegative);
+    } else {
+      cursor.unknown();
     }
   }
   if (arguments.world.empty() || arguments.output.empty()) {
-    throw UsageError("--world and --output are required");
+    throw std::invalid_argument("--world and --output are required");
   }
   return arguments;
-}
-
-/// OUT.bag -> OUT.suffix (the bag's name without ".bag").
-std::string besideBag(const std::string& bag, const std::string& suffix) {
-  const std::string ext = ".bag";
-  const bool has_ext = bag.size() > ext.size() && bag.compare(bag.size() - 4, 4, ext) == 0;
-  return (has_ext ? bag.substr(0, bag.size() - 4) : bag) + suffix;
 }
 
 /// Writes the simulator's events to a bag with the topics of the real ones.
@@ -245,8 +220,8 @@ int run(const Arguments& arguments) {
   options.max_duration_s = arguments.duration_s;
   sim::Simulator simulator(rbpf_slam::io::loadWorld(arguments.world), options);
 
-  const std::string reference_path = besideBag(arguments.output, ".ref.tum");
-  const std::string truth_path = besideBag(arguments.output, ".landmarks.yaml");
+  const std::string reference_path = rbpf_slam::io::besideBag(arguments.output, ".ref.tum");
+  const std::string truth_path = rbpf_slam::io::besideBag(arguments.output, ".landmarks.yaml");
   BagWriter writer(arguments.output, simulator, reference_path);
   sim::SimEvent event;
   while (simulator.next(&event)) writer.write(event);
@@ -269,13 +244,14 @@ int run(const Arguments& arguments) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  int exit_status = 0;
+  const std::optional<Arguments> parsed = rbpf_slam::io::parseToolArguments(
+      "simulate", kUsage, argc, argv, parseArguments, &exit_status);
+  if (!parsed) return exit_status;
   try {
-    return run(parseArguments(argc, argv));
-  } catch (const UsageError& error) {
-    std::cerr << "simulate: " << error.what() << "\n" << kUsage;
-    return 2;
+    return run(*parsed);
   } catch (const std::exception& error) {
     std::cerr << "simulate: error: " << error.what() << "\n";
-    return 1;
+    return rbpf_slam::io::kFailureExitStatus;
   }
 }

@@ -5,52 +5,63 @@
 
 #include <cstdio>
 #include <exception>
+#include <optional>
 #include <string>
 
+#include "rbpf_slam/io/tool_arguments.h"
 #include "rbpf_slam/ros/bag_validation.h"
 
 namespace {
 
-int usage(const std::string& message) {
-  std::fprintf(stderr,
-               "validate_bag: %s\nusage: validate_bag IN.bag [--base-frame F] [--odom-frame F] "
-               "[--max-gap S]\n",
-               message.c_str());
-  return 2;
+namespace io = rbpf_slam::io;
+
+const char kUsage[] =
+    "usage: validate_bag IN.bag [--base-frame F] [--odom-frame F] [--max-gap S]\n"
+    "  --base-frame F  the robot frame tf must reach (default base_link)\n"
+    "  --odom-frame F  the odometry frame (default odom)\n"
+    "  --max-gap S     a larger step between two stamps of a stream is a gap (default 2 s)\n"
+    "Exit status: 0 nothing found, 1 problems found, 2 bad usage or a bag that cannot be read.\n";
+
+struct Arguments {
+  std::string path;
+  rbpf_slam::rosbridge::BagValidationOptions options;
+};
+
+Arguments parseArguments(int argc, char** argv) {
+  Arguments a;
+  io::ArgumentCursor cursor(argc, argv);
+  while (cursor.next()) {
+    if (cursor.arg() == "--base-frame") {
+      a.options.base_frame = cursor.value();
+    } else if (cursor.arg() == "--odom-frame") {
+      a.options.odom_frame = cursor.value();
+    } else if (cursor.arg() == "--max-gap") {
+      a.options.max_gap_s = cursor.number(io::NumberRule::kPositive);
+    } else if (!cursor.isOption() && a.path.empty()) {
+      a.path = cursor.arg();
+    } else {
+      throw std::invalid_argument("unknown or extra argument '" + cursor.arg() + "'");
+    }
+  }
+  if (a.path.empty()) throw std::invalid_argument("the bag is required");
+  return a;
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
-  rbpf_slam::rosbridge::BagValidationOptions options;
-  std::string path;
-  for (int i = 1; i < argc; ++i) {
-    const std::string arg = argv[i];
-    const bool has_value = i + 1 < argc;
-    if (arg == "--base-frame" && has_value) {
-      options.base_frame = argv[++i];
-    } else if (arg == "--odom-frame" && has_value) {
-      options.odom_frame = argv[++i];
-    } else if (arg == "--max-gap" && has_value) {
-      try {
-        options.max_gap_s = std::stod(argv[++i]);
-      } catch (const std::exception&) {
-        return usage("--max-gap needs a number of seconds");
-      }
-      if (!(options.max_gap_s > 0.0)) return usage("--max-gap must be > 0");
-    } else if (!arg.empty() && arg[0] != '-' && path.empty()) {
-      path = arg;
-    } else {
-      return usage("unknown or incomplete argument '" + arg + "'");
-    }
-  }
-  if (path.empty()) return usage("the bag is required");
+  int exit_status = 0;
+  const std::optional<Arguments> parsed =
+      io::parseToolArguments("validate_bag", kUsage, argc, argv, parseArguments, &exit_status);
+  if (!parsed) return exit_status;
+  const std::string& path = parsed->path;
+  const rbpf_slam::rosbridge::BagValidationOptions& options = parsed->options;
   rbpf_slam::rosbridge::BagReport report;
   try {
     report = rbpf_slam::rosbridge::validateBag(path, options);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "validate_bag: %s\n", e.what());
-    return 2;
+    return io::kUsageExitStatus;  // documented: 1 means problems found
   }
   std::printf("%s: %.1f s\n", report.path.c_str(), report.duration_s);
   for (const auto& s : report.streams) {

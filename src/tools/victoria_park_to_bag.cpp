@@ -52,32 +52,19 @@ struct Arguments {
 Arguments parseArguments(int argc, char** argv) {
   Arguments a;
   std::vector<std::string> positional;
-  for (int i = 1; i < argc; ++i) {
-    const std::string arg = argv[i];
-    const auto next = [&]() -> std::string {
-      if (i + 1 >= argc) throw std::invalid_argument(arg + " needs a value");
-      return argv[++i];
-    };
-    if (arg == "--dt") {
-      const std::string text = next();
-      char* end = nullptr;
-      a.dt_s = std::strtod(text.c_str(), &end);
-      if (end != text.c_str() + text.size() || !(a.dt_s > 0.0 && a.dt_s < 1e3)) {
-        throw std::invalid_argument("--dt needs a positive number of seconds, got '" + text + "'");
-      }
-    } else if (arg == "--max-poses") {
-      const std::string text = next();
-      char* end = nullptr;
-      a.max_poses = std::strtol(text.c_str(), &end, 10);
-      if (end != text.c_str() + text.size() || a.max_poses < 0) {
-        throw std::invalid_argument("--max-poses needs a count, got '" + text + "'");
-      }
-    } else if (arg == "--unknown-ids") {
+  io::ArgumentCursor cursor(argc, argv);
+  while (cursor.next()) {
+    if (cursor.arg() == "--dt") {
+      a.dt_s = cursor.number(io::NumberRule::kPositive);
+      if (a.dt_s >= 1e3) throw std::invalid_argument("--dt must be under 1000 s");
+    } else if (cursor.arg() == "--max-poses") {
+      a.max_poses = static_cast<long>(cursor.count());
+    } else if (cursor.arg() == "--unknown-ids") {
       a.unknown_ids = true;
-    } else if (arg.size() > 1 && arg[0] == '-') {
-      throw std::invalid_argument("unknown option " + arg);
+    } else if (cursor.isOption()) {
+      cursor.unknown();
     } else {
-      positional.push_back(arg);
+      positional.push_back(cursor.arg());
     }
   }
   if (positional.size() != 2) {
@@ -87,13 +74,6 @@ Arguments parseArguments(int argc, char** argv) {
   a.input = positional[0];
   a.bag_path = positional[1];
   return a;
-}
-
-std::string besideBag(const std::string& bag, const std::string& suffix) {
-  const std::string ext = ".bag";
-  const bool has_ext =
-      bag.size() > ext.size() && bag.compare(bag.size() - ext.size(), ext.size(), ext) == 0;
-  return (has_ext ? bag.substr(0, bag.size() - ext.size()) : bag) + suffix;
 }
 
 rbpf_slam::FeatureArray featureMessage(const io::VictoriaPose& pose, const ros::Time& stamp,
@@ -156,7 +136,7 @@ int main(int argc, char** argv) {
       track.push_back({t, pose});
     }
     bag.close();
-    const std::string odometry_path = besideBag(arguments.bag_path, ".odom.tum");
+    const std::string odometry_path = io::besideBag(arguments.bag_path, ".odom.tum");
     io::writeTum(odometry_path, track);
     std::cerr << "victoria_park_to_bag: " << poses.size() << " poses over "
               << (poses.size() - 1) * arguments.dt_s << " s (dt " << arguments.dt_s << " s), "

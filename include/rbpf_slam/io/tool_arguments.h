@@ -1,7 +1,10 @@
 #pragma once
-// The command-line preamble the converters share: -h / --help prints the usage, a bad argument
-// prints "TOOL: what was wrong" and the usage and ends with the usage exit status.
+// The command line every tool shares: -h / --help prints the usage and exits 0, a bad argument
+// prints "TOOL: what was wrong" and the usage and exits 2, a failure while working exits 1.
+// An ArgumentCursor walks the arguments, the parse* functions read numbers the same way
+// everywhere, besideBag names the files a tool writes next to its bag.
 
+#include <cstdint>
 #include <iostream>
 #include <optional>
 #include <stdexcept>
@@ -12,6 +15,48 @@ namespace io {
 
 /// Exit status of a tool called with bad arguments.
 constexpr int kUsageExitStatus = 2;
+/// Exit status of a tool that failed while working (an input it cannot read, a write that failed).
+constexpr int kFailureExitStatus = 1;
+
+enum class NumberRule { kFinite, kNonNegative, kPositive };
+
+/// `text` as a number obeying `rule`; std::invalid_argument naming `flag` otherwise.
+double parseNumber(const std::string& flag, const std::string& text,
+                   NumberRule rule = NumberRule::kFinite);
+/// `text` as a non-negative integer (a seed, a count); std::invalid_argument naming `flag`.
+std::uint64_t parseUnsigned(const std::string& flag, const std::string& text);
+
+/// OUT.bag -> OUT + suffix (the bag's path without ".bag", or the whole path if it has none).
+std::string besideBag(const std::string& bag, const std::string& suffix);
+
+/// Walks argv[1..]: `while (cursor.next())`, then arg() is the argument, isOption() tells an
+/// option from a positional argument, value() / number() / count() take the option's value
+/// (std::invalid_argument "--flag needs a value" at the end of the line), unknown() throws
+/// "unknown option --flag".
+class ArgumentCursor {
+ public:
+  ArgumentCursor(int argc, char** argv) : argc_(argc), argv_(argv) {}
+  bool next() {
+    if (index_ + 1 >= argc_) return false;
+    arg_ = argv_[++index_];
+    return true;
+  }
+  const std::string& arg() const { return arg_; }
+  bool isOption() const { return arg_.size() > 1 && arg_[0] == '-'; }
+  std::string value() {
+    if (index_ + 1 >= argc_) throw std::invalid_argument(arg_ + " needs a value");
+    return argv_[++index_];
+  }
+  double number(NumberRule rule = NumberRule::kFinite) { return parseNumber(arg_, value(), rule); }
+  std::uint64_t count() { return parseUnsigned(arg_, value()); }
+  [[noreturn]] void unknown() const { throw std::invalid_argument("unknown option " + arg_); }
+
+ private:
+  int argc_;
+  char** argv_;
+  int index_ = 0;
+  std::string arg_;
+};
 
 /// `parse(argc, argv)` throws std::invalid_argument for a bad argument. Returns its result, or
 /// nothing with *exit_status set: 0 after printing `usage` for -h / --help (anywhere on the

@@ -1,0 +1,73 @@
+#!/usr/bin/env bash
+# Every tool's command line (one parser, io/tool_arguments.h): -h / --help prints the usage and
+# exits 0, a bad argument exits 2 (usage), an input that cannot be read exits 1 with a message
+# naming it (validate_bag: 2, its 1 means problems found); no converter leaves a bag behind on
+# failure.
+set -euo pipefail
+
+here=$(cd "$(dirname "$0")" && pwd)
+root=$(cd "$here/../.." && pwd)
+bin="${RBPF_BIN:-$root/build/devel/lib/rbpf_slam}"
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+status=0
+
+# expect NAME WANTED_STATUS PATTERN COMMAND...: runs COMMAND, checks its exit status and that
+# its output (stdout and stderr) matches PATTERN.
+expect() {
+  local name=$1 wanted=$2 pattern=$3
+  shift 3
+  local got=0
+  "$@" >"$work/out" 2>&1 || got=$?
+  if [ "$got" -ne "$wanted" ]; then
+    echo "FAIL: $name: exit status $got, expected $wanted"; sed 's/^/  /' "$work/out"; status=1
+  elif ! grep -qE -e "$pattern" "$work/out"; then
+    echo "FAIL: $name: output does not match '$pattern'"; sed 's/^/  /' "$work/out"; status=1
+  else
+    echo "ok: $name ($got)"
+  fi
+}
+
+missing="$work/no_such_input"
+expect "carmen_to_bag --help" 0 "usage: carmen_to_bag" "$bin/carmen_to_bag" --help
+expect "carmen_to_bag bad option" 2 "usage: carmen_to_bag" "$bin/carmen_to_bag" a b --bogus
+expect "carmen_to_bag missing log" 1 "no_such_input" "$bin/carmen_to_bag" "$missing.log" "$work/c.bag"
+expect "mrclam_to_bag --help" 0 "usage: mrclam_to_bag" "$bin/mrclam_to_bag" -h
+expect "mrclam_to_bag bad robot" 2 "usage: mrclam_to_bag" "$bin/mrclam_to_bag" "$work" x "$work/m.bag"
+expect "mrclam_to_bag missing dataset" 1 "no_such_input" "$bin/mrclam_to_bag" "$missing" 1 "$work/m.bag"
+expect "victoria_park_to_bag --help" 0 "usage: victoria_park_to_bag" "$bin/victoria_park_to_bag" --help
+expect "victoria_park_to_bag bad option" 2 "usage: victoria_park_to_bag" \
+  "$bin/victoria_park_to_bag" a b --dt
+expect "victoria_park_to_bag missing input" 1 "no_such_input" \
+  "$bin/victoria_park_to_bag" "$missing.txt" "$work/v.bag"
+for tool in offline_slam simulate evaluate render_grid validate_bag; do
+  expect "$tool --help" 0 "usage: $tool" "$bin/$tool" --help
+done
+expect "offline_slam unknown option" 2 "unknown argument '--bogus'" \
+  "$bin/offline_slam" --bogus
+expect "offline_slam value missing" 2 "--bag needs a value" "$bin/offline_slam" --bag
+expect "offline_slam missing bag" 1 "no_such_input" "$bin/offline_slam" --bag "$missing.bag" \
+  --config "$root/config/landmarks_fastslam2.yaml" --output "$work/o"
+expect "offline_slam bad config value" 1 "particles" "$bin/offline_slam" --bag "$missing.bag" \
+  --config "$root/config/landmarks_fastslam2.yaml" --output "$work/o" --set particles=-3
+expect "simulate bad seed" 2 "--seed needs a non-negative integer" "$bin/simulate" \
+  --world "$root/worlds/test_small.yaml" --output "$work/s.bag" --seed -1
+expect "simulate missing world" 1 "no_such_input" "$bin/simulate" --world "$missing.yaml" \
+  --output "$work/s.bag"
+printf '1 0 0 0 0 0 0 1\n2 1 0 0 0 0 0 1\n' >"$work/a.tum"
+expect "evaluate bad number" 2 "--max-dt needs a non-negative number" "$bin/evaluate" \
+  "$work/a.tum" "$work/a.tum" --max-dt x
+expect "evaluate one file" 2 "expected ESTIMATE.tum and REFERENCE.tum" "$bin/evaluate" "$work/a.tum"
+expect "evaluate missing file" 1 "no_such_input" "$bin/evaluate" "$work/a.tum" "$missing.tum"
+expect "evaluate itself" 0 "ate" "$bin/evaluate" "$work/a.tum" "$work/a.tum"
+expect "render_grid required" 2 "are required" "$bin/render_grid" --bag x.bag
+expect "render_grid missing reference" 1 "no_such_input" "$bin/render_grid" --bag "$missing.bag" \
+  --reference "$missing.tum" --config "$root/config/grid_pf_laser.yaml" --output "$work/g"
+expect "validate_bag bad gap" 2 "--max-gap needs a positive number" "$bin/validate_bag" x.bag \
+  --max-gap 0
+expect "validate_bag missing bag" 2 "no_such_input" "$bin/validate_bag" "$missing.bag"
+for bag in c.bag m.bag v.bag s.bag; do
+  [ ! -e "$work/$bag" ] || { echo "FAIL: $bag written although the conversion failed"; status=1; }
+done
+[ "$status" -eq 0 ] && echo PASS
+exit "$status"
