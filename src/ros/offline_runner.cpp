@@ -3,7 +3,6 @@
 #include <geometry_msgs/PoseWithCovarianceStamped.h>
 #include <rosbag/bag.h>
 #include <rosbag/view.h>
-#include <sys/stat.h>
 #include <tf2/buffer_core.h>
 #include <tf2/exceptions.h>
 #include <tf2_msgs/TFMessage.h>
@@ -216,6 +215,13 @@ OfflineSummary OfflineRunner::run() {
   } catch (const rosbag::BagException& e) {
     throw std::runtime_error(options_.bag_path + ": cannot open bag: " + e.what());
   }
+  // The output directory (and its parents) now, not after a long run.
+  std::error_code error;
+  std::filesystem::create_directories(options_.output_dir, error);
+  if (error || !std::filesystem::is_directory(options_.output_dir)) {
+    throw std::runtime_error(options_.output_dir + ": cannot create the output directory" +
+                             (error ? ": " + error.message() : ""));
+  }
   const auto wall_start = std::chrono::steady_clock::now();
   const std::clock_t cpu_start = std::clock();
   rosbag::View full(bag);
@@ -420,7 +426,8 @@ OfflineSummary OfflineRunner::run() {
 OfflineSummary OfflineRunner::writeOutputs(const OfflineSummary& in) const {
   OfflineSummary summary = in;
   const std::string& dir = options_.output_dir;
-  mkdir(dir.c_str(), 0755);
+  std::error_code ignored;  // made by run(); a write below reports a directory that went away
+  std::filesystem::create_directories(dir, ignored);
   // The trajectory: the best particle's path when the filter keeps paths (FastSLAM's estimate
   // of the whole path, the one its map was built from, corrected by every loop it closed),
   // else the pose estimated at each update. The latter is always in trajectory_online.tum.

@@ -54,6 +54,14 @@ expect "simulate bad seed" 2 "--seed needs a non-negative integer" "$bin/simulat
   --world "$root/worlds/test_small.yaml" --output "$work/s.bag" --seed -1
 expect "simulate missing world" 1 "no_such_input" "$bin/simulate" --world "$missing.yaml" \
   --output "$work/s.bag"
+expect "offline_slam nested output" 0 "updates" "$bin/offline_slam" --bag \
+  "$root/test/data/intel_head.bag" --config "$root/config/laser_fastslam2.yaml" \
+  --output "$work/new/nested/run" --no-progress --set particles=5
+[ -s "$work/new/nested/run/trajectory.tum" ] || { echo "FAIL: no nested trajectory"; status=1; }
+touch "$work/a_file"
+expect "offline_slam output is a file" 1 "a_file: cannot create the output directory" \
+  "$bin/offline_slam" --bag "$root/test/data/intel_head.bag" \
+  --config "$root/config/laser_fastslam2.yaml" --output "$work/a_file" --no-progress
 printf '1 0 0 0 0 0 0 1\n2 1 0 0 0 0 0 1\n' >"$work/a.tum"
 expect "evaluate bad number" 2 "--max-dt needs a non-negative number" "$bin/evaluate" \
   "$work/a.tum" "$work/a.tum" --max-dt x
