@@ -1,0 +1,92 @@
+// The command line every tool shares (io/tool_arguments.h).
+
+#include <gtest/gtest.h>
+
+#include <functional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "rbpf_slam/io/tool_arguments.h"
+
+namespace rbpf_slam {
+namespace io {
+namespace {
+
+std::string errorOf(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const std::invalid_argument& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(ToolArguments, NumbersFollowTheirRule) {
+  EXPECT_DOUBLE_EQ(parseNumber("--x", "-2.5"), -2.5);
+  EXPECT_DOUBLE_EQ(parseNumber("--x", "0", NumberRule::kNonNegative), 0.0);
+  EXPECT_DOUBLE_EQ(parseNumber("--x", "1e-3", NumberRule::kPositive), 1e-3);
+  EXPECT_EQ(errorOf([] { parseNumber("--x", "0", NumberRule::kPositive); }),
+            "--x needs a positive number, got '0'");
+  EXPECT_EQ(errorOf([] { parseNumber("--x", "-1", NumberRule::kNonNegative); }),
+            "--x needs a non-negative number, got '-1'");
+  for (const char* bad : {"", "1.5m", "nan", "inf", "abc"}) {
+    EXPECT_EQ(errorOf([&] { parseNumber("--x", bad); }),
+              std::string("--x needs a number, got '") + bad + "'")
+        << bad;
+  }
+  EXPECT_EQ(parseUnsigned("--seed", "42"), 42u);
+  for (const char* bad : {"", "-1", "+1", "4.2", "7x"}) {
+    EXPECT_NE(errorOf([&] { parseUnsigned("--seed", bad); }), "") << bad;
+  }
+}
+
+TEST(ToolArguments, BesideBag) {
+  EXPECT_EQ(besideBag("out/run.bag", ".ref.tum"), "out/run.ref.tum");
+  EXPECT_EQ(besideBag("run", ".ref.tum"), "run.ref.tum");
+  EXPECT_EQ(besideBag(".bag", ".x"), ".bag.x");  // a name that is only the extension
+}
+
+TEST(ToolArguments, CursorWalksOptionsValuesAndPositionals) {
+  std::vector<std::string> words = {"tool", "in.bag", "--dt", "0.5", "-v", "--seed"};
+  std::vector<char*> argv;
+  for (std::string& w : words) argv.push_back(&w[0]);
+  ArgumentCursor cursor(static_cast<int>(argv.size()), argv.data());
+  ASSERT_TRUE(cursor.next());
+  EXPECT_EQ(cursor.arg(), "in.bag");
+  EXPECT_FALSE(cursor.isOption());
+  ASSERT_TRUE(cursor.next());
+  EXPECT_TRUE(cursor.isOption());
+  EXPECT_DOUBLE_EQ(cursor.number(NumberRule::kPositive), 0.5);
+  EXPECT_EQ(cursor.arg(), "--dt");  // still the option whose value was taken
+  ASSERT_TRUE(cursor.next());
+  EXPECT_EQ(cursor.arg(), "-v");
+  EXPECT_EQ(errorOf([&] { cursor.unknown(); }), "unknown option -v");
+  ASSERT_TRUE(cursor.next());
+  EXPECT_EQ(errorOf([&] { cursor.count(); }), "--seed needs a value");
+  EXPECT_FALSE(cursor.next());
+}
+
+TEST(ToolArguments, HelpAndBadArgumentsEndWithTheirStatus) {
+  std::vector<std::string> words = {"tool", "--bogus"};
+  std::vector<char*> argv;
+  for (std::string& w : words) argv.push_back(&w[0]);
+  const auto parse = [](int argc, char** argv) {
+    ArgumentCursor cursor(argc, argv);
+    while (cursor.next()) cursor.unknown();
+    return 1;
+  };
+  int status = -1;
+  EXPECT_FALSE(parseToolArguments("tool", "usage\n", 2, argv.data(), parse, &status));
+  EXPECT_EQ(status, kUsageExitStatus);
+  words.push_back("-h");
+  argv.clear();
+  for (std::string& w : words) argv.push_back(&w[0]);
+  EXPECT_FALSE(parseToolArguments("tool", "usage\n", 3, argv.data(), parse, &status));
+  EXPECT_EQ(status, 0);
+  EXPECT_EQ(parseToolArguments("tool", "usage\n", 1, argv.data(), parse, &status), 1);
+}
+
+}  // namespace
+}  // namespace io
+}  // namespace rbpf_slam
