@@ -209,18 +209,19 @@ OfflineRunner::OfflineRunner(const io::SlamConfig& config, const OfflineOptions&
 
 OfflineSummary OfflineRunner::run() {
   OfflineSummary summary;
-  rosbag::Bag bag;
-  try {
-    bag.open(options_.bag_path, rosbag::bagmode::Read);
-  } catch (const rosbag::BagException& e) {
-    throw std::runtime_error(options_.bag_path + ": cannot open bag: " + e.what());
-  }
-  // The output directory (and its parents) now, not after a long run.
+  // The output directory (and its parents) first, not after a long run; also where a caller
+  // writes the error when the bag cannot be read.
   std::error_code error;
   std::filesystem::create_directories(options_.output_dir, error);
   if (error || !std::filesystem::is_directory(options_.output_dir)) {
     throw std::runtime_error(options_.output_dir + ": cannot create the output directory" +
                              (error ? ": " + error.message() : ""));
+  }
+  rosbag::Bag bag;
+  try {
+    bag.open(options_.bag_path, rosbag::bagmode::Read);
+  } catch (const rosbag::BagException& e) {
+    throw std::runtime_error(options_.bag_path + ": cannot open bag: " + e.what());
   }
   const auto wall_start = std::chrono::steady_clock::now();
   const std::clock_t cpu_start = std::clock();

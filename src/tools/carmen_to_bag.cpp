@@ -59,7 +59,7 @@ Arguments parseArguments(int argc, char** argv) {
   io::ArgumentCursor cursor(argc, argv);
   while (cursor.next()) {
     if (cursor.arg() == "--odom-noise") {
-      arguments.noise.noise_per_unit = cursor.number();
+      arguments.noise.noise_per_unit = cursor.number(io::NumberRule::kNonNegative);
     } else if (cursor.arg() == "--odom-bias") {
       arguments.noise.scale_bias = cursor.number();
     } else if (cursor.arg() == "--seed") {

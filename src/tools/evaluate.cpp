@@ -35,13 +35,14 @@ Arguments parseArguments(int argc, char** argv) {
   io::ArgumentCursor cursor(argc, argv);
   while (cursor.next()) {
     if (cursor.arg() == "--max-dt") {
-      arguments.options.max_dt_s = cursor.number(io::NumberRule::kNonNegative);
+      arguments.options.max_dt_s = cursor.number(io::NumberRule::kNonNegative);  // 0: same stamps
     } else if (cursor.arg() == "--no-align") {
       arguments.options.align = false;
     } else if (cursor.arg() == "--interpolate") {
       arguments.options.interpolate_reference = true;
     } else if (cursor.arg() == "--max-gap") {
-      arguments.options.max_interpolation_gap_s = cursor.number(io::NumberRule::kPositive);
+      arguments.options.max_interpolation_gap_s =
+          cursor.number(io::NumberRule::kPositiveOrInfinite);
     } else if (cursor.isOption()) {
       cursor.unknown();
     } else {

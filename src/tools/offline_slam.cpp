@@ -47,9 +47,9 @@ Arguments parseArguments(int argc, char** argv) {
     } else if (arg == "--reference") {
       a.options.reference_path = cursor.value();
     } else if (arg == "--seed") {
-      a.overrides.push_back("seed=" + cursor.value());
+      a.overrides.push_back("seed=" + std::to_string(cursor.count()));
     } else if (arg == "--set") {
-      a.overrides.push_back(cursor.value());
+      a.overrides.push_back(cursor.keyValue());
     } else if (arg == "--no-progress") {
       a.options.progress = false;
     } else if (arg == "--verbose") {

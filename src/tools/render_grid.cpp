@@ -76,7 +76,7 @@ Arguments parseArguments(int argc, char** argv) {
     } else if (cursor.arg() == "--output") {
       a.output = cursor.value();
     } else if (cursor.arg() == "--set") {
-      a.overrides.push_back(cursor.value());
+      a.overrides.push_back(cursor.keyValue());
     } else if (cursor.arg() == "--align-to") {
       a.align_path = cursor.value();
     } else if (cursor.arg() == "--max-dt") {

@@ -36,7 +36,7 @@ Arguments parseArguments(int argc, char** argv) {
     } else if (cursor.arg() == "--odom-frame") {
       a.options.odom_frame = cursor.value();
     } else if (cursor.arg() == "--max-gap") {
-      a.options.max_gap_s = cursor.number(io::NumberRule::kPositive);
+      a.options.max_gap_s = cursor.number(io::NumberRule::kPositiveOrInfinite);  // inf: no check
     } else if (!cursor.isOption() && a.path.empty()) {
       a.path = cursor.arg();
     } else {

@@ -56,7 +56,9 @@ Arguments parseArguments(int argc, char** argv) {
   while (cursor.next()) {
     if (cursor.arg() == "--dt") {
       a.dt_s = cursor.number(io::NumberRule::kPositive);
-      if (a.dt_s >= 1e3) throw std::invalid_argument("--dt must be under 1000 s");
+      if (a.dt_s >= 1e3) {
+        throw std::invalid_argument("--dt must be under 1000 s, got " + std::to_string(a.dt_s));
+      }
     } else if (cursor.arg() == "--max-poses") {
       a.max_poses = static_cast<long>(cursor.count());
     } else if (cursor.arg() == "--unknown-ids") {

@@ -48,6 +48,10 @@ expect "offline_slam unknown option" 2 "unknown argument '--bogus'" \
 expect "offline_slam value missing" 2 "--bag needs a value" "$bin/offline_slam" --bag
 expect "offline_slam missing bag" 1 "no_such_input" "$bin/offline_slam" --bag "$missing.bag" \
   --config "$root/config/landmarks_fastslam2.yaml" --output "$work/o"
+expect "offline_slam bad seed" 2 "--seed needs a non-negative integer" "$bin/offline_slam" \
+  --bag x.bag --config x.yaml --output "$work/o" --seed x
+expect "offline_slam bad override" 2 "--set needs key=value" "$bin/offline_slam" --bag x.bag \
+  --config x.yaml --output "$work/o" --set particles
 expect "offline_slam bad config value" 1 "particles" "$bin/offline_slam" --bag "$missing.bag" \
   --config "$root/config/landmarks_fastslam2.yaml" --output "$work/o" --set particles=-3
 expect "simulate bad seed" 2 "--seed needs a non-negative integer" "$bin/simulate" \
@@ -73,6 +77,8 @@ expect "render_grid missing reference" 1 "no_such_input" "$bin/render_grid" --ba
   --reference "$missing.tum" --config "$root/config/grid_pf_laser.yaml" --output "$work/g"
 expect "validate_bag bad gap" 2 "--max-gap needs a positive number" "$bin/validate_bag" x.bag \
   --max-gap 0
+expect "evaluate unlimited gap" 0 "ate" "$bin/evaluate" "$work/a.tum" "$work/a.tum" \
+  --interpolate --max-gap inf
 expect "validate_bag missing bag" 2 "no_such_input" "$bin/validate_bag" "$missing.bag"
 for bag in c.bag m.bag v.bag s.bag; do
   [ ! -e "$work/$bag" ] || { echo "FAIL: $bag written although the conversion failed"; status=1; }

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <functional>
 #include <stdexcept>
 #include <string>
@@ -35,8 +36,15 @@ TEST(ToolArguments, NumbersFollowTheirRule) {
               std::string("--x needs a number, got '") + bad + "'")
         << bad;
   }
+  EXPECT_TRUE(std::isinf(parseNumber("--gap", "inf", NumberRule::kPositiveOrInfinite)));
+  EXPECT_DOUBLE_EQ(parseNumber("--gap", "2", NumberRule::kPositiveOrInfinite), 2.0);
+  for (const char* bad : {"0", "-inf", "nan", "x"}) {
+    EXPECT_NE(errorOf([&] { parseNumber("--gap", bad, NumberRule::kPositiveOrInfinite); }), "")
+        << bad;
+  }
   EXPECT_EQ(parseUnsigned("--seed", "42"), 42u);
-  for (const char* bad : {"", "-1", "+1", "4.2", "7x"}) {
+  EXPECT_EQ(parseUnsigned("--seed", "18446744073709551615"), 18446744073709551615u);
+  for (const char* bad : {"", "-1", " -1", "+1", "4.2", "7x", "18446744073709551616"}) {
     EXPECT_NE(errorOf([&] { parseUnsigned("--seed", bad); }), "") << bad;
   }
 }
@@ -64,6 +72,18 @@ TEST(ToolArguments, CursorWalksOptionsValuesAndPositionals) {
   EXPECT_EQ(errorOf([&] { cursor.unknown(); }), "unknown option -v");
   ASSERT_TRUE(cursor.next());
   EXPECT_EQ(errorOf([&] { cursor.count(); }), "--seed needs a value");
+  EXPECT_FALSE(cursor.next());
+
+  std::vector<std::string> sets = {"tool", "--set", "a.b=1", "--set", "=1", "--set", "c"};
+  argv.clear();
+  for (std::string& w : sets) argv.push_back(&w[0]);
+  ArgumentCursor overrides(static_cast<int>(argv.size()), argv.data());
+  ASSERT_TRUE(overrides.next());
+  EXPECT_EQ(overrides.keyValue(), "a.b=1");
+  ASSERT_TRUE(overrides.next());
+  EXPECT_EQ(errorOf([&] { overrides.keyValue(); }), "--set needs key=value, got '=1'");
+  ASSERT_TRUE(overrides.next());
+  EXPECT_EQ(errorOf([&] { overrides.keyValue(); }), "--set needs key=value, got 'c'");
   EXPECT_FALSE(cursor.next());
 }
 

@@ -18,12 +18,18 @@ constexpr int kUsageExitStatus = 2;
 /// Exit status of a tool that failed while working (an input it cannot read, a write that failed).
 constexpr int kFailureExitStatus = 1;
 
-enum class NumberRule { kFinite, kNonNegative, kPositive };
+enum class NumberRule {
+  kFinite,
+  kNonNegative,
+  kPositive,
+  kPositiveOrInfinite,  // "inf" too: no limit (a tolerance, a gap)
+};
 
 /// `text` as a number obeying `rule`; std::invalid_argument naming `flag` otherwise.
 double parseNumber(const std::string& flag, const std::string& text,
                    NumberRule rule = NumberRule::kFinite);
-/// `text` as a non-negative integer (a seed, a count); std::invalid_argument naming `flag`.
+/// `text` as a non-negative integer (a seed, a count) of digits only, within 64 bits;
+/// std::invalid_argument naming `flag` otherwise.
 std::uint64_t parseUnsigned(const std::string& flag, const std::string& text);
 
 /// OUT.bag -> OUT + suffix (the bag's path without ".bag", or the whole path if it has none).
@@ -49,6 +55,14 @@ class ArgumentCursor {
   }
   double number(NumberRule rule = NumberRule::kFinite) { return parseNumber(arg_, value(), rule); }
   std::uint64_t count() { return parseUnsigned(arg_, value()); }
+  /// A value of the form key=value (a config override); the whole text.
+  std::string keyValue() {
+    const std::string text = value();
+    if (text.find('=') == std::string::npos || text.front() == '=') {
+      throw std::invalid_argument(arg_ + " needs key=value, got '" + text + "'");
+    }
+    return text;
+  }
   [[noreturn]] void unknown() const { throw std::invalid_argument("unknown option " + arg_); }
 
  private:

@@ -1,6 +1,6 @@
 #pragma once
-// Features as every landmark filter takes them: which features are usable (finite, a point in
-// front of the sensor), the noise a feature is given (its own covariance plus the configured
+// Features as every landmark filter takes them: which features are usable (finite, a point at
+// a positive range), the noise a feature is given (its own covariance plus the configured
 // floors), and the prepared observations of the FastSLAM family.
 
 #include <Eigen/Core>
