@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Every launch file parses with its default arguments (roslaunch --nodes resolves the args,
-# the includes and $(find ...)), and every node it starts from this package exists as an
-# executable that roslaunch can find.
+# the includes and $(find ...)), plus the values of a "test-args:" line in it for arguments it
+# requires, and every node it starts from this package exists as an executable that roslaunch
+# can find.
 set -euo pipefail
 
 here=$(cd "$(dirname "$0")" && pwd)
@@ -9,7 +10,8 @@ root=$(cd "$here/../.." && pwd)
 status=0
 for launch in "$root"/launch/*.launch; do
   name=$(basename "$launch")
-  if ! nodes=$(roslaunch --nodes "$launch" 2>&1); then
+  read -r -a args <<<"$(sed -n 's/.*test-args:\(.*\)$/\1/p' "$launch" | sed 's/-->//')"
+  if ! nodes=$(roslaunch --nodes "$launch" "${args[@]}" 2>&1); then
     echo "FAIL: $name does not parse:"; echo "$nodes"; status=1; continue
   fi
   for type in $(grep -oE 'pkg="rbpf_slam" type="[^"]+"' "$launch" | sed -E 's/.*type="([^"]+)"/\1/'); do
