@@ -131,9 +131,6 @@ std::vector<DpfLocalFilter::Observation> DpfLocalFilter::prepare(const FeatureSe
                                                                  int* rejected) const {
   std::vector<Observation> out;
   const MeasurementOptions& m = options_.measurement;
-  const Eigen::Matrix2d floor =
-      Eigen::Vector2d(m.sigma_range_m * m.sigma_range_m, m.sigma_bearing_rad * m.sigma_bearing_rad)
-          .asDiagonal();
   for (const auto& point : features.points) {
     if (point.id >= 0 && !owns(point.id)) continue;  // another local filter's block
     if (point.id < 0 || !usablePoint(point)) {
@@ -144,11 +141,7 @@ std::vector<DpfLocalFilter::Observation> DpfLocalFilter::prepare(const FeatureSe
     Observation o;
     o.id = point.id;
     o.z << point.range, wrapAngle(point.bearing);
-    o.noise = floor;
-    const Eigen::Matrix2d given = symmetric(point.covariance);
-    if (m.use_feature_covariance && given.allFinite() && given(0, 0) >= 0.0 && given(1, 1) >= 0.0) {
-      o.noise += given * m.covariance_inflation;
-    }
+    o.noise = observationNoise(point.covariance, m.sigma_range_m, m.sigma_bearing_rad, m);
     out.push_back(o);
   }
   return out;
