@@ -203,41 +203,35 @@ void writeBag(const Arguments& arguments, const io::CarmenLog& log,
   bag.close();
 }
 
+/// The work once the arguments are understood; the exit status.
+int run(const Arguments& arguments) {
+  ros::Time::init();
+  const io::CarmenLog log = io::readCarmenLog(arguments.log_path);
+  if (log.lasers.empty()) {
+    throw std::runtime_error(arguments.log_path + ": no FLASER scan in the log");
+  }
+  io::CorrectedMotionStats motion_stats;
+  const std::vector<io::StampedPose> motion = io::correctedMotion(log, &motion_stats);
+  const std::vector<io::StampedPose> odometry = io::simulateOdometry(motion, arguments.noise);
+  const std::vector<io::StampedPose> scans = io::scanPoses(log);
+  std::vector<io::StampedPose> reference;
+  for (const io::StampedPose& pose : scans) {
+    reference.push_back({kStampOffsetS + pose.stamp, pose.pose});
+  }
+  writeBag(arguments, log, odometry);
+  const std::string reference_path = io::besideBag(arguments.bag_path, ".ref.tum");
+  io::writeTum(reference_path, reference);
+
+  reportSkipped(log, motion_stats);
+  std::cerr << "carmen_to_bag: wrote " << arguments.bag_path << " (" << log.lasers.size()
+            << " scans, " << odometry.size() << " odometry messages over "
+            << (odometry.back().stamp - odometry.front().stamp) << " s) and " << reference_path
+            << "\n";
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
-  int exit_status = 0;
-  const std::optional<Arguments> parsed =
-      io::parseToolArguments("carmen_to_bag", kUsage, argc, argv, parseArguments, &exit_status);
-  if (!parsed) return exit_status;
-  const Arguments& arguments = *parsed;
-
-  try {
-    ros::Time::init();
-    const io::CarmenLog log = io::readCarmenLog(arguments.log_path);
-    if (log.lasers.empty()) {
-      throw std::runtime_error(arguments.log_path + ": no FLASER scan in the log");
-    }
-    io::CorrectedMotionStats motion_stats;
-    const std::vector<io::StampedPose> motion = io::correctedMotion(log, &motion_stats);
-    const std::vector<io::StampedPose> odometry = io::simulateOdometry(motion, arguments.noise);
-    const std::vector<io::StampedPose> scans = io::scanPoses(log);
-    std::vector<io::StampedPose> reference;
-    for (const io::StampedPose& pose : scans) {
-      reference.push_back({kStampOffsetS + pose.stamp, pose.pose});
-    }
-    writeBag(arguments, log, odometry);
-    const std::string reference_path = io::besideBag(arguments.bag_path, ".ref.tum");
-    io::writeTum(reference_path, reference);
-
-    reportSkipped(log, motion_stats);
-    std::cerr << "carmen_to_bag: wrote " << arguments.bag_path << " (" << log.lasers.size()
-              << " scans, " << odometry.size() << " odometry messages over "
-              << (odometry.back().stamp - odometry.front().stamp) << " s) and " << reference_path
-              << "\n";
-  } catch (const std::exception& error) {
-    std::cerr << "carmen_to_bag: " << error.what() << "\n";
-    return 1;  // a runtime failure, as the other converters (2 is for bad arguments)
-  }
-  return 0;
+  return io::runTool("carmen_to_bag", kUsage, argc, argv, parseArguments, run);
 }

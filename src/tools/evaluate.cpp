@@ -56,24 +56,20 @@ Arguments parseArguments(int argc, char** argv) {
   return arguments;
 }
 
+/// The work once the arguments are understood; the exit status.
+int run(const Arguments& arguments) {
+  const std::vector<std::string>& positional = arguments.positional;
+  const auto estimate = io::readTum(positional[0]);
+  const auto reference = io::readTum(positional[1]);
+  if (estimate.empty()) throw std::runtime_error(positional[0] + ": no poses");
+  if (reference.empty()) throw std::runtime_error(positional[1] + ": no poses");
+  const auto result = io::evaluateTrajectory(estimate, reference, arguments.options);
+  std::cout << io::toJson(result);
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
-  int exit_status = 0;
-  const std::optional<Arguments> parsed =
-      io::parseToolArguments("evaluate", kUsage, argc, argv, parseArguments, &exit_status);
-  if (!parsed) return exit_status;
-  const std::vector<std::string>& positional = parsed->positional;
-  try {
-    const auto estimate = io::readTum(positional[0]);
-    const auto reference = io::readTum(positional[1]);
-    if (estimate.empty()) throw std::runtime_error(positional[0] + ": no poses");
-    if (reference.empty()) throw std::runtime_error(positional[1] + ": no poses");
-    const auto result = io::evaluateTrajectory(estimate, reference, parsed->options);
-    std::cout << io::toJson(result);
-  } catch (const std::exception& error) {
-    std::cerr << "evaluate: " << error.what() << "\n";
-    return io::kFailureExitStatus;
-  }
-  return 0;
+  return io::runTool("evaluate", kUsage, argc, argv, parseArguments, run);
 }

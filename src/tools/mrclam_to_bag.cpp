@@ -217,56 +217,50 @@ void writeLandmarks(const std::string& path, const Arguments& arguments,
   if (!out) throw std::runtime_error(path + ": cannot be written");
 }
 
+/// The work once the arguments are understood; the exit status.
+int run(const Arguments& arguments) {
+  ros::Time::init();
+  io::MrclamRobot data = io::readMrclamRobot(arguments.dataset_dir, arguments.robot);
+  const std::size_t measurements_read = data.measurements.size();
+  io::cropMrclamRobot(arguments.duration_s, &data);
+  if (data.ground_truth.empty()) {
+    throw std::runtime_error("no ground truth during the odometry's time span");
+  }
+  const core::Pose2 start = io::interpolatePose(data.ground_truth, data.odometry.front().stamp);
+  const std::vector<io::StampedPose> odometry = io::integrateMrclamOdometry(data.odometry, start);
+  const std::vector<io::MrclamMeasurementGroup> groups =
+      io::groupLandmarkMeasurements(data.measurements);
+
+  const Counts counts = writeBag(arguments, data, odometry, groups);
+  const std::string reference_path = io::besideBag(arguments.bag_path, ".ref.tum");
+  const std::string odometry_path = io::besideBag(arguments.bag_path, ".odom.tum");
+  const std::string landmarks_path = io::besideBag(arguments.bag_path, ".landmarks.yaml");
+  io::writeTum(reference_path, data.ground_truth);
+  io::writeTum(odometry_path, odometry);
+  writeLandmarks(landmarks_path, arguments, data);
+
+  std::size_t robots = 0, unknown = 0;
+  for (const io::MrclamMeasurement& m : data.measurements) {
+    if (m.subject < 0)
+      ++unknown;
+    else if (m.subject < 6)
+      ++robots;
+  }
+  std::cerr << "mrclam_to_bag: robot " << arguments.robot << ": " << counts.odometry
+            << " odometry poses over " << (odometry.back().stamp - odometry.front().stamp)
+            << " s (start at the ground-truth pose " << start.transpose() << "), "
+            << counts.features << " landmark sightings in " << counts.feature_messages
+            << " /features messages (" << (arguments.known_ids ? "known" : "unknown")
+            << " ids; dropped " << robots << " sightings of robots and " << unknown
+            << " of unknown barcodes; " << measurements_read << " read), " << counts.ground_truth
+            << " ground-truth poses\n"
+            << "mrclam_to_bag: wrote " << arguments.bag_path << ", " << reference_path << ", "
+            << odometry_path << ", " << landmarks_path << "\n";
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
-  int exit_status = 0;
-  const std::optional<Arguments> parsed =
-      io::parseToolArguments("mrclam_to_bag", kUsage, argc, argv, parseArguments, &exit_status);
-  if (!parsed) return exit_status;
-  const Arguments& arguments = *parsed;
-
-  try {
-    ros::Time::init();
-    io::MrclamRobot data = io::readMrclamRobot(arguments.dataset_dir, arguments.robot);
-    const std::size_t measurements_read = data.measurements.size();
-    io::cropMrclamRobot(arguments.duration_s, &data);
-    if (data.ground_truth.empty()) {
-      throw std::runtime_error("no ground truth during the odometry's time span");
-    }
-    const core::Pose2 start = io::interpolatePose(data.ground_truth, data.odometry.front().stamp);
-    const std::vector<io::StampedPose> odometry = io::integrateMrclamOdometry(data.odometry, start);
-    const std::vector<io::MrclamMeasurementGroup> groups =
-        io::groupLandmarkMeasurements(data.measurements);
-
-    const Counts counts = writeBag(arguments, data, odometry, groups);
-    const std::string reference_path = io::besideBag(arguments.bag_path, ".ref.tum");
-    const std::string odometry_path = io::besideBag(arguments.bag_path, ".odom.tum");
-    const std::string landmarks_path = io::besideBag(arguments.bag_path, ".landmarks.yaml");
-    io::writeTum(reference_path, data.ground_truth);
-    io::writeTum(odometry_path, odometry);
-    writeLandmarks(landmarks_path, arguments, data);
-
-    std::size_t robots = 0, unknown = 0;
-    for (const io::MrclamMeasurement& m : data.measurements) {
-      if (m.subject < 0)
-        ++unknown;
-      else if (m.subject < 6)
-        ++robots;
-    }
-    std::cerr << "mrclam_to_bag: robot " << arguments.robot << ": " << counts.odometry
-              << " odometry poses over " << (odometry.back().stamp - odometry.front().stamp)
-              << " s (start at the ground-truth pose " << start.transpose() << "), "
-              << counts.features << " landmark sightings in " << counts.feature_messages
-              << " /features messages (" << (arguments.known_ids ? "known" : "unknown")
-              << " ids; dropped " << robots << " sightings of robots and " << unknown
-              << " of unknown barcodes; " << measurements_read << " read), " << counts.ground_truth
-              << " ground-truth poses\n"
-              << "mrclam_to_bag: wrote " << arguments.bag_path << ", " << reference_path << ", "
-              << odometry_path << ", " << landmarks_path << "\n";
-  } catch (const std::exception& error) {
-    std::cerr << "mrclam_to_bag: " << error.what() << "\n";
-    return 1;
-  }
-  return 0;
+  return io::runTool("mrclam_to_bag", kUsage, argc, argv, parseArguments, run);
 }

@@ -66,34 +66,30 @@ Arguments parseArguments(int argc, char** argv) {
   return a;
 }
 
+/// The work once the arguments are understood; the exit status.
+int run(const Arguments& arguments) {
+  const rbpf_slam::rosbridge::OfflineOptions& options = arguments.options;
+  const rbpf_slam::io::SlamConfig config =
+      io::loadSlamConfig(arguments.config_path, arguments.overrides);
+  rbpf_slam::rosbridge::OfflineRunner runner(config, options);
+  const auto s = runner.run();
+  std::printf(
+      "offline_slam: %ld updates, %d landmarks, %d particles, %.1f s wall for %.1f s "
+      "of data (%.0fx real time), update %.2f ms mean / %.2f ms p99",
+      s.updates, s.landmarks, s.particles, s.wall_s, s.bag_duration_s,
+      s.wall_s > 0 ? s.bag_duration_s / s.wall_s : 0.0, s.update_ms_mean, s.update_ms_p99);
+  if (s.has_reference) std::printf(", ATE %.3f m", s.ate_rmse_m);
+  std::printf("\noffline_slam: wrote %s/{trajectory.tum,landmarks.yaml,summary.json,map.png}\n",
+              options.output_dir.c_str());
+  if (s.dropped_no_tf + s.dropped_bad_message > 0) {
+    std::fprintf(stderr, "offline_slam: dropped %ld frames without tf, %ld malformed\n",
+                 s.dropped_no_tf, s.dropped_bad_message);
+  }
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
-  int exit_status = 0;
-  const std::optional<Arguments> parsed =
-      io::parseToolArguments("offline_slam", kUsage, argc, argv, parseArguments, &exit_status);
-  if (!parsed) return exit_status;
-  const rbpf_slam::rosbridge::OfflineOptions& options = parsed->options;
-  try {
-    const rbpf_slam::io::SlamConfig config =
-        io::loadSlamConfig(parsed->config_path, parsed->overrides);
-    rbpf_slam::rosbridge::OfflineRunner runner(config, options);
-    const auto s = runner.run();
-    std::printf("offline_slam: %ld updates, %d landmarks, %d particles, %.1f s wall for %.1f s "
-                "of data (%.0fx real time), update %.2f ms mean / %.2f ms p99",
-                s.updates, s.landmarks, s.particles, s.wall_s, s.bag_duration_s,
-                s.wall_s > 0 ? s.bag_duration_s / s.wall_s : 0.0, s.update_ms_mean,
-                s.update_ms_p99);
-    if (s.has_reference) std::printf(", ATE %.3f m", s.ate_rmse_m);
-    std::printf("\noffline_slam: wrote %s/{trajectory.tum,landmarks.yaml,summary.json,map.png}\n",
-                options.output_dir.c_str());
-    if (s.dropped_no_tf + s.dropped_bad_message > 0) {
-      std::fprintf(stderr, "offline_slam: dropped %ld frames without tf, %ld malformed\n",
-                   s.dropped_no_tf, s.dropped_bad_message);
-    }
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "offline_slam: %s\n", e.what());
-    return io::kFailureExitStatus;
-  }
-  return 0;
+  return io::runTool("offline_slam", kUsage, argc, argv, parseArguments, run);
 }

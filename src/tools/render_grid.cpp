@@ -33,6 +33,10 @@
 
 namespace {
 
+namespace core = rbpf_slam::core;
+namespace io = rbpf_slam::io;
+using rbpf_slam::rosbridge::stripSlash;
+
 const char kUsage[] =
     "usage: render_grid --bag IN.bag --reference REF.tum --config CONFIG.yaml --output PREFIX\n"
     "                   [--set key=value ...] [--max-dt S] [--align-to ESTIMATE.tum]\n"
@@ -91,102 +95,96 @@ Arguments parseArguments(int argc, char** argv) {
   return a;
 }
 
+/// The work once the arguments are understood; the exit status.
+int run(const Arguments& arguments) {
+  const std::string& bag_path = arguments.bag_path;
+  const std::string& reference_path = arguments.reference_path;
+  const std::string& output = arguments.output;
+  const std::string& align_path = arguments.align_path;
+  const double max_dt = arguments.max_dt;
+  const io::SlamConfig config = io::loadSlamConfig(arguments.config_path, arguments.overrides);
+  const core::GridOptions& options = config.filter.grid;
+  core::validate(options);
+  std::vector<io::StampedPose> reference = io::readTum(reference_path);
+  if (reference.empty()) throw std::runtime_error(reference_path + ": no poses");
+  std::sort(reference.begin(), reference.end(),
+            [](const auto& a, const auto& b) { return a.stamp < b.stamp; });
+  if (!align_path.empty()) {
+    const std::vector<io::StampedPose> estimate = io::readTum(align_path);
+    core::Pose2 at_start;
+    if (estimate.empty() || !referenceAt(reference, estimate.front().stamp, max_dt, &at_start)) {
+      throw std::runtime_error(align_path + ": no first pose with a reference within --max-dt");
+    }
+    const core::Pose2 to_estimate = core::compose(estimate.front().pose, core::inverse(at_start));
+    for (auto& p : reference) p.pose = core::compose(to_estimate, p.pose);
+  }
+  rosbag::Bag bag(bag_path, rosbag::bagmode::Read);
+  // Static sensor mounts: base -> sensor frame from tf_static (identity if the same frame).
+  std::vector<std::pair<std::string, core::Pose2>> mounts;
+  const std::vector<std::string> static_topics{"/tf_static", "tf_static"};
+  for (const rosbag::MessageInstance& m : rosbag::View(bag, rosbag::TopicQuery(static_topics))) {
+    const auto msg = m.instantiate<tf2_msgs::TFMessage>();
+    if (!msg) continue;
+    for (const auto& t : msg->transforms) {
+      if (stripSlash(t.header.frame_id) == config.ros.base_frame) {
+        mounts.emplace_back(stripSlash(t.child_frame_id),
+                            rbpf_slam::rosbridge::toPose2(t.transform));
+      }
+    }
+  }
+  const int width = static_cast<int>(std::ceil(options.size_x_m / options.resolution_m));
+  const int height = static_cast<int>(std::ceil(options.size_y_m / options.resolution_m));
+  const core::Pose2& start = reference.front().pose;
+  const double half_x = 0.5 * width * options.resolution_m;
+  const double half_y = 0.5 * height * options.resolution_m;
+  core::TiledLogOddsGrid grid(options.resolution_m, start.x() - half_x, start.y() - half_y, width,
+                              height, options.tile_cells);
+  long scans = 0, unmatched = 0, bad = 0;
+  const std::string topic = stripSlash(config.ros.scan_topic);
+  for (const rosbag::MessageInstance& m :
+       rosbag::View(bag, rosbag::TopicQuery(std::vector<std::string>{"/" + topic, topic}))) {
+    const auto msg = m.instantiate<sensor_msgs::LaserScan>();
+    if (!msg) continue;
+    core::Pose2 pose;
+    if (!referenceAt(reference, msg->header.stamp.toSec(), max_dt, &pose)) {
+      ++unmatched;
+      continue;
+    }
+    core::Pose2 mount = core::Pose2::Zero();
+    const std::string frame = stripSlash(msg->header.frame_id);
+    if (frame != config.ros.base_frame) {
+      auto it = std::find_if(mounts.begin(), mounts.end(),
+                             [&](const auto& f) { return f.first == frame; });
+      if (it == mounts.end()) {
+        throw std::runtime_error(bag_path + ": no tf_static " + config.ros.base_frame + " -> " +
+                                 frame);
+      }
+      mount = it->second;
+    }
+    auto scan = std::make_shared<core::RangeScan>();
+    std::string error;
+    if (!rbpf_slam::rosbridge::toRangeScan(*msg, mount, scan.get(), &error)) {
+      ++bad;
+      continue;
+    }
+    core::FeatureSet features;
+    features.scan = scan;
+    core::LocalMapStats stats;
+    core::integrateLocalMap(core::buildLocalMap(features, options, &stats), pose, options, &grid);
+    ++scans;
+  }
+  if (scans == 0) throw std::runtime_error(bag_path + ": no scan matched a reference pose");
+  const core::GridMapData map = grid.toGridMap();
+  io::writeGridMap(output, map, "rbpf_slam: scans rendered at the reference poses");
+  std::printf(
+      "{\"scans\": %ld, \"scans_without_reference\": %ld, \"bad_scans\": %ld, "
+      "\"occupied_cells\": %ld, \"free_cells\": %ld, \"resolution\": %g}\n",
+      scans, unmatched, bad, map.count(65, 100), map.count(0, 19), map.resolution_m);
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
-  namespace core = rbpf_slam::core;
-  namespace io = rbpf_slam::io;
-  using rbpf_slam::rosbridge::stripSlash;
-  int exit_status = 0;
-  const std::optional<Arguments> parsed =
-      io::parseToolArguments("render_grid", kUsage, argc, argv, parseArguments, &exit_status);
-  if (!parsed) return exit_status;
-  const std::string& bag_path = parsed->bag_path;
-  const std::string& reference_path = parsed->reference_path;
-  const std::string& output = parsed->output;
-  const std::string& align_path = parsed->align_path;
-  const double max_dt = parsed->max_dt;
-  try {
-    const io::SlamConfig config = io::loadSlamConfig(parsed->config_path, parsed->overrides);
-    const core::GridOptions& options = config.filter.grid;
-    core::validate(options);
-    std::vector<io::StampedPose> reference = io::readTum(reference_path);
-    if (reference.empty()) throw std::runtime_error(reference_path + ": no poses");
-    std::sort(reference.begin(), reference.end(),
-              [](const auto& a, const auto& b) { return a.stamp < b.stamp; });
-    if (!align_path.empty()) {
-      const std::vector<io::StampedPose> estimate = io::readTum(align_path);
-      core::Pose2 at_start;
-      if (estimate.empty() || !referenceAt(reference, estimate.front().stamp, max_dt, &at_start)) {
-        throw std::runtime_error(align_path + ": no first pose with a reference within --max-dt");
-      }
-      const core::Pose2 to_estimate = core::compose(estimate.front().pose, core::inverse(at_start));
-      for (auto& p : reference) p.pose = core::compose(to_estimate, p.pose);
-    }
-    rosbag::Bag bag(bag_path, rosbag::bagmode::Read);
-    // Static sensor mounts: base -> sensor frame from tf_static (identity if the same frame).
-    std::vector<std::pair<std::string, core::Pose2>> mounts;
-    const std::vector<std::string> static_topics{"/tf_static", "tf_static"};
-    for (const rosbag::MessageInstance& m : rosbag::View(bag, rosbag::TopicQuery(static_topics))) {
-      const auto msg = m.instantiate<tf2_msgs::TFMessage>();
-      if (!msg) continue;
-      for (const auto& t : msg->transforms) {
-        if (stripSlash(t.header.frame_id) == config.ros.base_frame) {
-          mounts.emplace_back(stripSlash(t.child_frame_id),
-                              rbpf_slam::rosbridge::toPose2(t.transform));
-        }
-      }
-    }
-    const int width = static_cast<int>(std::ceil(options.size_x_m / options.resolution_m));
-    const int height = static_cast<int>(std::ceil(options.size_y_m / options.resolution_m));
-    const core::Pose2& start = reference.front().pose;
-    const double half_x = 0.5 * width * options.resolution_m;
-    const double half_y = 0.5 * height * options.resolution_m;
-    core::TiledLogOddsGrid grid(options.resolution_m, start.x() - half_x, start.y() - half_y,
-                                width, height, options.tile_cells);
-    long scans = 0, unmatched = 0, bad = 0;
-    const std::string topic = stripSlash(config.ros.scan_topic);
-    for (const rosbag::MessageInstance& m : rosbag::View(
-             bag, rosbag::TopicQuery(std::vector<std::string>{"/" + topic, topic}))) {
-      const auto msg = m.instantiate<sensor_msgs::LaserScan>();
-      if (!msg) continue;
-      core::Pose2 pose;
-      if (!referenceAt(reference, msg->header.stamp.toSec(), max_dt, &pose)) {
-        ++unmatched;
-        continue;
-      }
-      core::Pose2 mount = core::Pose2::Zero();
-      const std::string frame = stripSlash(msg->header.frame_id);
-      if (frame != config.ros.base_frame) {
-        auto it = std::find_if(mounts.begin(), mounts.end(),
-                               [&](const auto& f) { return f.first == frame; });
-        if (it == mounts.end()) {
-          throw std::runtime_error(bag_path + ": no tf_static " + config.ros.base_frame + " -> " +
-                                   frame);
-        }
-        mount = it->second;
-      }
-      auto scan = std::make_shared<core::RangeScan>();
-      std::string error;
-      if (!rbpf_slam::rosbridge::toRangeScan(*msg, mount, scan.get(), &error)) {
-        ++bad;
-        continue;
-      }
-      core::FeatureSet features;
-      features.scan = scan;
-      core::LocalMapStats stats;
-      core::integrateLocalMap(core::buildLocalMap(features, options, &stats), pose, options, &grid);
-      ++scans;
-    }
-    if (scans == 0) throw std::runtime_error(bag_path + ": no scan matched a reference pose");
-    const core::GridMapData map = grid.toGridMap();
-    io::writeGridMap(output, map, "rbpf_slam: scans rendered at the reference poses");
-    std::printf("{\"scans\": %ld, \"scans_without_reference\": %ld, \"bad_scans\": %ld, "
-                "\"occupied_cells\": %ld, \"free_cells\": %ld, \"resolution\": %g}\n",
-                scans, unmatched, bad, map.count(65, 100), map.count(0, 19), map.resolution_m);
-  } catch (const std::exception& e) {
-    std::cerr << "render_grid: " << e.what() << "\n";
-    return io::kFailureExitStatus;
-  }
-  return 0;
+  return io::runTool("render_grid", kUsage, argc, argv, parseArguments, run);
 }

@@ -244,14 +244,5 @@ int run(const Arguments& arguments) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  int exit_status = 0;
-  const std::optional<Arguments> parsed = rbpf_slam::io::parseToolArguments(
-      "simulate", kUsage, argc, argv, parseArguments, &exit_status);
-  if (!parsed) return exit_status;
-  try {
-    return run(*parsed);
-  } catch (const std::exception& error) {
-    std::cerr << "simulate: error: " << error.what() << "\n";
-    return rbpf_slam::io::kFailureExitStatus;
-  }
+  return rbpf_slam::io::runTool("simulate", kUsage, argc, argv, parseArguments, run);
 }

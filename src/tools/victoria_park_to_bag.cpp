@@ -95,61 +95,56 @@ rbpf_slam::FeatureArray featureMessage(const io::VictoriaPose& pose, const ros::
   return message;
 }
 
+/// The work once the arguments are understood; the exit status.
+int run(const Arguments& arguments) {
+  ros::Time::init();
+  const io::VictoriaParkLog log = io::loadVictoriaPark(arguments.input);
+  std::size_t orphans = 0;
+  std::vector<io::VictoriaPose> poses = io::victoriaParkPoses(log, &orphans);
+  if (arguments.max_poses > 0 && static_cast<long>(poses.size()) > arguments.max_poses) {
+    poses.resize(arguments.max_poses);
+  }
+  rosbag::Bag bag(arguments.bag_path, rosbag::bagmode::Write);
+  std::vector<io::StampedPose> track;
+  std::uint32_t feature_seq = 0;
+  std::size_t features = 0;
+  for (std::size_t k = 0; k < poses.size(); ++k) {
+    const double t = kStartStamp + k * arguments.dt_s;
+    const ros::Time stamp(t);
+    const core::Pose2& pose = poses[k].odometry;
+    tf2_msgs::TFMessage tf;
+    tf.transforms.push_back(rosbridge::toTransformStamped(pose, "odom", "base_link", stamp));
+    bag.write("/tf", stamp, tf);
+    Eigen::Vector3d twist = Eigen::Vector3d::Zero();
+    if (k > 0) {
+      const core::Pose2 d = core::between(poses[k - 1].odometry, pose);
+      twist = d / arguments.dt_s;
+    }
+    nav_msgs::Odometry odometry = rosbridge::toOdometryMsg(pose, twist, "odom", "base_link", stamp);
+    odometry.header.seq = static_cast<std::uint32_t>(k);
+    bag.write("/odom", stamp, odometry);
+    if (!poses[k].landmarks.empty()) {
+      const auto message = featureMessage(poses[k], stamp, arguments.unknown_ids, feature_seq++);
+      features += message.points.size();
+      bag.write("/features", stamp, message);
+    }
+    track.push_back({t, pose});
+  }
+  bag.close();
+  const std::string odometry_path = io::besideBag(arguments.bag_path, ".odom.tum");
+  io::writeTum(odometry_path, track);
+  std::cerr << "victoria_park_to_bag: " << poses.size() << " poses over "
+            << (poses.size() - 1) * arguments.dt_s << " s (dt " << arguments.dt_s << " s), "
+            << features << " tree sightings in " << feature_seq << " /features messages ("
+            << (arguments.unknown_ids ? "unknown" : "known") << " ids; " << orphans
+            << " sightings from poses off the odometry chain dropped)\n"
+            << "victoria_park_to_bag: wrote " << arguments.bag_path << ", " << odometry_path
+            << "\n";
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
-  int exit_status = 0;
-  const std::optional<Arguments> parsed = io::parseToolArguments(
-      "victoria_park_to_bag", kUsage, argc, argv, parseArguments, &exit_status);
-  if (!parsed) return exit_status;
-  const Arguments& arguments = *parsed;
-  try {
-    ros::Time::init();
-    const io::VictoriaParkLog log = io::loadVictoriaPark(arguments.input);
-    std::size_t orphans = 0;
-    std::vector<io::VictoriaPose> poses = io::victoriaParkPoses(log, &orphans);
-    if (arguments.max_poses > 0 && static_cast<long>(poses.size()) > arguments.max_poses) {
-      poses.resize(arguments.max_poses);
-    }
-    rosbag::Bag bag(arguments.bag_path, rosbag::bagmode::Write);
-    std::vector<io::StampedPose> track;
-    std::uint32_t feature_seq = 0;
-    std::size_t features = 0;
-    for (std::size_t k = 0; k < poses.size(); ++k) {
-      const double t = kStartStamp + k * arguments.dt_s;
-      const ros::Time stamp(t);
-      const core::Pose2& pose = poses[k].odometry;
-      tf2_msgs::TFMessage tf;
-      tf.transforms.push_back(rosbridge::toTransformStamped(pose, "odom", "base_link", stamp));
-      bag.write("/tf", stamp, tf);
-      Eigen::Vector3d twist = Eigen::Vector3d::Zero();
-      if (k > 0) {
-        const core::Pose2 d = core::between(poses[k - 1].odometry, pose);
-        twist = d / arguments.dt_s;
-      }
-      nav_msgs::Odometry odometry = rosbridge::toOdometryMsg(pose, twist, "odom", "base_link", stamp);
-      odometry.header.seq = static_cast<std::uint32_t>(k);
-      bag.write("/odom", stamp, odometry);
-      if (!poses[k].landmarks.empty()) {
-        const auto message = featureMessage(poses[k], stamp, arguments.unknown_ids, feature_seq++);
-        features += message.points.size();
-        bag.write("/features", stamp, message);
-      }
-      track.push_back({t, pose});
-    }
-    bag.close();
-    const std::string odometry_path = io::besideBag(arguments.bag_path, ".odom.tum");
-    io::writeTum(odometry_path, track);
-    std::cerr << "victoria_park_to_bag: " << poses.size() << " poses over "
-              << (poses.size() - 1) * arguments.dt_s << " s (dt " << arguments.dt_s << " s), "
-              << features << " tree sightings in " << feature_seq << " /features messages ("
-              << (arguments.unknown_ids ? "unknown" : "known") << " ids; " << orphans
-              << " sightings from poses off the odometry chain dropped)\n"
-              << "victoria_park_to_bag: wrote " << arguments.bag_path << ", " << odometry_path
-              << "\n";
-  } catch (const std::exception& error) {
-    std::cerr << "victoria_park_to_bag: " << error.what() << "\n";
-    return 1;
-  }
-  return 0;
+  return io::runTool("victoria_park_to_bag", kUsage, argc, argv, parseArguments, run);
 }

@@ -96,5 +96,21 @@ auto parseToolArguments(const std::string& tool, const char* usage, int argc, ch
   }
 }
 
+/// A tool's whole main(): parseToolArguments, then work(arguments), whose result is the exit
+/// status; an exception from work prints "TOOL: what went wrong" and exits kFailureExitStatus.
+template <typename Parse, typename Work>
+int runTool(const std::string& tool, const char* usage, int argc, char** argv, Parse parse,
+            Work work) {
+  int exit_status = 0;
+  const auto parsed = parseToolArguments(tool, usage, argc, argv, parse, &exit_status);
+  if (!parsed) return exit_status;
+  try {
+    return work(*parsed);
+  } catch (const std::exception& error) {
+    std::cerr << tool << ": " << error.what() << "\n";
+    return kFailureExitStatus;
+  }
+}
+
 }  // namespace io
 }  // namespace rbpf_slam
