@@ -426,9 +426,7 @@ OfflineSummary OfflineRunner::run() {
 
 OfflineSummary OfflineRunner::writeOutputs(const OfflineSummary& in) const {
   OfflineSummary summary = in;
-  const std::string& dir = options_.output_dir;
-  std::error_code ignored;  // made by run(); a write below reports a directory that went away
-  std::filesystem::create_directories(dir, ignored);
+  const std::string& dir = options_.output_dir;  // made by run() before the bag was read
   // The trajectory: the best particle's path when the filter keeps paths (FastSLAM's estimate
   // of the whole path, the one its map was built from, corrected by every loop it closed),
   // else the pose estimated at each update. The latter is always in trajectory_online.tum.

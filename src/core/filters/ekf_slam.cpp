@@ -12,10 +12,6 @@ namespace {
 
 Eigen::Matrix2d symmetric(const Eigen::Matrix2d& m) { return 0.5 * (m + m.transpose()); }
 
-bool usableCovariance(const Eigen::Matrix2d& c) {
-  return c.allFinite() && c(0, 0) > 0.0 && c(1, 1) > 0.0 && c.determinant() > 0.0;
-}
-
 }  // namespace
 
 EkfSlam::EkfSlam(const FilterOptions& options)
@@ -129,7 +125,7 @@ bool EkfSlam::correct(int i, const Observation& o) {
                               covariance_.middleCols<2>(k) * p.h_landmark.transpose();
   Eigen::Matrix2d s = p.h_pose * pht.topRows<3>() + p.h_landmark * pht.middleRows<2>(k) + o.noise;
   s = symmetric(s);
-  if (!usableCovariance(s)) return false;
+  if (!finitePositiveDefinite(s)) return false;
   const Eigen::Matrix2d s_inv = s.inverse();
   const double gate = options_.ekf.innovation_gate_chi2;
   if (gate > 0.0 && v.dot(s_inv * v) > gate) return false;
@@ -262,7 +258,7 @@ bool EkfSlam::loadMap(const std::vector<LandmarkEstimate>& landmarks) {
   info_.clear();
   for (const auto& l : landmarks) {
     if (!l.mean.allFinite()) continue;
-    const Eigen::Matrix2d cov = usableCovariance(symmetric(l.covariance))
+    const Eigen::Matrix2d cov = finitePositiveDefinite(symmetric(l.covariance))
                                     ? symmetric(l.covariance)
                                     : Eigen::Matrix2d::Identity() * 1e-4;
     appendLandmark(l.mean, cov, Eigen::Matrix<double, 2, 3>::Zero(), false);

@@ -17,13 +17,15 @@ bool usablePoint(const PointFeature& point) {
   return std::isfinite(point.range) && std::isfinite(point.bearing) && point.range > 0.0;
 }
 
+bool finitePositiveDefinite(const Eigen::Matrix2d& c) {
+  return c.allFinite() && c(0, 0) > 0.0 && c(1, 1) > 0.0 && c.determinant() > 0.0;
+}
+
 Eigen::Matrix2d observationNoise(const Eigen::Matrix2d& given, double sigma_a, double sigma_b,
                                  const MeasurementOptions& options) {
   const Eigen::Matrix2d floor = Eigen::Vector2d(sigma_a * sigma_a, sigma_b * sigma_b).asDiagonal();
   const Eigen::Matrix2d symmetric = 0.5 * (given + given.transpose());
-  const bool positive = symmetric.allFinite() && symmetric(0, 0) > 0.0 && symmetric(1, 1) > 0.0 &&
-                        symmetric.determinant() > 0.0;
-  if (options.use_feature_covariance && positive) {
+  if (options.use_feature_covariance && finitePositiveDefinite(symmetric)) {
     return Eigen::Matrix2d(symmetric * options.covariance_inflation + floor);
   }
   return floor;

@@ -54,6 +54,9 @@ void forEachUsableFeature(const FeatureSet& features, bool use_lines, bool use_p
   }
 }
 
+/// A covariance that is finite and positive definite (what a noise or an innovation needs).
+bool finitePositiveDefinite(const Eigen::Matrix2d& c);
+
 /// The noise of a feature: its own covariance (symmetrised, times covariance_inflation) plus
 /// the floors diag(sigma_a^2, sigma_b^2) when use_feature_covariance and the covariance is a
 /// finite positive definite one; the floors alone otherwise.
