@@ -27,6 +27,20 @@ double floorVarianceTheta(const MotionOptions& o, const MotionInput& motion) {
          dtOf(motion) * o.sigma_theta_per_sqrt_s * o.sigma_theta_per_sqrt_s;
 }
 
+/// Adds the floors and the random walk to a sampled pose, scaled by the step's noise scale as
+/// the rest of the draw; floorCovariance() is their covariance before that scale.
+void addFloorNoise(const MotionOptions& o, const MotionInput& motion, Rng& rng, Pose2* pose) {
+  const double sigma_xy = std::sqrt(floorVarianceXy(o, motion));
+  const double sigma_theta = std::sqrt(floorVarianceTheta(o, motion));
+  pose->x() += sampleGaussian(rng, motion.noise_scale * sigma_xy);
+  pose->y() += sampleGaussian(rng, motion.noise_scale * sigma_xy);
+  pose->z() = wrapAngle(pose->z() + sampleGaussian(rng, motion.noise_scale * sigma_theta));
+}
+Eigen::Matrix3d floorCovariance(const MotionOptions& o, const MotionInput& motion) {
+  const double xy = floorVarianceXy(o, motion);
+  return Eigen::Vector3d(xy, xy, floorVarianceTheta(o, motion)).asDiagonal();
+}
+
 /// Odometry model of Thrun, Burgard & Fox (rot1, trans, rot2 with alpha noise).
 class OdometryMotionModel : public MotionModel {
  public:
@@ -49,11 +63,7 @@ class OdometryMotionModel : public MotionModel {
     Pose2 next(previous.x() + trans_hat * std::cos(heading),
                previous.y() + trans_hat * std::sin(heading),
                wrapAngle(previous.z() + rot1_hat + rot2_hat));
-    const double sigma_xy = std::sqrt(floorVarianceXy(options_, motion));
-    const double sigma_theta = std::sqrt(floorVarianceTheta(options_, motion));
-    next.x() += sampleGaussian(rng, motion.noise_scale * sigma_xy);
-    next.y() += sampleGaussian(rng, motion.noise_scale * sigma_xy);
-    next.z() = wrapAngle(next.z() + sampleGaussian(rng, motion.noise_scale * sigma_theta));
+    addFloorNoise(options_, motion, rng, &next);
     return next;
   }
 
@@ -70,10 +80,8 @@ class OdometryMotionModel : public MotionModel {
     v << -trans * std::sin(heading), std::cos(heading), 0.0,
         trans * std::cos(heading), std::sin(heading), 0.0,
         1.0, 0.0, 1.0;
-    Eigen::Matrix3d cov = v * variances.asDiagonal() * v.transpose();
-    cov(0, 0) += floorVarianceXy(options_, motion);
-    cov(1, 1) += floorVarianceXy(options_, motion);
-    cov(2, 2) += floorVarianceTheta(options_, motion);
+    const Eigen::Matrix3d cov =
+        v * variances.asDiagonal() * v.transpose() + floorCovariance(options_, motion);
     return motion.noise_scale * motion.noise_scale * cov;
   }
 
@@ -108,11 +116,7 @@ class DiffDriveMotionModel : public MotionModel {
     const double l = left + sampleGaussian(rng, motion.noise_scale * sigma_left);
     const double r = right + sampleGaussian(rng, motion.noise_scale * sigma_right);
     Pose2 next = integrate(previous, l, r);
-    const double sigma_xy = std::sqrt(floorVarianceXy(options_, motion));
-    const double sigma_theta = std::sqrt(floorVarianceTheta(options_, motion));
-    next.x() += sampleGaussian(rng, motion.noise_scale * sigma_xy);
-    next.y() += sampleGaussian(rng, motion.noise_scale * sigma_xy);
-    next.z() = wrapAngle(next.z() + sampleGaussian(rng, motion.noise_scale * sigma_theta));
+    addFloorNoise(options_, motion, rng, &next);
     return next;
   }
 
@@ -132,12 +136,10 @@ class DiffDriveMotionModel : public MotionModel {
     j(2, 0) = wrapAngle(dl.z() - base.z()) / h;
     j(2, 1) = wrapAngle(dr.z() - base.z()) / h;
     const Eigen::Vector2d variances(sigma_left * sigma_left, sigma_right * sigma_right);
-    Eigen::Matrix3d cov = motion.noise_scale * motion.noise_scale * j *
-                          variances.asDiagonal() * j.transpose();
-    cov(0, 0) += floorVarianceXy(options_, motion);
-    cov(1, 1) += floorVarianceXy(options_, motion);
-    cov(2, 2) += floorVarianceTheta(options_, motion);
-    return cov;
+    // The floors are scaled with the wheel noise, as in sample().
+    const Eigen::Matrix3d cov =
+        j * variances.asDiagonal() * j.transpose() + floorCovariance(options_, motion);
+    return motion.noise_scale * motion.noise_scale * cov;
   }
 
  private:

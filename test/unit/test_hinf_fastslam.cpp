@@ -304,6 +304,43 @@ TEST(MotionRandomWalk, GrowsWithTheStepDuration) {
   EXPECT_THROW(createMotionModel(o), std::invalid_argument);
 }
 
+TEST(MotionNoiseScale, CovarianceDescribesTheScaledSamples) {
+  // A scan-matched step (noise_scale < 1) or a gap (> 1) scales every part of the draw, the
+  // floors included; the covariance the proposals use must scale alike, for both models.
+  MotionOptions o;
+  o.alpha1 = 0.05;
+  o.alpha2 = 0.02;
+  o.alpha3 = 0.05;
+  o.alpha4 = 0.02;
+  o.wheel_base_m = 0.4;
+  o.wheel_alpha1 = 0.05;
+  o.wheel_alpha2 = 0.02;
+  o.min_sigma_xy_m = 0.02;
+  o.min_sigma_theta_rad = 0.01;
+  for (const std::string model : {"odometry", "diff_drive"}) {
+    o.model = model;
+    const std::unique_ptr<MotionModel> m = createMotionModel(o);
+    MotionInput motion;
+    motion.delta = Pose2(0.3, 0.02, 0.1);
+    const Eigen::Matrix3d unscaled = m->covariance(Pose2::Zero(), motion);
+    motion.noise_scale = 3.0;
+    const Eigen::Matrix3d scaled = m->covariance(Pose2::Zero(), motion);
+    EXPECT_LT((scaled - 9.0 * unscaled).norm(), 1e-9 * unscaled.norm()) << model;
+    // The samples' spread matches the covariance given for them (x and heading).
+    Rng rng(11);
+    const Pose2 mean = m->mean(Pose2::Zero(), motion);
+    double sq_x = 0.0, sq_z = 0.0;
+    const int n = 40000;
+    for (int i = 0; i < n; ++i) {
+      const Pose2 d = m->sample(Pose2::Zero(), motion, rng) - mean;
+      sq_x += d.x() * d.x();
+      sq_z += wrapAngle(d.z()) * wrapAngle(d.z());
+    }
+    EXPECT_NEAR(sq_x / n / scaled(0, 0), 1.0, 0.05) << model;
+    EXPECT_NEAR(sq_z / n / scaled(2, 2), 1.0, 0.05) << model;
+  }
+}
+
 TEST(HinfOptions, BadValuesAreRejectedByName) {
   FilterOptions options;
   options.variant = "hinf_fastslam";
