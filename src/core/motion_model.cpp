@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
 #include <stdexcept>
 
 #include "rbpf_slam/core/require_range.h"
@@ -10,8 +9,6 @@
 namespace rbpf_slam {
 namespace core {
 namespace {
-
-constexpr double kInfinity = std::numeric_limits<double>::infinity();
 
 /// Variances of the diffusion added to every step, position and heading (before the noise
 /// scale): the per-step floors plus a random walk growing with the step's duration.
@@ -170,24 +167,22 @@ void wheelTravelSigmas(double left, double right, double alpha1, double alpha2,
 }
 
 void validate(const MotionOptions& options) {
-  if (options.model != "odometry" && options.model != "diff_drive") {
-    throw std::invalid_argument("motion.model = '" + options.model +
-                                "' is unknown (allowed: odometry, diff_drive)");
-  }
-  const auto nonNegative = [](const char* name, double value) {
-    requireRange(std::string("motion.") + name, value, 0.0, kInfinity, false, true);
+  requireOneOf("motion.model", options.model, {"odometry", "diff_drive"});
+  // Upper limits far beyond any real robot, to catch a misplaced digit.
+  const auto check = [](const char* name, double value, double lo, double hi) {
+    requireRange(std::string("motion.") + name, value, lo, hi);
   };
-  nonNegative("alpha1", options.alpha1);
-  nonNegative("alpha2", options.alpha2);
-  nonNegative("alpha3", options.alpha3);
-  nonNegative("alpha4", options.alpha4);
-  nonNegative("wheel_alpha1", options.wheel_alpha1);
-  nonNegative("wheel_alpha2", options.wheel_alpha2);
-  nonNegative("min_sigma_xy_m", options.min_sigma_xy_m);
-  nonNegative("min_sigma_theta_rad", options.min_sigma_theta_rad);
-  nonNegative("sigma_xy_per_sqrt_s", options.sigma_xy_per_sqrt_s);
-  nonNegative("sigma_theta_per_sqrt_s", options.sigma_theta_per_sqrt_s);
-  requireRange("motion.wheel_base_m", options.wheel_base_m, 0.0, kInfinity, true, true);
+  check("alpha1", options.alpha1, 0.0, 10.0);
+  check("alpha2", options.alpha2, 0.0, 10.0);
+  check("alpha3", options.alpha3, 0.0, 10.0);
+  check("alpha4", options.alpha4, 0.0, 10.0);
+  check("wheel_base_m", options.wheel_base_m, 1e-3, 10.0);
+  check("wheel_alpha1", options.wheel_alpha1, 0.0, 10.0);
+  check("wheel_alpha2", options.wheel_alpha2, 0.0, 10.0);
+  check("min_sigma_xy_m", options.min_sigma_xy_m, 0.0, 1.0);
+  check("min_sigma_theta_rad", options.min_sigma_theta_rad, 0.0, 1.0);
+  check("sigma_xy_per_sqrt_s", options.sigma_xy_per_sqrt_s, 0.0, 10.0);
+  check("sigma_theta_per_sqrt_s", options.sigma_theta_per_sqrt_s, 0.0, 10.0);
 }
 
 std::unique_ptr<MotionModel> createMotionModel(const MotionOptions& options) {

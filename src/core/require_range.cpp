@@ -23,5 +23,15 @@ void requireRange(const std::string& name, double value, double lo, double hi, b
                               (hi_open || std::isinf(hi) ? ")" : "]"));
 }
 
+void requireOneOf(const std::string& name, const std::string& value,
+                  const std::vector<std::string>& allowed) {
+  std::string list;
+  for (const std::string& word : allowed) {
+    if (word == value) return;
+    list += (list.empty() ? "" : ", ") + word;
+  }
+  throw std::invalid_argument(name + " = '" + value + "' is not one of: " + list);
+}
+
 }  // namespace core
 }  // namespace rbpf_slam

@@ -9,117 +9,122 @@ namespace rbpf_slam {
 namespace io {
 namespace {
 
+// The readers below only map keys to options and check types: every range and every allowed
+// word is checked once, by the core's validate() of the options (parseSlamConfigTree's
+// validateAs), which programmatic users of the core get too. Only the ROS-side options, which
+// the core never sees, are range-checked here.
+
 void readMotion(YamlSection section, core::MotionOptions* o) {
-  section.read("model", &o->model, {"odometry", "diff_drive"});
-  section.read("alpha1", &o->alpha1, 0.0, 10.0);
-  section.read("alpha2", &o->alpha2, 0.0, 10.0);
-  section.read("alpha3", &o->alpha3, 0.0, 10.0);
-  section.read("alpha4", &o->alpha4, 0.0, 10.0);
-  section.read("wheel_base_m", &o->wheel_base_m, 1e-3, 10.0);
-  section.read("wheel_alpha1", &o->wheel_alpha1, 0.0, 10.0);
-  section.read("wheel_alpha2", &o->wheel_alpha2, 0.0, 10.0);
-  section.read("min_sigma_xy_m", &o->min_sigma_xy_m, 0.0, 1.0);
-  section.read("min_sigma_theta_rad", &o->min_sigma_theta_rad, 0.0, 1.0);
-  section.read("sigma_xy_per_sqrt_s", &o->sigma_xy_per_sqrt_s, 0.0, 10.0);
-  section.read("sigma_theta_per_sqrt_s", &o->sigma_theta_per_sqrt_s, 0.0, 10.0);
+  section.read("model", &o->model);
+  section.read("alpha1", &o->alpha1);
+  section.read("alpha2", &o->alpha2);
+  section.read("alpha3", &o->alpha3);
+  section.read("alpha4", &o->alpha4);
+  section.read("wheel_base_m", &o->wheel_base_m);
+  section.read("wheel_alpha1", &o->wheel_alpha1);
+  section.read("wheel_alpha2", &o->wheel_alpha2);
+  section.read("min_sigma_xy_m", &o->min_sigma_xy_m);
+  section.read("min_sigma_theta_rad", &o->min_sigma_theta_rad);
+  section.read("sigma_xy_per_sqrt_s", &o->sigma_xy_per_sqrt_s);
+  section.read("sigma_theta_per_sqrt_s", &o->sigma_theta_per_sqrt_s);
   section.finish();
 }
 
 void readAssociation(YamlSection section, core::AssociationOptions* o) {
-  section.read("gate_chi2", &o->gate_chi2, 0.1, 1000.0);
-  section.read("new_landmark_chi2", &o->new_landmark_chi2, 0.1, 1000.0);
-  section.read("line_overlap_margin_m", &o->line_overlap_margin_m, 0.0, 100.0);
+  section.read("gate_chi2", &o->gate_chi2);
+  section.read("new_landmark_chi2", &o->new_landmark_chi2);
+  section.read("line_overlap_margin_m", &o->line_overlap_margin_m);
   section.finish();
 }
 
 void readRelocalization(YamlSection section, core::RelocalizationOptions* o) {
   section.read("enabled", &o->enabled);
-  section.read("search_xy_m", &o->search_xy_m, 0.0, 20.0);
-  section.read("search_theta_rad", &o->search_theta_rad, 0.0, 1.0);
-  section.read("min_unmatched", &o->min_unmatched, 1, 1000);
-  section.read("min_unmatched_ratio", &o->min_unmatched_ratio, 0.0, 1.0);
-  section.read("min_matches", &o->min_matches, 1, 1000);
-  section.read("min_gain", &o->min_gain, 1, 1000);
-  section.read("min_matched_ratio", &o->min_matched_ratio, 0.0, 1.0);
-  section.read("min_landmark_age", &o->min_landmark_age, 0, 1000000);
-  section.read("line_tolerance_m", &o->line_tolerance_m, 1e-3, 10.0);
-  section.read("angle_tolerance_rad", &o->angle_tolerance_rad, 1e-4, 1.0);
-  section.read("point_tolerance_m", &o->point_tolerance_m, 1e-3, 10.0);
+  section.read("search_xy_m", &o->search_xy_m);
+  section.read("search_theta_rad", &o->search_theta_rad);
+  section.read("min_unmatched", &o->min_unmatched);
+  section.read("min_unmatched_ratio", &o->min_unmatched_ratio);
+  section.read("min_matches", &o->min_matches);
+  section.read("min_gain", &o->min_gain);
+  section.read("min_matched_ratio", &o->min_matched_ratio);
+  section.read("min_landmark_age", &o->min_landmark_age);
+  section.read("line_tolerance_m", &o->line_tolerance_m);
+  section.read("angle_tolerance_rad", &o->angle_tolerance_rad);
+  section.read("point_tolerance_m", &o->point_tolerance_m);
   section.finish();
 }
 
 void readRobust(YamlSection section, core::RobustOptions* o) {
-  section.read("ancestor_sets", &o->ancestor_sets, 1, 100);
-  section.read("ancestor_spacing_steps", &o->ancestor_spacing_steps, 1, 100000);
-  section.read("window_steps", &o->window_steps, 1, 100000);
-  section.read("min_old_observations", &o->min_old_observations, 0, 1000);
+  section.read("ancestor_sets", &o->ancestor_sets);
+  section.read("ancestor_spacing_steps", &o->ancestor_spacing_steps);
+  section.read("window_steps", &o->window_steps);
+  section.read("min_old_observations", &o->min_old_observations);
   section.read("intermediate_path", &o->intermediate_path);
-  section.read("path_iterations", &o->path_iterations, 1, 100);
+  section.read("path_iterations", &o->path_iterations);
   section.finish();
 }
 
 void readTracker(YamlSection section, core::LandmarkTrackerOptions* o) {
-  section.read("gate_chi2", &o->gate_chi2, 0.1, 1000.0);
-  section.read("new_landmark_chi2", &o->new_landmark_chi2, 0.1, 1000.0);
-  section.read("forget_after_steps", &o->forget_after_steps, 1, 100000);
-  section.read("forget_distance_m", &o->forget_distance_m, 0.1, 1e4);
-  section.read("max_landmarks", &o->max_landmarks, 1, 1000);
+  section.read("gate_chi2", &o->gate_chi2);
+  section.read("new_landmark_chi2", &o->new_landmark_chi2);
+  section.read("forget_after_steps", &o->forget_after_steps);
+  section.read("forget_distance_m", &o->forget_distance_m);
+  section.read("max_landmarks", &o->max_landmarks);
   section.finish();
 }
 
 void readMeasurement(YamlSection section, core::MeasurementOptions* o) {
   section.read("use_feature_covariance", &o->use_feature_covariance);
-  section.read("sigma_range_m", &o->sigma_range_m, 1e-6, 100.0);
-  section.read("sigma_bearing_rad", &o->sigma_bearing_rad, 1e-6, 3.2);
-  section.read("sigma_rho_m", &o->sigma_rho_m, 1e-6, 100.0);
-  section.read("sigma_theta_rad", &o->sigma_theta_rad, 1e-6, 3.2);
-  section.read("covariance_inflation", &o->covariance_inflation, 1e-3, 1e3);
+  section.read("sigma_range_m", &o->sigma_range_m);
+  section.read("sigma_bearing_rad", &o->sigma_bearing_rad);
+  section.read("sigma_rho_m", &o->sigma_rho_m);
+  section.read("sigma_theta_rad", &o->sigma_theta_rad);
+  section.read("covariance_inflation", &o->covariance_inflation);
   section.finish();
 }
 
 void readExistence(YamlSection section, core::ExistenceOptions* o) {
-  section.read("min_observations", &o->min_observations, 1, 1000);
-  section.read("tentative_updates", &o->tentative_updates, 1, 1000000);
-  section.read("visible_range_m", &o->visible_range_m, 0.0, 1000.0);
-  section.read("visible_min_range_m", &o->visible_min_range_m, 0.0, 1000.0);
-  section.read("visible_fov_rad", &o->visible_fov_rad, 1e-6, 2.0 * M_PI);
-  section.read("max_count", &o->max_count, 1, 1000000);
+  section.read("min_observations", &o->min_observations);
+  section.read("tentative_updates", &o->tentative_updates);
+  section.read("visible_range_m", &o->visible_range_m);
+  section.read("visible_min_range_m", &o->visible_min_range_m);
+  section.read("visible_fov_rad", &o->visible_fov_rad);
+  section.read("max_count", &o->max_count);
   section.finish();
 }
 
 void readHeadingPrior(YamlSection section, core::HeadingPriorOptions* o) {
   section.read("enabled", &o->enabled);
   section.read("learn_direction", &o->learn_direction);
-  section.read("learn_updates", &o->learn_updates, 1, 1000);
-  section.read("min_family_fraction", &o->min_family_fraction, 0.0, 1.0);
-  section.read("max_skew_rad", &o->max_skew_rad, 0.0, 0.6);
-  section.read("direction_rad", &o->direction_rad, -M_PI, M_PI);
-  section.read("tolerance_rad", &o->tolerance_rad, 1e-4, 0.785);
-  section.read("sigma_rad", &o->sigma_rad, 1e-5, 1.0);
-  section.read("min_lines", &o->min_lines, 1, 1000);
-  section.read("outlier_ratio", &o->outlier_ratio, 0.0, 0.999);
+  section.read("learn_updates", &o->learn_updates);
+  section.read("min_family_fraction", &o->min_family_fraction);
+  section.read("max_skew_rad", &o->max_skew_rad);
+  section.read("direction_rad", &o->direction_rad);
+  section.read("tolerance_rad", &o->tolerance_rad);
+  section.read("sigma_rad", &o->sigma_rad);
+  section.read("min_lines", &o->min_lines);
+  section.read("outlier_ratio", &o->outlier_ratio);
   section.read("drift_tracking", &o->drift_tracking);
-  section.read("drift_per_rad", &o->drift_per_rad, 0.0, 10.0);
-  section.read("drift_per_m", &o->drift_per_m, 0.0, 10.0);
+  section.read("drift_per_rad", &o->drift_per_rad);
+  section.read("drift_per_m", &o->drift_per_m);
   section.finish();
 }
 
 void readHinf(YamlSection section, core::HinfOptions* o) {
   // Config values are finite; 1e12 is the EKF for any realistic covariance.
-  section.read("mode", &o->mode, {"relative", "absolute"});
-  section.read("theta_pose", &o->theta_pose, 0.0, 0.999999);
-  section.read("theta_landmark", &o->theta_landmark, 0.0, 0.999999);
-  section.read("gamma_position", &o->gamma_position, 1e-12, 1e12);
-  section.read("gamma_heading", &o->gamma_heading, 1e-12, 1e12);
-  section.read("gamma_landmark", &o->gamma_landmark, 1e-12, 1e12);
-  section.read("gain", &o->gain, {"posterior", "prior"});
-  section.read("proposal_covariance", &o->proposal_covariance, {"hinf", "ekf"});
-  section.read("weight", &o->weight, {"pointwise", "marginal", "attenuated"});
-  section.read("max_inflation", &o->max_inflation, 1.0, 1e12);
+  section.read("mode", &o->mode);
+  section.read("theta_pose", &o->theta_pose);
+  section.read("theta_landmark", &o->theta_landmark);
+  section.read("gamma_position", &o->gamma_position);
+  section.read("gamma_heading", &o->gamma_heading);
+  section.read("gamma_landmark", &o->gamma_landmark);
+  section.read("gain", &o->gain);
+  section.read("proposal_covariance", &o->proposal_covariance);
+  section.read("weight", &o->weight);
+  section.read("max_inflation", &o->max_inflation);
   section.finish();
 }
 
-// Multi-filter SMC and EKF-SLAM (Yuen and MacDonald); ranges are checked by core::validate.
+// Multi-filter SMC and EKF-SLAM (Yuen and MacDonald).
 void readLineSlam(YamlSection& top, core::FilterOptions* f) {
   YamlSection association = top.section("line_association");
   association.read("h_similar_feature", &f->line_association.h_similar_feature);
@@ -141,7 +146,6 @@ void readLineSlam(YamlSection& top, core::FilterOptions* f) {
 }
 
 void readGrid(YamlSection section, core::GridOptions* o) {
-  // Ranges are checked by core::validate(GridOptions).
   section.read("resolution_m", &o->resolution_m);
   section.read("size_x_m", &o->size_x_m);
   section.read("size_y_m", &o->size_y_m);
@@ -163,83 +167,81 @@ void readGrid(YamlSection section, core::GridOptions* o) {
   section.finish();
 }
 
-// Ranges are checked by core::validate(DpfOptions).
 void readDpf(YamlSection section, core::DpfOptions* o) {
-  section.read("local_filters", &o->local_filters, 1, 64);
-  section.read("threads", &o->threads, 0, 64);
-  section.read("weighting", &o->weighting, {"innovation", "neff", "mixed"});
-  section.read("fusion", &o->fusion, {"information", "average"});
-  section.read("mix_innovation", &o->mix_innovation, 0.0, 1.0);
+  section.read("local_filters", &o->local_filters);
+  section.read("threads", &o->threads);
+  section.read("weighting", &o->weighting);
+  section.read("fusion", &o->fusion);
+  section.read("mix_innovation", &o->mix_innovation);
   section.read("adaptive_covariance", &o->adaptive_covariance);
   section.read("feedback", &o->feedback);
-  section.read("feedback_inflation", &o->feedback_inflation, 1.0, 100.0);
-  section.read("feedback_mode", &o->feedback_mode, {"reweight", "moment"});
-  section.read("innovation_smoothing", &o->innovation_smoothing, 1e-3, 1.0);
-  section.read("fault_nis", &o->fault_nis, 0.0, 1e9);
-  section.read("fault_neff_ratio", &o->fault_neff_ratio, 0.0, 1.0);
-  section.read("fault_prior_chi2", &o->fault_prior_chi2, 0.0, 1e9);
-  section.read("suspect_weight", &o->suspect_weight, 0.0, 1.0);
-  section.read("isolate_after_steps", &o->isolate_after_steps, 1, 1000000);
-  section.read("readmit_after_steps", &o->readmit_after_steps, 0, 1000000);
-  section.read("step_timeout_s", &o->step_timeout_s, 1e-3, 1e6);
+  section.read("feedback_inflation", &o->feedback_inflation);
+  section.read("feedback_mode", &o->feedback_mode);
+  section.read("innovation_smoothing", &o->innovation_smoothing);
+  section.read("fault_nis", &o->fault_nis);
+  section.read("fault_neff_ratio", &o->fault_neff_ratio);
+  section.read("fault_prior_chi2", &o->fault_prior_chi2);
+  section.read("suspect_weight", &o->suspect_weight);
+  section.read("isolate_after_steps", &o->isolate_after_steps);
+  section.read("readmit_after_steps", &o->readmit_after_steps);
+  section.read("step_timeout_s", &o->step_timeout_s);
   section.finish();
 }
 
 void readFault(YamlSection section, core::FaultInjectorOptions* o) {
   section.read("enabled", &o->enabled);
-  section.read("start_step", &o->start_step, 1, 1000000000);
-  section.read("local_index", &o->local_index, 0, 63);
-  section.read("sigma_xy_m", &o->sigma_xy_m, 0.0, 100.0);
-  section.read("sigma_theta_rad", &o->sigma_theta_rad, 0.0, 10.0);
+  section.read("start_step", &o->start_step);
+  section.read("local_index", &o->local_index);
+  section.read("sigma_xy_m", &o->sigma_xy_m);
+  section.read("sigma_theta_rad", &o->sigma_theta_rad);
   section.finish();
 }
 
 void readLaser(YamlSection section, core::LaserExtractorOptions* o) {
-  section.read("method", &o->method, {"incremental", "split_and_merge"});
-  section.read("sigma_range_m", &o->sigma_range_m, 1e-6, 1.0);
-  section.read("max_mean_sq_residual_m2", &o->max_mean_sq_residual_m2, 1e-8, 1.0);
-  section.read("split_distance_m", &o->split_distance_m, 1e-4, 10.0);
-  section.read("max_point_gap_m", &o->max_point_gap_m, 1e-3, 100.0);
-  section.read("min_points_per_line", &o->min_points_per_line, 2, 100000);
-  section.read("min_line_length_m", &o->min_line_length_m, 0.0, 100.0);
-  section.read("merge_angle_rad", &o->merge_angle_rad, 0.0, 1.6);
-  section.read("merge_distance_m", &o->merge_distance_m, 0.0, 10.0);
+  section.read("method", &o->method);
+  section.read("sigma_range_m", &o->sigma_range_m);
+  section.read("max_mean_sq_residual_m2", &o->max_mean_sq_residual_m2);
+  section.read("split_distance_m", &o->split_distance_m);
+  section.read("max_point_gap_m", &o->max_point_gap_m);
+  section.read("min_points_per_line", &o->min_points_per_line);
+  section.read("min_line_length_m", &o->min_line_length_m);
+  section.read("merge_angle_rad", &o->merge_angle_rad);
+  section.read("merge_distance_m", &o->merge_distance_m);
   section.read("extract_corners", &o->extract_corners);
-  section.read("corner_min_angle_rad", &o->corner_min_angle_rad, 0.0, 1.6);
-  section.read("corner_max_gap_m", &o->corner_max_gap_m, 0.0, 10.0);
+  section.read("corner_min_angle_rad", &o->corner_min_angle_rad);
+  section.read("corner_max_gap_m", &o->corner_max_gap_m);
   section.read("extract_clusters", &o->extract_clusters);
-  section.read("cluster_max_width_m", &o->cluster_max_width_m, 0.0, 10.0);
-  section.read("cluster_min_points", &o->cluster_min_points, 1, 1000);
-  section.read("cluster_isolation_m", &o->cluster_isolation_m, 0.0, 100.0);
-  section.read("sigma_point_range_m", &o->sigma_point_range_m, 1e-6, 10.0);
-  section.read("sigma_point_bearing_rad", &o->sigma_point_bearing_rad, 1e-6, 3.2);
-  section.read("max_range_m", &o->max_range_m, 0.0, 1000.0);
+  section.read("cluster_max_width_m", &o->cluster_max_width_m);
+  section.read("cluster_min_points", &o->cluster_min_points);
+  section.read("cluster_isolation_m", &o->cluster_isolation_m);
+  section.read("sigma_point_range_m", &o->sigma_point_range_m);
+  section.read("sigma_point_bearing_rad", &o->sigma_point_bearing_rad);
+  section.read("max_range_m", &o->max_range_m);
   section.finish();
 }
 
 void readScanMatching(YamlSection section, core::ScanMatcherOptions* o) {
   section.read("enabled", &o->enabled);
-  section.read("max_iterations", &o->max_iterations, 1, 1000);
-  section.read("max_correspondence_m", &o->max_correspondence_m, 1e-3, 10.0);
-  section.read("min_correspondence_m", &o->min_correspondence_m, 1e-3, 10.0);
-  section.read("min_inlier_ratio", &o->min_inlier_ratio, 0.0, 1.0);
-  section.read("max_residual_rms_m", &o->max_residual_rms_m, 1e-4, 10.0);
-  section.read("max_range_m", &o->max_range_m, 0.1, 1000.0);
-  section.read("rotation_guess_rad", &o->rotation_guess_rad, 0.0, 1.6);
-  section.read("search_below_inlier_ratio", &o->search_below_inlier_ratio, 0.0, 1.0);
-  section.read("search_step_rad", &o->search_step_rad, 0.01, 1.6);
-  section.read("min_information", &o->min_information, 0.0, 1e9);
-  section.read("max_correction_m", &o->max_correction_m, 0.0, 100.0);
-  section.read("max_correction_rad", &o->max_correction_rad, 0.0, 3.2);
-  section.read("noise_scale", &o->noise_scale, 1e-3, 10.0);
-  section.read("submap_scans", &o->submap_scans, 1, 100);
-  section.read("prior_weight_xy", &o->prior_weight_xy, 0.0, 1e6);
-  section.read("prior_weight_theta", &o->prior_weight_theta, 0.0, 1e6);
+  section.read("max_iterations", &o->max_iterations);
+  section.read("max_correspondence_m", &o->max_correspondence_m);
+  section.read("min_correspondence_m", &o->min_correspondence_m);
+  section.read("min_inlier_ratio", &o->min_inlier_ratio);
+  section.read("max_residual_rms_m", &o->max_residual_rms_m);
+  section.read("max_range_m", &o->max_range_m);
+  section.read("rotation_guess_rad", &o->rotation_guess_rad);
+  section.read("search_below_inlier_ratio", &o->search_below_inlier_ratio);
+  section.read("search_step_rad", &o->search_step_rad);
+  section.read("min_information", &o->min_information);
+  section.read("max_correction_m", &o->max_correction_m);
+  section.read("max_correction_rad", &o->max_correction_rad);
+  section.read("noise_scale", &o->noise_scale);
+  section.read("submap_scans", &o->submap_scans);
+  section.read("prior_weight_xy", &o->prior_weight_xy);
+  section.read("prior_weight_theta", &o->prior_weight_theta);
   section.finish();
 }
 
 void readSonar(YamlSection section, core::SonarExtractorOptions* o) {
-  // Ranges are checked by core::validate (one place for the limits).
   section.read("min_range_m", &o->min_range_m);
   section.read("max_range_m", &o->max_range_m);
   section.read("max_range_margin_m", &o->max_range_margin_m);
@@ -317,11 +319,11 @@ SlamConfig parseSlamConfigTree(const YAML::Node& root, const std::string& source
   YamlSection top(root, source);
   top.read("frontend", &config.frontend, {"laser", "sonar", "features"});
   core::FilterOptions& f = config.filter;
-  top.read("variant", &f.variant, core::availableVariants());
-  top.read("particles", &f.particles, 1, 100000);
+  top.read("variant", &f.variant);
+  top.read("particles", &f.particles);
   top.read("seed", &f.seed);
-  top.read("resample_threshold", &f.resample_threshold, 0.0, 1.0);
-  top.read("proposal_sample_scale", &f.proposal_sample_scale, 1e-3, 1.0);
+  top.read("resample_threshold", &f.resample_threshold);
+  top.read("proposal_sample_scale", &f.proposal_sample_scale);
   top.read("use_points", &f.use_points);
   top.read("use_lines", &f.use_lines);
   readMotion(top.section("motion"), &f.motion);
@@ -341,14 +343,14 @@ SlamConfig parseSlamConfigTree(const YAML::Node& root, const std::string& source
   readScanMatching(top.section("scan_matching"), &config.scan_matching);
   readSonar(top.section("sonar_features"), &config.sonar);
   core::SessionOptions& s = config.session;
-  top.read("linear_update", &s.linear_update_m, 0.0, 100.0);
-  top.read("angular_update", &s.angular_update_rad, 0.0, 10.0);
-  top.read("max_time_gap", &s.max_time_gap_s, 0.0, 1e6);
-  top.read("max_odometry_jump", &s.max_odometry_jump_m, 0.0, 1e6);
-  top.read("gap_action", &s.gap_action, {"inflate", "reset"});
-  top.read("gap_noise_inflation", &s.gap_noise_inflation, 1.0, 1000.0);
-  top.read("reset_on_time_jump_back", &s.reset_on_time_jump_back_s, 0.0, 1e6);
-  top.read("reset_after_frames_back", &s.reset_after_frames_back, 1, 1000);
+  top.read("linear_update", &s.linear_update_m);
+  top.read("angular_update", &s.angular_update_rad);
+  top.read("max_time_gap", &s.max_time_gap_s);
+  top.read("max_odometry_jump", &s.max_odometry_jump_m);
+  top.read("gap_action", &s.gap_action);
+  top.read("gap_noise_inflation", &s.gap_noise_inflation);
+  top.read("reset_on_time_jump_back", &s.reset_on_time_jump_back_s);
+  top.read("reset_after_frames_back", &s.reset_after_frames_back);
   top.read("map_file", &config.map_file);
   top.read("localization_only", &config.localization_only);
   readRos(top, &config.ros);

@@ -53,7 +53,8 @@ void YamlSection::read(const std::string& key, double* value, double min, double
   } catch (const YAML::Exception&) {
     throw ConfigError(where(key) + " = " + describe(n) + " is not a number");
   }
-  if (!std::isfinite(parsed) || parsed < min || parsed > max) {
+  if (!std::isfinite(parsed)) throw ConfigError(where(key) + " = " + describe(n) + " is not finite");
+  if (parsed < min || parsed > max) {
     throw ConfigError(where(key) + " = " + describe(n) + " is out of range " +
                       rangeText(min, max));
   }

@@ -156,9 +156,20 @@ TEST(SlamConfig, HinfAndExistenceErrorsNameTheKey) {
   const std::string fov = errorOf("existence: {visible_range_m: 4, visible_min_range_m: 5}");
   EXPECT_NE(fov.find("existence.visible_min_range_m"), std::string::npos) << fov;
   EXPECT_NE(errorOf("variant: hinf").find("hinf_fastslam"), std::string::npos);
-  EXPECT_NE(errorOf("hinf: {gamma_landmark: .inf}").find("out of range [1e-12, 1e+12]"),
+  EXPECT_NE(errorOf("hinf: {gamma_landmark: .inf}").find("hinf.gamma_landmark = .inf is not finite"),
             std::string::npos)
       << errorOf("hinf: {gamma_landmark: .inf}");
+  // Ranges are checked by the core, with the file named and the same text as for the core's
+  // own users; an unknown word likewise.
+  EXPECT_NE(errorOf("motion: {alpha1: 11}").find("test.yaml: motion.alpha1 = 11 is out of range [0, 10]"),
+            std::string::npos)
+      << errorOf("motion: {alpha1: 11}");
+  EXPECT_NE(errorOf("motion: {model: tank}").find("test.yaml: motion.model = 'tank' is not one of: odometry, diff_drive"),
+            std::string::npos)
+      << errorOf("motion: {model: tank}");
+  EXPECT_NE(errorOf("variant: hinf").find("is not one of: fastslam2, robust_fastslam2"),
+            std::string::npos)
+      << errorOf("variant: hinf");
 }
 
 TEST(SlamConfig, LineSlamConfigsCarryThePapersDefaults) {

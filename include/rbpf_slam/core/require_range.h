@@ -1,8 +1,10 @@
 #pragma once
-// One range check for every options struct of the core, so that a bad configuration value
-// gets the same message wherever it is read: "<section>.<key> = <value> is out of range [lo, hi]".
+// One range check (and one list check) for every options struct of the core, so that a bad
+// configuration value gets the same message wherever it is read:
+// "<section>.<key> = <value> is out of range [lo, hi]", "<key> = '<word>' is not one of: ...".
 
 #include <string>
+#include <vector>
 
 namespace rbpf_slam {
 namespace core {
@@ -15,6 +17,11 @@ std::string formatNumber(double value);
 /// printed open). NaN always throws. `name` carries the section: "scan_matching.max_range_m".
 void requireRange(const std::string& name, double value, double lo, double hi,
                   bool lo_open = false, bool hi_open = false);
+
+/// Throws std::invalid_argument("<name> = '<value>' is not one of: a, b") unless value is one
+/// of allowed: the same check for every option that takes one word from a list.
+void requireOneOf(const std::string& name, const std::string& value,
+                  const std::vector<std::string>& allowed);
 
 }  // namespace core
 }  // namespace rbpf_slam

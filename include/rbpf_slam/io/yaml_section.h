@@ -1,6 +1,7 @@
 #pragma once
-// Typed, tracked reads from one YAML map: every read is range-checked and every key that
-// nobody read is reported, so a typo in a config is an error, not a silent default.
+// Typed, tracked reads from one YAML map: every read is type-checked (numbers finite), may be
+// range-checked, and every key that nobody read is reported, so a typo in a config is an
+// error, not a silent default.
 
 #include <yaml-cpp/yaml.h>
 
@@ -26,7 +27,8 @@ class YamlSection {
   YamlSection(const YAML::Node& node, std::string source, std::string path = "");
 
   bool has(const std::string& key) const;
-  /// Reads an optional number; throws ConfigError outside [min, max] or if not a number.
+  /// Reads an optional number; throws ConfigError if it is not a finite number or outside
+  /// [min, max].
   void read(const std::string& key, double* value,
             double min = -std::numeric_limits<double>::infinity(),
             double max = std::numeric_limits<double>::infinity());

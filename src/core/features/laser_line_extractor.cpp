@@ -397,10 +397,7 @@ class Extraction {
 }  // namespace
 
 void validate(const LaserExtractorOptions& o) {
-  if (o.method != "incremental" && o.method != "split_and_merge") {
-    throw std::invalid_argument("laser_features.method = '" + o.method +
-                                "' is not one of: incremental, split_and_merge");
-  }
+  requireOneOf("laser_features.method", o.method, {"incremental", "split_and_merge"});
   requireRange("laser_features.sigma_range_m", o.sigma_range_m, 0.0, 10.0, true);
   requireRange("laser_features.max_mean_sq_residual_m2", o.max_mean_sq_residual_m2, 0.0, 1.0, true);
   requireRange("laser_features.split_distance_m", o.split_distance_m, 0.0, 10.0, true);

@@ -12,17 +12,9 @@ namespace core {
 void validate(const DpfOptions& o) {
   requireRange("dpf.local_filters", o.local_filters, 1, 64);
   requireRange("dpf.threads", o.threads, 0, 64);
-  if (o.weighting != "innovation" && o.weighting != "neff" && o.weighting != "mixed") {
-    throw std::invalid_argument("dpf.weighting = '" + o.weighting +
-                                "' is not one of innovation, neff, mixed");
-  }
-  if (o.fusion != "information" && o.fusion != "average") {
-    throw std::invalid_argument("dpf.fusion = '" + o.fusion + "' is not one of information, average");
-  }
-  if (o.feedback_mode != "reweight" && o.feedback_mode != "moment") {
-    throw std::invalid_argument("dpf.feedback_mode = '" + o.feedback_mode +
-                                "' is not one of reweight, moment");
-  }
+  requireOneOf("dpf.weighting", o.weighting, {"innovation", "neff", "mixed"});
+  requireOneOf("dpf.fusion", o.fusion, {"information", "average"});
+  requireOneOf("dpf.feedback_mode", o.feedback_mode, {"reweight", "moment"});
   requireRange("dpf.mix_innovation", o.mix_innovation, 0.0, 1.0);
   requireRange("dpf.feedback_inflation", o.feedback_inflation, 1.0, 100.0);
   requireRange("dpf.innovation_smoothing", o.innovation_smoothing, 1e-3, 1.0);

@@ -7,6 +7,7 @@
 
 #include "rbpf_slam/core/filters/measurement_models.h"
 #include "rbpf_slam/core/filters/observation.h"
+#include "rbpf_slam/core/filters/pose_moments.h"
 #include "rbpf_slam/core/filters/resampling.h"
 
 namespace rbpf_slam {
@@ -14,32 +15,6 @@ namespace core {
 namespace {
 
 Eigen::Matrix2d symmetric(const Eigen::Matrix2d& m) { return 0.5 * (m + m.transpose()); }
-
-/// Weighted mean and covariance of poses (circular mean for the heading).
-void poseMoments(const std::vector<Pose2>& poses, const std::vector<double>& weights, Pose2* mean,
-                 Eigen::Matrix3d* covariance) {
-  double x = 0.0, y = 0.0, c = 0.0, s = 0.0;
-  for (size_t j = 0; j < poses.size(); ++j) {
-    x += weights[j] * poses[j].x();
-    y += weights[j] * poses[j].y();
-    c += weights[j] * std::cos(poses[j].z());
-    s += weights[j] * std::sin(poses[j].z());
-  }
-  *mean = Pose2(x, y, std::atan2(s, c));
-  covariance->setZero();
-  for (size_t j = 0; j < poses.size(); ++j) {
-    Pose2 d = poses[j] - *mean;
-    d.z() = wrapAngle(d.z());
-    *covariance += weights[j] * d * d.transpose();
-  }
-}
-
-/// Moments of a Gaussian mixture: sum_j w_j N(means_j, covariances_j).
-void mixtureMoments(const std::vector<Pose2>& means, const std::vector<Eigen::Matrix3d>& covariances,
-                    const std::vector<double>& weights, Pose2* mean, Eigen::Matrix3d* covariance) {
-  poseMoments(means, weights, mean, covariance);
-  for (size_t j = 0; j < means.size(); ++j) *covariance += weights[j] * covariances[j];
-}
 
 Eigen::Matrix3d regularised(const Eigen::Matrix3d& m) {
   return 0.5 * (m + m.transpose()) + Eigen::Vector3d(1e-8, 1e-8, 1e-10).asDiagonal().toDenseMatrix();
@@ -191,9 +166,9 @@ void DpfLocalFilter::momentMatch(const DpfFeedback& feedback) {
   // cloud's covariance onto the master's (Cholesky factors); particles keep their maps.
   std::vector<Pose2> poses;
   for (const auto& p : particles_) poses.push_back(p.pose);
-  Pose2 mean;
-  Eigen::Matrix3d covariance;
-  poseMoments(poses, weights_, &mean, &covariance);
+  const PoseEstimate moments = poseMoments(poses, weights_);
+  const Pose2& mean = moments.mean;
+  const Eigen::Matrix3d& covariance = moments.covariance;
   const Eigen::Matrix3d target =
       regularised(options_.dpf.feedback_inflation * feedback.covariance);
   const Eigen::Matrix3d own = regularised(covariance);
@@ -315,8 +290,9 @@ DpfLocalEstimate DpfLocalFilter::finishStep(
     const std::vector<std::vector<Eigen::Matrix2d>>& model_cov, const std::vector<bool>& known,
     DpfLocalEstimate* estimate) {
   const size_t n = particles_.size(), m = innovations.size();
-  mixtureMoments(prior_means_, prior_covs_, weights_, &estimate->prior_mean,
-                 &estimate->prior_covariance);
+  const PoseEstimate prior = mixtureMoments(prior_means_, prior_covs_, weights_);
+  estimate->prior_mean = prior.mean;
+  estimate->prior_covariance = prior.covariance;
   // eq. 12 with the constant (model) covariance: the basic weights of this step.
   std::vector<double> basic_log(n, 0.0), basic;
   for (size_t o = 0; o < m; ++o) {
@@ -362,9 +338,9 @@ DpfLocalEstimate DpfLocalFilter::finishStep(
   // A cloud that did not cover the master's estimate reports that Neff (the master's Neff
   // check then sees the inconsistency even though the cloud was moved onto the master).
   estimate->neff = std::min(effectiveSampleSize(weights_), feedback_neff_);
-  Pose2 posterior_mean;
-  Eigen::Matrix3d posterior_cov;
-  mixtureMoments(proposal_means_, proposal_covs_, weights_, &posterior_mean, &posterior_cov);
+  const PoseEstimate posterior = mixtureMoments(proposal_means_, proposal_covs_, weights_);
+  const Pose2& posterior_mean = posterior.mean;
+  const Eigen::Matrix3d& posterior_cov = posterior.covariance;
   estimate->particles = static_cast<int>(n);
   for (size_t j = 0; j < n; ++j) log_weights_[j] = std::log(std::max(weights_[j], 1e-300));
   resampleIfBelow(estimate->neff);

@@ -8,6 +8,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "rbpf_slam/core/filters/pose_moments.h"
+
 namespace rbpf_slam {
 namespace core {
 namespace {
@@ -26,21 +28,15 @@ std::vector<double> normalised(std::vector<double> w) {
 /// mixture.
 void fuseAverage(const std::vector<const DpfLocalEstimate*>& locals,
                  const std::vector<double>& weights, DpfMasterOutput* out) {
-  double x = 0.0, y = 0.0, c = 0.0, s = 0.0;
-  for (size_t i = 0; i < locals.size(); ++i) {
-    const Pose2& m = locals[i]->mean;
-    x += weights[i] * m.x();
-    y += weights[i] * m.y();
-    c += weights[i] * std::cos(m.z());
-    s += weights[i] * std::sin(m.z());
+  std::vector<Pose2> means;
+  std::vector<Eigen::Matrix3d> covariances;
+  for (const DpfLocalEstimate* local : locals) {
+    means.push_back(local->mean);
+    covariances.push_back(local->covariance);
   }
-  out->mean = Pose2(x, y, std::atan2(s, c));
-  out->covariance.setZero();
-  for (size_t i = 0; i < locals.size(); ++i) {
-    Pose2 d = locals[i]->mean - out->mean;
-    d.z() = wrapAngle(d.z());
-    out->covariance += weights[i] * (locals[i]->covariance + d * d.transpose());
-  }
+  const PoseEstimate fused = mixtureMoments(means, covariances, weights);
+  out->mean = fused.mean;
+  out->covariance = fused.covariance;
 }
 
 Pose2 difference(const Pose2& a, const Pose2& b) {

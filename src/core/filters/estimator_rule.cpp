@@ -3,8 +3,11 @@
 #include <Eigen/Cholesky>
 #include <Eigen/Dense>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <string>
+
+#include "rbpf_slam/core/require_range.h"
 
 namespace rbpf_slam {
 namespace core {
@@ -26,44 +29,17 @@ bool positiveDefinite(const Eigen::Matrix<double, N, N>& m) {
 
 void validate(const HinfOptions& o) {
   // gamma may be +inf (the EKF), never zero, negative or NaN.
-  if (!(o.gamma_position > 0.0)) {
-    throw std::invalid_argument("hinf.gamma_position = " + std::to_string(o.gamma_position) +
-                                " must be > 0 (infinity: the EKF)");
-  }
-  if (!(o.gamma_heading > 0.0)) {
-    throw std::invalid_argument("hinf.gamma_heading = " + std::to_string(o.gamma_heading) +
-                                " must be > 0 (infinity: the EKF)");
-  }
-  if (!(o.gamma_landmark > 0.0)) {
-    throw std::invalid_argument("hinf.gamma_landmark = " + std::to_string(o.gamma_landmark) +
-                                " must be > 0 (infinity: the EKF)");
-  }
-  if (!(o.max_inflation >= 1.0)) {
-    throw std::invalid_argument("hinf.max_inflation = " + std::to_string(o.max_inflation) +
-                                " must be >= 1");
-  }
-  if (o.mode != "relative" && o.mode != "absolute") {
-    throw std::invalid_argument("hinf.mode = '" + o.mode + "' must be relative or absolute");
-  }
-  if (!(o.theta_pose >= 0.0 && o.theta_pose < 1.0)) {
-    throw std::invalid_argument("hinf.theta_pose = " + std::to_string(o.theta_pose) +
-                                " must be in [0, 1)");
-  }
-  if (!(o.theta_landmark >= 0.0 && o.theta_landmark < 1.0)) {
-    throw std::invalid_argument("hinf.theta_landmark = " + std::to_string(o.theta_landmark) +
-                                " must be in [0, 1)");
-  }
-  if (o.proposal_covariance != "hinf" && o.proposal_covariance != "ekf") {
-    throw std::invalid_argument("hinf.proposal_covariance = '" + o.proposal_covariance +
-                                "' must be hinf or ekf");
-  }
-  if (o.gain != "posterior" && o.gain != "prior") {
-    throw std::invalid_argument("hinf.gain = '" + o.gain + "' must be posterior or prior");
-  }
-  if (o.weight != "pointwise" && o.weight != "marginal" && o.weight != "attenuated") {
-    throw std::invalid_argument("hinf.weight = '" + o.weight +
-                                "' must be pointwise, marginal or attenuated");
-  }
+  const double inf = std::numeric_limits<double>::infinity();
+  requireRange("hinf.gamma_position", o.gamma_position, 0.0, inf, true);
+  requireRange("hinf.gamma_heading", o.gamma_heading, 0.0, inf, true);
+  requireRange("hinf.gamma_landmark", o.gamma_landmark, 0.0, inf, true);
+  requireRange("hinf.max_inflation", o.max_inflation, 1.0, inf);
+  requireOneOf("hinf.mode", o.mode, {"relative", "absolute"});
+  requireRange("hinf.theta_pose", o.theta_pose, 0.0, 1.0, false, true);
+  requireRange("hinf.theta_landmark", o.theta_landmark, 0.0, 1.0, false, true);
+  requireOneOf("hinf.proposal_covariance", o.proposal_covariance, {"hinf", "ekf"});
+  requireOneOf("hinf.gain", o.gain, {"posterior", "prior"});
+  requireOneOf("hinf.weight", o.weight, {"pointwise", "marginal", "attenuated"});
 }
 
 template <int N>

@@ -6,6 +6,7 @@
 
 #include "rbpf_slam/core/filters/landmark_existence.h"
 #include "rbpf_slam/core/filters/measurement_models.h"
+#include "rbpf_slam/core/filters/pose_moments.h"
 #include "rbpf_slam/core/filters/relocalization.h"
 #include "rbpf_slam/core/filters/resampling.h"
 
@@ -388,12 +389,10 @@ FastSlam2::HeadingStep FastSlam2::headingStep(const std::vector<Observation>& ob
   // particle, so that all are weighed on the same lines.
   double reference_heading = 0.0;
   if (heading_prior_.ready()) {
-    double s = 0.0, c = 0.0;
-    for (size_t i = 0; i < particles_.size(); ++i) {
-      s += weights_[i] * std::sin(particles_[i].pose.z());
-      c += weights_[i] * std::cos(particles_[i].pose.z());
-    }
-    reference_heading = wrapAngle(std::atan2(s, c) + motion.delta.z());
+    std::vector<Pose2> poses;
+    poses.reserve(particles_.size());
+    for (const Particle& p : particles_) poses.push_back(p.pose);
+    reference_heading = wrapAngle(poseMoments(poses, weights_).mean.z() + motion.delta.z());
   }
   // Drift tracking: one correction of the mean heading, the same for every particle.
   if (heading_prior_.tracksDrift()) {
@@ -508,26 +507,13 @@ std::vector<Pose2> FastSlam2::bestPath() const {
 }
 
 PoseEstimate FastSlam2::estimate() const {
-  PoseEstimate e;
-  double sin_sum = 0.0, cos_sum = 0.0;
-  Eigen::Vector2d xy = Eigen::Vector2d::Zero();
   std::vector<Pose2> poses(particles_.size());
   for (size_t i = 0; i < particles_.size(); ++i) {
     poses[i] = pending_motion_.has_motion
                    ? compose(particles_[i].pose, pending_motion_.motion.delta)
                    : particles_[i].pose;
-    xy += weights_[i] * poses[i].head<2>();
-    sin_sum += weights_[i] * std::sin(poses[i].z());
-    cos_sum += weights_[i] * std::cos(poses[i].z());
   }
-  e.mean << xy, std::atan2(sin_sum, cos_sum);
-  e.covariance.setZero();
-  for (size_t i = 0; i < particles_.size(); ++i) {
-    Eigen::Vector3d d = poses[i] - e.mean;
-    d.z() = wrapAngle(d.z());
-    e.covariance += weights_[i] * d * d.transpose();
-  }
-  return e;
+  return poseMoments(poses, weights_);
 }
 
 std::vector<LandmarkEstimate> FastSlam2::landmarks() const {

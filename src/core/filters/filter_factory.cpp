@@ -34,9 +34,7 @@ void validate(const RobustOptions& o) {
 }
 
 void validate(const FilterOptions& o) {
-  bool known = false;
-  for (const auto& v : availableVariants()) known = known || v == o.variant;
-  if (!known) throw std::invalid_argument("variant = '" + o.variant + "' is not implemented");
+  requireOneOf("variant", o.variant, availableVariants());
   if (o.heading_prior.enabled && o.variant != "fastslam2" && o.variant != "hinf_fastslam" &&
       o.variant != "robust_fastslam2") {
     throw std::invalid_argument("heading_prior.enabled = true is not implemented for variant '" +

@@ -71,6 +71,8 @@ void validate(const ExistenceOptions& o) {
   if (o.visible_range_m > 0.0) {
     requireRange("existence.visible_min_range_m (at most visible_range_m)", o.visible_min_range_m,
                  0.0, o.visible_range_m);
+  } else {
+    requireRange("existence.visible_min_range_m", o.visible_min_range_m, 0.0, 1000.0);
   }
   requireRange("existence.visible_fov_rad", o.visible_fov_rad, 0.0, 2.0 * M_PI, true);
   requireRange("existence.max_count", o.max_count, 1, 1000000);

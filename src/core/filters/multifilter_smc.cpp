@@ -8,31 +8,20 @@
 #include "rbpf_slam/core/filters/landmark_map.h"
 #include "rbpf_slam/core/filters/measurement_models.h"
 #include "rbpf_slam/core/filters/observation.h"
+#include "rbpf_slam/core/filters/pose_moments.h"
 #include "rbpf_slam/core/filters/resampling.h"
 
 namespace rbpf_slam {
 namespace core {
 
 PoseEstimate weightedPoseMean(const std::vector<Pose2>& poses, const std::vector<double>& weights) {
-  PoseEstimate e;
-  double sx = 0.0, sy = 0.0, sc = 0.0, ss = 0.0, total = 0.0;
-  for (size_t i = 0; i < poses.size(); ++i) {
-    const double w = weights[i];
-    sx += w * poses[i].x();
-    sy += w * poses[i].y();
-    sc += w * std::cos(poses[i].z());
-    ss += w * std::sin(poses[i].z());
-    total += w;
-  }
-  if (!(total > 0.0)) return e;
-  e.mean << sx / total, sy / total, std::atan2(ss, sc);
-  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
-  for (size_t i = 0; i < poses.size(); ++i) {
-    Eigen::Vector3d d = poses[i] - e.mean;
-    d.z() = wrapAngle(d.z());
-    cov += weights[i] / total * d * d.transpose();
-  }
-  e.covariance = cov + 1e-9 * Eigen::Matrix3d::Identity();
+  double total = 0.0;
+  for (double w : weights) total += w;
+  if (!(total > 0.0)) return PoseEstimate();
+  std::vector<double> normalised(weights.size());
+  for (size_t i = 0; i < weights.size(); ++i) normalised[i] = weights[i] / total;
+  PoseEstimate e = poseMoments(poses, normalised);
+  e.covariance += 1e-9 * Eigen::Matrix3d::Identity();
   return e;
 }
 

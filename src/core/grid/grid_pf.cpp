@@ -4,6 +4,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "rbpf_slam/core/filters/pose_moments.h"
 #include "rbpf_slam/core/filters/resampling.h"
 #include "rbpf_slam/core/require_range.h"
 
@@ -144,21 +145,10 @@ int GridParticleFilter::bestIndex() const {
 }
 
 PoseEstimate GridParticleFilter::estimate() const {
-  PoseEstimate e;
-  double x = 0.0, y = 0.0, c = 0.0, s = 0.0;
-  for (size_t i = 0; i < particles_.size(); ++i) {
-    x += weights_[i] * particles_[i].pose.x();
-    y += weights_[i] * particles_[i].pose.y();
-    c += weights_[i] * std::cos(particles_[i].pose.z());
-    s += weights_[i] * std::sin(particles_[i].pose.z());
-  }
-  e.mean = Pose2(x, y, std::atan2(s, c));
-  e.covariance.setZero();
-  for (size_t i = 0; i < particles_.size(); ++i) {
-    Eigen::Vector3d d = particles_[i].pose - e.mean;
-    d.z() = wrapAngle(d.z());
-    e.covariance += weights_[i] * d * d.transpose();
-  }
+  std::vector<Pose2> poses;
+  poses.reserve(particles_.size());
+  for (const auto& p : particles_) poses.push_back(p.pose);
+  PoseEstimate e = poseMoments(poses, weights_);
   e.covariance.diagonal().array() += 1e-9;
   return e;
 }

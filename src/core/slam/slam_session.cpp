@@ -10,19 +10,13 @@ namespace rbpf_slam {
 namespace core {
 
 void validate(const SessionOptions& o) {
-  const auto check = [](const char* name, double value) {
-    requireRange(name, value, 0.0, std::numeric_limits<double>::infinity(), false, true);
-  };
-  check("linear_update", o.linear_update_m);
-  check("angular_update", o.angular_update_rad);
-  check("max_time_gap", o.max_time_gap_s);
-  check("max_odometry_jump", o.max_odometry_jump_m);
-  if (o.gap_action != "inflate" && o.gap_action != "reset") {
-    throw std::invalid_argument("gap_action = '" + o.gap_action +
-                                "' is not one of: inflate, reset");
-  }
+  requireRange("linear_update", o.linear_update_m, 0.0, 100.0);
+  requireRange("angular_update", o.angular_update_rad, 0.0, 10.0);
+  requireRange("max_time_gap", o.max_time_gap_s, 0.0, 1e6);
+  requireRange("max_odometry_jump", o.max_odometry_jump_m, 0.0, 1e6);
+  requireOneOf("gap_action", o.gap_action, {"inflate", "reset"});
   requireRange("gap_noise_inflation", o.gap_noise_inflation, 1.0, 1000.0);
-  check("reset_on_time_jump_back", o.reset_on_time_jump_back_s);
+  requireRange("reset_on_time_jump_back", o.reset_on_time_jump_back_s, 0.0, 1e6);
   requireRange("reset_after_frames_back", o.reset_after_frames_back, 1, 1000);
 }
 
