@@ -11,6 +11,7 @@
 #include <memory>
 #include <vector>
 
+#include "bench_support.h"
 #include "rbpf_slam/core/filters/fastslam2.h"
 #include "rbpf_slam/core/filters/measurement_models.h"
 #include "rbpf_slam/core/filters/resampling.h"
@@ -26,38 +27,16 @@ constexpr double kGridSpacingM = 2.0;   // landmarks far apart compared with the
 /// Options shared by the map builder and the benchmarked filters: tight noise, so that the
 /// grid landmarks stay distinct even 100 m away.
 core::FilterOptions benchOptions(int particles) {
-  core::FilterOptions options;
-  options.particles = particles;
-  options.seed = 1;
-  options.use_lines = false;
-  options.measurement.use_feature_covariance = false;
-  options.measurement.sigma_range_m = 0.02;
-  options.measurement.sigma_bearing_rad = 0.002;
-  options.motion.min_sigma_xy_m = 1e-4;
-  options.motion.min_sigma_theta_rad = 1e-5;
-  return options;
+  return rbpf_slam::bench::pointLandmarkOptions(particles, 1e-4, 1e-5);
 }
 
-/// FastSlam2 with every particle's map replaceable by a prebuilt one (shared, path-copied on
-/// write, exactly as after resampling).
-class BenchFastSlam2 : public core::FastSlam2 {
- public:
-  using core::FastSlam2::FastSlam2;
-  void shareMap(const std::shared_ptr<core::LandmarkMap>& map) {
-    for (core::Particle& p : particles_) p.map = map;
-  }
-};
+using BenchFastSlam2 = rbpf_slam::bench::PrebuiltMapFastSlam2;
 
 /// Grid positions around the origin, nearest first.
 std::vector<Eigen::Vector2d> gridPositions(int count) {
   const int side = static_cast<int>(std::ceil(std::sqrt(static_cast<double>(count))));
-  std::vector<Eigen::Vector2d> positions;
-  for (int i = 0; i < side; ++i) {
-    for (int j = 0; j < side; ++j) {
-      positions.emplace_back((i - 0.5 * (side - 1)) * kGridSpacingM + 0.3,
-                             (j - 0.5 * (side - 1)) * kGridSpacingM + 0.7);
-    }
-  }
+  std::vector<Eigen::Vector2d> positions =
+      rbpf_slam::bench::landmarkGrid(side * side, kGridSpacingM);
   std::sort(positions.begin(), positions.end(),
             [](const Eigen::Vector2d& a, const Eigen::Vector2d& b) { return a.norm() < b.norm(); });
   positions.resize(count);

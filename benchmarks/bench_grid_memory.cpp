@@ -9,11 +9,11 @@
 
 #include <chrono>
 #include <cmath>
-#include <fstream>
 #include <memory>
 #include <string>
 #include <vector>
 
+#include "bench_support.h"
 #include "rbpf_slam/core/grid/grid_pf.h"
 
 namespace {
@@ -25,15 +25,7 @@ constexpr double kHalfSideM = 9.9;   // walls at +-9.9 m: inside the 20 m grid c
 constexpr double kPostRadiusM = 0.3;
 constexpr double kMaxRangeM = 10.0;
 
-/// Resident set size ("VmRSS") or its peak ("VmHWM") of this process, MB.
-double residentMb(const std::string& field) {
-  std::ifstream status("/proc/self/status");
-  std::string line;
-  while (std::getline(status, line)) {
-    if (line.rfind(field + ":", 0) == 0) return std::stod(line.substr(field.size() + 1)) / 1024.0;
-  }
-  return NAN;
-}
+using rbpf_slam::bench::residentMb;
 
 /// Distance along a ray from p at angle a to the room's walls or a post (inf past max range).
 double castRay(const Eigen::Vector2d& p, double a) {

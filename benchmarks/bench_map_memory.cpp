@@ -10,11 +10,11 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <fstream>
 #include <memory>
 #include <string>
 #include <vector>
 
+#include "bench_support.h"
 #include "rbpf_slam/core/filters/fastslam2.h"
 #include "rbpf_slam/core/filters/measurement_models.h"
 
@@ -26,48 +26,7 @@ constexpr double kGridSpacingM = 2.0;
 constexpr int kObserved = 10;
 constexpr int kUpdates = 500;
 
-/// Resident set size ("VmRSS") or its peak ("VmHWM") of this process, MB.
-double residentMb(const std::string& field) {
-  std::ifstream status("/proc/self/status");
-  std::string line;
-  while (std::getline(status, line)) {
-    if (line.rfind(field + ":", 0) == 0) return std::stod(line.substr(field.size() + 1)) / 1024.0;
-  }
-  return NAN;
-}
-
-core::FilterOptions options(int particles) {
-  core::FilterOptions o;
-  o.particles = particles;
-  o.seed = 1;
-  o.use_lines = false;
-  o.measurement.use_feature_covariance = false;
-  o.measurement.sigma_range_m = 0.02;
-  o.measurement.sigma_bearing_rad = 0.002;
-  o.motion.min_sigma_xy_m = 1e-3;
-  o.motion.min_sigma_theta_rad = 1e-4;
-  return o;
-}
-
-class SharedMapFilter : public core::FastSlam2 {
- public:
-  using core::FastSlam2::FastSlam2;
-  void shareMap(const std::shared_ptr<core::LandmarkMap>& map) {
-    for (core::Particle& p : particles_) p.map = map;
-  }
-};
-
-std::vector<Eigen::Vector2d> grid(int count) {
-  const int side = static_cast<int>(std::ceil(std::sqrt(static_cast<double>(count))));
-  std::vector<Eigen::Vector2d> positions;
-  for (int i = 0; i < side && static_cast<int>(positions.size()) < count; ++i) {
-    for (int j = 0; j < side && static_cast<int>(positions.size()) < count; ++j) {
-      positions.emplace_back((i - 0.5 * (side - 1)) * kGridSpacingM + 0.3,
-                             (j - 0.5 * (side - 1)) * kGridSpacingM + 0.7);
-    }
-  }
-  return positions;
-}
+using rbpf_slam::bench::residentMb;
 
 void BM_MapMemory(benchmark::State& state) {
   const int landmarks = static_cast<int>(state.range(0));
@@ -75,7 +34,8 @@ void BM_MapMemory(benchmark::State& state) {
   for (auto _ : state) {
     state.PauseTiming();
     const double rss_start = residentMb("VmRSS");
-    const std::vector<Eigen::Vector2d> positions = grid(landmarks);
+    const std::vector<Eigen::Vector2d> positions =
+        rbpf_slam::bench::landmarkGrid(landmarks, kGridSpacingM);
     auto map = std::make_shared<core::LandmarkMap>();
     for (size_t i = 0; i < positions.size(); ++i) {
       core::Landmark lm;
@@ -84,7 +44,8 @@ void BM_MapMemory(benchmark::State& state) {
       lm.covariance = Eigen::Vector2d(1e-3, 1e-3).asDiagonal();
       map->add(lm);
     }
-    SharedMapFilter filter(options(particles));
+    rbpf_slam::bench::PrebuiltMapFastSlam2 filter(
+        rbpf_slam::bench::pointLandmarkOptions(particles, 1e-3, 1e-4));
     filter.shareMap(map);
     map.reset();
     const double rss_map = residentMb("VmRSS");
