@@ -299,6 +299,11 @@ void readRos(YamlSection& top, RosOptions* o) {
   top.read("map_save_prefix", &o->map_save_prefix);
   top.read("map_update_period", &o->map_update_period, 0.0, 3600.0);
   top.read("map_resolution", &o->map_resolution, 1e-3, 10.0);
+  // tf2 frame names carry no leading '/' (ROS 1 configs often still write one).
+  for (std::string* frame :
+       {&o->map_frame, &o->odom_frame, &o->base_frame, &o->sonar_frame_prefix}) {
+    if (!frame->empty() && frame->front() == '/') frame->erase(0, 1);
+  }
   for (const std::string* frame : {&o->map_frame, &o->odom_frame, &o->base_frame}) {
     if (frame->empty()) throw ConfigError(top.source() + ": frame names must not be empty");
   }

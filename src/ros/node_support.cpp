@@ -17,8 +17,8 @@ void ThrottledWarnings::warn(const std::string& cause, const std::string& messag
 
 bool frameInTf(const tf2_ros::Buffer& tf, const std::string& base_frame, const std::string& frame,
                std::string* error) {
-  if (frame.empty() || !tf._frameExists(base_frame)) return true;
-  return tf.canTransform(base_frame, frame, ros::Time(0), error);
+  if (frame.empty() || !tf._frameExists(stripSlash(base_frame))) return true;
+  return tf.canTransform(stripSlash(base_frame), stripSlash(frame), ros::Time(0), error);
 }
 
 }  // namespace rosbridge

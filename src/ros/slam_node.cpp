@@ -291,8 +291,10 @@ bool SlamNode::lookupPoses(const std_msgs::Header& header, core::Pose2* odom_pos
         toPose2(tf_buffer_.lookupTransform(o.odom_frame, o.base_frame, header.stamp).transform);
     from = &o.base_frame;
     to = &header.frame_id;
+    // tf2 refuses frame names with a leading '/' (old drivers and bags still write them).
     *frame_in_base =
-        toPose2(tf_buffer_.lookupTransform(o.base_frame, header.frame_id, header.stamp).transform);
+        toPose2(tf_buffer_.lookupTransform(o.base_frame, stripSlash(header.frame_id), header.stamp)
+                    .transform);
   } catch (const tf2::TransformException& e) {
     diagnostics_.recordDrop("tf lookup failed");
     warnThrottled("tf " + *from + " -> " + *to, "No transform " + *from + " -> " + *to + " at " +
@@ -477,7 +479,7 @@ bool SlamNode::loadMapService(MapFile::Request& request, MapFile::Response& resp
 }
 
 void SlamNode::initialPoseCallback(const geometry_msgs::PoseWithCovarianceStamped::ConstPtr& msg) {
-  if (!msg->header.frame_id.empty() && msg->header.frame_id != config_.ros.map_frame) {
+  if (!msg->header.frame_id.empty() && stripSlash(msg->header.frame_id) != config_.ros.map_frame) {
     warnThrottled("initialpose frame", "Ignoring initialpose in frame '" + msg->header.frame_id +
                                            "': expected the map frame '" +
                                            config_.ros.map_frame + "'");

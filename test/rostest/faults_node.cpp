@@ -290,6 +290,23 @@ TEST_F(FaultsTest, E_UnknownAndEmptyFramesAreDropped) {
       << "the scans in frame no_such_laser";
 }
 
+TEST_F(FaultsTest, E2_FramesWithALeadingSlashAreUsed) {
+  // Old drivers and bags write "/laser"; tf2 refuses such names, so the node must strip it.
+  const long unknown_before = std::max(0L, observer_->diagnostic("dropped: frame not in tf"));
+  const long lookups_before = std::max(0L, observer_->diagnostic("dropped: tf lookup failed"));
+  for (int i = 0; i < 4; ++i) {
+    robot_->tick();
+    sensor_msgs::LaserScan msg = robot_->scan();
+    msg.header.frame_id = "/laser";
+    robot_->publish(msg);
+  }
+  EXPECT_TRUE(caughtUp()) << "scans in frame /laser were not used (last pose at "
+                          << observer_->lastPoseStamp() << ", now " << robot_->time() << ")";
+  settle();
+  EXPECT_EQ(std::max(0L, observer_->diagnostic("dropped: frame not in tf")), unknown_before);
+  EXPECT_EQ(std::max(0L, observer_->diagnostic("dropped: tf lookup failed")), lookups_before);
+}
+
 TEST_F(FaultsTest, F_MissingOdometryTfIsWaitedForThenDropped) {
   const long map_to_odom_before = observer_->mapToOdom();
   const double pose_before = observer_->lastPoseStamp();

@@ -64,6 +64,19 @@ TEST(SlamConfig, ErrorsNameTheKeyValueAndRange) {
             std::string::npos);
 }
 
+TEST(SlamConfig, FrameNamesLoseALeadingSlash) {
+  // tf2 refuses "/odom"; ROS 1 launch files and configs often still write it.
+  const SlamConfig c =
+      parseSlamConfig(YAML::Load("{map_frame: /map, odom_frame: /odom, base_frame: base_link, "
+                                 "sonar_frame_prefix: /sonar_}"),
+                      "test.yaml");
+  EXPECT_EQ(c.ros.map_frame, "map");
+  EXPECT_EQ(c.ros.odom_frame, "odom");
+  EXPECT_EQ(c.ros.base_frame, "base_link");
+  EXPECT_EQ(c.ros.sonar_frame_prefix, "sonar_");
+  EXPECT_NE(errorOf("odom_frame: /").find("frame names must not be empty"), std::string::npos);
+}
+
 TEST(SlamConfig, SonarConfigSelectsTheSonarFrontEnd) {
   const SlamConfig c =
       loadSlamConfig(std::string(RBPF_SOURCE_DIR) + "/config/sonar_fastslam2.yaml");
