@@ -144,8 +144,11 @@ class CorruptedStretch : public ::testing::Test {
     return o;
   }
 
-  static double run(SlamFilter* filter) {
-    const Eigen::Vector2d a(8.0, 0.5), b(9.0, -0.5);
+  /// known_ids: the sensor names its landmarks (a = 0, b = 1, c = 2). only_c: a third landmark
+  /// c is first seen with the moved a (steps 22-23, after S_20 was stored) and is the only one
+  /// seen at steps 29-31, instead of b.
+  static double run(SlamFilter* filter, bool known_ids = false, bool only_c = false) {
+    const Eigen::Vector2d a(8.0, 0.5), b(9.0, -0.5), c(9.5, 1.5);
     const Eigen::Vector2d moved_a = a + Eigen::Vector2d(0.35, 0.0);
     Pose2 truth = Pose2::Zero();
     for (int step = 1; step <= 31; ++step) {
@@ -155,8 +158,9 @@ class CorruptedStretch : public ::testing::Test {
       truth = compose(truth, motion.delta);
       filter->predict(motion);
       FeatureSet features;
-      auto see = [&](const Eigen::Vector2d& landmark) {
+      auto see = [&](const Eigen::Vector2d& landmark, int id) {
         PointFeature f;
+        if (known_ids) f.id = id;
         const Prediction p = predictPoint(truth, landmark);
         f.range = p.z.x();
         f.bearing = p.z.y();
@@ -164,12 +168,17 @@ class CorruptedStretch : public ::testing::Test {
         features.points.push_back(f);
       };
       if (step <= 10) {
-        see(a);
-        see(b);
+        see(a, 0);
+        see(b, 1);
       } else if (step >= 21 && step <= 25) {
-        see(moved_a);
+        see(moved_a, 0);
+        if (only_c && step >= 22 && step <= 23) see(c, 2);
       } else if (step >= 29) {
-        see(b);
+        if (only_c) {
+          see(c, 2);
+        } else {
+          see(b, 1);
+        }
       }
       filter->update(features);
     }
@@ -194,6 +203,22 @@ TEST_F(CorruptedStretch, ParticlesComeFromTheSetBeforeTheCorruption) {
   EXPECT_GT(robust.robustStats().replayed_steps, 0);
   EXPECT_GT(plain_error, 0.08) << "the scenario must corrupt FastSLAM 2.0";
   EXPECT_LT(robust_error, 0.5 * plain_error) << robust_error << " vs " << plain_error;
+}
+
+// Whether an observation is evidence every ancestor set can weigh (a landmark mapped before the
+// oldest set) must not depend on the sensor naming its landmarks. At steps 29-31 only c is
+// seen, first mapped at step 22, after the oldest set: no old-landmark evidence, so those events
+// are plain FastSLAM 2.0 steps (min_old_observations 1), with known ids as without them.
+TEST_F(CorruptedStretch, KnownIdsDoNotMakeNewerLandmarksOldEvidence) {
+  RobustFastSlam2 unnamed(options("robust_fastslam2"));
+  run(&unnamed, false, true);
+  RobustFastSlam2 named(options("robust_fastslam2"));
+  run(&named, true, true);
+  EXPECT_GE(unnamed.robustStats().fallbacks, 1)
+      << "the scenario must reach the decision: events " << unnamed.robustStats().tracker_events
+      << ", robust steps " << unnamed.stats().robust_steps;
+  EXPECT_EQ(named.stats().robust_steps, unnamed.stats().robust_steps);
+  EXPECT_EQ(named.robustStats().fallbacks, unnamed.robustStats().fallbacks);
 }
 
 // A particle kept from an older set skipped the steps since that set: its path gets them from

@@ -13,10 +13,12 @@ namespace rbpf_slam {
 namespace core {
 namespace {
 
-/// An observation of a landmark older than the oldest ancestor set (or with a known id): one
-/// every set's particles can hold, so it weighs candidates of different sets fairly.
-bool knownToEverySet(const Observation& o, const Landmark& landmark, int old_id_limit) {
-  return o.known_id >= 0 || landmark.id < old_id_limit;
+/// A landmark mapped no later than the oldest ancestor set's step (or loaded with a prior
+/// map): one every set's particles can hold, so its observations weigh candidates of
+/// different sets fairly. Decided by creation step, not id: with known ids (landmark sensors
+/// that identify their beacons) the ids say nothing about when a landmark was first mapped.
+bool knownToEverySet(const Landmark& landmark, int oldest_set_step) {
+  return landmark.created_step <= oldest_set_step;
 }
 
 constexpr double kLog2Pi = 1.8378770664093453;
@@ -82,7 +84,6 @@ UpdateStats RobustFastSlam2::update(const FeatureSet& features) {
   latest.step = step - 1;
   latest.particles = particles_;
   latest.weights = weights_;
-  latest.next_landmark_id = next_landmark_id_;
   std::vector<const AncestorSet*> ancestors{&latest};
   for (const AncestorSet* set : memory_.usable(step)) {
     if (static_cast<int>(ancestors.size()) < options_.robust.ancestor_sets)
@@ -125,7 +126,7 @@ UpdateStats RobustFastSlam2::robustUpdate(const std::vector<Observation>& observ
   pending_motion_ = PendingMotion();
   const int t = step_;
   const int count = options_.particles;
-  const int old_id_limit = ancestors.back()->next_landmark_id;
+  const int oldest_set_step = ancestors.back()->step;
   std::vector<Particle> candidates;
   std::vector<int> candidate_set;
   std::vector<Pose2> candidate_start;
@@ -143,7 +144,7 @@ UpdateStats RobustFastSlam2::robustUpdate(const std::vector<Observation>& observ
       candidate_start.push_back(candidate.pose);
       candidate_counts.emplace_back();
       candidate.log_weight = updateCandidate(&candidate, mean, cov, observations, heading.lines,
-                                             old_id_limit, &candidate_counts.back());
+                                             oldest_set_step, &candidate_counts.back());
       candidates.push_back(std::move(candidate));
       candidate_set.push_back(static_cast<int>(k));
     }
@@ -200,7 +201,7 @@ double RobustFastSlam2::updateCandidate(Particle* particle, const Pose2& predict
                                         const Eigen::Matrix3d& predicted_cov,
                                         const std::vector<Observation>& observations,
                                         const HeadingPrior::LineSelection& heading_lines,
-                                        int old_id_limit, ParticleUpdate* counts) {
+                                        int oldest_set_step, ParticleUpdate* counts) {
   const AssociationOptions& a = options_.association;
   Pose2 mean = predicted_mean;
   Eigen::Matrix3d cov = predicted_cov;
@@ -227,7 +228,7 @@ double RobustFastSlam2::updateCandidate(Particle* particle, const Pose2& predict
     if (!(det > 0.0) || !std::isfinite(det)) continue;
     const Eigen::Matrix2d s_inv = s.inverse();
     const Eigen::Vector2d v = innovation(o.z, m.prediction.z);
-    const bool old = knownToEverySet(o, map[m.index], old_id_limit);
+    const bool old = knownToEverySet(map[m.index], oldest_set_step);
     log_likelihood += old ? -0.5 * v.dot(s_inv * v) - 0.5 * std::log(det) - kLog2Pi : log_new;
     const Eigen::Matrix<double, 3, 2> gain = cov * h.transpose() * s_inv;
     mean += gain * v;
@@ -256,7 +257,7 @@ int RobustFastSlam2::oldLandmarkObservations(const std::vector<Observation>& obs
                                              const std::vector<const AncestorSet*>& ancestors,
                                              int step) const {
   if (observations.empty()) return 0;
-  const int old_id_limit = ancestors.back()->next_landmark_id;
+  const int oldest_set_step = ancestors.back()->step;
   int most = 0;
   for (const AncestorSet* set : ancestors) {
     if (set->particles.empty()) continue;
@@ -277,7 +278,7 @@ int RobustFastSlam2::oldLandmarkObservations(const std::vector<Observation>& obs
     for (const Observation& o : observations) {
       const Match m = associate(map, mean, cov, o);
       if (m.index < 0 || m.distance2 >= options_.association.gate_chi2) continue;
-      if (knownToEverySet(o, map[m.index], old_id_limit)) ++count;
+      if (knownToEverySet(map[m.index], oldest_set_step)) ++count;
     }
     most = std::max(most, count);
   }

@@ -19,7 +19,6 @@ struct AncestorSet {
   int step = 0;
   std::vector<Particle> particles;
   std::vector<double> weights;  // normalised
-  int next_landmark_id = 0;     // landmark ids below this existed when the set was stored
 };
 
 /// What the filter received at one step.

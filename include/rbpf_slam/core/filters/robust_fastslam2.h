@@ -51,11 +51,11 @@ class RobustFastSlam2 : public FastSlam2 {
                            const std::vector<const AncestorSet*>& ancestors,
                            const MotionInput& motion);
   /// The FastSLAM 2.0 step of one candidate from its propagated pose Gaussian; returns its
-  /// weight, counting only landmarks older than old_id_limit (those every ancestor can know),
+  /// weight, counting only landmarks mapped by oldest_set_step (those every ancestor can know),
   /// so that candidates from older sets are not penalised for lacking newer landmarks.
   double updateCandidate(Particle* particle, const Pose2& mean, const Eigen::Matrix3d& cov,
                          const std::vector<Observation>& observations,
-                         const HeadingPrior::LineSelection& heading_lines, int old_id_limit,
+                         const HeadingPrior::LineSelection& heading_lines, int oldest_set_step,
                          ParticleUpdate* counts);
   /// The most observations at `step` that the most probable particle of one ancestor set, moved
   /// over the skipped steps, associates with landmarks older than the oldest set (known to every
