@@ -256,6 +256,40 @@ TEST(FastSlam2, NonFiniteFeaturesAreRejectedNotFused) {
   EXPECT_TRUE(filter.estimate().mean.allFinite());
 }
 
+// The step's association counts describe its most probable particle, not whichever particle
+// sits first after resampling reordered them.
+class TwoMapsFastSlam2 : public FastSlam2 {
+ public:
+  using FastSlam2::FastSlam2;
+  /// Particle 1 knows a point landmark at `at`; particle 0 knows nothing.
+  void giveSecondParticle(const Eigen::Vector2d& at) {
+    auto map = std::make_shared<LandmarkMap>();
+    Landmark lm;
+    lm.id = 0;
+    lm.mean = at;
+    lm.covariance = 1e-4 * Eigen::Matrix2d::Identity();
+    map->add(lm);
+    particles_[1].map = map;
+  }
+};
+
+TEST(FastSlam2, UpdateStatsDescribeTheMostProbableParticle) {
+  FilterOptions options;
+  options.particles = 2;
+  options.resample_threshold = 1.0;  // resample at every step
+  TwoMapsFastSlam2 filter(options);
+  filter.reset(Pose2::Zero());
+  filter.giveSecondParticle(Eigen::Vector2d(5.0, 0.0));
+  FeatureSet set;
+  PointFeature seen;  // exactly where particle 1 has its landmark
+  seen.range = 5.0;
+  seen.bearing = 0.0;
+  set.points.push_back(seen);
+  const UpdateStats stats = filter.update(set);
+  ASSERT_TRUE(stats.resampled);
+  EXPECT_EQ(stats.associated, 1) << "particle 1 matched its landmark and outweighs particle 0";
+  EXPECT_EQ(stats.new_landmarks, 0);
+}
 
 // Covariances that are zero, indefinite or asymmetric fall back to the configured noise
 // floors; a line given with rho < 0 is the same line as (-rho, theta + pi); thousands of

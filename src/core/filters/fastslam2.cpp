@@ -443,13 +443,20 @@ UpdateStats FastSlam2::update(const FeatureSet& features) {
   stats_.relocalizations += stats.relocalized;
   for (auto& p : particles_) p.path = std::make_shared<PathNode>(p.pose, std::move(p.path));
   stats_.fallbacks += stats.fallbacks;
+  // Report the association of the most probable particle of this step, found before
+  // resampling reorders the particles (results follow the order before it).
+  int most_probable = -1;
+  for (size_t i = 0; i < particles_.size(); ++i) {
+    if (most_probable < 0 || particles_[i].log_weight > particles_[most_probable].log_weight) {
+      most_probable = static_cast<int>(i);
+    }
+  }
   weighAndResample(&stats);
-  // Report the association of the particle that now carries the most weight.
   const int best = bestParticle();
   if (!heading_prior_.ready()) heading_prior_.learn(observations, estimate().mean.z());
-  if (best >= 0 && best < static_cast<int>(results.size())) {
-    stats.associated = results[best].associated;
-    stats.new_landmarks = results[best].created;
+  if (most_probable >= 0 && most_probable < static_cast<int>(results.size())) {
+    stats.associated = results[most_probable].associated;
+    stats.new_landmarks = results[most_probable].created;
   }
   ++stats_.updates;
   stats_.last_neff = stats.neff;
