@@ -209,6 +209,14 @@ TEST(LaserLineExtractorTest, InvalidBeamsAreNeverFitted) {
   EXPECT_GT(LaserLineExtractor(options).extract(scan).lines.size(), 2u);
 }
 
+TEST(LaserLineExtractorTest, ReadingsAtRangeMaxAreNoReturn) {
+  // Drivers that do not send +inf for "no return" (REP 117) send range_max: an arc there is
+  // not a wall (the scan matcher drops those beams too).
+  RangeScan scan = roomScan();
+  for (size_t i = 100; i < 140; ++i) scan.ranges[i] = static_cast<float>(scan.range_max);
+  expectRoomLines(LaserLineExtractor(LaserExtractorOptions()).extract(scan), 0.01, 0.5 * kDeg);
+}
+
 TEST(LaserLineExtractorTest, NonPositiveRangeMaxMeansUnbounded) {
   RangeScan scan = roomScan();
   scan.range_max = 0.0;

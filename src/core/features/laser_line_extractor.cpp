@@ -102,7 +102,9 @@ class Extraction {
         c = c_next;
       }
       const double r = scan_.ranges[i];
-      if (!std::isfinite(r) || r <= 0.0 || r < lower || r > upper) continue;
+      // A reading at range_max is the "no return" of drivers that do not send +inf
+      // (REP 117); the scan matcher drops it likewise.
+      if (!std::isfinite(r) || r <= 0.0 || r < lower || r >= upper) continue;
       pts_.valid[i] = 1;
       pts_.range[i] = r;
       pts_.point[i] = Eigen::Vector2d(r * c, r * s);
