@@ -79,37 +79,97 @@ struct OdometryArrival {
   double stamp = 0.0;  // the transform's stamp, s
 };
 
-/// Loads every transform of the bag; repeated stamps of a child frame (common in converted
-/// logs) are skipped here instead of letting tf2 warn for each. Returns how many were skipped.
-/// The stamps of odom_frame -> base_frame (the odometry) go to odometry, in bag order, each
-/// with the time the bag received it.
-long loadTransforms(const rosbag::Bag& bag, const std::string& odom_frame,
-                    const std::string& base_frame, tf2::BufferCore* buffer,
-                    std::vector<OdometryArrival>* odometry) {
+/// The bag's tf from one bag time on: a bag holding two logs (or a restarted driver) has one
+/// per run, since one tf buffer cannot hold two runs whose stamps overlap.
+struct TfSegment {
+  ros::Time starts;  // bag time of the message that started it
+  std::unique_ptr<tf2::BufferCore> buffer;
+};
+
+const std::vector<std::string> kTfTopics{"/tf", "/tf_static", "tf", "tf_static"};
+
+/// The stamps of the odometry (odom_frame -> base_frame on tf), in bag order, each with the
+/// time the bag received it.
+std::vector<OdometryArrival> readOdometry(const rosbag::Bag& bag, const std::string& odom_frame,
+                                          const std::string& base_frame) {
+  std::vector<OdometryArrival> odometry;
+  rosbag::View view(bag, rosbag::TopicQuery(kTfTopics));
+  for (const rosbag::MessageInstance& m : view) {
+    if (topicIs(m.getTopic(), "tf_static")) continue;
+    const auto msg = m.instantiate<tf2_msgs::TFMessage>();
+    if (!msg) continue;
+    for (const auto& t : msg->transforms) {
+      if (stripSlash(t.header.frame_id) == odom_frame &&
+          stripSlash(t.child_frame_id) == base_frame) {
+        odometry.push_back({m.getTime(), t.header.stamp.toSec()});
+      }
+    }
+  }
+  return odometry;
+}
+
+/// Bag times where the odometry starts a new run (a second log in the bag, a restarted
+/// driver): `in_a_row` odometry stamps in a row more than jump_back_s behind the newest one
+/// before them. One stale stamp is no new run. None when jump_back_s is 0.
+std::vector<ros::Time> runStarts(const std::vector<OdometryArrival>& odometry, double jump_back_s,
+                                 int in_a_row) {
+  std::vector<ros::Time> starts;
+  if (!(jump_back_s > 0.0)) return starts;
+  double newest = -std::numeric_limits<double>::infinity();
+  int back = 0;
+  ros::Time first_back;
+  for (const OdometryArrival& a : odometry) {
+    if (a.stamp < newest - jump_back_s) {
+      if (back++ == 0) first_back = a.received;
+      if (back >= std::max(1, in_a_row)) {
+        starts.push_back(first_back);
+        newest = a.stamp;
+        back = 0;
+      }
+    } else {
+      back = 0;
+      newest = std::max(newest, a.stamp);
+    }
+  }
+  return starts;
+}
+
+/// Loads every transform of the bag into one tf buffer per run (run_starts: bag times where a
+/// new one begins, with the static transforms seen so far), since one buffer cannot hold two
+/// runs whose stamps overlap. Repeated stamps of a child frame (common in converted logs) are
+/// skipped here instead of letting tf2 warn for each. Returns how many were skipped.
+long loadTransforms(const rosbag::Bag& bag, const std::vector<ros::Time>& run_starts,
+                    const ros::Duration& cache, std::vector<TfSegment>* segments) {
   std::map<std::string, ros::Time> last_stamp;
+  std::vector<geometry_msgs::TransformStamped> statics;
+  segments->clear();
+  segments->push_back({ros::Time(0), std::make_unique<tf2::BufferCore>(cache)});
+  size_t next_start = 0;
   long skipped = 0;
-  rosbag::View view(bag, rosbag::TopicQuery(std::vector<std::string>{"/tf", "/tf_static", "tf",
-                                                                     "tf_static"}));
+  rosbag::View view(bag, rosbag::TopicQuery(kTfTopics));
   for (const rosbag::MessageInstance& m : view) {
     const auto msg = m.instantiate<tf2_msgs::TFMessage>();
     if (!msg) continue;
+    while (next_start < run_starts.size() && m.getTime() >= run_starts[next_start]) {
+      segments->push_back({run_starts[next_start++], std::make_unique<tf2::BufferCore>(cache)});
+      for (const auto& t : statics) segments->back().buffer->setTransform(t, "bag", true);
+      last_stamp.clear();
+    }
+    tf2::BufferCore* buffer = segments->back().buffer.get();
     const bool is_static = topicIs(m.getTopic(), "tf_static");
     for (const auto& t : msg->transforms) {
-      const std::string key = t.header.frame_id + ">" + t.child_frame_id;
-      const bool is_odometry = !is_static && stripSlash(t.header.frame_id) == odom_frame &&
-                               stripSlash(t.child_frame_id) == base_frame;
       if (!is_static) {
+        const std::string key = t.header.frame_id + ">" + t.child_frame_id;
         auto it = last_stamp.find(key);
         if (it != last_stamp.end() && t.header.stamp <= it->second) {
           ++skipped;  // tf2 has it (or a newer one) already; a node still sees it arrive
-          if (is_odometry) odometry->push_back({m.getTime(), t.header.stamp.toSec()});
           continue;
         }
         last_stamp[key] = t.header.stamp;
       }
       try {
         buffer->setTransform(t, "bag", is_static);
-        if (is_odometry) odometry->push_back({m.getTime(), t.header.stamp.toSec()});
+        if (is_static) statics.push_back(t);
       } catch (const std::exception&) {
         // malformed transform (NaN, empty frame): tf2 rejects it; nothing to keep
         ++skipped;
@@ -229,11 +289,18 @@ OfflineSummary OfflineRunner::run() {
   const ros::Time bag_begin = full.getBeginTime(), bag_end = full.getEndTime();
   summary.bag_duration_s = (bag_end - bag_begin).toSec();
   // The whole bag's tf fits in memory for the bags this runner is meant for (hours of 2D data).
-  tf2::BufferCore tf(ros::Duration(std::max(summary.bag_duration_s + 60.0, 10.0)));
   const io::RosOptions& ros_options = config_.ros;
   std::vector<OdometryArrival> odometry;
-  summary.skipped_transforms = loadTransforms(bag, stripSlash(ros_options.odom_frame),
-                                              stripSlash(ros_options.base_frame), &tf, &odometry);
+  std::vector<TfSegment> tf_segments;
+  odometry =
+      readOdometry(bag, stripSlash(ros_options.odom_frame), stripSlash(ros_options.base_frame));
+  summary.skipped_transforms =
+      loadTransforms(bag,
+                     runStarts(odometry, config_.session.reset_on_time_jump_back_s,
+                               config_.session.reset_after_frames_back),
+                     ros::Duration(std::max(summary.bag_duration_s + 60.0, 10.0)), &tf_segments);
+  summary.tf_segments = static_cast<long>(tf_segments.size());
+  std::size_t segment = 0;        // the tf segment of the current message
   std::size_t next_odometry = 0;  // the next odometry transform to tell the session of
   double last_odometry_fed = -std::numeric_limits<double>::infinity();    // stamp of the last fed
   double newest_odometry_fed = -std::numeric_limits<double>::infinity();  // ... and the newest
@@ -290,6 +357,10 @@ OfflineSummary OfflineRunner::run() {
       ++summary.dropped_bad_message;
       continue;
     }
+    while (segment + 1 < tf_segments.size() && m.getTime() >= tf_segments[segment + 1].starts) {
+      ++segment;
+    }
+    const tf2::BufferCore& tf = *tf_segments[segment].buffer;
     core::Pose2 odom_pose, sensor_in_base;
     try {
       odom_pose = toPose2(tf.lookupTransform(ros_options.odom_frame, ros_options.base_frame,
@@ -358,6 +429,12 @@ OfflineSummary OfflineRunner::run() {
     const double ms =
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     switch (result) {
+      case core::FrameResult::kReset:
+        if (options_.verbose) {
+          std::fprintf(stderr, "t=%.2f: the session started a new map (stamps back or a gap)\n",
+                       stamp.toSec());
+        }
+        [[fallthrough]];
       case core::FrameResult::kUpdated:
       case core::FrameResult::kFirstFrame:
         update_ms.push_back(ms);
@@ -484,6 +561,7 @@ OfflineSummary OfflineRunner::writeOutputs(const OfflineSummary& in) const {
        << "  \"dropped_no_tf\": " << summary.dropped_no_tf << ",\n"
        << "  \"dropped_bad_message\": " << summary.dropped_bad_message << ",\n"
        << "  \"skipped_transforms\": " << summary.skipped_transforms << ",\n"
+       << "  \"tf_segments\": " << summary.tf_segments << ",\n"
        << "  \"landmarks\": " << summary.landmarks << ",\n"
        << "  \"particles\": " << summary.particles << ",\n"
        << "  \"fallbacks\": " << summary.fallbacks << ",\n"

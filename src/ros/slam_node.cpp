@@ -43,7 +43,7 @@ const char* describe(core::FrameResult result) {
     case core::FrameResult::kRejectedPose:
       return "rejected (odometry pose not finite)";
     case core::FrameResult::kReset:
-      return "reset";
+      return "first frame of a new map (the session reset)";
   }
   return "unknown";
 }
@@ -312,7 +312,16 @@ bool SlamNode::lookupPoses(const std_msgs::Header& header, core::Pose2* odom_pos
 
 void SlamNode::handleResult(core::FrameResult result, const ros::Time& stamp, double update_ms) {
   ROS_DEBUG_STREAM("Frame at " << stamp << ": " << describe(result));
-  if (result != core::FrameResult::kUpdated && result != core::FrameResult::kFirstFrame) {
+  if (result == core::FrameResult::kReset) {
+    // The session threw the map away itself: stamps far back several frames in a row, or an
+    // odometry gap with gap_action: reset. Said and counted like the node's own resets.
+    diagnostics_.recordReset();
+    ROS_WARN_STREAM("rbpf_slam_node: frame at " << stamp << ": " << describe(result)
+                                                << " (stamps went back, or an odometry gap with "
+                                                   "gap_action: reset)");
+  }
+  if (result != core::FrameResult::kUpdated && result != core::FrameResult::kFirstFrame &&
+      result != core::FrameResult::kReset) {
     if (result == core::FrameResult::kRejectedStamp || result == core::FrameResult::kRejectedPose) {
       warnThrottled(describe(result), std::string("Frame ") + describe(result));
       diagnostics_.recordDrop(result == core::FrameResult::kRejectedStamp ? "stamp not after the last"
@@ -549,6 +558,7 @@ void SlamNode::resetAll(const std::string& why) {
   if (sonar_cloud_input_) sonar_cloud_input_->clear();
   features_input_->clear();
   updates_ = 0;
+  map_published_at_update_ = -1;  // the new map's first grid is published like the first one
   stale_drops_in_a_row_ = 0;
   publishLandmarks(ros::Time::now());  // DELETE for every landmark shown
   trajectory_publisher_.publish(toPath(pipeline_.session().trajectory(), config_.ros.map_frame));

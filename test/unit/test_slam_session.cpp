@@ -54,7 +54,7 @@ TEST(SlamSession, ARestartedClockStartsANewMapAfterEnoughFrames) {
   for (int i = 1; i <= 10; ++i) frame(&session, i);
   EXPECT_EQ(frame(&session, 1.0), core::FrameResult::kRejectedStamp);
   EXPECT_EQ(frame(&session, 1.5), core::FrameResult::kRejectedStamp);
-  EXPECT_EQ(frame(&session, 2.0), core::FrameResult::kFirstFrame);  // third in a row: new run
+  EXPECT_EQ(frame(&session, 2.0), core::FrameResult::kReset);  // third in a row: new run
   EXPECT_EQ(session.resets(), 1);
   ASSERT_EQ(session.trajectory().size(), 1u);
   EXPECT_DOUBLE_EQ(session.trajectory().front().stamp, 2.0);
@@ -64,7 +64,7 @@ TEST(SlamSession, ARestartedClockStartsANewMapAfterEnoughFrames) {
 TEST(SlamSession, OneFrameBackResetsWhenConfiguredSo) {
   core::SlamSession session = makeSession(1);
   for (int i = 1; i <= 5; ++i) frame(&session, i);
-  EXPECT_EQ(frame(&session, 1.0), core::FrameResult::kFirstFrame);
+  EXPECT_EQ(frame(&session, 1.0), core::FrameResult::kReset);
   EXPECT_EQ(session.resets(), 1);
 }
 
@@ -90,7 +90,7 @@ namespace {
 /// odometry_period_s between the frames, except in (hole_start, hole_end).
 double spreadAfterGap(const std::string& action, double gap_s, long* gaps, long* resets,
                       double odometry_period_s = 0.0, double hole_start = 0.0,
-                      double hole_end = 0.0) {
+                      double hole_end = 0.0, core::FrameResult* after_gap = nullptr) {
   core::FilterOptions filter;
   filter.particles = 200;
   filter.seed = 3;
@@ -104,7 +104,9 @@ double spreadAfterGap(const std::string& action, double gap_s, long* gaps, long*
     }
   }
   session.process(1.0, core::Pose2(0.0, 0.0, 0.0), core::FeatureSet());
-  session.process(1.0 + gap_s, core::Pose2(0.5, 0.0, 0.0), core::FeatureSet());
+  const core::FrameResult result =
+      session.process(1.0 + gap_s, core::Pose2(0.5, 0.0, 0.0), core::FeatureSet());
+  if (after_gap) *after_gap = result;
   *gaps = session.gaps();
   *resets = session.resets();
   const auto particles = session.filter().particles();
@@ -123,9 +125,11 @@ TEST(SlamSession, ATimeGapInflatesTheMotionNoiseOrResets) {
   EXPECT_EQ(gaps, 1);
   EXPECT_EQ(resets, 0);
   EXPECT_GT(inflated, 2.0 * normal) << "normal " << normal << ", after the gap " << inflated;
-  spreadAfterGap("reset", 60.0, &gaps, &resets);
+  core::FrameResult after_gap = core::FrameResult::kUpdated;
+  spreadAfterGap("reset", 60.0, &gaps, &resets, 0.0, 0.0, 0.0, &after_gap);
   EXPECT_EQ(gaps, 1);
   EXPECT_EQ(resets, 1);
+  EXPECT_EQ(after_gap, core::FrameResult::kReset) << "the caller must learn of the new map";
 }
 
 /// max_time_gap 30 s, the given gap_action.

@@ -102,6 +102,39 @@ TEST(SonarFeatureExtractor, WindowKeepsOnlyRecentTravel) {
   EXPECT_TRUE(extractor.extractionDue(Pose2(3.0, 0, 0.35)));
 }
 
+TEST(SonarFeatureExtractor, StampsGoingBackClearTheWindowButKeepTheCounters) {
+  // A second log or a restarted driver: the held echoes were placed with another run's
+  // odometry and must go; the counters of the extractor's life stay.
+  SonarExtractorOptions o;
+  o.window_distance_m = 10.0;
+  SonarFeatureExtractor extractor(o);
+  const Pose2 mount(0.0, 0.2, M_PI_2);
+  for (int i = 0; i < 10; ++i) {
+    extractor.addReadings({reading(1.0, mount)}, Pose2(0.1 * i, 0, 0), 100.0 + i);
+  }
+  ASSERT_EQ(extractor.echoes().size(), 10u);
+  extractor.addReadings({reading(1.0, mount)}, Pose2(5.0, 3.0, 0), 100.5);  // 8.5 s back
+  EXPECT_EQ(extractor.echoes().size(), 1u);
+  EXPECT_EQ(extractor.stats().clock_jumps, 1);
+  EXPECT_EQ(extractor.stats().readings, 11);
+  extractor.addReadings({reading(1.0, mount)}, Pose2(5.0, 3.1, 0), 100.2);  // within a second
+  EXPECT_EQ(extractor.echoes().size(), 2u);
+  EXPECT_EQ(extractor.stats().clock_jumps, 1);
+}
+
+TEST(SonarFeatureExtractor, MountsThatKeepMovingStayBounded) {
+  // A panning sonar (or a jittery tf): every reading from a new mounting pose. The transducer
+  // list stops growing; every echo still names a transducer within it.
+  SonarFeatureExtractor extractor{SonarExtractorOptions()};
+  for (int i = 0; i < 1000; ++i) {
+    const Pose2 mount(0.0, 0.2, -M_PI + 0.006 * i);
+    extractor.addReadings({reading(2.0, mount)}, Pose2(0.01 * i, 0, 0), 1.0 + 0.1 * i);
+  }
+  ASSERT_FALSE(extractor.echoes().empty());
+  for (const SonarEcho& e : extractor.echoes()) EXPECT_LT(e.transducer, 128);
+  extractor.extract(Pose2(10.0, 0, 0), 101.0);  // the cross-talk check over them runs
+}
+
 TEST(SonarFeatureExtractor, SpacingSkipsRepeatedEchoesOfAStandingTransducer) {
   SonarExtractorOptions o;
   o.min_echo_spacing_m = 0.05;

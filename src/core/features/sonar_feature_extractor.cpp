@@ -18,6 +18,7 @@ namespace {
 
 constexpr double kMountTolerance = 1e-3;  // m and rad: the same transducer
 constexpr double kClockJumpBackS = 1.0;   // stamps going back more than this clear the window
+constexpr size_t kMaxTransducers = 128;   // distinct mounting poses kept apart
 constexpr double kMaxOdomCoordinateM = 1e6;  // beyond: a broken odometry pose, readings dropped
 constexpr double kMaxEchoDistanceM = 100.0;  // echoes taken farther away are not extracted from
 
@@ -67,13 +68,18 @@ SonarFeatureExtractor::SonarFeatureExtractor(const SonarExtractorOptions& option
 }
 
 void SonarFeatureExtractor::reset() {
-  echoes_.clear();
+  clearWindow();
   mounts_.clear();
   last_kept_.clear();
+  stats_ = SonarExtractorStats();
+}
+
+void SonarFeatureExtractor::clearWindow() {
+  echoes_.clear();
+  for (SonarEcho& last : last_kept_) last.range = -1.0;
   has_pose_ = false;
   travel_ = 0.0;
   has_extracted_ = false;
-  stats_ = SonarExtractorStats();
 }
 
 int SonarFeatureExtractor::transducerIndex(const Pose2& mount) {
@@ -82,6 +88,21 @@ int SonarFeatureExtractor::transducerIndex(const Pose2& mount) {
         std::abs(wrapAngle(mounts_[i].z() - mount.z())) < kMountTolerance) {
       return static_cast<int>(i);
     }
+  }
+  if (mounts_.size() >= kMaxTransducers) {
+    // A mount that keeps moving (a panning sonar, jittery tf): the nearest known transducer,
+    // so that the list stays bounded.
+    size_t nearest = 0;
+    double best = INFINITY;
+    for (size_t i = 0; i < mounts_.size(); ++i) {
+      const double d = (mounts_[i].head<2>() - mount.head<2>()).norm() +
+                       std::abs(wrapAngle(mounts_[i].z() - mount.z()));
+      if (d < best) {
+        best = d;
+        nearest = i;
+      }
+    }
+    return static_cast<int>(nearest);
   }
   mounts_.push_back(mount);
   SonarEcho none;
@@ -98,7 +119,10 @@ int SonarFeatureExtractor::addReadings(const std::vector<ConeReading>& readings,
     stats_.invalid += static_cast<long>(readings.size());
     return 0;
   }
-  if (!echoes_.empty() && stamp < echoes_.back().stamp - kClockJumpBackS) reset();
+  if (!echoes_.empty() && stamp < echoes_.back().stamp - kClockJumpBackS) {
+    clearWindow();
+    ++stats_.clock_jumps;
+  }
   if (has_pose_) travel_ += (odom_pose.head<2>() - last_pose_.head<2>()).norm();
   has_pose_ = true;
   last_pose_ = odom_pose;

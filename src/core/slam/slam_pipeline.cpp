@@ -11,7 +11,12 @@ namespace {
 constexpr size_t kMaxPendingCones = 4096;
 
 bool usedFrame(FrameResult result) {
-  return result == FrameResult::kUpdated || result == FrameResult::kFirstFrame;
+  return result == FrameResult::kUpdated || result == FrameResult::kFirstFrame ||
+         result == FrameResult::kReset;
+}
+
+bool startedMap(FrameResult result) {
+  return result == FrameResult::kFirstFrame || result == FrameResult::kReset;
 }
 
 }  // namespace
@@ -70,7 +75,7 @@ FrameResult SlamPipeline::processScan(const RangeScan& scan, const Pose2& odom_p
   }
   const FrameResult result = session_.process(scan.stamp, odom_pose, last_features_, override_motion);
   if (usedFrame(result)) {
-    if (result == FrameResult::kFirstFrame) submap_.clear();
+    if (startedMap(result)) submap_.clear();
     addToSubmap(std::move(points), chain_delta);
     reference_odom_pose_ = odom_pose;
   }
@@ -98,7 +103,12 @@ void SlamPipeline::addToSubmap(std::vector<Eigen::Vector2d> points, const Pose2&
 
 FrameResult SlamPipeline::processSonar(const std::vector<ConeReading>& readings,
                                        const Pose2& odom_pose, double stamp) {
+  const long clock_jumps = sonar_extractor_.stats().clock_jumps;
   sonar_extractor_.addReadings(readings, odom_pose, stamp);
+  // The extractor cleared its window for stamps that went back (a restarted clock, a second
+  // log): the held cone readings were measured in the other run's odometry too. The session
+  // decides when the map itself starts over.
+  if (sonar_extractor_.stats().clock_jumps != clock_jumps) pending_cones_.clear();
   if (odom_pose.allFinite()) {
     for (const ConeReading& r : readings) pending_cones_.push_back({r, odom_pose});
     if (pending_cones_.size() > kMaxPendingCones) {

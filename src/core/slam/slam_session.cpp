@@ -71,6 +71,7 @@ FrameResult SlamSession::process(double stamp, const Pose2& odom_pose,
                                  const FeatureSet& features, const MotionInput* measured_motion) {
   if (!std::isfinite(stamp) || stamp <= 0.0) return FrameResult::kRejectedStamp;
   if (!odom_pose.allFinite()) return FrameResult::kRejectedPose;
+  bool restarted = false;
   if (has_previous_ && stamp <= last_stamp_) {
     // A large jump back in several frames in a row is a restarted clock (a looping bag):
     // start a new map. One late message (a slow driver) must not wipe the map: it is rejected.
@@ -81,6 +82,7 @@ FrameResult SlamSession::process(double stamp, const Pose2& odom_pose,
       return FrameResult::kRejectedStamp;
     }
     reset();
+    restarted = true;
     // fall through: this frame becomes the first of the new run
   }
   frames_back_ = 0;
@@ -105,7 +107,7 @@ FrameResult SlamSession::process(double stamp, const Pose2& odom_pose,
     const Pose2 first = filter_->estimate().mean;
     if (first.allFinite()) map_to_odom_ = compose(first, inverse(odom_pose));
     trajectory_.push_back({stamp, filter_->estimate().mean});
-    return FrameResult::kFirstFrame;
+    return restarted ? FrameResult::kReset : FrameResult::kFirstFrame;
   }
   const Pose2 delta = between(last_odom_, odom_pose);
   const bool moved = std::hypot(delta.x(), delta.y()) >= options_.linear_update_m ||
@@ -144,7 +146,8 @@ FrameResult SlamSession::process(double stamp, const Pose2& odom_pose,
       const long gaps = gaps_;
       restart();  // the odometry stamps stay: they are still this run's
       gaps_ = gaps;
-      return process(stamp, odom_pose, features);  // the first frame of a new map
+      process(stamp, odom_pose, features);  // the first frame of a new map
+      return FrameResult::kReset;
     }
   }
   // A measured (scan-matched) increment that was accepted is kept as it is; odometry alone

@@ -81,6 +81,7 @@ struct SonarExtractorStats {
   long extractions = 0;
   long lines = 0;
   long points = 0;
+  long clock_jumps = 0;  // stamps that went back over a second: the window was cleared
 };
 
 /// One accepted echo, stored in the odometry frame.
@@ -111,6 +112,7 @@ class SonarFeatureExtractor {
   const std::deque<SonarEcho>& echoes() const { return echoes_; }
   const SonarExtractorStats& stats() const { return stats_; }
   const SonarExtractorOptions& options() const { return options_; }
+  /// Forgets the window, the transducers and the counters.
   void reset();
 
  private:
@@ -118,6 +120,8 @@ class SonarFeatureExtractor {
   /// True when echo adds little to its transducer's last kept echo (min_echo_spacing_m).
   bool redundant(const SonarEcho& echo) const;
   void prune(double stamp);
+  /// Forgets the echoes and the motion since them (the transducers and counters stay).
+  void clearWindow();
 
   const SonarExtractorOptions options_;
   std::deque<SonarEcho> echoes_;

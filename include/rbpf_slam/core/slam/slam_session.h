@@ -32,7 +32,10 @@ struct SessionOptions {
 
 void validate(const SessionOptions& options);
 
-/// Why a frame was not used.
+/// What became of a frame. kFirstFrame and kReset both start a map: kReset when the session
+/// itself threw the previous one away (stamps far back several times in a row, or an odometry
+/// gap with gap_action: reset), which the caller should report and follow (clear what it
+/// derived from the old run).
 enum class FrameResult { kUpdated, kSkippedNoMotion, kFirstFrame, kRejectedStamp,
                          kRejectedPose, kReset };
 
