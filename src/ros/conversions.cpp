@@ -33,6 +33,13 @@ core::Pose2 toPose2(const geometry_msgs::Pose& p) {
   return core::Pose2(p.position.x, p.position.y, tf2::getYaw(p.orientation));
 }
 
+bool isUpsideDown(const geometry_msgs::Transform& t) {
+  const geometry_msgs::Quaternion& q = t.rotation;
+  const double norm2 = q.x * q.x + q.y * q.y + q.z * q.z + q.w * q.w;
+  // R(2, 2), the z component of the frame's z axis, of the normalised quaternion.
+  return norm2 > 0.0 && 1.0 - 2.0 * (q.x * q.x + q.y * q.y) / norm2 < 0.0;
+}
+
 geometry_msgs::Transform toTransform(const core::Pose2& pose) {
   geometry_msgs::Transform t;
   t.translation.x = pose.x();
@@ -89,7 +96,7 @@ nav_msgs::Odometry toOdometryMsg(const core::Pose2& pose, const Eigen::Vector3d&
 }
 
 bool toRangeScan(const sensor_msgs::LaserScan& msg, const core::Pose2& sensor_in_base,
-                 core::RangeScan* scan, std::string* error) {
+                 core::RangeScan* scan, std::string* error, bool upside_down) {
   if (!std::isfinite(msg.angle_min) || !std::isfinite(msg.angle_increment) ||
       msg.angle_increment == 0.0f) {
     *error = "angle_min/angle_increment not finite or increment zero";
@@ -104,8 +111,9 @@ bool toRangeScan(const sensor_msgs::LaserScan& msg, const core::Pose2& sensor_in
     }
   }
   scan->stamp = msg.header.stamp.toSec();
-  scan->angle_min = msg.angle_min;
-  scan->angle_increment = msg.angle_increment;
+  // Upside down, a beam at angle b in the sensor frame points at -b seen from above.
+  scan->angle_min = upside_down ? -msg.angle_min : msg.angle_min;
+  scan->angle_increment = upside_down ? -msg.angle_increment : msg.angle_increment;
   scan->range_min = std::isfinite(msg.range_min) && msg.range_min > 0.0f ? msg.range_min : 0.0;
   scan->range_max = std::isfinite(msg.range_max) && msg.range_max > 0.0f
                         ? msg.range_max

@@ -28,9 +28,9 @@ void SlamDiagnostics::recordUpdate(double update_ms) {
   update_ms_sum_period_ += update_ms;
 }
 
-void SlamDiagnostics::recordDrop(const std::string& cause) {
-  ++drops_period_[cause];
-  ++drops_total_[cause];
+void SlamDiagnostics::recordDrop(const std::string& cause, long count) {
+  drops_period_[cause] += count;
+  drops_total_[cause] += count;
 }
 
 diagnostic_msgs::DiagnosticArray SlamDiagnostics::report(const ros::Time& stamp,

@@ -32,10 +32,16 @@ LaserFeaturesNode::LaserFeaturesNode(ros::NodeHandle nh, ros::NodeHandle private
 
 void LaserFeaturesNode::scanCallback(const sensor_msgs::LaserScan::ConstPtr& msg) {
   core::Pose2 sensor_in_base;
+  bool upside_down = false;
   try {
-    sensor_in_base = toPose2(
-        tf_buffer_.lookupTransform(config_.ros.base_frame, msg->header.frame_id, msg->header.stamp)
-            .transform);
+    // tf2 refuses frame names with a leading '/' (old drivers and bags still write them).
+    const geometry_msgs::Transform mount =
+        tf_buffer_
+            .lookupTransform(config_.ros.base_frame, stripSlash(msg->header.frame_id),
+                             msg->header.stamp)
+            .transform;
+    sensor_in_base = toPose2(mount);
+    upside_down = isUpsideDown(mount);
   } catch (const tf2::TransformException& e) {
     warnings_.warn("tf " + msg->header.frame_id, "No transform " + config_.ros.base_frame + " -> " +
                                                     msg->header.frame_id + ": " + e.what());
@@ -43,7 +49,7 @@ void LaserFeaturesNode::scanCallback(const sensor_msgs::LaserScan::ConstPtr& msg
   }
   core::RangeScan scan;
   std::string error;
-  const bool ok = toRangeScan(*msg, sensor_in_base, &scan, &error);
+  const bool ok = toRangeScan(*msg, sensor_in_base, &scan, &error, upside_down);
   if (!error.empty()) warnings_.warn("scan header", "Scan: " + error);
   if (!ok) return;
   std_msgs::Header header;

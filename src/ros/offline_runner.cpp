@@ -362,11 +362,14 @@ OfflineSummary OfflineRunner::run() {
     }
     const tf2::BufferCore& tf = *tf_segments[segment].buffer;
     core::Pose2 odom_pose, sensor_in_base;
+    bool sensor_upside_down = false;
     try {
       odom_pose = toPose2(tf.lookupTransform(ros_options.odom_frame, ros_options.base_frame,
                                              stamp).transform);
-      sensor_in_base =
-          toPose2(tf.lookupTransform(ros_options.base_frame, stripSlash(frame), stamp).transform);
+      const geometry_msgs::Transform mount =
+          tf.lookupTransform(ros_options.base_frame, stripSlash(frame), stamp).transform;
+      sensor_in_base = toPose2(mount);
+      sensor_upside_down = isUpsideDown(mount);
     } catch (const tf2::TransformException&) {
       ++summary.dropped_no_tf;
       continue;
@@ -391,7 +394,7 @@ OfflineSummary OfflineRunner::run() {
     if (scan) {
       core::RangeScan range_scan;
       std::string error;
-      if (!toRangeScan(*scan, sensor_in_base, &range_scan, &error)) {
+      if (!toRangeScan(*scan, sensor_in_base, &range_scan, &error, sensor_upside_down)) {
         ++summary.dropped_bad_message;
         continue;
       }
@@ -425,6 +428,7 @@ OfflineSummary OfflineRunner::run() {
       int dropped = 0;
       result = pipeline_.processFeatures(toFeatureSet(*features, sensor_in_base, &dropped),
                                          odom_pose);
+      summary.dropped_features += dropped;
     }
     const double ms =
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
@@ -562,6 +566,7 @@ OfflineSummary OfflineRunner::writeOutputs(const OfflineSummary& in) const {
        << "  \"dropped_bad_message\": " << summary.dropped_bad_message << ",\n"
        << "  \"skipped_transforms\": " << summary.skipped_transforms << ",\n"
        << "  \"tf_segments\": " << summary.tf_segments << ",\n"
+       << "  \"dropped_features\": " << summary.dropped_features << ",\n"
        << "  \"landmarks\": " << summary.landmarks << ",\n"
        << "  \"particles\": " << summary.particles << ",\n"
        << "  \"fallbacks\": " << summary.fallbacks << ",\n"

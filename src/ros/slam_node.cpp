@@ -168,6 +168,7 @@ void SlamNode::sonarCloudCallback(const sensor_msgs::PointCloud::ConstPtr& msg) 
       sonar_transducers_.push_back(toPose2(t.transform));
     } catch (const tf2::TransformException&) {
       if (i == 0) {
+        diagnostics_.recordDrop("no sonar transducer in tf");
         warnThrottled("sonar transducers", "sonar_cloud needs the transducer poses, but tf has "
                                            "no frame " + frame + " under " + o.base_frame);
         return;
@@ -180,6 +181,7 @@ void SlamNode::sonarCloudCallback(const sensor_msgs::PointCloud::ConstPtr& msg) 
       toBasePoints(*msg, frame_in_base), sonar_transducers_, o.sonar_cloud_fov, 0.0,
       o.sonar_cloud_max_range, msg->header.stamp.toSec(), kAxisTolerance, &unmatched);
   if (unmatched > 0) {
+    diagnostics_.recordDrop("sonar cloud point off every axis", unmatched);
     warnThrottled("sonar cloud points", std::to_string(unmatched) +
                                             " sonar_cloud point(s) lie on no transducer's axis");
   }
@@ -192,10 +194,11 @@ void SlamNode::sonarCloudCallback(const sensor_msgs::PointCloud::ConstPtr& msg) 
 void SlamNode::scanCallback(const sensor_msgs::LaserScan::ConstPtr& msg) {
   if (!readyForFrame()) return;
   core::Pose2 odom_pose, sensor_in_base;
-  if (!lookupPoses(msg->header, &odom_pose, &sensor_in_base)) return;
+  bool upside_down = false;
+  if (!lookupPoses(msg->header, &odom_pose, &sensor_in_base, &upside_down)) return;
   core::RangeScan scan;
   std::string error;
-  const bool ok = toRangeScan(*msg, sensor_in_base, &scan, &error);
+  const bool ok = toRangeScan(*msg, sensor_in_base, &scan, &error, upside_down);
   if (!error.empty()) warnThrottled("scan header " + msg->header.frame_id, "Scan: " + error);
   if (!ok) {
     diagnostics_.recordDrop("bad scan");
@@ -213,6 +216,7 @@ void SlamNode::featuresCallback(const FeatureArray::ConstPtr& msg) {
   int dropped = 0;
   const core::FeatureSet features = toFeatureSet(*msg, frame_in_base, &dropped);
   if (dropped > 0) {
+    diagnostics_.recordDrop("non-finite feature", dropped);
     warnThrottled("non-finite features", "Dropped " + std::to_string(dropped) +
                                              " feature(s) with non-finite values from " +
                                              features_input_->topic());
@@ -282,7 +286,7 @@ void SlamNode::messageDropped(const std_msgs::Header& header, tf2_ros::FilterFai
 }
 
 bool SlamNode::lookupPoses(const std_msgs::Header& header, core::Pose2* odom_pose,
-                           core::Pose2* frame_in_base) {
+                           core::Pose2* frame_in_base, bool* upside_down) {
   const io::RosOptions& o = config_.ros;
   const std::string* from = &o.odom_frame;
   const std::string* to = &o.base_frame;
@@ -292,9 +296,11 @@ bool SlamNode::lookupPoses(const std_msgs::Header& header, core::Pose2* odom_pos
     from = &o.base_frame;
     to = &header.frame_id;
     // tf2 refuses frame names with a leading '/' (old drivers and bags still write them).
-    *frame_in_base =
-        toPose2(tf_buffer_.lookupTransform(o.base_frame, stripSlash(header.frame_id), header.stamp)
-                    .transform);
+    const geometry_msgs::Transform mount =
+        tf_buffer_.lookupTransform(o.base_frame, stripSlash(header.frame_id), header.stamp)
+            .transform;
+    *frame_in_base = toPose2(mount);
+    if (upside_down) *upside_down = isUpsideDown(mount);
   } catch (const tf2::TransformException& e) {
     diagnostics_.recordDrop("tf lookup failed");
     warnThrottled("tf " + *from + " -> " + *to, "No transform " + *from + " -> " + *to + " at " +
@@ -303,6 +309,7 @@ bool SlamNode::lookupPoses(const std_msgs::Header& header, core::Pose2* odom_pos
     return false;
   }
   if (!odom_pose->allFinite() || !frame_in_base->allFinite()) {
+    diagnostics_.recordDrop("tf not finite");
     warnThrottled("non-finite tf", "tf gave a non-finite pose for " + o.odom_frame + " -> " +
                                        o.base_frame + " -> " + header.frame_id);
     return false;

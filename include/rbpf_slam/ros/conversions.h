@@ -24,6 +24,10 @@ namespace rosbridge {
 
 core::Pose2 toPose2(const geometry_msgs::Transform& transform);
 core::Pose2 toPose2(const geometry_msgs::Pose& pose);
+/// True when the frame's z axis points down in its parent: a laser mounted upside down,
+/// whose beam angles turn the other way in the base frame (toPose2 gives the direction of its
+/// x axis either way).
+bool isUpsideDown(const geometry_msgs::Transform& transform);
 geometry_msgs::Transform toTransform(const core::Pose2& pose);
 geometry_msgs::Pose toPoseMsg(const core::Pose2& pose);
 /// (x, y, yaw) covariance into the 6x6 row-major (x, y, z, roll, pitch, yaw) of a ROS pose.
@@ -36,10 +40,11 @@ nav_msgs::Odometry toOdometryMsg(const core::Pose2& pose, const Eigen::Vector3d&
                                  const std::string& frame, const std::string& child,
                                  const ros::Time& stamp);
 
-/// The scan with its sensor mounting pose in the base frame. Returns false and sets error
-/// when the header of the scan cannot describe a scan (zero or non-finite increment, ...).
+/// The scan with its sensor mounting pose in the base frame; upside_down (isUpsideDown of the
+/// mount) mirrors the beam angles. Returns false and sets error when the header of the scan
+/// cannot describe a scan (zero or non-finite increment, ...).
 bool toRangeScan(const sensor_msgs::LaserScan& msg, const core::Pose2& sensor_in_base,
-                 core::RangeScan* scan, std::string* error);
+                 core::RangeScan* scan, std::string* error, bool upside_down = false);
 
 /// One sonar (or infrared) reading with its transducer pose in the base frame. Returns false
 /// and sets error when the message cannot describe a cone (field_of_view not in (0, pi)); a

@@ -36,8 +36,9 @@ class SlamDiagnostics {
       : name_(std::move(name)), options_(options) {}
 
   void recordUpdate(double update_ms);
-  /// A message that could not be used; cause is a short fixed phrase ("no tf", "bad scan").
-  void recordDrop(const std::string& cause);
+  /// Something that could not be used (a message, or `count` features or points of one);
+  /// cause is a short fixed phrase ("no tf", "bad scan").
+  void recordDrop(const std::string& cause, long count = 1);
   void recordReset() { ++resets_total_; }
   /// Steps taken across an odometry gap so far (SlamSession::gaps); reported once set.
   void setOdometryGaps(long total) { odometry_gaps_ = total; }

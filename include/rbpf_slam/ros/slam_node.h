@@ -68,8 +68,9 @@ class SlamNode {
   void frameNotInTf(const std_msgs::Header& header, const std::string& tf_error);
   /// The odometry pose of the base and the pose of the message frame in the base frame at
   /// the header's stamp; false (with a throttled warning) if tf cannot give them.
+  /// upside_down (optional): whether the frame's z axis points down (isUpsideDown).
   bool lookupPoses(const std_msgs::Header& header, core::Pose2* odom_pose,
-                   core::Pose2* frame_in_base);
+                   core::Pose2* frame_in_base, bool* upside_down = nullptr);
   void handleResult(core::FrameResult result, const ros::Time& stamp, double update_ms);
   void publishDiagnostics(const ros::WallTimerEvent& event);
   void publishState(const ros::Time& stamp);
