@@ -237,6 +237,9 @@ double RobustFastSlam2::updateCandidate(Particle* particle, const Pose2& predict
     cov = 0.5 * (cov + cov.transpose());
     matched.emplace_back(static_cast<int>(k), m.index);
   }
+  // As a FastSLAM 2.0 step draws (proposal_sample_scale). Relocalization is not tried at a
+  // robust step: its candidates from older sets are the search over earlier poses here.
+  if (!matched.empty()) cov *= options_.proposal_sample_scale;
   particle->pose = sampleMultivariate<3>(rng_, mean, cov);
   particle->pose.z() = wrapAngle(particle->pose.z());
   counts->associated = static_cast<int>(matched.size());
