@@ -154,7 +154,10 @@ class LineVotes {
  public:
   LineVotes(const SonarExtractorOptions& o, const std::vector<LocalEcho>& echoes)
       : options_(o), echoes_(echoes) {
+    // Whole bins around the circle: the step actually used is 2 pi / bins (at most the
+    // configured one), so that bin k and bin k + bins are the same direction.
     theta_bins_ = static_cast<int>(std::ceil(2.0 * M_PI / o.hough_theta_step_rad));
+    theta_step_ = 2.0 * M_PI / theta_bins_;
     double rho_max = 0.0;
     for (const LocalEcho& e : echoes) rho_max = std::max(rho_max, e.sensor.norm() + e.range);
     rho_bins_ = static_cast<int>(std::ceil(rho_max / o.hough_rho_step_m)) + 2;
@@ -163,7 +166,7 @@ class LineVotes {
   }
   void vote(size_t index, int delta) {
     const LocalEcho& e = echoes_[index];
-    const double step = options_.hough_theta_step_rad;
+    const double step = theta_step_;
     const double reach = e.half_cone;
     const int first = static_cast<int>(std::ceil((e.axis - reach + M_PI) / step));
     const int last = static_cast<int>(std::floor((e.axis + reach + M_PI) / step));
@@ -182,8 +185,7 @@ class LineVotes {
   }
   bool peak(int min_votes, double* rho, double* theta, size_t* cell_index) {
     if (!accumulator_.peak(min_votes, cell_index)) return false;
-    *theta = wrapAngle(-M_PI + static_cast<double>(*cell_index / rho_bins_) *
-                                   options_.hough_theta_step_rad);
+    *theta = wrapAngle(-M_PI + static_cast<double>(*cell_index / rho_bins_) * theta_step_);
     *rho = (static_cast<double>(*cell_index % rho_bins_) + 0.5) * options_.hough_rho_step_m;
     return true;
   }
@@ -194,6 +196,7 @@ class LineVotes {
   const SonarExtractorOptions& options_;
   const std::vector<LocalEcho>& echoes_;
   int theta_bins_ = 0;
+  double theta_step_ = 0.0;
   int rho_bins_ = 0;
   Accumulator accumulator_{0};
 };
