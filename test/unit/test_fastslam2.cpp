@@ -261,17 +261,46 @@ TEST(FastSlam2, NonFiniteFeaturesAreRejectedNotFused) {
 class TwoMapsFastSlam2 : public FastSlam2 {
  public:
   using FastSlam2::FastSlam2;
-  /// Particle 1 knows a point landmark at `at`; particle 0 knows nothing.
-  void giveSecondParticle(const Eigen::Vector2d& at) {
+  /// Particle i knows one point landmark at `at`.
+  void giveLandmark(int i, const Eigen::Vector2d& at) {
     auto map = std::make_shared<LandmarkMap>();
     Landmark lm;
     lm.id = 0;
     lm.mean = at;
     lm.covariance = 1e-4 * Eigen::Matrix2d::Identity();
     map->add(lm);
-    particles_[1].map = map;
+    particles_[i].map = map;
   }
+  void giveSecondParticle(const Eigen::Vector2d& at) { giveLandmark(1, at); }
 };
+
+TEST(FastSlam2, KeptMostProbableFindsTheFirstCopyOfTheHeaviest) {
+  EXPECT_EQ(FastSlam2::keptMostProbable({0, 0, 2, 2, 2}, {0.3, 0.1, 0.6}), 2);
+  EXPECT_EQ(FastSlam2::keptMostProbable({0, 0, 1}, {0.3, 0.1, 0.6}), -1);  // not kept
+}
+
+// After a resampling every weight is equal: the map and path reported must still be those of
+// the particle that was the most probable, not of whichever copy comes first (particle 0's).
+TEST(FastSlam2, TheBestParticleAfterResamplingIsACopyOfTheMostProbable) {
+  FilterOptions options;
+  options.particles = 3;
+  options.resample_threshold = 1.0;  // resample at every step
+  options.measurement.use_feature_covariance = false;
+  options.measurement.sigma_range_m = 0.05;
+  TwoMapsFastSlam2 filter(options);
+  filter.reset(Pose2::Zero());
+  filter.giveLandmark(0, Eigen::Vector2d(5.03, 0.0));  // a little off: less probable
+  filter.giveLandmark(1, Eigen::Vector2d(5.0, 0.0));   // exactly where it is seen
+  FeatureSet set;
+  PointFeature seen;
+  seen.range = 5.0;
+  seen.bearing = 0.0;
+  set.points.push_back(seen);
+  ASSERT_TRUE(filter.update(set).resampled);
+  const std::vector<LandmarkEstimate> map = filter.landmarks();
+  ASSERT_EQ(map.size(), 1u);
+  EXPECT_NEAR(map[0].mean.x(), 5.0, 0.01) << "the map of particle 0's copy was reported";
+}
 
 TEST(FastSlam2, UpdateStatsDescribeTheMostProbableParticle) {
   FilterOptions options;

@@ -80,6 +80,7 @@ void FastSlam2::reset(const Pose2& initial_pose) {
     p.map = std::make_shared<LandmarkMap>();
   }
   weights_.assign(particles_.size(), 1.0 / particles_.size());
+  resampled_best_ = -1;
   pending_motion_ = PendingMotion();
   heading_prior_.reset();
   next_landmark_id_ = 0;
@@ -475,6 +476,7 @@ void FastSlam2::weighAndResample(UpdateStats* stats) {
   if (stats->neff < options_.resample_threshold * particles_.size()) {
     const std::vector<int> indices =
         resampleLowVariance(weights_, static_cast<int>(particles_.size()), rng_);
+    resampled_best_ = keptMostProbable(indices, weights_);
     std::vector<Particle> next;
     next.reserve(indices.size());
     for (int index : indices) next.push_back(particles_[index]);  // maps shared, not copied
@@ -484,13 +486,28 @@ void FastSlam2::weighAndResample(UpdateStats* stats) {
     stats->resampled = true;
     ++stats_.resamples;
   } else {
+    resampled_best_ = -1;
     for (size_t i = 0; i < particles_.size(); ++i) {
       particles_[i].log_weight = weights_[i] > 0.0 ? std::log(weights_[i]) : -745.0;
     }
   }
 }
 
+int FastSlam2::keptMostProbable(const std::vector<int>& kept, const std::vector<double>& weights) {
+  int most = -1;
+  for (size_t i = 0; i < weights.size(); ++i) {
+    if (most < 0 || weights[i] > weights[most]) most = static_cast<int>(i);
+  }
+  for (size_t j = 0; j < kept.size(); ++j) {
+    if (kept[j] == most) return static_cast<int>(j);
+  }
+  return -1;
+}
+
 int FastSlam2::bestParticle() const {
+  if (resampled_best_ >= 0 && resampled_best_ < static_cast<int>(particles_.size())) {
+    return resampled_best_;
+  }
   int best = -1;
   double best_weight = -1.0;
   for (size_t i = 0; i < weights_.size(); ++i) {
@@ -556,6 +573,7 @@ bool FastSlam2::resetPose(const Pose2& pose, const Eigen::Matrix3d& covariance) 
     p.path.reset();
   }
   weights_.assign(particles_.size(), 1.0 / particles_.size());
+  resampled_best_ = -1;
   pending_motion_ = PendingMotion();
   if (!heading_prior_.ready()) heading_prior_.reset();  // lines learned at the old pose
   heading_prior_.setDriftVariance(c(2, 2));             // the given heading's uncertainty

@@ -183,8 +183,11 @@ UpdateStats RobustFastSlam2::robustUpdate(const std::vector<Observation>& observ
     }
     next.back().path = std::make_shared<PathNode>(next.back().pose, std::move(next.back().path));
   }
-  stats.associated = candidate_counts[kept[0]].associated;
-  stats.new_landmarks = candidate_counts[kept[0]].created;
+  // Report the most probable candidate's step (it is kept: its weight is the largest).
+  resampled_best_ = keptMostProbable(kept, weights);
+  const int reported = resampled_best_ >= 0 ? kept[resampled_best_] : kept[0];
+  stats.associated = candidate_counts[reported].associated;
+  stats.new_landmarks = candidate_counts[reported].created;
   particles_.swap(next);
   weights_.assign(count, 1.0 / count);
   stats.resampled = true;
@@ -192,7 +195,7 @@ UpdateStats RobustFastSlam2::robustUpdate(const std::vector<Observation>& observ
   ++stats_.updates;
   ++stats_.robust_steps;
   stats_.last_neff = stats.neff;
-  stats_.landmarks = particles_[0].map->size();
+  stats_.landmarks = particles_[bestParticle()].map->size();
   if (!heading_prior_.ready()) heading_prior_.learn(observations, estimate().mean.z());
   return stats;
 }

@@ -59,6 +59,9 @@ class FastSlam2 : public SlamFilter {
   std::vector<Observation> prepare(const FeatureSet& features, int* rejected) const;
   const std::vector<Particle>& particleSet() const { return particles_; }
   int bestParticle() const;
+  /// The first position in `kept` (resampled indices into a set with these weights) holding
+  /// the most probable one (-1 for none).
+  static int keptMostProbable(const std::vector<int>& kept, const std::vector<double>& weights);
   /// The pose at every update() since the last reset, oldest first, of the particle that now
   /// carries the most weight (its map is landmarks()); resetPose() starts a new path.
   std::vector<Pose2> bestPath() const override;
@@ -157,6 +160,10 @@ class FastSlam2 : public SlamFilter {
   Rng rng_;
   std::vector<Particle> particles_;
   std::vector<double> weights_;  // normalised, same order as particles_
+  /// After a resampling (equal weights), the index of a copy of the particle that was the most
+  /// probable before it: bestParticle() then names it instead of whichever copy came first.
+  /// -1 when the weights tell (no resampling since they were computed).
+  int resampled_best_ = -1;
   PendingMotion pending_motion_;
   HeadingPrior heading_prior_;
   int next_landmark_id_ = 0;
