@@ -12,6 +12,7 @@
 #include "rbpf_slam/core/filters/dpf_local_filter.h"
 #include "rbpf_slam/core/filters/dpf_master.h"
 #include "rbpf_slam/core/filters/slam_filter.h"
+#include "rbpf_slam/core/grid/grid_map_data.h"
 #include "rbpf_slam/io/slam_config.h"
 
 namespace rbpf_slam {
@@ -558,6 +559,22 @@ TEST(FaultInjector, CentralisedFilterGetsTheSameDisturbance) {
   f.variant = "fastslam2";
   f.dpf.fault = o;
   EXPECT_EQ(createFilter(f)->variant(), "fastslam2");  // wrapped, same interface
+  // ... all of it: the best path (the trajectory offline_slam writes) and, for grid_pf, the grid.
+  const std::unique_ptr<SlamFilter> wrapped = createFilter(f);
+  wrapped->reset(Pose2::Zero());
+  MotionInput step;
+  step.delta = Pose2(0.1, 0.0, 0.0);
+  wrapped->predict(step);
+  wrapped->update(FeatureSet());
+  EXPECT_FALSE(wrapped->bestPath().empty());
+  f.variant = "grid_pf";
+  f.particles = 5;
+  const std::unique_ptr<SlamFilter> grid = createFilter(f);
+  grid->reset(Pose2::Zero());
+  grid->predict(step);
+  grid->update(FeatureSet());
+  GridMapData data;
+  EXPECT_TRUE(grid->occupancyGrid(data));
 }
 
 TEST(DpfOptions, OutOfRangeValuesAreNamed) {

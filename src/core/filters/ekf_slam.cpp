@@ -142,6 +142,10 @@ bool EkfSlam::correct(int i, const Observation& o) {
       state_(k + 1) += M_PI;
       covariance_.row(k) *= -1.0;
       covariance_.col(k) *= -1.0;
+      // Positions along the line change sign with its normal (alongLine): the extent too.
+      const double lowest = info_[i].extent_min;
+      info_[i].extent_min = -info_[i].extent_max;
+      info_[i].extent_max = -lowest;
     }
     state_(k + 1) = wrapAngle(state_(k + 1));
   }

@@ -39,6 +39,8 @@ class FaultInjectedFilter : public SlamFilter {
     return inner_->loadMap(landmarks);
   }
   bool setMapping(bool enabled) override { return inner_->setMapping(enabled); }
+  bool occupancyGrid(GridMapData& out) const override { return inner_->occupancyGrid(out); }
+  std::vector<Pose2> bestPath() const override { return inner_->bestPath(); }
 
  private:
   std::unique_ptr<SlamFilter> inner_;
