@@ -275,8 +275,8 @@ class TwoMapsFastSlam2 : public FastSlam2 {
 };
 
 TEST(FastSlam2, KeptMostProbableFindsTheFirstCopyOfTheHeaviest) {
-  EXPECT_EQ(FastSlam2::keptMostProbable({0, 0, 2, 2, 2}, {0.3, 0.1, 0.6}), 2);
-  EXPECT_EQ(FastSlam2::keptMostProbable({0, 0, 1}, {0.3, 0.1, 0.6}), -1);  // not kept
+  EXPECT_EQ(keptMostProbable({0, 0, 2, 2, 2}, {0.3, 0.1, 0.6}), 2);
+  EXPECT_EQ(keptMostProbable({0, 0, 1}, {0.3, 0.1, 0.6}), -1);  // not kept
 }
 
 // After a resampling every weight is equal: the map and path reported must still be those of

@@ -493,17 +493,6 @@ void FastSlam2::weighAndResample(UpdateStats* stats) {
   }
 }
 
-int FastSlam2::keptMostProbable(const std::vector<int>& kept, const std::vector<double>& weights) {
-  int most = -1;
-  for (size_t i = 0; i < weights.size(); ++i) {
-    if (most < 0 || weights[i] > weights[most]) most = static_cast<int>(i);
-  }
-  for (size_t j = 0; j < kept.size(); ++j) {
-    if (kept[j] == most) return static_cast<int>(j);
-  }
-  return -1;
-}
-
 int FastSlam2::bestParticle() const {
   if (resampled_best_ >= 0 && resampled_best_ < static_cast<int>(particles_.size())) {
     return resampled_best_;

@@ -46,5 +46,16 @@ std::vector<int> resampleLowVariance(const std::vector<double>& weights, int cou
   return indices;
 }
 
+int keptMostProbable(const std::vector<int>& kept, const std::vector<double>& weights) {
+  int most = -1;
+  for (size_t i = 0; i < weights.size(); ++i) {
+    if (most < 0 || weights[i] > weights[most]) most = static_cast<int>(i);
+  }
+  for (size_t j = 0; j < kept.size(); ++j) {
+    if (kept[j] == most) return static_cast<int>(j);
+  }
+  return -1;
+}
+
 }  // namespace core
 }  // namespace rbpf_slam

@@ -84,6 +84,7 @@ void GridParticleFilter::reset(const Pose2& initial_pose) {
                                g.tile_cells);
   particles_.assign(options_.particles, Particle{initial_pose, empty});
   weights_.assign(options_.particles, 1.0 / options_.particles);
+  resampled_best_ = -1;
   stats_ = FilterStats();
   local_stats_ = LocalMapStats();
 }
@@ -128,15 +129,22 @@ UpdateStats GridParticleFilter::update(const FeatureSet& features) {
     std::vector<Particle> next;
     next.reserve(drawn.size());
     for (int i : drawn) next.push_back(particles_[i]);  // grids share their tiles
+    resampled_best_ = keptMostProbable(drawn, weights_);
     particles_ = std::move(next);
     weights_.assign(particles_.size(), 1.0 / particles_.size());
     result.resampled = true;
     ++stats_.resamples;
+  } else {
+    resampled_best_ = -1;
   }
   return result;
 }
 
 int GridParticleFilter::bestIndex() const {
+  // After a resampling (equal weights): the copy of the particle that was the most probable.
+  if (resampled_best_ >= 0 && resampled_best_ < static_cast<int>(particles_.size())) {
+    return resampled_best_;
+  }
   int best = 0;
   for (size_t i = 1; i < weights_.size(); ++i) {
     if (weights_[i] > weights_[best]) best = static_cast<int>(i);
@@ -166,6 +174,7 @@ bool GridParticleFilter::resetPose(const Pose2& pose, const Eigen::Matrix3d& cov
     p.pose.z() = wrapAngle(p.pose.z());
   }
   weights_.assign(particles_.size(), 1.0 / particles_.size());
+  resampled_best_ = -1;
   return true;
 }
 

@@ -59,9 +59,6 @@ class FastSlam2 : public SlamFilter {
   std::vector<Observation> prepare(const FeatureSet& features, int* rejected) const;
   const std::vector<Particle>& particleSet() const { return particles_; }
   int bestParticle() const;
-  /// The first position in `kept` (resampled indices into a set with these weights) holding
-  /// the most probable one (-1 for none).
-  static int keptMostProbable(const std::vector<int>& kept, const std::vector<double>& weights);
   /// The pose at every update() since the last reset, oldest first, of the particle that now
   /// carries the most weight (its map is landmarks()); resetPose() starts a new path.
   std::vector<Pose2> bestPath() const override;

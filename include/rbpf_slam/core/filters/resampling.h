@@ -19,5 +19,10 @@ double effectiveSampleSize(const std::vector<double>& weights);
 /// uniform offset. Each particle i with weight w_i is drawn floor(count w_i) or one more times.
 std::vector<int> resampleLowVariance(const std::vector<double>& weights, int count, Rng& rng);
 
+/// The first position in `kept` (indices drawn from a set with these weights) that holds the
+/// most probable particle, or -1 when it was not drawn. After resampling every weight is equal:
+/// this names the copy of the particle that was the best, for the map and path a filter reports.
+int keptMostProbable(const std::vector<int>& kept, const std::vector<double>& weights);
+
 }  // namespace core
 }  // namespace rbpf_slam

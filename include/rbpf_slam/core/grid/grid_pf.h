@@ -59,6 +59,7 @@ class GridParticleFilter : public SlamFilter {
   Rng rng_;
   std::vector<Particle> particles_;
   std::vector<double> weights_;  // normalised
+  int resampled_best_ = -1;      // after a resampling: the copy of the most probable (bestIndex)
   FilterStats stats_;
   LocalMapStats local_stats_;  // totals since reset
   bool mapping_ = true;
