@@ -4,14 +4,8 @@
 # landmark config; a different filter seed changes the trajectory (the check can fail).
 set -euo pipefail
 
-here=$(cd "$(dirname "$0")" && pwd)
-root=$(cd "$here/../.." && pwd)
-bin="${RBPF_BIN:-$root/build/devel/lib/rbpf_slam}"
-for tool in simulate offline_slam; do
-  [ -x "$bin/$tool" ] || { echo "FAIL: $bin/$tool is not built"; exit 1; }
-done
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
+source "$(dirname "$0")/lib/offline.sh"
+require_tools simulate offline_slam
 world="$root/worlds/test_small.yaml"
 
 "$bin/simulate" --world "$world" --output "$work/a.bag" --seed 9 >/dev/null

@@ -11,14 +11,9 @@
 # reported too (on this slice the odometry drifts little: it is not a pass/fail case).
 set -euo pipefail
 
-here=$(cd "$(dirname "$0")" && pwd)
-root=$(cd "$here/../.." && pwd)
-bin="${RBPF_BIN:-$root/build/devel/lib/rbpf_slam}"  # RBPF_BIN: another build
-for tool in offline_slam render_grid; do
-  [ -x "$bin/$tool" ] || { echo "FAIL: $bin/$tool is not built"; exit 1; }
-done
-work=$(mktemp -d)
-trap '[ -n "${KEEP:-}" ] || rm -rf "$work"' EXIT; echo "work: $work"
+source "$(dirname "$0")/lib/offline.sh"
+require_tools offline_slam render_grid
+echo "work: $work"
 config="$root/config/grid_pf_laser.yaml"
 bag="$root/test/data/aces_head.bag"
 ref="$root/test/data/aces_head.ref.tum"

@@ -8,14 +8,8 @@
 # trajectory and the input's tf and scans.
 set -euo pipefail
 
-here=$(cd "$(dirname "$0")" && pwd)
-root=$(cd "$here/../.." && pwd)
-bin="${RBPF_BIN:-$root/build/devel/lib/rbpf_slam}"  # RBPF_BIN: another build
-for tool in simulate offline_slam; do
-  [ -x "$bin/$tool" ] || { echo "FAIL: $bin/$tool is not built"; exit 1; }
-done
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
+source "$(dirname "$0")/lib/offline.sh"
+require_tools simulate offline_slam
 config="$root/config/laser_fastslam2.yaml"
 world="$root/worlds/test_small.yaml"
 

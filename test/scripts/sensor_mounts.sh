@@ -5,14 +5,8 @@
 # angles kept their sign) and, live, "/laser" was dropped as a frame tf does not know.
 set -euo pipefail
 
-here=$(cd "$(dirname "$0")" && pwd)
-root=$(cd "$here/../.." && pwd)
-bin="${RBPF_BIN:-$root/build/devel/lib/rbpf_slam}"
-for tool in simulate offline_slam; do
-  [ -x "$bin/$tool" ] || { echo "FAIL: $bin/$tool is not built"; exit 1; }
-done
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
+source "$(dirname "$0")/lib/offline.sh"
+require_tools simulate offline_slam
 
 "$bin/simulate" --world "$root/worlds/laser_office.yaml" --output "$work/level.bag" --seed 3 \
   --duration 90 >/dev/null

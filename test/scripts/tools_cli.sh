@@ -5,11 +5,7 @@
 # failure.
 set -euo pipefail
 
-here=$(cd "$(dirname "$0")" && pwd)
-root=$(cd "$here/../.." && pwd)
-bin="${RBPF_BIN:-$root/build/devel/lib/rbpf_slam}"
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
+source "$(dirname "$0")/lib/offline.sh"
 status=0
 
 # expect NAME WANTED_STATUS PATTERN COMMAND...: runs COMMAND, checks its exit status and that

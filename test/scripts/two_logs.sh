@@ -6,14 +6,8 @@
 # new map once, and the trajectory it writes is the second log's.
 set -euo pipefail
 
-here=$(cd "$(dirname "$0")" && pwd)
-root=$(cd "$here/../.." && pwd)
-bin="${RBPF_BIN:-$root/build/devel/lib/rbpf_slam}"
-for tool in simulate offline_slam; do
-  [ -x "$bin/$tool" ] || { echo "FAIL: $bin/$tool is not built"; exit 1; }
-done
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
+source "$(dirname "$0")/lib/offline.sh"
+require_tools simulate offline_slam
 
 # The second log: test_small (laser and landmark sensor); the first: another world and route
 # with the sensor the config uses (laser_office has a laser, lee_sim_b landmarks).

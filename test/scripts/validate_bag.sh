@@ -4,14 +4,8 @@
 # 5 s without odometry tf) fails (exit 1) with each fault named.
 set -euo pipefail
 
-here=$(cd "$(dirname "$0")" && pwd)
-root=$(cd "$here/../.." && pwd)
-bin="${RBPF_BIN:-$root/build/devel/lib/rbpf_slam}"
-for tool in simulate validate_bag; do
-  [ -x "$bin/$tool" ] || { echo "FAIL: $bin/$tool is not built"; exit 1; }
-done
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
+source "$(dirname "$0")/lib/offline.sh"
+require_tools simulate validate_bag
 
 "$bin/simulate" --world "$root/worlds/test_small.yaml" --output "$work/clean.bag" --seed 4 >/dev/null
 if ! "$bin/validate_bag" "$work/clean.bag" >"$work/clean.txt"; then
