@@ -110,7 +110,7 @@ void readHeadingPrior(YamlSection section, core::HeadingPriorOptions* o) {
 }
 
 void readHinf(YamlSection section, core::HinfOptions* o) {
-  // Config values are finite; 1e12 is the EKF for any realistic covariance.
+  // Config values are finite (a large gamma, e.g. 1e12, is the EKF for any realistic covariance).
   section.read("mode", &o->mode);
   section.read("theta_pose", &o->theta_pose);
   section.read("theta_landmark", &o->theta_landmark);

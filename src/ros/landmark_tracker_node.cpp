@@ -43,7 +43,9 @@ void LandmarkTrackerNode::featuresCallback(const FeatureArray::ConstPtr& msg) {
     odom_pose =
         toPose2(tf_buffer_.lookupTransform(o.odom_frame, o.base_frame, msg->header.stamp).transform);
     frame_in_base = toPose2(
-        tf_buffer_.lookupTransform(o.base_frame, msg->header.frame_id, msg->header.stamp).transform);
+        tf_buffer_
+            .lookupTransform(o.base_frame, stripSlash(msg->header.frame_id), msg->header.stamp)
+            .transform);
   } catch (const tf2::TransformException& e) {
     drop("no tf", "tf " + msg->header.frame_id, std::string("No transform: ") + e.what());
     return;

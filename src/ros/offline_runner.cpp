@@ -99,8 +99,9 @@ std::vector<OdometryArrival> readOdometry(const rosbag::Bag& bag, const std::str
     const auto msg = m.instantiate<tf2_msgs::TFMessage>();
     if (!msg) continue;
     for (const auto& t : msg->transforms) {
+      // A non-finite transform is refused by tf2: no odometry arrived with it.
       if (stripSlash(t.header.frame_id) == odom_frame &&
-          stripSlash(t.child_frame_id) == base_frame) {
+          stripSlash(t.child_frame_id) == base_frame && toPose2(t.transform).allFinite()) {
         odometry.push_back({m.getTime(), t.header.stamp.toSec()});
       }
     }

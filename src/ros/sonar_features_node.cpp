@@ -62,9 +62,11 @@ void SonarFeaturesNode::sonarCallback(const sensor_msgs::Range::ConstPtr& msg) {
                             .lookupTransform(config_.ros.odom_frame, config_.ros.base_frame,
                                              msg->header.stamp)
                             .transform);
-    sensor_in_base = toPose2(
-        tf_buffer_.lookupTransform(config_.ros.base_frame, msg->header.frame_id, msg->header.stamp)
-            .transform);
+    sensor_in_base =
+        toPose2(tf_buffer_
+                    .lookupTransform(config_.ros.base_frame, stripSlash(msg->header.frame_id),
+                                     msg->header.stamp)
+                    .transform);
   } catch (const tf2::TransformException& e) {
     drop("no tf", "tf " + msg->header.frame_id, std::string("No transform: ") + e.what());
     return;

@@ -120,7 +120,7 @@ int run(const Arguments& arguments) {
   }
   rosbag::Bag bag(bag_path, rosbag::bagmode::Read);
   // Static sensor mounts: base -> sensor frame from tf_static (identity if the same frame).
-  std::vector<std::pair<std::string, core::Pose2>> mounts;
+  std::vector<std::pair<std::string, std::pair<core::Pose2, bool>>> mounts;  // pose, upside down
   const std::vector<std::string> static_topics{"/tf_static", "tf_static"};
   for (const rosbag::MessageInstance& m : rosbag::View(bag, rosbag::TopicQuery(static_topics))) {
     const auto msg = m.instantiate<tf2_msgs::TFMessage>();
@@ -128,7 +128,8 @@ int run(const Arguments& arguments) {
     for (const auto& t : msg->transforms) {
       if (stripSlash(t.header.frame_id) == config.ros.base_frame) {
         mounts.emplace_back(stripSlash(t.child_frame_id),
-                            rbpf_slam::rosbridge::toPose2(t.transform));
+                            std::make_pair(rbpf_slam::rosbridge::toPose2(t.transform),
+                                           rbpf_slam::rosbridge::isUpsideDown(t.transform)));
       }
     }
   }
@@ -151,6 +152,7 @@ int run(const Arguments& arguments) {
       continue;
     }
     core::Pose2 mount = core::Pose2::Zero();
+    bool upside_down = false;
     const std::string frame = stripSlash(msg->header.frame_id);
     if (frame != config.ros.base_frame) {
       auto it = std::find_if(mounts.begin(), mounts.end(),
@@ -159,11 +161,12 @@ int run(const Arguments& arguments) {
         throw std::runtime_error(bag_path + ": no tf_static " + config.ros.base_frame + " -> " +
                                  frame);
       }
-      mount = it->second;
+      mount = it->second.first;
+      upside_down = it->second.second;
     }
     auto scan = std::make_shared<core::RangeScan>();
     std::string error;
-    if (!rbpf_slam::rosbridge::toRangeScan(*msg, mount, scan.get(), &error)) {
+    if (!rbpf_slam::rosbridge::toRangeScan(*msg, mount, scan.get(), &error, upside_down)) {
       ++bad;
       continue;
     }

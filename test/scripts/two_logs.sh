@@ -2,7 +2,7 @@
 # Two logs in one bag (the second's stamps start over, its bag times follow the first's):
 # offline_slam must map the second log with its own odometry. It keeps one tf buffer per run
 # (a single buffer drops the second log's transforms, older than the first's, and maps it with
-# the first log's odometry: ATE ~8 m before the fix, 0.04 m after on these worlds), starts a
+# the first log's odometry: ATE 3.6 m before the fix, 0.04 m after on these worlds), starts a
 # new map once, and the trajectory it writes is the second log's.
 set -euo pipefail
 

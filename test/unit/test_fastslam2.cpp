@@ -276,7 +276,8 @@ class TwoMapsFastSlam2 : public FastSlam2 {
 
 TEST(FastSlam2, KeptMostProbableFindsTheFirstCopyOfTheHeaviest) {
   EXPECT_EQ(keptMostProbable({0, 0, 2, 2, 2}, {0.3, 0.1, 0.6}), 2);
-  EXPECT_EQ(keptMostProbable({0, 0, 1}, {0.3, 0.1, 0.6}), -1);  // not kept
+  EXPECT_EQ(keptMostProbable({1, 0, 0}, {0.3, 0.1, 0.6}), 1);  // the heaviest of those kept
+  EXPECT_EQ(keptMostProbable({}, {0.3, 0.1, 0.6}), -1);
 }
 
 // After a resampling every weight is equal: the map and path reported must still be those of

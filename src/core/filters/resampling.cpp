@@ -47,14 +47,13 @@ std::vector<int> resampleLowVariance(const std::vector<double>& weights, int cou
 }
 
 int keptMostProbable(const std::vector<int>& kept, const std::vector<double>& weights) {
-  int most = -1;
-  for (size_t i = 0; i < weights.size(); ++i) {
-    if (most < 0 || weights[i] > weights[most]) most = static_cast<int>(i);
-  }
+  int best = -1;
   for (size_t j = 0; j < kept.size(); ++j) {
-    if (kept[j] == most) return static_cast<int>(j);
+    const int i = kept[j];
+    if (i < 0 || i >= static_cast<int>(weights.size())) continue;
+    if (best < 0 || weights[i] > weights[kept[best]]) best = static_cast<int>(j);
   }
-  return -1;
+  return best;
 }
 
 }  // namespace core

@@ -183,7 +183,7 @@ UpdateStats RobustFastSlam2::robustUpdate(const std::vector<Observation>& observ
     }
     next.back().path = std::make_shared<PathNode>(next.back().pose, std::move(next.back().path));
   }
-  // Report the most probable candidate's step (it is kept: its weight is the largest).
+  // Report the step of the most probable kept candidate.
   resampled_best_ = keptMostProbable(kept, weights);
   const int reported = resampled_best_ >= 0 ? kept[resampled_best_] : kept[0];
   stats.associated = candidate_counts[reported].associated;

@@ -20,8 +20,9 @@ double effectiveSampleSize(const std::vector<double>& weights);
 std::vector<int> resampleLowVariance(const std::vector<double>& weights, int count, Rng& rng);
 
 /// The first position in `kept` (indices drawn from a set with these weights) that holds the
-/// most probable particle, or -1 when it was not drawn. After resampling every weight is equal:
-/// this names the copy of the particle that was the best, for the map and path a filter reports.
+/// most probable of the kept particles (-1 only when kept is empty). After resampling every
+/// weight is equal: this names the copy of the best particle, for the map and path a filter
+/// reports. (When M are kept of M x K candidates the heaviest candidate may not be drawn.)
 int keptMostProbable(const std::vector<int>& kept, const std::vector<double>& weights);
 
 }  // namespace core
