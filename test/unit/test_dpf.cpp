@@ -151,6 +151,19 @@ TEST(DpfMaster, DownWeightsThenIsolatesAFaultyLocalAndNamesAMissingOne) {
       EXPECT_EQ(master.health()[1].isolations, 1);
     }
   }
+  // With every local isolated at once (here the only one), none may be fused: the master keeps
+  // its prediction (the last estimate, the zero pose, moved by a zero step).
+  for (const std::string fusion : {"average", "information"}) {
+    DpfOptions lone = o;
+    lone.local_filters = 1;
+    lone.isolate_after_steps = 1;
+    lone.fusion = fusion;
+    DpfMaster single(lone);
+    const auto out = single.fuse(1, MotionInput(), {estimateOf(0, 1, bad, 200.0, 0.9)});
+    EXPECT_EQ(single.health()[0].isolations, 1) << fusion;
+    EXPECT_LT(out.mean.head<2>().norm(), 1e-9) << fusion << ": the isolated local was fused";
+    EXPECT_TRUE(out.mean.allFinite() && out.covariance.allFinite()) << fusion;
+  }
   // Neff-only weighting watches Neff: a collapsed local filter is flagged there.
   o.weighting = "neff";
   DpfMaster neff_master(o);

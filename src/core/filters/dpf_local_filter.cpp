@@ -3,6 +3,7 @@
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 #include <Eigen/LU>
+#include <algorithm>
 #include <cmath>
 
 #include "rbpf_slam/core/filters/measurement_models.h"
@@ -86,6 +87,7 @@ void DpfLocalFilter::reset(const Pose2& initial_pose) {
   for (auto& p : particles_) p.pose = initial_pose;
   weights_.assign(options_.particles, 1.0 / options_.particles);
   log_weights_.assign(options_.particles, 0.0);
+  resampled_best_ = -1;
   reinitialisations_ = 0;
   has_posterior_ = false;
 }
@@ -95,6 +97,12 @@ bool DpfLocalFilter::owns(int id) const {
 }
 
 int DpfLocalFilter::bestParticle() const {
+  // Right after a resampling (equal weights): the copy of the particle that was the best.
+  if (resampled_best_ >= 0 && resampled_best_ < static_cast<int>(weights_.size()) &&
+      *std::min_element(weights_.begin(), weights_.end()) ==
+          *std::max_element(weights_.begin(), weights_.end())) {
+    return resampled_best_;
+  }
   int best = 0;
   for (size_t j = 1; j < weights_.size(); ++j) {
     if (weights_[j] > weights_[best]) best = static_cast<int>(j);
@@ -196,6 +204,7 @@ void DpfLocalFilter::reinitialise(const DpfFeedback& feedback) {
   }
   weights_.assign(particles_.size(), 1.0 / particles_.size());
   log_weights_.assign(particles_.size(), 0.0);
+  resampled_best_ = -1;
   has_posterior_ = false;  // the cloud is the master's now
   ++reinitialisations_;
 }
@@ -359,6 +368,7 @@ void DpfLocalFilter::resampleIfBelow(double neff) {
   const size_t n = particles_.size();
   if (!(neff < options_.resample_threshold * n)) return;
   const std::vector<int> drawn = resampleLowVariance(weights_, static_cast<int>(n), rng_);
+  resampled_best_ = keptMostProbable(drawn, weights_);
   std::vector<Particle> next;
   next.reserve(n);
   for (int k : drawn) next.push_back(particles_[k]);

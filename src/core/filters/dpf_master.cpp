@@ -211,8 +211,16 @@ DpfMasterOutput DpfMaster::fuse(long step, const MotionInput& motion,
   out.weights = normalised(w);
   std::vector<double> trust(n, 0.0);
   for (int i = 0; i < n; ++i) trust[i] = total > 0.0 ? std::min(1.0, n * out.weights[i]) : 0.0;
-  if (options_.fusion != "information" ||
-      !fuseInformation(prior_mean, by_index, out.weights, trust, &out)) {
+  if (!(total > 0.0)) {
+    // Every local is isolated or inconsistent: none is fused (averaging with the uniform
+    // weights would let the faulty ones back in); the master keeps its own prediction, with
+    // the locals' prior spread.
+    out.mean = prior_mean;
+    Eigen::Matrix3d spread = Eigen::Matrix3d::Zero();
+    for (int i = 0; i < n; ++i) spread += by_index[i]->prior_covariance / n;
+    out.covariance = regularised(spread.trace() > 0.0 ? spread : last_.covariance);
+  } else if (options_.fusion != "information" ||
+             !fuseInformation(prior_mean, by_index, out.weights, trust, &out)) {
     fuseAverage(by_index, out.weights, &out);
   }
   out.feedback.mean = out.mean;

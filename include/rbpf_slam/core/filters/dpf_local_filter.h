@@ -85,6 +85,7 @@ class DpfLocalFilter {
   std::vector<Particle> particles_;
   std::vector<double> weights_;
   std::vector<double> log_weights_;  // since the last resampling
+  int resampled_best_ = -1;  // after a resampling: the copy of the most probable (bestParticle)
   // This step's per-particle Gaussians: predicted (motion only) and proposal (after the
   // observations), for the prior and posterior moments the master fuses.
   std::vector<Pose2> prior_means_, proposal_means_;
