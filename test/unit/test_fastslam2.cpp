@@ -278,6 +278,11 @@ TEST(FastSlam2, KeptMostProbableFindsTheFirstCopyOfTheHeaviest) {
   EXPECT_EQ(keptMostProbable({0, 0, 2, 2, 2}, {0.3, 0.1, 0.6}), 2);
   EXPECT_EQ(keptMostProbable({1, 0, 0}, {0.3, 0.1, 0.6}), 1);  // the heaviest of those kept
   EXPECT_EQ(keptMostProbable({}, {0.3, 0.1, 0.6}), -1);
+  // The best particle: the first largest weight, or the resampled best while weights are equal.
+  EXPECT_EQ(mostProbable({0.2, 0.4, 0.4}, -1), 1);
+  EXPECT_EQ(mostProbable({0.2, 0.4, 0.4}, 0), 1);  // the weights tell: no longer after a resampling
+  EXPECT_EQ(mostProbable({0.5, 0.5}, 1), 1);
+  EXPECT_EQ(mostProbable({}, 0), -1);
 }
 
 // After a resampling every weight is equal: the map and path reported must still be those of

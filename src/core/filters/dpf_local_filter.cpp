@@ -97,17 +97,7 @@ bool DpfLocalFilter::owns(int id) const {
 }
 
 int DpfLocalFilter::bestParticle() const {
-  // Right after a resampling (equal weights): the copy of the particle that was the best.
-  if (resampled_best_ >= 0 && resampled_best_ < static_cast<int>(weights_.size()) &&
-      *std::min_element(weights_.begin(), weights_.end()) ==
-          *std::max_element(weights_.begin(), weights_.end())) {
-    return resampled_best_;
-  }
-  int best = 0;
-  for (size_t j = 1; j < weights_.size(); ++j) {
-    if (weights_[j] > weights_[best]) best = static_cast<int>(j);
-  }
-  return best;
+  return std::max(0, mostProbable(weights_, resampled_best_));
 }
 
 std::vector<DpfLocalFilter::Observation> DpfLocalFilter::prepare(const FeatureSet& features,

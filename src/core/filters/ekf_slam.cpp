@@ -142,10 +142,7 @@ bool EkfSlam::correct(int i, const Observation& o) {
       state_(k + 1) += M_PI;
       covariance_.row(k) *= -1.0;
       covariance_.col(k) *= -1.0;
-      // Positions along the line change sign with its normal (alongLine): the extent too.
-      const double lowest = info_[i].extent_min;
-      info_[i].extent_min = -info_[i].extent_max;
-      info_[i].extent_max = -lowest;
+      reverseExtent(&info_[i].extent_min, &info_[i].extent_max);
     }
     state_(k + 1) = wrapAngle(state_(k + 1));
   }

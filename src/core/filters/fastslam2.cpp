@@ -228,9 +228,7 @@ bool FastSlam2::updateLandmark(LandmarkMap* map, const Match& match, const Pose2
     if (lm.mean.x() < 0.0) {  // keep rho >= 0: flip the normal and the extent's direction
       lm.mean << -lm.mean.x(), wrapAngle(lm.mean.y() + M_PI);
       lm.covariance(0, 1) = lm.covariance(1, 0) = -lm.covariance(0, 1);
-      const double lo = -lm.extent_max, hi = -lm.extent_min;
-      lm.extent_min = lo;
-      lm.extent_max = hi;
+      reverseExtent(&lm.extent_min, &lm.extent_max);
     }
     const double a = alongLine(lm.mean, transformPoint(pose, observation.start));
     const double b = alongLine(lm.mean, transformPoint(pose, observation.end));
@@ -493,20 +491,7 @@ void FastSlam2::weighAndResample(UpdateStats* stats) {
   }
 }
 
-int FastSlam2::bestParticle() const {
-  if (resampled_best_ >= 0 && resampled_best_ < static_cast<int>(particles_.size())) {
-    return resampled_best_;
-  }
-  int best = -1;
-  double best_weight = -1.0;
-  for (size_t i = 0; i < weights_.size(); ++i) {
-    if (weights_[i] > best_weight) {
-      best_weight = weights_[i];
-      best = static_cast<int>(i);
-    }
-  }
-  return best;
-}
+int FastSlam2::bestParticle() const { return mostProbable(weights_, resampled_best_); }
 
 std::vector<Pose2> FastSlam2::bestPath() const {
   std::vector<Pose2> path;

@@ -91,11 +91,9 @@ void LandmarkParticleFilter::computeCentroid() {
   theta = reference + theta / n;
   normalizeLine(rho, theta);
   // A centroid whose normal turned over (the mean signed rho changed sign) counts positions
-  // along the line the other way (alongLine): the extent flips with it.
+  // along the line the other way: the extent turns with it.
   if (has_extent_ && std::fabs(wrapAngle(theta - centroid_.y())) > M_PI / 2) {
-    const double lowest = extent_min_;
-    extent_min_ = -extent_max_;
-    extent_max_ = -lowest;
+    reverseExtent(&extent_min_, &extent_max_);
   }
   centroid_ << rho, theta;
 }

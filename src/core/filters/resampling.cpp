@@ -56,5 +56,16 @@ int keptMostProbable(const std::vector<int>& kept, const std::vector<double>& we
   return best;
 }
 
+int mostProbable(const std::vector<double>& weights, int resampled_best) {
+  if (weights.empty()) return -1;
+  // max_element: the first of equal maxima (minmax_element would give the last).
+  const auto highest = std::max_element(weights.begin(), weights.end());
+  if (resampled_best >= 0 && resampled_best < static_cast<int>(weights.size()) &&
+      *std::min_element(weights.begin(), weights.end()) == *highest) {
+    return resampled_best;
+  }
+  return static_cast<int>(highest - weights.begin());
+}
+
 }  // namespace core
 }  // namespace rbpf_slam

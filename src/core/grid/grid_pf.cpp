@@ -1,5 +1,6 @@
 #include "rbpf_slam/core/grid/grid_pf.h"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -141,15 +142,7 @@ UpdateStats GridParticleFilter::update(const FeatureSet& features) {
 }
 
 int GridParticleFilter::bestIndex() const {
-  // After a resampling (equal weights): the copy of the particle that was the most probable.
-  if (resampled_best_ >= 0 && resampled_best_ < static_cast<int>(particles_.size())) {
-    return resampled_best_;
-  }
-  int best = 0;
-  for (size_t i = 1; i < weights_.size(); ++i) {
-    if (weights_[i] > weights_[best]) best = static_cast<int>(i);
-  }
-  return best;
+  return std::max(0, mostProbable(weights_, resampled_best_));
 }
 
 PoseEstimate GridParticleFilter::estimate() const {

@@ -103,6 +103,14 @@ inline double alongLine(const Eigen::Vector2d& line, const Eigen::Vector2d& p) {
   return -std::sin(line.y()) * p.x() + std::cos(line.y()) * p.y();
 }
 
+/// A line's extent [*lo, *hi] (positions alongLine) after its normal turned by pi (rho < 0
+/// made positive): positions along the line change sign, so the extent becomes [-hi, -lo].
+inline void reverseExtent(double* lo, double* hi) {
+  const double old_lo = *lo;
+  *lo = -*hi;
+  *hi = -old_lo;
+}
+
 /// The point of line (rho, alpha) at position s along its direction.
 inline Eigen::Vector2d pointOnLine(const Eigen::Vector2d& line, double s) {
   const double c = std::cos(line.y()), si = std::sin(line.y());

@@ -25,5 +25,10 @@ std::vector<int> resampleLowVariance(const std::vector<double>& weights, int cou
 /// reports. (When M are kept of M x K candidates the heaviest candidate may not be drawn.)
 int keptMostProbable(const std::vector<int>& kept, const std::vector<double>& weights);
 
+/// The index of the most probable particle: the first largest weight, or, while the weights are
+/// all equal after a resampling, `resampled_best` (keptMostProbable of that resampling; -1 for
+/// none). -1 when there are no weights. Every particle filter's best particle is this.
+int mostProbable(const std::vector<double>& weights, int resampled_best);
+
 }  // namespace core
 }  // namespace rbpf_slam
