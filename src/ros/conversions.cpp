@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 
 namespace rbpf_slam {
 namespace rosbridge {
@@ -33,11 +34,25 @@ core::Pose2 toPose2(const geometry_msgs::Pose& p) {
   return core::Pose2(p.position.x, p.position.y, tf2::getYaw(p.orientation));
 }
 
-bool isUpsideDown(const geometry_msgs::Transform& t) {
+SensorMount toSensorMount(const geometry_msgs::Transform& t) {
+  SensorMount mount;
+  mount.pose = toPose2(t);
   const geometry_msgs::Quaternion& q = t.rotation;
   const double norm2 = q.x * q.x + q.y * q.y + q.z * q.z + q.w * q.w;
+  if (!(norm2 > 0.0) || !std::isfinite(norm2)) return mount;
   // R(2, 2), the z component of the frame's z axis, of the normalised quaternion.
-  return norm2 > 0.0 && 1.0 - 2.0 * (q.x * q.x + q.y * q.y) / norm2 < 0.0;
+  const double up = 1.0 - 2.0 * (q.x * q.x + q.y * q.y) / norm2;
+  mount.upside_down = up < 0.0;
+  mount.tilt_rad = std::acos(std::min(1.0, std::fabs(up)));
+  return mount;
+}
+
+std::string tiltWarning(const std::string& frame, const SensorMount& mount) {
+  char angle[32];
+  std::snprintf(angle, sizeof(angle), "%.1f", mount.tilt_rad * 180.0 / M_PI);
+  return "Sensor frame " + frame + " is tilted " + angle + " deg from " +
+         (mount.upside_down ? "upside down" : "level") +
+         ": its readings are used as if level (rbpf_slam maps in 2D)";
 }
 
 geometry_msgs::Transform toTransform(const core::Pose2& pose) {

@@ -31,25 +31,24 @@ LaserFeaturesNode::LaserFeaturesNode(ros::NodeHandle nh, ros::NodeHandle private
 }
 
 void LaserFeaturesNode::scanCallback(const sensor_msgs::LaserScan::ConstPtr& msg) {
-  core::Pose2 sensor_in_base;
-  bool upside_down = false;
+  SensorMount mount;
   try {
     // tf2 refuses frame names with a leading '/' (old drivers and bags still write them).
-    const geometry_msgs::Transform mount =
-        tf_buffer_
-            .lookupTransform(config_.ros.base_frame, stripSlash(msg->header.frame_id),
-                             msg->header.stamp)
-            .transform;
-    sensor_in_base = toPose2(mount);
-    upside_down = isUpsideDown(mount);
+    mount = toSensorMount(tf_buffer_
+                              .lookupTransform(config_.ros.base_frame,
+                                               stripSlash(msg->header.frame_id), msg->header.stamp)
+                              .transform);
   } catch (const tf2::TransformException& e) {
     warnings_.warn("tf " + msg->header.frame_id, "No transform " + config_.ros.base_frame + " -> " +
                                                     msg->header.frame_id + ": " + e.what());
     return;
   }
+  if (isTilted(mount)) {
+    warnings_.warn("tilt " + msg->header.frame_id, tiltWarning(msg->header.frame_id, mount));
+  }
   core::RangeScan scan;
   std::string error;
-  const bool ok = toRangeScan(*msg, sensor_in_base, &scan, &error, upside_down);
+  const bool ok = toRangeScan(*msg, mount.pose, &scan, &error, mount.upside_down);
   if (!error.empty()) warnings_.warn("scan header", "Scan: " + error);
   if (!ok) return;
   std_msgs::Header header;

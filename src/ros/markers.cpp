@@ -116,6 +116,11 @@ std::vector<Eigen::Vector2d> covarianceEllipse(const Eigen::Vector2d& mean,
 visualization_msgs::MarkerArray LandmarkMarkers::update(
     const std::vector<core::LandmarkEstimate>& landmarks, const std_msgs::Header& header) {
   visualization_msgs::MarkerArray array;
+  if (delete_all_) {
+    array.markers.push_back(baseMarker(header, "", 0, visualization_msgs::Marker::SPHERE));
+    array.markers.back().action = visualization_msgs::Marker::DELETEALL;
+    delete_all_ = false;
+  }
   std::set<std::pair<std::string, int>> now;
   for (const auto& l : landmarks) {
     if (!isFinite(l)) continue;

@@ -18,6 +18,7 @@
 #include <limits>
 #include <map>
 #include <memory>
+#include <set>
 #include <sstream>
 
 #include "rbpf_slam/core/grid/grid_map_data.h"
@@ -328,6 +329,7 @@ OfflineSummary OfflineRunner::run() {
                              ros_options.features_topic + "'");
   }
   std::vector<core::Pose2> transducers;  // sonar_cloud: found in tf at the first cloud
+  std::set<std::string> tilted_frames;   // warned once each
   std::vector<double> update_ms;
   ProgressBar progress(options_.progress);
   for (const rosbag::MessageInstance& m : view) {
@@ -362,18 +364,19 @@ OfflineSummary OfflineRunner::run() {
       ++segment;
     }
     const tf2::BufferCore& tf = *tf_segments[segment].buffer;
-    core::Pose2 odom_pose, sensor_in_base;
-    bool sensor_upside_down = false;
+    core::Pose2 odom_pose;
+    SensorMount mount;
     try {
       odom_pose = toPose2(tf.lookupTransform(ros_options.odom_frame, ros_options.base_frame,
                                              stamp).transform);
-      const geometry_msgs::Transform mount =
-          tf.lookupTransform(ros_options.base_frame, stripSlash(frame), stamp).transform;
-      sensor_in_base = toPose2(mount);
-      sensor_upside_down = isUpsideDown(mount);
+      mount = toSensorMount(
+          tf.lookupTransform(ros_options.base_frame, stripSlash(frame), stamp).transform);
     } catch (const tf2::TransformException&) {
       ++summary.dropped_no_tf;
       continue;
+    }
+    if (isTilted(mount) && tilted_frames.insert(frame).second) {
+      std::fprintf(stderr, "offline_slam: %s\n", tiltWarning(frame, mount).c_str());
     }
     // The session learns of the odometry as a node would: what the bag received up to this
     // frame, and on until a stamp at or after the frame's (the transform that made the lookup
@@ -395,7 +398,7 @@ OfflineSummary OfflineRunner::run() {
     if (scan) {
       core::RangeScan range_scan;
       std::string error;
-      if (!toRangeScan(*scan, sensor_in_base, &range_scan, &error, sensor_upside_down)) {
+      if (!toRangeScan(*scan, mount.pose, &range_scan, &error, mount.upside_down)) {
         ++summary.dropped_bad_message;
         continue;
       }
@@ -403,7 +406,7 @@ OfflineSummary OfflineRunner::run() {
     } else if (range) {
       core::ConeReading reading;
       std::string error;
-      if (!toConeReading(*range, sensor_in_base, &reading, &error)) {
+      if (!toConeReading(*range, mount.pose, &reading, &error)) {
         ++summary.dropped_bad_message;
         continue;
       }
@@ -421,14 +424,13 @@ OfflineSummary OfflineRunner::run() {
       }
       int unmatched = 0;
       const std::vector<core::ConeReading> readings = core::coneReadingsFromCloud(
-          toBasePoints(*cloud, sensor_in_base), transducers, ros_options.sonar_cloud_fov, 0.0,
+          toBasePoints(*cloud, mount.pose), transducers, ros_options.sonar_cloud_fov, 0.0,
           ros_options.sonar_cloud_max_range, stamp.toSec(), kCloudAxisTolerance, &unmatched);
       summary.dropped_cloud_points += unmatched;
       result = pipeline_.processSonar(readings, odom_pose, stamp.toSec());
     } else {
       int dropped = 0;
-      result = pipeline_.processFeatures(toFeatureSet(*features, sensor_in_base, &dropped),
-                                         odom_pose);
+      result = pipeline_.processFeatures(toFeatureSet(*features, mount.pose, &dropped), odom_pose);
       summary.dropped_features += dropped;
     }
     const double ms =
@@ -485,6 +487,7 @@ OfflineSummary OfflineRunner::run() {
       std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
   summary.cpu_s = static_cast<double>(std::clock() - cpu_start) / CLOCKS_PER_SEC;
   summary.updates = static_cast<long>(update_ms.size());
+  summary.tilted_frames = static_cast<long>(tilted_frames.size());
   summary.resets = pipeline_.session().resets();
   summary.gaps = pipeline_.session().gaps();
   if (!update_ms.empty()) {
@@ -568,6 +571,7 @@ OfflineSummary OfflineRunner::writeOutputs(const OfflineSummary& in) const {
        << "  \"skipped_transforms\": " << summary.skipped_transforms << ",\n"
        << "  \"tf_segments\": " << summary.tf_segments << ",\n"
        << "  \"dropped_features\": " << summary.dropped_features << ",\n"
+       << "  \"tilted_frames\": " << summary.tilted_frames << ",\n"
        << "  \"landmarks\": " << summary.landmarks << ",\n"
        << "  \"particles\": " << summary.particles << ",\n"
        << "  \"fallbacks\": " << summary.fallbacks << ",\n"

@@ -133,11 +133,12 @@ std::unique_ptr<TfGatedSubscriber<Message>> SlamNode::subscribeFiltered(
 
 void SlamNode::sonarCallback(const sensor_msgs::Range::ConstPtr& msg) {
   if (!readyForFrame()) return;
-  core::Pose2 odom_pose, sensor_in_base;
-  if (!lookupPoses(msg->header, &odom_pose, &sensor_in_base)) return;
+  core::Pose2 odom_pose;
+  SensorMount mount;
+  if (!lookupPoses(msg->header, &odom_pose, &mount)) return;
   core::ConeReading reading;
   std::string error;
-  if (!toConeReading(*msg, sensor_in_base, &reading, &error)) {
+  if (!toConeReading(*msg, mount.pose, &reading, &error)) {
     warnThrottled("sonar " + msg->header.frame_id,
                   "Dropping a sonar reading from " + msg->header.frame_id + ": " + error);
     diagnostics_.recordDrop("bad sonar reading");
@@ -158,8 +159,9 @@ void SlamNode::sonarCloudCallback(const sensor_msgs::PointCloud::ConstPtr& msg) 
   constexpr double kAxisTolerance = 0.05;  // m: a cloud point lies on its transducer's axis
   constexpr int kMaxTransducers = 64;
   if (!readyForFrame()) return;
-  core::Pose2 odom_pose, frame_in_base;
-  if (!lookupPoses(msg->header, &odom_pose, &frame_in_base)) return;
+  core::Pose2 odom_pose;
+  SensorMount cloud_frame;
+  if (!lookupPoses(msg->header, &odom_pose, &cloud_frame)) return;
   const io::RosOptions& o = config_.ros;
   for (int i = 0; sonar_transducers_.empty() && i < kMaxTransducers; ++i) {
     const std::string frame = o.sonar_frame_prefix + std::to_string(i);
@@ -178,7 +180,7 @@ void SlamNode::sonarCloudCallback(const sensor_msgs::PointCloud::ConstPtr& msg) 
   }
   int unmatched = 0;
   const std::vector<core::ConeReading> readings = core::coneReadingsFromCloud(
-      toBasePoints(*msg, frame_in_base), sonar_transducers_, o.sonar_cloud_fov, 0.0,
+      toBasePoints(*msg, cloud_frame.pose), sonar_transducers_, o.sonar_cloud_fov, 0.0,
       o.sonar_cloud_max_range, msg->header.stamp.toSec(), kAxisTolerance, &unmatched);
   if (unmatched > 0) {
     diagnostics_.recordDrop("sonar cloud point off every axis", unmatched);
@@ -193,12 +195,12 @@ void SlamNode::sonarCloudCallback(const sensor_msgs::PointCloud::ConstPtr& msg) 
 
 void SlamNode::scanCallback(const sensor_msgs::LaserScan::ConstPtr& msg) {
   if (!readyForFrame()) return;
-  core::Pose2 odom_pose, sensor_in_base;
-  bool upside_down = false;
-  if (!lookupPoses(msg->header, &odom_pose, &sensor_in_base, &upside_down)) return;
+  core::Pose2 odom_pose;
+  SensorMount mount;
+  if (!lookupPoses(msg->header, &odom_pose, &mount)) return;
   core::RangeScan scan;
   std::string error;
-  const bool ok = toRangeScan(*msg, sensor_in_base, &scan, &error, upside_down);
+  const bool ok = toRangeScan(*msg, mount.pose, &scan, &error, mount.upside_down);
   if (!error.empty()) warnThrottled("scan header " + msg->header.frame_id, "Scan: " + error);
   if (!ok) {
     diagnostics_.recordDrop("bad scan");
@@ -211,10 +213,11 @@ void SlamNode::scanCallback(const sensor_msgs::LaserScan::ConstPtr& msg) {
 
 void SlamNode::featuresCallback(const FeatureArray::ConstPtr& msg) {
   if (!readyForFrame()) return;
-  core::Pose2 odom_pose, frame_in_base;
-  if (!lookupPoses(msg->header, &odom_pose, &frame_in_base)) return;
+  core::Pose2 odom_pose;
+  SensorMount frame;
+  if (!lookupPoses(msg->header, &odom_pose, &frame)) return;
   int dropped = 0;
-  const core::FeatureSet features = toFeatureSet(*msg, frame_in_base, &dropped);
+  const core::FeatureSet features = toFeatureSet(*msg, frame.pose, &dropped);
   if (dropped > 0) {
     diagnostics_.recordDrop("non-finite feature", dropped);
     warnThrottled("non-finite features", "Dropped " + std::to_string(dropped) +
@@ -286,7 +289,7 @@ void SlamNode::messageDropped(const std_msgs::Header& header, tf2_ros::FilterFai
 }
 
 bool SlamNode::lookupPoses(const std_msgs::Header& header, core::Pose2* odom_pose,
-                           core::Pose2* frame_in_base, bool* upside_down) {
+                           SensorMount* frame_mount) {
   const io::RosOptions& o = config_.ros;
   const std::string* from = &o.odom_frame;
   const std::string* to = &o.base_frame;
@@ -299,8 +302,7 @@ bool SlamNode::lookupPoses(const std_msgs::Header& header, core::Pose2* odom_pos
     const geometry_msgs::Transform mount =
         tf_buffer_.lookupTransform(o.base_frame, stripSlash(header.frame_id), header.stamp)
             .transform;
-    *frame_in_base = toPose2(mount);
-    if (upside_down) *upside_down = isUpsideDown(mount);
+    *frame_mount = toSensorMount(mount);
   } catch (const tf2::TransformException& e) {
     diagnostics_.recordDrop("tf lookup failed");
     warnThrottled("tf " + *from + " -> " + *to, "No transform " + *from + " -> " + *to + " at " +
@@ -308,11 +310,14 @@ bool SlamNode::lookupPoses(const std_msgs::Header& header, core::Pose2* odom_pos
                                                     e.what());
     return false;
   }
-  if (!odom_pose->allFinite() || !frame_in_base->allFinite()) {
+  if (!odom_pose->allFinite() || !frame_mount->pose.allFinite()) {
     diagnostics_.recordDrop("tf not finite");
     warnThrottled("non-finite tf", "tf gave a non-finite pose for " + o.odom_frame + " -> " +
                                        o.base_frame + " -> " + header.frame_id);
     return false;
+  }
+  if (isTilted(*frame_mount)) {
+    warnThrottled("tilt " + header.frame_id, tiltWarning(header.frame_id, *frame_mount));
   }
   return true;
 }

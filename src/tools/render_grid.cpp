@@ -120,16 +120,19 @@ int run(const Arguments& arguments) {
   }
   rosbag::Bag bag(bag_path, rosbag::bagmode::Read);
   // Static sensor mounts: base -> sensor frame from tf_static (identity if the same frame).
-  std::vector<std::pair<std::string, std::pair<core::Pose2, bool>>> mounts;  // pose, upside down
+  std::vector<std::pair<std::string, rbpf_slam::rosbridge::SensorMount>> mounts;
   const std::vector<std::string> static_topics{"/tf_static", "tf_static"};
   for (const rosbag::MessageInstance& m : rosbag::View(bag, rosbag::TopicQuery(static_topics))) {
     const auto msg = m.instantiate<tf2_msgs::TFMessage>();
     if (!msg) continue;
     for (const auto& t : msg->transforms) {
       if (stripSlash(t.header.frame_id) == config.ros.base_frame) {
-        mounts.emplace_back(stripSlash(t.child_frame_id),
-                            std::make_pair(rbpf_slam::rosbridge::toPose2(t.transform),
-                                           rbpf_slam::rosbridge::isUpsideDown(t.transform)));
+        const auto mount = rbpf_slam::rosbridge::toSensorMount(t.transform);
+        if (rbpf_slam::rosbridge::isTilted(mount)) {
+          std::fprintf(stderr, "render_grid: %s\n",
+                       rbpf_slam::rosbridge::tiltWarning(t.child_frame_id, mount).c_str());
+        }
+        mounts.emplace_back(stripSlash(t.child_frame_id), mount);
       }
     }
   }
@@ -151,8 +154,7 @@ int run(const Arguments& arguments) {
       ++unmatched;
       continue;
     }
-    core::Pose2 mount = core::Pose2::Zero();
-    bool upside_down = false;
+    rbpf_slam::rosbridge::SensorMount mount;  // level at the base when the scan is in its frame
     const std::string frame = stripSlash(msg->header.frame_id);
     if (frame != config.ros.base_frame) {
       auto it = std::find_if(mounts.begin(), mounts.end(),
@@ -161,12 +163,12 @@ int run(const Arguments& arguments) {
         throw std::runtime_error(bag_path + ": no tf_static " + config.ros.base_frame + " -> " +
                                  frame);
       }
-      mount = it->second.first;
-      upside_down = it->second.second;
+      mount = it->second;
     }
     auto scan = std::make_shared<core::RangeScan>();
     std::string error;
-    if (!rbpf_slam::rosbridge::toRangeScan(*msg, mount, scan.get(), &error, upside_down)) {
+    if (!rbpf_slam::rosbridge::toRangeScan(*msg, mount.pose, scan.get(), &error,
+                                           mount.upside_down)) {
       ++bad;
       continue;
     }

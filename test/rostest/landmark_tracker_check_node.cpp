@@ -48,6 +48,10 @@ TEST(LandmarkTracker, PublishesEventsAndLandmarks) {
         std::lock_guard<std::mutex> lock(seen.mutex);
         for (const auto& m : msg->markers) {
           const auto key = std::make_pair(m.ns, m.id);
+          if (m.action == visualization_msgs::Marker::DELETEALL) {
+            seen.shown.clear();
+            continue;
+          }
           if (m.action == visualization_msgs::Marker::DELETE) {
             seen.shown.erase(key);
             continue;

@@ -1,12 +1,14 @@
-// Landmark markers, particle poses and trajectory messages (no roscore needed; run by
-// markers.test so that it sits with the other ROS-layer tests).
+// Landmark markers, particle poses and trajectory messages, and sensor mounts from tf (no
+// roscore needed; run by markers.test so that it sits with the other ROS-layer tests).
 
 #include <gtest/gtest.h>
 #include <ros/time.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
+#include "rbpf_slam/ros/conversions.h"
 #include "rbpf_slam/ros/markers.h"
 
 namespace rbpf_slam {
@@ -46,9 +48,17 @@ int count(const visualization_msgs::MarkerArray& a, const std::string& ns, int a
   return n;
 }
 
+/// The array without the DELETEALL that opens the first one.
+visualization_msgs::MarkerArray withoutDeleteAll(visualization_msgs::MarkerArray a) {
+  a.markers.erase(std::remove_if(a.markers.begin(), a.markers.end(),
+                                 [](const Marker& m) { return m.action == Marker::DELETEALL; }),
+                  a.markers.end());
+  return a;
+}
+
 TEST(LandmarkMarkers, LinesAreSegmentsAndPointsHaveEllipses) {
   rosbridge::LandmarkMarkers markers;
-  const auto a = markers.update({line(3), point(7, 1.0, 2.0)}, mapHeader());
+  const auto a = withoutDeleteAll(markers.update({line(3), point(7, 1.0, 2.0)}, mapHeader()));
   ASSERT_EQ(a.markers.size(), 3u);
   for (const auto& m : a.markers) EXPECT_EQ(m.header.frame_id, "map");
   const Marker& l = a.markers[0];
@@ -85,12 +95,84 @@ TEST(LandmarkMarkers, DeletesWhatDisappeared) {
   EXPECT_EQ(count(c, "lines", Marker::DELETE), 1);
 }
 
+/// A restarted node (or a bag played again) must not leave the earlier run's markers in rviz
+/// for ids the new run does not use: its first array opens with a DELETEALL, once.
+TEST(LandmarkMarkers, TheFirstArrayClearsWhatAnEarlierRunShowed) {
+  rosbridge::LandmarkMarkers markers;
+  const auto a = markers.update({line(1)}, mapHeader());
+  ASSERT_FALSE(a.markers.empty());
+  EXPECT_EQ(a.markers.front().action, Marker::DELETEALL);
+  EXPECT_EQ(a.markers.front().header.frame_id, "map");
+  EXPECT_EQ(count(a, "lines", Marker::ADD), 1);
+  const auto b = markers.update({line(1)}, mapHeader());
+  for (const auto& m : b.markers) EXPECT_NE(m.action, Marker::DELETEALL);
+  // Even an empty first map clears the display.
+  rosbridge::LandmarkMarkers empty;
+  const auto c = empty.update({}, mapHeader());
+  ASSERT_EQ(c.markers.size(), 1u);
+  EXPECT_EQ(c.markers[0].action, Marker::DELETEALL);
+  // After clear() the publisher no longer knows what is shown: clear it all again.
+  markers.clear();
+  const auto d = markers.update({line(2)}, mapHeader());
+  ASSERT_FALSE(d.markers.empty());
+  EXPECT_EQ(d.markers.front().action, Marker::DELETEALL);
+  EXPECT_EQ(count(d, "lines", Marker::DELETE), 0);
+}
+
 TEST(LandmarkMarkers, NonFiniteLandmarksAreLeftOut) {
   rosbridge::LandmarkMarkers markers;
   auto bad = point(4, std::numeric_limits<double>::quiet_NaN(), 0.0);
-  const auto a = markers.update({bad, line(1)}, mapHeader());
+  const auto a = withoutDeleteAll(markers.update({bad, line(1)}, mapHeader()));
   ASSERT_EQ(a.markers.size(), 1u);
   EXPECT_EQ(a.markers[0].ns, "lines");
+}
+
+geometry_msgs::Transform mountRpy(double roll, double pitch, double yaw, double scale = 1.0) {
+  // q = yaw (z) * pitch (y) * roll (x), optionally not of unit length.
+  const double cr = std::cos(0.5 * roll), sr = std::sin(0.5 * roll);
+  const double cp = std::cos(0.5 * pitch), sp = std::sin(0.5 * pitch);
+  const double cy = std::cos(0.5 * yaw), sy = std::sin(0.5 * yaw);
+  geometry_msgs::Transform t;
+  t.translation.x = 0.2;
+  t.translation.y = -0.1;
+  t.rotation.w = scale * (cr * cp * cy + sr * sp * sy);
+  t.rotation.x = scale * (sr * cp * cy - cr * sp * sy);
+  t.rotation.y = scale * (cr * sp * cy + sr * cp * sy);
+  t.rotation.z = scale * (cr * cp * sy - sr * sp * cy);
+  return t;
+}
+
+TEST(SensorMount, LevelUpsideDownAndTiltedMounts) {
+  const double deg = M_PI / 180.0;
+  const auto level = rosbridge::toSensorMount(mountRpy(0.0, 0.0, 0.5));
+  EXPECT_FALSE(level.upside_down);
+  EXPECT_NEAR(level.tilt_rad, 0.0, 1e-6);
+  EXPECT_FALSE(rosbridge::isTilted(level));
+  EXPECT_NEAR(level.pose.x(), 0.2, 1e-12);
+  EXPECT_NEAR(level.pose.z(), 0.5, 1e-9);
+  // Upside down (rolled by pi): not tilted, and the pose keeps the x axis' direction.
+  const auto flipped = rosbridge::toSensorMount(mountRpy(M_PI, 0.0, 0.5));
+  EXPECT_TRUE(flipped.upside_down);
+  EXPECT_NEAR(flipped.tilt_rad, 0.0, 1e-6);
+  EXPECT_FALSE(rosbridge::isTilted(flipped));
+  EXPECT_NEAR(flipped.pose.z(), 0.5, 1e-9);
+  // Pitched 10 deg (a laser looking down), a non-unit quaternion: tilted, said with the angle.
+  const auto pitched = rosbridge::toSensorMount(mountRpy(0.0, 10.0 * deg, 0.5, 3.0));
+  EXPECT_FALSE(pitched.upside_down);
+  EXPECT_NEAR(pitched.tilt_rad, 10.0 * deg, 1e-6);
+  EXPECT_TRUE(rosbridge::isTilted(pitched));
+  const std::string warning = rosbridge::tiltWarning("front_laser", pitched);
+  EXPECT_NE(warning.find("front_laser"), std::string::npos) << warning;
+  EXPECT_NE(warning.find("10.0 deg from level"), std::string::npos) << warning;
+  // Upside down and rolled a further 8 deg: tilted from upside down.
+  const auto both = rosbridge::toSensorMount(mountRpy(M_PI - 8.0 * deg, 0.0, 0.0));
+  EXPECT_TRUE(both.upside_down);
+  EXPECT_NEAR(both.tilt_rad, 8.0 * deg, 1e-6);
+  EXPECT_NE(rosbridge::tiltWarning("l", both).find("from upside down"), std::string::npos);
+  // 3 deg is within the level tolerance; a zero quaternion reads as level.
+  EXPECT_FALSE(rosbridge::isTilted(rosbridge::toSensorMount(mountRpy(3.0 * deg, 0.0, 0.0))));
+  geometry_msgs::Transform zero;
+  EXPECT_FALSE(rosbridge::isTilted(rosbridge::toSensorMount(zero)));
 }
 
 TEST(CovarianceEllipse, TwoSigmaAxesFollowTheEigenvectors) {

@@ -4,8 +4,12 @@ about its x axis on /tf_static, each scan's beams reversed so that every beam st
 same point of the world) and whose scans name their frame with a leading '/', as old drivers
 do. SLAM on the copy must give the map and path of the original.
 
-    remount_laser.py IN.bag OUT.bag
+    remount_laser.py IN.bag OUT.bag            # upside down, as above
+    remount_laser.py --pitch-deg D IN.bag OUT.bag
+        # instead: the laser frame pitched by D degrees on /tf_static, scans unchanged (a
+        # tilted laser that rbpf_slam uses as if level, and must say so)
 """
+import math
 import sys
 
 import rosbag
@@ -21,7 +25,20 @@ def roll_pi(q):
     q.w, q.x, q.y, q.z = -x, w, z, -y
 
 
+def pitch(q, degrees):
+    """q * (pitch by degrees): the frame turned about its own y axis."""
+    h = 0.5 * math.radians(degrees)
+    c, s = math.cos(h), math.sin(h)
+    w, x, y, z = q.w, q.x, q.y, q.z
+    # (w, x, y, z) * (c, 0, s, 0)
+    q.w, q.x, q.y, q.z = w * c - y * s, x * c - z * s, y * c + w * s, z * c + x * s
+
+
 def main(argv):
+    pitch_deg = None
+    if len(argv) == 5 and argv[1] == "--pitch-deg":
+        pitch_deg = float(argv[2])
+        argv = [argv[0]] + argv[3:]
     if len(argv) != 3:
         sys.stderr.write(__doc__)
         return 2
@@ -39,9 +56,12 @@ def main(argv):
             if msg._type == TF and topic.lstrip("/") == "tf_static":
                 for transform in msg.transforms:
                     if transform.child_frame_id.lstrip("/") in scan_frames:
-                        roll_pi(transform.transform.rotation)
+                        if pitch_deg is None:
+                            roll_pi(transform.transform.rotation)
+                        else:
+                            pitch(transform.transform.rotation, pitch_deg)
                         rolled += 1
-            elif msg._type == SCAN:
+            elif msg._type == SCAN and pitch_deg is None:
                 n = len(msg.ranges)
                 angle_max = msg.angle_min + (n - 1) * msg.angle_increment
                 # Beam i of the copy is beam n-1-i of the original: at -(its angle) upside down.

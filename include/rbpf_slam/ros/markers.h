@@ -18,7 +18,9 @@ namespace rbpf_slam {
 namespace rosbridge {
 
 /// Turns successive landmark lists into MarkerArrays with stable ids, deleting markers of
-/// landmarks that disappeared since the previous call.
+/// landmarks that disappeared since the previous call. The first array (and the first after
+/// clear()) starts with a DELETEALL: rviz keeps the markers of an earlier run of the node
+/// (a restart, a bag played again) otherwise, for every id the new run does not reuse.
 class LandmarkMarkers {
  public:
   /// Marker namespaces: one marker per landmark in each, id = landmark id.
@@ -31,11 +33,15 @@ class LandmarkMarkers {
   /// Landmarks with non-finite values are left out.
   visualization_msgs::MarkerArray update(const std::vector<core::LandmarkEstimate>& landmarks,
                                          const std_msgs::Header& header);
-  /// Forgets what was published (e.g. when the subscriber side was reset too).
-  void clear() { published_.clear(); }
+  /// Forgets what was published; the next array starts with a DELETEALL.
+  void clear() {
+    published_.clear();
+    delete_all_ = true;
+  }
 
  private:
   std::set<std::pair<std::string, int>> published_;
+  bool delete_all_ = true;
 };
 
 /// The (finite) particle poses in header.frame_id.

@@ -36,6 +36,7 @@ struct OfflineSummary {
   long dropped_bad_message = 0;
   long skipped_transforms = 0;  // repeated or malformed tf in the bag
   long dropped_features = 0;    // non-finite features inside otherwise good messages
+  long tilted_frames = 0;       // sensor frames tilted over kMaxLevelTiltRad (used as if level)
   long tf_segments = 0;         // tf runs: 1 + the times the odometry stamps went back
   long dropped_cloud_points = 0;  // sonar_cloud points on no transducer's axis
   int landmarks = 0;

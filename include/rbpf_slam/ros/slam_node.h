@@ -28,6 +28,7 @@
 
 #include "rbpf_slam/core/slam/slam_pipeline.h"
 #include "rbpf_slam/io/slam_config.h"
+#include "rbpf_slam/ros/conversions.h"
 #include "rbpf_slam/ros/diagnostics.h"
 #include "rbpf_slam/ros/markers.h"
 #include "rbpf_slam/ros/node_support.h"
@@ -66,11 +67,11 @@ class SlamNode {
   void messageDropped(const std_msgs::Header& header, tf2_ros::FilterFailureReason reason);
   /// A message whose frame tf does not connect to the base: dropped, counted, warned.
   void frameNotInTf(const std_msgs::Header& header, const std::string& tf_error);
-  /// The odometry pose of the base and the pose of the message frame in the base frame at
-  /// the header's stamp; false (with a throttled warning) if tf cannot give them.
-  /// upside_down (optional): whether the frame's z axis points down (isUpsideDown).
+  /// The odometry pose of the base and the mount of the message frame in the base frame at
+  /// the header's stamp; false (with a throttled warning) if tf cannot give them. A tilted
+  /// frame is used as if level, with a throttled warning.
   bool lookupPoses(const std_msgs::Header& header, core::Pose2* odom_pose,
-                   core::Pose2* frame_in_base, bool* upside_down = nullptr);
+                   SensorMount* frame_mount);
   void handleResult(core::FrameResult result, const ros::Time& stamp, double update_ms);
   void publishDiagnostics(const ros::WallTimerEvent& event);
   void publishState(const ros::Time& stamp);
