@@ -184,6 +184,54 @@ TEST(LineSlam, LinesCarryTheirObservedExtent) {
   }
 }
 
+/// A line through (almost) the map origin whose estimate crosses it: its normal turns over
+/// (rho < 0 made positive), and positions along the line change sign, so the extent must turn
+/// too. Before session 12 the EKF's and the multi-filter's did not: the wall was mirrored
+/// through the origin (x in [-3, 1] instead of [-1, 3]).
+TEST(LineSlam, AnExtentTurnsWithItsLinesNormal) {
+  for (const std::string variant : {"ekf_slam", "multifilter_smc"}) {
+    SCOPED_TRACE(variant);
+    FilterOptions o = optionsFor(variant);
+    o.motion.alpha1 = o.motion.alpha2 = o.motion.alpha3 = o.motion.alpha4 = 0.0;
+    o.motion.min_sigma_xy_m = 0.0;
+    o.motion.min_sigma_theta_rad = 0.0;
+    auto filter = createFilter(o);
+    const Pose2 robot(1.0, -2.0, 0.0);
+    filter->reset(robot);
+    // The wall y = wall_y, x in [-1, 3], seen from below: rho = wall_y + 2, theta = pi / 2.
+    auto wallAt = [&](double wall_y, double sigma_rho) {
+      FeatureSet set;
+      LineFeature f;
+      f.rho = wall_y - robot.y();
+      f.theta = M_PI / 2;
+      f.covariance = Eigen::Vector2d(sigma_rho * sigma_rho, 1e-6).asDiagonal();
+      f.start = Eigen::Vector2d(-1.0 - robot.x(), f.rho);
+      f.end = Eigen::Vector2d(3.0 - robot.x(), f.rho);
+      set.lines.push_back(f);
+      return set;
+    };
+    filter->update(wallAt(0.02, 0.1));  // a loose first sighting: rho 0.02 in the map
+    MotionInput still;
+    still.dt = 1.0;
+    for (int k = 0; k < 5; ++k) {
+      filter->predict(still);
+      filter->update(wallAt(-0.03, 0.002));  // precise ones across the origin
+    }
+    const auto landmarks = filter->landmarks();
+    ASSERT_EQ(landmarks.size(), 1u);
+    const auto& wall = landmarks[0];
+    // The estimate crossed the origin: rho ~ 0.03 with the normal turned to -pi / 2.
+    EXPECT_NEAR(wall.mean.x(), 0.03, 0.02);
+    EXPECT_NEAR(std::fabs(wrapAngle(wall.mean.y() + M_PI / 2)), 0.0, 0.05);
+    const double x_lo = std::min(wall.start.x(), wall.end.x());
+    const double x_hi = std::max(wall.start.x(), wall.end.x());
+    EXPECT_NEAR(x_lo, -1.0, 0.1);
+    EXPECT_NEAR(x_hi, 3.0, 0.1);
+    EXPECT_NEAR(wall.start.y(), -0.03, 0.03);
+    EXPECT_NEAR(wall.end.y(), -0.03, 0.03);
+  }
+}
+
 TEST(LineSlam, EkfIsConsistentAndBeatsOdometryOnASyntheticLoop) {
   FilterOptions o = optionsFor("ekf_slam");
   o.motion.alpha1 = 0.01;
