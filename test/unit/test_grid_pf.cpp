@@ -6,7 +6,6 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
-#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <memory>
@@ -238,44 +237,6 @@ TEST(MapMatching, MatchIsTheAgreementOfLocalAndGlobalCells) {
   // Shifted by 0.5 m the occupied cell lands on the free one: disagreement.
   EXPECT_NEAR(matchLocalMap(local, Pose2(-0.5, 0.0, 0.0), g, o),
               std::tanh(0.5 * o.log_odds_free), 1e-6);
-}
-
-/// A turned local map must write each world cell once: sampling the turned cell centres wrote
-/// some world cells twice and left holes between others (2504 of 40000 at 0.3 rad).
-TEST(MapIntegration, ATurnedLocalMapWritesEachWorldCellOnceWithoutHoles) {
-  GridOptions o;
-  o.resolution_m = 0.1;
-  std::vector<LocalMapCell> local;
-  for (int ix = -20; ix < 20; ++ix) {
-    for (int iy = -20; iy < 20; ++iy) {
-      LocalMapCell cell;
-      cell.center = Eigen::Vector2d((ix + 0.5) * 0.1, (iy + 0.5) * 0.1);
-      cell.occupied = true;
-      local.push_back(cell);
-    }
-  }
-  for (double heading : {0.0, 0.3, 0.7854, -2.0}) {
-    SCOPED_TRACE(heading);
-    const Pose2 pose(0.013, -0.021, heading);
-    TiledLogOddsGrid g(0.1, -5.0, -5.0, 100, 100, 16);
-    integrateLocalMap(local, pose, o, &g);
-    int written = 0, twice = 0, holes = 0;
-    for (int cx = 0; cx < 100; ++cx) {
-      for (int cy = 0; cy < 100; ++cy) {
-        const float l = g.logOdds(cx, cy);
-        if (l != 0.0f) ++written;
-        if (std::abs(l - 2.0f * static_cast<float>(o.log_odds_occupied)) < 1e-4f) ++twice;
-        // A world cell whose centre lies well inside the turned 4 m square must be written.
-        const Eigen::Vector2d centre(-5.0 + (cx + 0.5) * 0.1, -5.0 + (cy + 0.5) * 0.1);
-        const Eigen::Vector2d in_base = Eigen::Rotation2Dd(-heading) * (centre - pose.head<2>());
-        if (in_base.cwiseAbs().maxCoeff() < 1.9 && l == 0.0f) ++holes;
-      }
-    }
-    EXPECT_EQ(twice, 0);
-    EXPECT_EQ(holes, 0);
-    // The turned square covers 16 m^2: 1600 world cells, give or take its border.
-    EXPECT_NEAR(written, 1600, 40);
-  }
 }
 
 FilterOptions gridOptions(int particles) {

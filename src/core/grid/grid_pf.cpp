@@ -60,34 +60,10 @@ void integrateLocalMap(const std::vector<LocalMapCell>& local, const Pose2& pose
   const float occupied = static_cast<float>(options.log_odds_occupied);
   const float free = static_cast<float>(options.log_odds_free);
   const float clamp = static_cast<float>(options.log_odds_clamp);
-  // Each world cell takes the local cell its centre falls in (nearest-neighbour resampling).
-  // Placing the turned local centres instead wrote some world cells twice and skipped others
-  // whenever the heading is not a multiple of 90 deg. The world cells whose centres can fall in
-  // a local cell lie within half its diagonal of the local cell's placed centre.
-  const double local_res = options.resolution_m;
-  const double world_res = grid->resolution();
-  const int reach = static_cast<int>(std::ceil(0.5 * std::sqrt(2.0) * local_res / world_res));
-  const double c = std::cos(pose.z()), s = std::sin(pose.z());
+  int cx, cy;
   for (const LocalMapCell& cell : local) {
-    const long ix = static_cast<long>(std::floor(cell.center.x() / local_res));
-    const long iy = static_cast<long>(std::floor(cell.center.y() / local_res));
-    const Eigen::Vector2d placed = transformPoint(pose, cell.center);
-    const long px = static_cast<long>(std::floor((placed.x() - grid->originX()) / world_res));
-    const long py = static_cast<long>(std::floor((placed.y() - grid->originY()) / world_res));
-    for (long cx = std::max(0L, px - reach); cx <= std::min<long>(grid->width() - 1, px + reach);
-         ++cx) {
-      const double dx = grid->originX() + (cx + 0.5) * world_res - pose.x();
-      for (long cy = std::max(0L, py - reach); cy <= std::min<long>(grid->height() - 1, py + reach);
-           ++cy) {
-        const double dy = grid->originY() + (cy + 0.5) * world_res - pose.y();
-        // The world cell's centre in the base frame, and the local cell it falls in.
-        if (static_cast<long>(std::floor((c * dx + s * dy) / local_res)) != ix ||
-            static_cast<long>(std::floor((-s * dx + c * dy) / local_res)) != iy) {
-          continue;
-        }
-        grid->add(static_cast<int>(cx), static_cast<int>(cy), cell.occupied ? occupied : free,
-                  clamp);
-      }
+    if (grid->cellOf(transformPoint(pose, cell.center), &cx, &cy)) {
+      grid->add(cx, cy, cell.occupied ? occupied : free, clamp);
     }
   }
 }

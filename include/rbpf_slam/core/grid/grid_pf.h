@@ -18,8 +18,7 @@ namespace core {
 /// weight * (+1 occupied, -1 free) * (2 p - 1), p the grid's occupancy (unknown: 0).
 double matchLocalMap(const std::vector<LocalMapCell>& local, const Pose2& pose,
                      const TiledLogOddsGrid& grid, const GridOptions& options);
-/// Eq. 13: adds the local map placed at pose to the grid's log odds; each world cell takes the
-/// local cell its centre falls in, so a turned local map writes every covered cell once.
+/// Eq. 13: adds the local map placed at pose to the grid's log odds.
 void integrateLocalMap(const std::vector<LocalMapCell>& local, const Pose2& pose,
                        const GridOptions& options, TiledLogOddsGrid* grid);
 
