@@ -18,7 +18,11 @@ namespace core {
 /// weight * (+1 occupied, -1 free) * (2 p - 1), p the grid's occupancy (unknown: 0).
 double matchLocalMap(const std::vector<LocalMapCell>& local, const Pose2& pose,
                      const TiledLogOddsGrid& grid, const GridOptions& options);
-/// Eq. 13: adds the local map placed at pose to the grid's log odds.
+/// Eq. 13: adds the local map placed at pose to the grid's log odds. Each local cell writes the
+/// world cell its placed centre falls in, the cell matchLocalMap reads for it. At headings off
+/// the axes some world cells are written twice by one scan and some not at all (~6 % at
+/// 0.3 rad). Writing each world cell once was tried and is worse on real laser data: see
+/// docs/results.md, "Session 13: one write per world cell (tried, not kept)".
 void integrateLocalMap(const std::vector<LocalMapCell>& local, const Pose2& pose,
                        const GridOptions& options, TiledLogOddsGrid* grid);
 
