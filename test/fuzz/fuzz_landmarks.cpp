@@ -26,5 +26,6 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     }
   } catch (const std::runtime_error&) {
   }
+  std::remove(path.c_str());
   return 0;
 }

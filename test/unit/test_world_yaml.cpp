@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <system_error>
 #include <vector>
 
 #include "rbpf_slam/core/sim/simulator.h"
@@ -35,10 +36,20 @@ sensors:
     range_noise_m: 0.01
 )";
 
+/// The test's temporary directory, removed when the test program exits.
+struct TemporaryDirectory {
+  fs::path path =
+      fs::temp_directory_path() / ("rbpf_slam_test_world_yaml_" + std::to_string(getpid()));
+  ~TemporaryDirectory() {
+    std::error_code ignored;
+    fs::remove_all(path, ignored);
+  }
+};
+
 /// Writes text to a fresh file in the test's temporary directory and returns its path.
 std::string writeWorld(const std::string& name, const std::string& text) {
-  const fs::path dir =
-      fs::temp_directory_path() / ("rbpf_slam_test_world_yaml_" + std::to_string(getpid()));
+  static const TemporaryDirectory directory;
+  const fs::path& dir = directory.path;
   fs::create_directories(dir);
   const fs::path path = dir / name;
   std::ofstream(path) << text;
