@@ -12,8 +12,10 @@ export PATH=/usr/bin:/bin:/usr/sbin:/sbin:$PATH
 
 APT_PACKAGES=(ros-base-dev libtf2-ros-dev libtf2-geometry-msgs-dev libsensor-msgs-dev
   libnav-msgs-dev libvisualization-msgs-dev libdiagnostic-msgs-dev libstd-srvs-dev librosbag-dev
-  librostest-dev python3-rostest ros-message-generation libeigen3-dev libgtest-dev
-  python3-roslaunch python3-rosmaster rosbash python3-rostopic python3-rosbag libyaml-cpp-dev
+  libtopic-tools-dev librostest-dev python3-rostest ros-message-generation libeigen3-dev
+  libgtest-dev
+  python3-roslaunch python3-rosmaster rosbash python3-rostopic python3-rosbag python3-sensor-msgs
+  libyaml-cpp-dev
   libbenchmark-dev zlib1g-dev cmake g++ make python3-numpy python3-yaml rviz xvfb imagemagick)
 
 install_missing() {

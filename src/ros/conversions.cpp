@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 
 namespace rbpf_slam {
 namespace rosbridge {
@@ -153,6 +154,60 @@ bool toConeReading(const sensor_msgs::Range& msg, const core::Pose2& sensor_in_b
                            : std::numeric_limits<double>::infinity();
   reading->field_of_view = msg.field_of_view;
   reading->sensor_pose = sensor_in_base;
+  return true;
+}
+
+bool toPointCloud(const sensor_msgs::PointCloud2& msg, sensor_msgs::PointCloud* out,
+                  std::string* error) {
+  // Offset and width of a float field, or -1 when the cloud has none.
+  auto field = [&msg](const std::string& name, int* bytes) {
+    for (const auto& f : msg.fields) {
+      if (f.name != name || f.count < 1) continue;
+      if (f.datatype == sensor_msgs::PointField::FLOAT32)
+        *bytes = 4;
+      else if (f.datatype == sensor_msgs::PointField::FLOAT64)
+        *bytes = 8;
+      else
+        return -1;
+      return f.offset + *bytes <= msg.point_step ? static_cast<int>(f.offset) : -1;
+    }
+    return -1;
+  };
+  int x_bytes = 0, y_bytes = 0, z_bytes = 0;
+  const int x = field("x", &x_bytes), y = field("y", &y_bytes), z = field("z", &z_bytes);
+  if (x < 0 || y < 0) {
+    *error = "no float32/float64 x and y fields within point_step";
+    return false;
+  }
+  if (msg.is_bigendian) {
+    *error = "big-endian clouds are not supported";
+    return false;
+  }
+  const uint64_t points = static_cast<uint64_t>(msg.width) * msg.height;
+  if (msg.point_step == 0 || points * msg.point_step > msg.data.size()) {
+    *error = "data holds " + std::to_string(msg.data.size()) + " bytes, width x height x " +
+             "point_step needs " + std::to_string(points * msg.point_step);
+    return false;
+  }
+  auto read = [&msg](uint64_t at, int bytes) {
+    if (bytes == 4) {
+      float v;
+      std::memcpy(&v, &msg.data[at], 4);
+      return static_cast<double>(v);
+    }
+    double v;
+    std::memcpy(&v, &msg.data[at], 8);
+    return v;
+  };
+  out->header = msg.header;
+  out->channels.clear();
+  out->points.resize(points);
+  for (uint64_t i = 0; i < points; ++i) {
+    const uint64_t base = i * msg.point_step;
+    out->points[i].x = static_cast<float>(read(base + x, x_bytes));
+    out->points[i].y = static_cast<float>(read(base + y, y_bytes));
+    out->points[i].z = z >= 0 ? static_cast<float>(read(base + z, z_bytes)) : 0.0f;
+  }
   return true;
 }
 

@@ -3,6 +3,7 @@
 #include <geometry_msgs/PoseWithCovarianceStamped.h>
 #include <rosbag/bag.h>
 #include <rosbag/view.h>
+#include <sensor_msgs/PointCloud2.h>
 #include <tf2/buffer_core.h>
 #include <tf2/exceptions.h>
 #include <tf2_msgs/TFMessage.h>
@@ -198,6 +199,53 @@ std::vector<core::Pose2> lookupTransducers(const tf2::BufferCore& tf, const std:
   return poses;
 }
 
+/// "'/a' (type), '/b' (type)": the bag's topics, for error messages.
+std::string describeTopics(const rosbag::Bag& bag) {
+  std::map<std::string, std::string> types;
+  for (const rosbag::ConnectionInfo* c : rosbag::View(bag).getConnections()) {
+    types[c->topic] = c->datatype;
+  }
+  if (types.empty()) return "no topics";
+  std::string out;
+  for (const auto& [topic, type] : types) {
+    out += (out.empty() ? "'" : ", '") + topic + "' (" + type + ")";
+  }
+  return out;
+}
+
+/// Refuses a topic of the wrong message type (e.g. scan_topic set to an odometry topic)
+/// instead of counting every message as malformed.
+void checkTopicTypes(rosbag::View& view, const std::string& bag_path, const io::RosOptions& ros,
+                     const std::string& sensor_topic) {
+  for (const rosbag::ConnectionInfo* c : view.getConnections()) {
+    const std::string topic = stripSlash(c->topic);
+    std::vector<std::string> allowed;
+    std::string key;
+    if (topic == stripSlash(ros.features_topic)) {
+      allowed = {"rbpf_slam/FeatureArray"};
+      key = "features_topic";
+    } else if (topic == stripSlash(sensor_topic) && sensor_topic == ros.scan_topic) {
+      allowed = {"sensor_msgs/LaserScan"};
+      key = "scan_topic";
+    } else if (topic == stripSlash(sensor_topic) && sensor_topic == ros.sonar_cloud_topic &&
+               ros.sonar_source == "cloud") {
+      allowed = {"sensor_msgs/PointCloud", "sensor_msgs/PointCloud2"};
+      key = "sonar_cloud_topic";
+    } else if (topic == stripSlash(sensor_topic)) {
+      allowed = {"sensor_msgs/Range"};
+      key = "sonar_topic";
+    }
+    if (allowed.empty() ||
+        std::find(allowed.begin(), allowed.end(), c->datatype) != allowed.end()) {
+      continue;
+    }
+    std::string names;
+    for (const auto& a : allowed) names += (names.empty() ? "" : " or ") + a;
+    throw std::runtime_error(bag_path + ": topic '" + c->topic + "' carries " + c->datatype +
+                             ", but " + key + " needs " + names);
+  }
+}
+
 /// --output-bag: the input's tf and sensor messages plus what rbpf_slam_node would have
 /// published (map -> odom on /tf, ~pose, ~landmarks, and ~trajectory at the end), for rviz.
 class ResultBag {
@@ -279,6 +327,13 @@ OfflineSummary OfflineRunner::run() {
     throw std::runtime_error(options_.output_dir + ": cannot create the output directory" +
                              (error ? ": " + error.message() : ""));
   }
+  if (!options_.output_bag.empty()) {
+    std::error_code same_error;
+    if (std::filesystem::equivalent(options_.output_bag, options_.bag_path, same_error)) {
+      throw std::runtime_error("--output-bag " + options_.output_bag + " is the input bag " +
+                               options_.bag_path + ": writing it would destroy the recording");
+    }
+  }
   rosbag::Bag bag;
   try {
     bag.open(options_.bag_path, rosbag::bagmode::Read);
@@ -312,21 +367,32 @@ OfflineSummary OfflineRunner::run() {
     sensor_topic = ros_options.sonar_source == "cloud" ? ros_options.sonar_cloud_topic
                                                        : ros_options.sonar_topic;
   }
-  std::vector<std::string> topics{"/" + stripSlash(ros_options.features_topic),
-                                  stripSlash(ros_options.features_topic)};
+  // grid_pf maps raw readings only: line and point features are of no use to it.
+  const bool uses_features = config_.filter.variant != "grid_pf";
+  std::vector<std::string> topics;
+  if (uses_features) {
+    topics = {"/" + stripSlash(ros_options.features_topic), stripSlash(ros_options.features_topic)};
+  }
   if (!sensor_topic.empty()) {
     topics.push_back("/" + stripSlash(sensor_topic));
     topics.push_back(stripSlash(sensor_topic));
   }
+  rosbag::View view(bag, rosbag::TopicQuery(topics));
+  checkTopicTypes(view, options_.bag_path, ros_options, sensor_topic);
+  if (view.size() == 0) {
+    std::string wanted = sensor_topic.empty() ? "" : "'" + sensor_topic + "'";
+    if (uses_features) {
+      wanted += (wanted.empty() ? "'" : " or '") + ros_options.features_topic + "'";
+    } else {
+      wanted += " (" + config_.filter.variant + " maps raw " + config_.frontend +
+                " readings, not features)";
+    }
+    throw std::runtime_error(options_.bag_path + ": no messages on " + wanted + "; the bag has " +
+                             describeTopics(bag));
+  }
   std::unique_ptr<ResultBag> result_bag;
   if (!options_.output_bag.empty()) {
     result_bag = std::make_unique<ResultBag>(options_.output_bag, ros_options);
-  }
-  rosbag::View view(bag, rosbag::TopicQuery(topics));
-  if (view.size() == 0) {
-    throw std::runtime_error(options_.bag_path + ": no messages on " +
-                             (sensor_topic.empty() ? "" : "'" + sensor_topic + "' or ") + "'" +
-                             ros_options.features_topic + "'");
   }
   std::vector<core::Pose2> transducers;  // sonar_cloud: found in tf at the first cloud
   std::set<std::string> tilted_frames;   // warned once each
@@ -349,15 +415,32 @@ OfflineSummary OfflineRunner::run() {
     } else if ((cloud = m.instantiate<sensor_msgs::PointCloud>())) {
       frame = cloud->header.frame_id;
       stamp = cloud->header.stamp;
+    } else if (const auto cloud2 = m.instantiate<sensor_msgs::PointCloud2>()) {
+      // RosAria's sonar_pointcloud2: the same points.
+      auto converted = boost::make_shared<sensor_msgs::PointCloud>();
+      std::string error;
+      if (!toPointCloud(*cloud2, converted.get(), &error)) {
+        if (summary.dropped_bad_message++ == 0)
+          summary.first_bad_message = m.getTopic() + ": " + error;
+        continue;
+      }
+      cloud = converted;
+      frame = cloud->header.frame_id;
+      stamp = cloud->header.stamp;
     } else if ((features = m.instantiate<FeatureArray>())) {
       frame = features->header.frame_id;
       stamp = features->header.stamp;
     } else {
-      ++summary.dropped_bad_message;
+      if (summary.dropped_bad_message++ == 0) {
+        summary.first_bad_message = m.getTopic() + ": unreadable " + m.getDataType();
+      }
       continue;
     }
     if (frame.empty() || stamp.isZero()) {
-      ++summary.dropped_bad_message;
+      if (summary.dropped_bad_message++ == 0) {
+        summary.first_bad_message =
+            m.getTopic() + ": " + (frame.empty() ? "no frame_id" : "a zero stamp");
+      }
       continue;
     }
     while (segment + 1 < tf_segments.size() && m.getTime() >= tf_segments[segment + 1].starts) {
@@ -366,13 +449,21 @@ OfflineSummary OfflineRunner::run() {
     const tf2::BufferCore& tf = *tf_segments[segment].buffer;
     core::Pose2 odom_pose;
     SensorMount mount;
+    const std::string* from = &ros_options.odom_frame;
+    const std::string* to = &ros_options.base_frame;
     try {
       odom_pose = toPose2(tf.lookupTransform(ros_options.odom_frame, ros_options.base_frame,
                                              stamp).transform);
+      from = &ros_options.base_frame;
+      to = &frame;
       mount = toSensorMount(
           tf.lookupTransform(ros_options.base_frame, stripSlash(frame), stamp).transform);
-    } catch (const tf2::TransformException&) {
-      ++summary.dropped_no_tf;
+    } catch (const tf2::TransformException& e) {
+      if (summary.dropped_no_tf++ == 0) {
+        char at[32];
+        std::snprintf(at, sizeof(at), "%.3f", stamp.toSec());
+        summary.first_tf_error = *from + " -> " + *to + " at " + at + ": " + e.what();
+      }
       continue;
     }
     if (isTilted(mount) && tilted_frames.insert(frame).second) {
@@ -399,7 +490,7 @@ OfflineSummary OfflineRunner::run() {
       core::RangeScan range_scan;
       std::string error;
       if (!toRangeScan(*scan, mount.pose, &range_scan, &error, mount.upside_down)) {
-        ++summary.dropped_bad_message;
+        if (summary.dropped_bad_message++ == 0) summary.first_bad_message = "scan: " + error;
         continue;
       }
       result = pipeline_.processScan(range_scan, odom_pose);
@@ -407,7 +498,7 @@ OfflineSummary OfflineRunner::run() {
       core::ConeReading reading;
       std::string error;
       if (!toConeReading(*range, mount.pose, &reading, &error)) {
-        ++summary.dropped_bad_message;
+        if (summary.dropped_bad_message++ == 0) summary.first_bad_message = "sonar: " + error;
         continue;
       }
       result = pipeline_.processSonar({reading}, odom_pose, stamp.toSec());
@@ -445,6 +536,7 @@ OfflineSummary OfflineRunner::run() {
       case core::FrameResult::kUpdated:
       case core::FrameResult::kFirstFrame:
         update_ms.push_back(ms);
+        summary.features_rejected += pipeline_.session().lastStats().features_rejected;
         if (result_bag) result_bag->update(stamp, pipeline_.session());
         break;
       case core::FrameResult::kSkippedNoMotion:
@@ -572,6 +664,7 @@ OfflineSummary OfflineRunner::writeOutputs(const OfflineSummary& in) const {
        << "  \"tf_segments\": " << summary.tf_segments << ",\n"
        << "  \"dropped_features\": " << summary.dropped_features << ",\n"
        << "  \"tilted_frames\": " << summary.tilted_frames << ",\n"
+       << "  \"features_rejected\": " << summary.features_rejected << ",\n"
        << "  \"landmarks\": " << summary.landmarks << ",\n"
        << "  \"particles\": " << summary.particles << ",\n"
        << "  \"fallbacks\": " << summary.fallbacks << ",\n"

@@ -64,8 +64,10 @@ SlamNode::SlamNode(ros::NodeHandle nh, ros::NodeHandle private_nh,
   if (config_.frontend == "laser") {
     scan_input_ = subscribeFiltered(ros_options.scan_topic, &SlamNode::scanCallback);
   } else if (config_.frontend == "sonar" && ros_options.sonar_source == "cloud") {
-    sonar_cloud_input_ =
-        subscribeFiltered(ros_options.sonar_cloud_topic, &SlamNode::sonarCloudCallback);
+    sonar_cloud_input_ = subscribeFiltered(std::string(), &SlamNode::sonarCloudCallback);
+    sonar_cloud_subscriber_ =
+        nh_.subscribe(ros_options.sonar_cloud_topic, static_cast<uint32_t>(ros_options.queue_size),
+                      &SlamNode::sonarCloudArrived, this);
   } else if (config_.frontend == "sonar") {
     sonar_input_ = subscribeFiltered(ros_options.sonar_topic, &SlamNode::sonarCallback);
   }
@@ -153,6 +155,29 @@ void SlamNode::sonarCallback(const sensor_msgs::Range::ConstPtr& msg) {
   const core::FrameResult result =
       pipeline_.processSonar({reading}, odom_pose, msg->header.stamp.toSec());
   handleResult(result, msg->header.stamp, millisecondsSince(t0));
+}
+
+void SlamNode::sonarCloudArrived(const topic_tools::ShapeShifter::ConstPtr& msg) {
+  const std::string& type = msg->getDataType();
+  if (type == "sensor_msgs/PointCloud") {
+    sonar_cloud_input_->add(msg->instantiate<sensor_msgs::PointCloud>());
+    return;
+  }
+  if (type == "sensor_msgs/PointCloud2") {
+    auto cloud = boost::make_shared<sensor_msgs::PointCloud>();
+    std::string error;
+    if (toPointCloud(*msg->instantiate<sensor_msgs::PointCloud2>(), cloud.get(), &error)) {
+      sonar_cloud_input_->add(cloud);
+      return;
+    }
+    diagnostics_.recordDrop("bad sonar cloud");
+    warnThrottled("sonar cloud2", "Dropping a sonar_cloud PointCloud2: " + error);
+    return;
+  }
+  diagnostics_.recordDrop("sonar cloud of another type");
+  warnThrottled("sonar cloud type", config_.ros.sonar_cloud_topic + " carries " + type +
+                                        ": sonar_cloud must be sensor_msgs/PointCloud or "
+                                        "PointCloud2");
 }
 
 void SlamNode::sonarCloudCallback(const sensor_msgs::PointCloud::ConstPtr& msg) {
@@ -344,6 +369,15 @@ void SlamNode::handleResult(core::FrameResult result, const ros::Time& stamp, do
   diagnostics_.recordUpdate(update_ms);
   ++updates_;
   stale_drops_in_a_row_ = 0;
+  const int rejected = pipeline_.session().lastStats().features_rejected;
+  if (rejected > 0) {
+    diagnostics_.recordDrop("feature the filter cannot use", rejected);
+    warnThrottled("features rejected",
+                  "The " + config_.filter.variant + " filter skipped " + std::to_string(rejected) +
+                      " feature(s) of the frame at " + std::to_string(stamp.toSec()) +
+                      ": non-finite or degenerate, or of a kind it ignores (dpf uses points "
+                      "with known ids only)");
+  }
   const core::FilterStats stats = pipeline_.session().filter().stats();
   ROS_INFO_STREAM_THROTTLE(kSummaryPeriodS,
                            "rbpf_slam_node: " << updates_ << " updates, " << stats.landmarks

@@ -25,7 +25,9 @@ const char kUsage[] =
     "  --set key=value  overrides a config key (dotted for sections: motion.alpha1=0.1)\n"
     "  --reference F    TUM ground truth: ATE in summary.json\n"
     "  --output-bag F   the input's tf and sensors plus map -> odom, pose, landmarks, trajectory\n"
-    "Writes DIR/trajectory.tum, trajectory_online.tum, landmarks.yaml, summary.json, map.png.\n";
+    "Writes DIR/trajectory.tum, trajectory_online.tum, landmarks.yaml, summary.json, map.png,\n"
+    "map.pgm and map.yaml. Exits 1 when no frame could be used or --reference could not be\n"
+    "evaluated (the outputs are written all the same), 2 on bad arguments.\n";
 
 struct Arguments {
   rbpf_slam::rosbridge::OfflineOptions options;
@@ -79,13 +81,41 @@ int run(const Arguments& arguments) {
       s.updates, s.landmarks, s.particles, s.wall_s, s.bag_duration_s,
       s.wall_s > 0 ? s.bag_duration_s / s.wall_s : 0.0, s.update_ms_mean, s.update_ms_p99);
   if (s.has_reference) std::printf(", ATE %.3f m", s.ate_rmse_m);
-  std::printf("\noffline_slam: wrote %s/{trajectory.tum,landmarks.yaml,summary.json,map.png}\n",
-              options.output_dir.c_str());
-  if (s.dropped_no_tf + s.dropped_bad_message > 0) {
-    std::fprintf(stderr, "offline_slam: dropped %ld frames without tf, %ld malformed\n",
-                 s.dropped_no_tf, s.dropped_bad_message);
+  std::printf(
+      "\noffline_slam: wrote %s/{trajectory.tum,trajectory_online.tum,landmarks.yaml,"
+      "summary.json,map.png,map.pgm,map.yaml}%s%s\n",
+      options.output_dir.c_str(), options.output_bag.empty() ? "" : " and ",
+      options.output_bag.c_str());
+  if (s.dropped_no_tf > 0) {
+    std::fprintf(stderr, "offline_slam: dropped %ld frame(s) without tf; the first: %s\n",
+                 s.dropped_no_tf, s.first_tf_error.c_str());
   }
-  return 0;
+  if (s.dropped_bad_message > 0) {
+    std::fprintf(stderr, "offline_slam: dropped %ld malformed message(s); the first: %s\n",
+                 s.dropped_bad_message, s.first_bad_message.c_str());
+  }
+  if (s.features_rejected > 0) {
+    std::fprintf(stderr,
+                 "offline_slam: the %s filter skipped %ld feature(s) it cannot use (non-finite or "
+                 "degenerate, or of a kind it ignores: dpf uses points with known ids only)\n",
+                 config.filter.variant.c_str(), s.features_rejected);
+  }
+  // The outputs are written either way (they show what happened), but a run that used no
+  // frame, or whose requested reference could not be evaluated, did not do its work.
+  int status = 0;
+  if (s.updates == 0) {
+    std::fprintf(stderr,
+                 "offline_slam: no frame was used (%ld read, %ld without tf, %ld malformed, %ld "
+                 "rejected by the session): nothing was mapped\n",
+                 s.frames, s.dropped_no_tf, s.dropped_bad_message, s.rejected);
+    status = 1;
+  }
+  if (!options.reference_path.empty() && !s.has_reference) {
+    std::fprintf(stderr, "offline_slam: --reference %s was not evaluated\n",
+                 options.reference_path.c_str());
+    status = 1;
+  }
+  return status;
 }
 
 }  // namespace

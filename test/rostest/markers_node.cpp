@@ -5,6 +5,7 @@
 #include <ros/time.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 
@@ -173,6 +174,61 @@ TEST(SensorMount, LevelUpsideDownAndTiltedMounts) {
   EXPECT_FALSE(rosbridge::isTilted(rosbridge::toSensorMount(mountRpy(3.0 * deg, 0.0, 0.0))));
   geometry_msgs::Transform zero;
   EXPECT_FALSE(rosbridge::isTilted(rosbridge::toSensorMount(zero)));
+}
+
+sensor_msgs::PointCloud2 cloud2(const std::vector<std::array<float, 3>>& points) {
+  sensor_msgs::PointCloud2 c;
+  c.header.frame_id = "base_link";
+  c.header.stamp = ros::Time(5.0);
+  c.height = 1;
+  c.width = static_cast<uint32_t>(points.size());
+  const char* names[] = {"x", "y", "z", "intensity"};
+  for (uint32_t i = 0; i < 4; ++i) {
+    sensor_msgs::PointField f;
+    f.name = names[i];
+    f.offset = 4 * i;
+    f.datatype = sensor_msgs::PointField::FLOAT32;
+    f.count = 1;
+    c.fields.push_back(f);
+  }
+  c.point_step = 16;
+  c.row_step = c.point_step * c.width;
+  for (const auto& p : points) {
+    const float values[4] = {p[0], p[1], p[2], 1.0f};
+    const auto* bytes = reinterpret_cast<const uint8_t*>(values);
+    c.data.insert(c.data.end(), bytes, bytes + 16);
+  }
+  return c;
+}
+
+TEST(PointCloud2, ConvertsToThePointsOfAPointCloud) {
+  sensor_msgs::PointCloud out;
+  std::string error;
+  ASSERT_TRUE(
+      rosbridge::toPointCloud(cloud2({{1.5f, -2.0f, 0.2f}, {0.0f, 3.25f, 0.0f}}), &out, &error))
+      << error;
+  EXPECT_EQ(out.header.frame_id, "base_link");
+  EXPECT_EQ(out.header.stamp, ros::Time(5.0));
+  ASSERT_EQ(out.points.size(), 2u);
+  EXPECT_FLOAT_EQ(out.points[0].x, 1.5f);
+  EXPECT_FLOAT_EQ(out.points[0].y, -2.0f);
+  EXPECT_FLOAT_EQ(out.points[0].z, 0.2f);
+  EXPECT_FLOAT_EQ(out.points[1].y, 3.25f);
+  // Broken clouds are refused with a reason, never read past their data.
+  auto truncated = cloud2({{1.0f, 2.0f, 0.0f}, {3.0f, 4.0f, 0.0f}});
+  truncated.data.resize(20);
+  EXPECT_FALSE(rosbridge::toPointCloud(truncated, &out, &error));
+  EXPECT_NE(error.find("needs 32"), std::string::npos) << error;
+  auto no_y = cloud2({{1.0f, 2.0f, 0.0f}});
+  no_y.fields[1].name = "v";
+  EXPECT_FALSE(rosbridge::toPointCloud(no_y, &out, &error));
+  EXPECT_NE(error.find("x and y"), std::string::npos) << error;
+  auto outside = cloud2({{1.0f, 2.0f, 0.0f}});
+  outside.fields[0].offset = 14;  // x would run past point_step
+  EXPECT_FALSE(rosbridge::toPointCloud(outside, &out, &error));
+  auto big_endian = cloud2({{1.0f, 2.0f, 0.0f}});
+  big_endian.is_bigendian = true;
+  EXPECT_FALSE(rosbridge::toPointCloud(big_endian, &out, &error));
 }
 
 TEST(CovarianceEllipse, TwoSigmaAxesFollowTheEigenvectors) {

@@ -62,6 +62,31 @@ touch "$work/a_file"
 expect "offline_slam output is a file" 1 "a_file: cannot create the output directory" \
   "$bin/offline_slam" --bag "$root/test/data/intel_head.bag" \
   --config "$root/config/laser_fastslam2.yaml" --output "$work/a_file" --no-progress
+# Mistakes that used to give exit 0 with nothing mapped, or a wrong diagnosis (session 13):
+head_bag="$root/test/data/intel_head.bag"
+laser_config="$root/config/laser_fastslam2.yaml"
+expect "offline_slam wrong base frame" 1 \
+  "without tf; the first: odom -> base_footprint .*does not exist" \
+  "$bin/offline_slam" --bag "$head_bag" --config "$laser_config" --output "$work/tf" \
+  --no-progress --set base_frame=base_footprint
+expect "offline_slam reference not evaluated" 1 "--reference .*was not evaluated" \
+  "$bin/offline_slam" --bag "$head_bag" --config "$laser_config" --output "$work/ref" \
+  --no-progress --set particles=5 --reference "$work/a_file"
+expect "offline_slam topic of the wrong type" 1 \
+  "topic '/odom' carries nav_msgs/Odometry, but scan_topic needs sensor_msgs/LaserScan" \
+  "$bin/offline_slam" --bag "$head_bag" --config "$laser_config" --output "$work/type" \
+  --no-progress --set scan_topic=/odom
+expect "offline_slam grid_pf without raw readings" 1 \
+  "no messages on 'ir' \(grid_pf maps raw sonar readings, not features\); the bag has .*'/scan'" \
+  "$bin/offline_slam" --bag "$head_bag" --config "$root/config/grid_pf.yaml" \
+  --output "$work/grid" --no-progress
+cp "$head_bag" "$work/same.bag"
+size_before=$(stat -c %s "$work/same.bag")
+expect "offline_slam output bag = input bag" 1 "is the input bag .*would destroy the recording" \
+  "$bin/offline_slam" --bag "$work/same.bag" --config "$laser_config" --output "$work/same" \
+  --no-progress --output-bag "$work/./same.bag"
+[ "$(stat -c %s "$work/same.bag")" -eq "$size_before" ] ||
+  { echo "FAIL: the input bag was overwritten"; status=1; }
 printf '1 0 0 0 0 0 0 1\n2 1 0 0 0 0 0 1\n' >"$work/a.tum"
 expect "evaluate bad number" 2 "--max-dt needs a non-negative number" "$bin/evaluate" \
   "$work/a.tum" "$work/a.tum" --max-dt x

@@ -9,6 +9,7 @@
 #include <rbpf_slam/FeatureArray.h>
 #include <sensor_msgs/LaserScan.h>
 #include <sensor_msgs/PointCloud.h>
+#include <sensor_msgs/PointCloud2.h>
 #include <sensor_msgs/Range.h>
 #include <std_msgs/Header.h>
 
@@ -73,6 +74,12 @@ bool toConeReading(const sensor_msgs::Range& msg, const core::Pose2& sensor_in_b
 /// The points of a cloud whose frame is at frame_in_base, in the base frame (z dropped).
 std::vector<Eigen::Vector2d> toBasePoints(const sensor_msgs::PointCloud& msg,
                                           const core::Pose2& frame_in_base);
+/// A PointCloud2 (RosAria's sonar_pointcloud2) as a PointCloud with the same header and
+/// points (x, y and, when present, z; other fields dropped). Returns false and sets error when
+/// the cloud has no float x and y fields, is big-endian, or its data is shorter than its
+/// width x height x point_step says.
+bool toPointCloud(const sensor_msgs::PointCloud2& msg, sensor_msgs::PointCloud* out,
+                  std::string* error);
 
 /// Features from a message whose frame is at frame_in_base; features with non-finite values
 /// are dropped and counted in *dropped.

@@ -61,15 +61,13 @@ class TfGatedSubscriber {
         base_frame_(std::move(base_frame)),
         handlers_(std::move(handlers)),
         filter_(*tf, target_frame, queue_size, nh) {
-    subscriber_.subscribe(nh, topic, queue_size);
-    subscriber_.registerCallback(boost::function<void(const Ptr&)>([this](const Ptr& msg) {
-      std::string error;
-      if (frameInTf(*tf_, base_frame_, msg->header.frame_id, &error)) {
-        filter_.add(msg);
-      } else if (handlers_.on_unknown_frame) {
-        handlers_.on_unknown_frame(msg, error);
-      }
-    }));
+    // An empty topic: no subscription, the owner feeds messages with add() (a topic whose
+    // messages come in another type first, e.g. PointCloud2 converted to PointCloud).
+    if (!topic.empty()) {
+      subscriber_.subscribe(nh, topic, queue_size);
+      subscriber_.registerCallback(
+          boost::function<void(const Ptr&)>([this](const Ptr& msg) { add(msg); }));
+    }
     filter_.registerCallback(
         boost::function<void(const Ptr&)>([this](const Ptr& msg) { handlers_.on_message(msg); }));
     filter_.registerFailureCallback([this](const Ptr& msg, tf2_ros::FilterFailureReason reason) {
@@ -79,6 +77,15 @@ class TfGatedSubscriber {
   TfGatedSubscriber(const TfGatedSubscriber&) = delete;
   TfGatedSubscriber& operator=(const TfGatedSubscriber&) = delete;
 
+  /// A message into the tf gate, as if it had arrived on the topic.
+  void add(const Ptr& msg) {
+    std::string error;
+    if (frameInTf(*tf_, base_frame_, msg->header.frame_id, &error)) {
+      filter_.add(msg);
+    } else if (handlers_.on_unknown_frame) {
+      handlers_.on_unknown_frame(msg, error);
+    }
+  }
   /// Empties the tf queue (after a reset: nothing queued before it is processed after it).
   void clear() { filter_.clear(); }
   std::string topic() const { return subscriber_.getTopic(); }

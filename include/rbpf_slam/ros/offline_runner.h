@@ -37,6 +37,9 @@ struct OfflineSummary {
   long skipped_transforms = 0;  // repeated or malformed tf in the bag
   long dropped_features = 0;    // non-finite features inside otherwise good messages
   long tilted_frames = 0;       // sensor frames tilted over kMaxLevelTiltRad (used as if level)
+  long features_rejected = 0;   // features the filter skipped (degenerate, or a kind it ignores)
+  std::string first_tf_error;   // the first failed lookup behind dropped_no_tf
+  std::string first_bad_message;  // the first reason behind dropped_bad_message
   long tf_segments = 0;         // tf runs: 1 + the times the odometry stamps went back
   long dropped_cloud_points = 0;  // sonar_cloud points on no transducer's axis
   int landmarks = 0;

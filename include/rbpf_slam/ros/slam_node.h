@@ -19,6 +19,7 @@
 #include <tf2_ros/message_filter.h>
 #include <tf2_ros/transform_broadcaster.h>
 #include <tf2_ros/transform_listener.h>
+#include <topic_tools/shape_shifter.h>
 
 #include <functional>
 #include <map>
@@ -58,6 +59,9 @@ class SlamNode {
   void featuresCallback(const FeatureArray::ConstPtr& msg);
   void sonarCallback(const sensor_msgs::Range::ConstPtr& msg);
   void sonarCloudCallback(const sensor_msgs::PointCloud::ConstPtr& msg);
+  /// sonar_cloud as it arrives: sensor_msgs/PointCloud, or PointCloud2 (RosAria's
+  /// sonar_pointcloud2) converted to it; then through the tf gate to sonarCloudCallback.
+  void sonarCloudArrived(const topic_tools::ShapeShifter::ConstPtr& msg);
   /// Tells the session when odom -> base arrived (its gap check is on odometry silences).
   void odometryTfCallback(const tf2_msgs::TFMessage::ConstPtr& msg);
   /// Subscribes to topic through tf (TfGatedSubscriber) on the odometry frame.
@@ -111,6 +115,7 @@ class SlamNode {
   std::unique_ptr<TfGatedSubscriber<FeatureArray>> features_input_;
   std::unique_ptr<TfGatedSubscriber<sensor_msgs::Range>> sonar_input_;
   std::unique_ptr<TfGatedSubscriber<sensor_msgs::PointCloud>> sonar_cloud_input_;
+  ros::Subscriber sonar_cloud_subscriber_;      // either cloud type, into sonar_cloud_input_
   std::vector<core::Pose2> sonar_transducers_;  // sonar_cloud: from tf, found once
 
   ros::Publisher pose_publisher_;
