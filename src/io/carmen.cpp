@@ -60,6 +60,22 @@ bool malformed(CarmenLog* log, std::size_t line_number, const std::string& why) 
   return false;
 }
 
+// Plausibility limits: finite numbers far outside them are corrupt data. Log stamps stay below
+// 3e9 s so that the converter's offset (2010-01-01) keeps them within ROS's 32-bit seconds.
+constexpr double kMaxLogStampS = 3.0e9;
+constexpr double kMaxCoordinateM = 1e6;
+constexpr double kMaxSpeed = 100.0;  // m/s and rad/s
+
+/// Empty when the pose, velocities and stamp are plausible; else what is not.
+std::string implausible(const core::Pose2& pose, double stamp, double v = 0.0, double w = 0.0) {
+  if (std::abs(pose.x()) > kMaxCoordinateM || std::abs(pose.y()) > kMaxCoordinateM) {
+    return "a position beyond 1e6 m";
+  }
+  if (std::abs(v) > kMaxSpeed || std::abs(w) > kMaxSpeed) return "a velocity beyond 100";
+  if (!(stamp >= 0.0 && stamp <= kMaxLogStampS)) return "a stamp outside [0, 3e9] s";
+  return "";
+}
+
 bool parseOdom(const std::vector<std::string>& fields, std::size_t line_number, CarmenLog* log) {
   if (fields.size() < kOdomFields) {
     return malformed(log, line_number,
@@ -73,6 +89,8 @@ bool parseOdom(const std::vector<std::string>& fields, std::size_t line_number, 
   odometry.translational_velocity = values[3];
   odometry.rotational_velocity = values[4];
   odometry.stamp = values[6];
+  const std::string why = implausible(odometry.pose, odometry.stamp, values[3], values[4]);
+  if (!why.empty()) return malformed(log, line_number, "ODOM with " + why);
   odometry.lasers_before = log->lasers.size();
   odometry.line = line_number;
   log->odometry.push_back(odometry);
@@ -100,6 +118,9 @@ bool parseFlaser(const std::vector<std::string>& fields, std::size_t line_number
   laser.laser_pose = core::Pose2(values[0], values[1], core::wrapAngle(values[2]));
   laser.robot_pose = core::Pose2(values[3], values[4], core::wrapAngle(values[5]));
   laser.stamp = values[6];
+  std::string why = implausible(laser.laser_pose, laser.stamp);
+  if (why.empty()) why = implausible(laser.robot_pose, laser.stamp);
+  if (!why.empty()) return malformed(log, line_number, "FLASER with " + why);
   laser.line = line_number;
   log->lasers.push_back(laser);
   return true;

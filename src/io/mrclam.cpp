@@ -64,6 +64,26 @@ std::vector<Row> readRows(std::istream& in, const std::string& source, std::size
   return rows;
 }
 
+// Plausibility limits: finite numbers far outside them are corrupt data, which would otherwise
+// overflow the dead reckoning or ros::Time (stamps are Unix seconds within 32 bits).
+constexpr double kMaxStampS = 4294967295.0;
+constexpr double kMaxSpeed = 100.0;      // m/s and rad/s
+constexpr double kMaxCoordinateM = 1e6;  // poses and landmarks
+constexpr double kMaxRangeM = 1000.0;
+
+void requireWithin(const std::string& source, std::size_t line, const char* what, double value,
+                   double lo, double hi) {
+  if (value < lo || value > hi) {
+    std::ostringstream message;
+    message << what << " = " << value << " is outside [" << lo << ", " << hi << "]";
+    throw lineError(source, line, message.str());
+  }
+}
+
+void requireStamp(const std::string& source, std::size_t line, double stamp) {
+  requireWithin(source, line, "t", stamp, 0.0, kMaxStampS);
+}
+
 int toInteger(double value, const std::string& source, std::size_t line, const char* what) {
   if (value != std::floor(value) || std::abs(value) > 1e9) {
     throw lineError(source, line, std::string(what) + " is not an integer");
@@ -88,6 +108,9 @@ auto parseFile(const std::string& path, Parser parser) {
 std::vector<MrclamOdometry> parseMrclamOdometry(std::istream& in, const std::string& source) {
   std::vector<MrclamOdometry> odometry;
   for (const Row& row : readRows(in, source, 3, "t v w")) {
+    requireStamp(source, row.line, row.values[0]);
+    requireWithin(source, row.line, "v", row.values[1], -kMaxSpeed, kMaxSpeed);
+    requireWithin(source, row.line, "w", row.values[2], -kMaxSpeed, kMaxSpeed);
     odometry.push_back({row.values[0], row.values[1], row.values[2], row.line});
   }
   return odometry;
@@ -104,6 +127,8 @@ std::vector<MrclamMeasurement> parseMrclamMeasurements(std::istream& in,
     m.bearing_rad = row.values[3];
     m.line = row.line;
     if (m.range_m < 0.0) throw lineError(source, row.line, "negative range");
+    requireStamp(source, row.line, m.stamp);
+    requireWithin(source, row.line, "range", m.range_m, 0.0, kMaxRangeM);
     measurements.push_back(m);
   }
   return measurements;
@@ -124,6 +149,9 @@ std::map<int, int> parseMrclamBarcodes(std::istream& in, const std::string& sour
 std::vector<StampedPose> parseMrclamGroundTruth(std::istream& in, const std::string& source) {
   std::vector<StampedPose> poses;
   for (const Row& row : readRows(in, source, 4, "t x y theta")) {
+    requireStamp(source, row.line, row.values[0]);
+    requireWithin(source, row.line, "x", row.values[1], -kMaxCoordinateM, kMaxCoordinateM);
+    requireWithin(source, row.line, "y", row.values[2], -kMaxCoordinateM, kMaxCoordinateM);
     StampedPose pose;
     pose.stamp = row.values[0];
     pose.pose = core::Pose2(row.values[1], row.values[2], core::wrapAngle(row.values[3]));
@@ -214,7 +242,9 @@ core::Pose2 interpolatePose(const std::vector<StampedPose>& trajectory, double s
 }
 
 std::vector<StampedPose> integrateMrclamOdometry(const std::vector<MrclamOdometry>& odometry,
-                                                 const core::Pose2& start, double max_gap_s) {
+                                                 const core::Pose2& start, double max_gap_s,
+                                                 int* not_integrated) {
+  if (not_integrated) *not_integrated = 0;
   std::vector<StampedPose> poses;
   if (odometry.empty()) return poses;
   poses.push_back({odometry.front().stamp, start});
@@ -224,6 +254,7 @@ std::vector<StampedPose> integrateMrclamOdometry(const std::vector<MrclamOdometr
     const double dt = command.stamp - previous->stamp;
     if (!(dt > 0.0)) continue;
     core::Pose2 pose = poses.back().pose;
+    if (dt > max_gap_s && not_integrated) ++*not_integrated;
     if (dt <= max_gap_s) {
       const double v = previous->v_mps;
       const double w = previous->w_radps;

@@ -86,12 +86,19 @@ std::vector<StampedPose> readTum(const std::string& path) {
 }
 
 void writeTum(std::ostream& out, const std::vector<StampedPose>& poses) {
-  char buffer[256];
+  std::vector<char> buffer(256);
   for (const StampedPose& stamped : poses) {
     const double half_yaw = 0.5 * stamped.pose.z();
-    std::snprintf(buffer, sizeof(buffer), "%.9f %.9f %.9f 0 0 0 %.12f %.12f\n", stamped.stamp,
-                  stamped.pose.x(), stamped.pose.y(), std::sin(half_yaw), std::cos(half_yaw));
-    out << buffer;
+    // Sized for the line: a huge coordinate (corrupt data) must not cut it short.
+    for (;;) {
+      const int n = std::snprintf(
+          buffer.data(), buffer.size(), "%.9f %.9f %.9f 0 0 0 %.12f %.12f\n", stamped.stamp,
+          stamped.pose.x(), stamped.pose.y(), std::sin(half_yaw), std::cos(half_yaw));
+      if (n < 0) throw std::runtime_error("writeTum: cannot format a pose");
+      if (static_cast<size_t>(n) < buffer.size()) break;
+      buffer.resize(static_cast<size_t>(n) + 1);
+    }
+    out << buffer.data();
   }
 }
 

@@ -41,12 +41,15 @@ namespace rosbridge = rbpf_slam::rosbridge;
 const char kUsage[] =
     "usage: mrclam_to_bag DATASET_DIR ROBOT OUT.bag [--known-ids] [--duration S]\n"
     "                     [--sigma-range-m F] [--sigma-range-per-m F] [--sigma-bearing-rad F]\n"
+    "                     [--max-gap S]\n"
     "  ROBOT                  1..5 (RobotN_*.dat in DATASET_DIR)\n"
     "  --known-ids            give every feature its landmark subject as id (default: -1)\n"
     "  --duration S           keep only the first S seconds after the first odometry command\n"
     "  --sigma-range-m F      feature range sigma at zero range (default 0.03 m)\n"
     "  --sigma-range-per-m F  ... growing by this per metre of range (default 0.035)\n"
     "  --sigma-bearing-rad F  feature bearing sigma (default 0.02 rad)\n"
+    "  --max-gap S            commands further apart are not integrated (the robot stood\n"
+    "                         still; default 2 s: dataset 6 drives with commands 1.03 s apart)\n"
     "Writes OUT.bag (/tf, /odom, /features, /ground_truth), OUT.ref.tum, OUT.odom.tum and\n"
     "OUT.landmarks.yaml.\n";
 
@@ -62,6 +65,7 @@ struct Arguments {
   double sigma_range_m = 0.03;
   double sigma_range_per_m = 0.035;
   double sigma_bearing_rad = 0.02;
+  double max_gap_s = io::kMrclamMaxCommandGapS;
 };
 
 Arguments parseArguments(int argc, char** argv) {
@@ -80,6 +84,8 @@ Arguments parseArguments(int argc, char** argv) {
       arguments.sigma_range_per_m = non_negative();
     } else if (cursor.arg() == "--sigma-bearing-rad") {
       arguments.sigma_bearing_rad = non_negative();
+    } else if (cursor.arg() == "--max-gap") {
+      arguments.max_gap_s = cursor.number(io::NumberRule::kPositive);
     } else if (cursor.isOption()) {
       cursor.unknown();
     } else {
@@ -227,7 +233,9 @@ int run(const Arguments& arguments) {
     throw std::runtime_error("no ground truth during the odometry's time span");
   }
   const core::Pose2 start = io::interpolatePose(data.ground_truth, data.odometry.front().stamp);
-  const std::vector<io::StampedPose> odometry = io::integrateMrclamOdometry(data.odometry, start);
+  int not_integrated = 0;
+  const std::vector<io::StampedPose> odometry =
+      io::integrateMrclamOdometry(data.odometry, start, arguments.max_gap_s, &not_integrated);
   const std::vector<io::MrclamMeasurementGroup> groups =
       io::groupLandmarkMeasurements(data.measurements);
 
@@ -253,7 +261,8 @@ int run(const Arguments& arguments) {
             << " /features messages (" << (arguments.known_ids ? "known" : "unknown")
             << " ids; dropped " << robots << " sightings of robots and " << unknown
             << " of unknown barcodes; " << measurements_read << " read), " << counts.ground_truth
-            << " ground-truth poses\n"
+            << " ground-truth poses; " << not_integrated << " command interval(s) over "
+            << arguments.max_gap_s << " s not integrated\n"
             << "mrclam_to_bag: wrote " << arguments.bag_path << ", " << reference_path << ", "
             << odometry_path << ", " << landmarks_path << "\n";
   return 0;

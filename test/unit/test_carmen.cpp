@@ -82,6 +82,20 @@ TEST(CarmenParse, CountsUnknownAndMalformedLines) {
   EXPECT_EQ(log.malformed_examples[2].rfind("line 11:", 0), 0u) << log.malformed_examples[2];
 }
 
+/// Finite but absurd numbers are corrupt lines (they overflowed the odometry and ros::Time).
+TEST(CarmenParse, ImplausibleValuesAreMalformedLines) {
+  const CarmenLog far = parse("ODOM 1e300 2 0.3 0 0 0 1.0 host 1.0\n");
+  EXPECT_EQ(far.malformed_lines, 1u);
+  EXPECT_TRUE(far.odometry.empty());
+  ASSERT_EQ(far.malformed_examples.size(), 1u);
+  EXPECT_NE(far.malformed_examples[0].find("beyond 1e6 m"), std::string::npos)
+      << far.malformed_examples[0];
+  EXPECT_EQ(parse("ODOM 1 2 0.3 5e3 0 0 1.0 host 1.0\n").malformed_lines, 1u);      // speed
+  EXPECT_EQ(parse("ODOM 1 2 0.3 0 0 0 -1262305000 host 0\n").malformed_lines, 1u);  // stamp
+  EXPECT_EQ(parse("FLASER 2 4.0 5.0 1.6 2.1 0.45 1.5 2.1 0.4 1e12 host 2.0\n").malformed_lines, 1u);
+  EXPECT_EQ(parse("ODOM 1 2 0.3 0.4 0.2 0 1.0 host 1.0\n").malformed_lines, 0u);
+}
+
 TEST(CarmenParse, RejectsBadBeamCounts) {
   EXPECT_EQ(parse("FLASER -1 1 2 3 4 5 6 7\n").malformed_lines, 1u);
   EXPECT_EQ(parse("FLASER 1.5 1 2 3 4 5 6 7 8\n").malformed_lines, 1u);

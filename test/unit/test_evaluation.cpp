@@ -227,6 +227,20 @@ TEST(Tum, RoundTripKeepsStampsAndPoses) {
   std::remove(path.c_str());
 }
 
+/// A huge coordinate (corrupt input) is written whole: the line used to be cut at 256 bytes
+/// and the file could not be read back.
+TEST(Tum, HugeCoordinatesAreWrittenWhole) {
+  std::vector<StampedPose> poses = makeTrajectory(3);
+  poses[1].pose.x() = 4e228;
+  std::ostringstream out;
+  writeTum(out, poses);
+  std::istringstream in(out.str());
+  const std::vector<StampedPose> read = readTum(in, "memory");
+  ASSERT_EQ(read.size(), 3u);
+  EXPECT_NEAR(read[1].pose.x() / 4e228, 1.0, 1e-12);
+  EXPECT_NEAR(read[2].pose.y(), poses[2].pose.y(), 1e-9);
+}
+
 TEST(Tum, ReadsCommentsBlankLinesAndFullQuaternions) {
   // A 90 degree yaw, then an unnormalised identity quaternion.
   std::istringstream in(

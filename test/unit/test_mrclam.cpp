@@ -86,6 +86,19 @@ void parseBarcodeText(const std::string& text) {
   parseMrclamBarcodes(in, "Barcodes.dat");
 }
 
+/// Finite but absurd values (a corrupt file) name the file, the line and the limit; they used
+/// to be dead-reckoned to 4e228 m, or stop the converter in ros::Time without a line.
+TEST(MrclamParse, ImplausibleValuesNameFileAndLine) {
+  EXPECT_EQ(errorOf(parseOdometryText, "1 0.1 0\n2 1e300 0\n"),
+            "Robot1_Odometry.dat:2: v = 1e+300 is outside [-100, 100]");
+  EXPECT_NE(errorOf(parseOdometryText, "-3 0.1 0\n").find("Robot1_Odometry.dat:1: t = -3"),
+            std::string::npos);
+  EXPECT_NE(errorOf(parseMeasurementText, "1e300 14 2 0\n").find("Robot1_Measurement.dat:1: t"),
+            std::string::npos);
+  EXPECT_NE(errorOf(parseMeasurementText, "1 14 5e6 0\n").find("range = 5e+06"), std::string::npos);
+  EXPECT_EQ(errorOf(parseOdometryText, "1248444187.156 0.086 -0.398\n"), "");
+}
+
 TEST(MrclamParse, MalformedLinesNameFileAndLine) {
   EXPECT_EQ(errorOf(parseOdometryText, "# h\n1 2 3\n1 2\n"),
             "Robot1_Odometry.dat:3: expected 3 numbers (t v w), got 2");
@@ -167,7 +180,26 @@ TEST(MrclamOdometryIntegration, SkipsRepeatedStampsAndLongGaps) {
   ASSERT_EQ(poses.size(), 3u);
   EXPECT_NEAR(poses[1].pose.x(), 0.5, 1e-12);
   EXPECT_NEAR(poses[2].pose.x(), 0.5, 1e-12);  // the 10 s gap is not integrated
+  int skipped = 0;
+  integrateMrclamOdometry(commands, core::Pose2::Zero(), 1.0, &skipped);
+  EXPECT_EQ(skipped, 1);
   EXPECT_TRUE(integrateMrclamOdometry({}, core::Pose2::Zero()).empty());
+}
+
+/// Dataset 6's robots send commands up to 1.03 s apart while they drive (Vicon shows turns of
+/// 0.3 rad across such intervals): by default they are integrated. Before session 13 anything
+/// over 1 s counted as standing still.
+TEST(MrclamOdometryIntegration, CommandsAboutASecondApartAreIntegratedByDefault) {
+  std::vector<MrclamOdometry> commands = {
+      {0.0, 0.086, -0.398, 1}, {1.003, 0.0, 0.0, 2}, {1.5, 0.0, 0.0, 3}};
+  int skipped = -1;
+  const std::vector<StampedPose> poses =
+      integrateMrclamOdometry(commands, core::Pose2::Zero(), kMrclamMaxCommandGapS, &skipped);
+  ASSERT_EQ(poses.size(), 3u);
+  EXPECT_EQ(skipped, 0);
+  EXPECT_NEAR(poses[1].pose.z(), -0.398 * 1.003, 1e-9);
+  EXPECT_GT(poses[1].pose.x(), 0.08);
+  EXPECT_EQ(integrateMrclamOdometry(commands, core::Pose2::Zero()).back().pose, poses.back().pose);
 }
 
 TEST(MrclamInterpolation, LinearWithShortestHeading) {

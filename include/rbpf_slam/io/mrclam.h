@@ -99,9 +99,15 @@ core::Pose2 interpolatePose(const std::vector<StampedPose>& trajectory, double s
 /// Dead reckoning from the velocity commands: one pose per command stamp, starting at `start`
 /// at the first stamp; command i holds from its stamp until the next one (exact arcs of a
 /// unicycle). Commands with a stamp not after the previous one are skipped, and so is any
-/// interval longer than max_gap_s (the robot is assumed to stand still then).
+/// interval longer than max_gap_s (the robot is assumed to stand still then; *not_integrated
+/// counts them). The robots send a command at least every ~1 s while they drive, sometimes a
+/// few ms later (dataset 6: up to 1.03 s, with Vicon showing turns of 0.3 rad across them), so
+/// the default leaves room above that.
+constexpr double kMrclamMaxCommandGapS = 2.0;
 std::vector<StampedPose> integrateMrclamOdometry(const std::vector<MrclamOdometry>& odometry,
-                                                 const core::Pose2& start, double max_gap_s = 1.0);
+                                                 const core::Pose2& start,
+                                                 double max_gap_s = kMrclamMaxCommandGapS,
+                                                 int* not_integrated = nullptr);
 
 /// The landmark sightings (subject >= first_landmark_subject; robots and unknown barcodes are
 /// dropped) grouped by equal stamp, in time order.
