@@ -390,10 +390,18 @@ SlamConfig loadSlamConfig(const std::string& path, const std::vector<std::string
     throw ConfigError(path + ": cannot open the config file");
   } catch (const YAML::Exception& e) {
     throw ConfigError(path + ": not valid YAML: " + e.what());
+  } catch (const std::exception& e) {  // a directory, an unreadable file
+    throw ConfigError(path + ": cannot read the config file: " + e.what());
   }
   if (root.IsNull()) root = YAML::Node(YAML::NodeType::Map);
   for (const auto& assignment : overrides) applyOverride(&root, assignment);
-  return parseSlamConfig(root, path);
+  // A value out of range may come from an override, not from the file: name both.
+  std::string source = path;
+  for (size_t i = 0; i < overrides.size(); ++i) {
+    source += (i == 0 ? " (with --set " : ", --set ") + overrides[i];
+  }
+  if (!overrides.empty()) source += ")";
+  return parseSlamConfig(root, source);
 }
 
 void applyMapConfig(const SlamConfig& config, core::SlamSession* session) {

@@ -119,8 +119,13 @@ class MapReader {
 
   /// Throws when the map holds a key that was never asked for.
   void finish() const {
+    std::set<std::string> seen;
     for (const auto& item : node_) {
-      const std::string key = item.first.as<std::string>();
+      if (!item.first.IsScalar())
+        fail((path_.empty() ? "top level" : path_) + ": a key that is not a plain name");
+      const std::string key = item.first.Scalar();
+      // yaml-cpp reads the first of two copies of a key: an edit of the second would be lost.
+      if (!seen.insert(key).second) fail(field(key) + " appears more than once");
       if (known_.count(key)) continue;
       std::string list;
       for (const auto& k : known_) list += (list.empty() ? "" : ", ") + k;

@@ -1,6 +1,8 @@
 #include "rbpf_slam/io/yaml_section.h"
 
+#include <algorithm>
 #include <cmath>
+#include <set>
 #include <sstream>
 
 namespace rbpf_slam {
@@ -142,16 +144,26 @@ YamlSection YamlSection::section(const std::string& key) {
 
 void YamlSection::finish() const {
   if (!node_ || !node_.IsMap()) return;
+  const std::string where = path_.empty() ? std::string("at the top level") : "in " + path_;
   std::string unknown;
+  bool any_unknown = false;
+  std::set<std::string> seen;
   for (const auto& item : node_) {
     if (!item.first.IsScalar()) {
-      throw ConfigError(source_ + ": a key that is not a plain name " +
-                        (path_.empty() ? std::string("at the top level") : "in " + path_));
+      throw ConfigError(source_ + ": a key that is not a plain name " + where);
     }
     const std::string key = item.first.Scalar();
-    if (!read_.count(key)) unknown += (unknown.empty() ? "" : ", ") + key;
+    // yaml-cpp keeps both copies of a repeated key and reads the first: an edit of the second
+    // would be silently ignored.
+    if (!seen.insert(key).second) {
+      throw ConfigError(source_ + ": key '" + key + "' appears more than once " + where);
+    }
+    if (!read_.count(key)) {
+      unknown += (any_unknown ? ", " : "") + (key.empty() ? std::string("''") : key);
+      any_unknown = true;
+    }
   }
-  if (!unknown.empty()) {
+  if (any_unknown) {
     throw ConfigError(source_ + ": unknown key(s) " +
                       (path_.empty() ? std::string("at the top level") : "in " + path_) + ": " +
                       unknown);
@@ -168,17 +180,30 @@ void applyOverride(YAML::Node* root, const std::string& assignment) {
   std::vector<std::string> keys;
   std::stringstream stream(path);
   for (std::string key; std::getline(stream, key, '.');) keys.push_back(key);
+  if (path.back() == '.' || std::find(keys.begin(), keys.end(), "") != keys.end()) {
+    throw ConfigError("--set '" + assignment + "': an empty key in '" + path + "'");
+  }
+  YAML::Node parsed;
+  try {
+    parsed = YAML::Load(value);
+  } catch (const YAML::Exception& e) {
+    throw ConfigError("--set '" + assignment + "': the value is not valid YAML: " + e.msg);
+  }
   // yaml-cpp node assignment rebinds handles, so walk with explicit copies of children.
   std::vector<YAML::Node> chain{*root};
+  std::string walked;
   for (size_t i = 0; i + 1 < keys.size(); ++i) {
+    walked += (walked.empty() ? "" : ".") + keys[i];
     YAML::Node next = chain.back()[keys[i]];
     if (!next || next.IsNull()) {
       chain.back()[keys[i]] = YAML::Node(YAML::NodeType::Map);
       next = chain.back()[keys[i]];
+    } else if (!next.IsMap()) {
+      throw ConfigError("--set '" + assignment + "': '" + walked + "' is not a section");
     }
     chain.push_back(next);
   }
-  chain.back()[keys.back()] = YAML::Load(value);
+  chain.back()[keys.back()] = parsed;
 }
 
 }  // namespace io

@@ -94,6 +94,41 @@ TEST(SlamConfig, SonarConfigSelectsTheSonarFrontEnd) {
   EXPECT_NE(errorOf("sonar_source: both").find("not one of: range, cloud"), std::string::npos);
 }
 
+/// yaml-cpp keeps both copies of a repeated key and reads the first, so an edit of the second
+/// was silently ignored; an empty key got past the unknown-key check.
+TEST(SlamConfig, RepeatedAndEmptyKeysAreErrors) {
+  EXPECT_NE(errorOf("particles: 10\nparticles: 0")
+                .find("test.yaml: key 'particles' appears more than once at the top level"),
+            std::string::npos)
+      << errorOf("particles: 10\nparticles: 0");
+  EXPECT_NE(errorOf("motion: {alpha1: 0.1, alpha1: 0.2}")
+                .find("'alpha1' appears more than once in motion"),
+            std::string::npos);
+  EXPECT_NE(errorOf("'': 7").find("unknown key(s) at the top level: ''"), std::string::npos)
+      << errorOf("'': 7");
+}
+
+/// --set mistakes name the --set argument, not a yaml-cpp internal.
+TEST(SlamConfig, BadOverridesNameTheArgument) {
+  auto overrideError = [](const std::string& assignment) {
+    YAML::Node root = YAML::Load("particles: 5\nmotion: {alpha1: 0.1}");
+    try {
+      applyOverride(&root, assignment);
+    } catch (const ConfigError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  EXPECT_NE(overrideError("motion..alpha1=-5").find("--set 'motion..alpha1=-5': an empty key"),
+            std::string::npos);
+  EXPECT_NE(overrideError("particles=[").find("--set 'particles=[': the value is not valid YAML"),
+            std::string::npos);
+  EXPECT_NE(overrideError("particles.x=3").find("'particles' is not a section"), std::string::npos);
+  EXPECT_NE(overrideError("motion.alpha1.x=1").find("'motion.alpha1' is not a section"),
+            std::string::npos);
+  EXPECT_EQ(overrideError("motion.alpha2=0.3"), "");
+}
+
 TEST(SlamConfig, OverridesApplyDottedKeys) {
   YAML::Node root = YAML::Load("particles: 5");
   applyOverride(&root, "association.gate_chi2=4.5");

@@ -173,6 +173,16 @@ TEST(WorldYaml, RejectsAnUnknownKeyNamingFileAndField) {
   expectContains(message, "sensors.laser.range_noize_m is not a known key");
 }
 
+/// A repeated key used to be resolved to its first value without a word ("laps: 0" after
+/// "laps: 2" ran two laps); a key that is not a plain name gave "bad conversion".
+TEST(WorldYaml, RejectsRepeatedAndNonScalarKeys) {
+  const std::string twice =
+      writeWorld("twice.yaml", std::string(kMinimalWorld) + "laps: 2\nlaps: 0\n");
+  expectContains(loadError(twice), twice + ": laps appears more than once");
+  const std::string odd = writeWorld("odd_key.yaml", std::string(kMinimalWorld) + "[1, 2]: 3\n");
+  expectContains(loadError(odd), odd + ": top level: a key that is not a plain name");
+}
+
 TEST(WorldYaml, RejectsNegativeNoiseNamingFileAndField) {
   const std::string path = writeWorld(
       "negative_noise.yaml", replaced(kMinimalWorld, "range_noise_m: 0.01", "range_noise_m: -1"));
