@@ -143,7 +143,7 @@ std::vector<ros::Time> runStarts(const std::vector<OdometryArrival>& odometry, d
 /// skipped here instead of letting tf2 warn for each. Returns how many were skipped.
 long loadTransforms(const rosbag::Bag& bag, const std::vector<ros::Time>& run_starts,
                     const ros::Duration& cache, std::vector<TfSegment>* segments) {
-  std::map<std::string, ros::Time> last_stamp;
+  std::map<std::string, std::set<ros::Time>> stamps_seen;  // per frame pair, this segment
   std::vector<geometry_msgs::TransformStamped> statics;
   segments->clear();
   segments->push_back({ros::Time(0), std::make_unique<tf2::BufferCore>(cache)});
@@ -156,19 +156,19 @@ long loadTransforms(const rosbag::Bag& bag, const std::vector<ros::Time>& run_st
     while (next_start < run_starts.size() && m.getTime() >= run_starts[next_start]) {
       segments->push_back({run_starts[next_start++], std::make_unique<tf2::BufferCore>(cache)});
       for (const auto& t : statics) segments->back().buffer->setTransform(t, "bag", true);
-      last_stamp.clear();
+      stamps_seen.clear();
     }
     tf2::BufferCore* buffer = segments->back().buffer.get();
     const bool is_static = topicIs(m.getTopic(), "tf_static");
     for (const auto& t : msg->transforms) {
       if (!is_static) {
+        // A repeated stamp is skipped (tf2 would keep the first and complain); an older one
+        // that arrives late is inserted in its place, as a node's tf2 does.
         const std::string key = t.header.frame_id + ">" + t.child_frame_id;
-        auto it = last_stamp.find(key);
-        if (it != last_stamp.end() && t.header.stamp <= it->second) {
-          ++skipped;  // tf2 has it (or a newer one) already; a node still sees it arrive
+        if (!stamps_seen[key].insert(t.header.stamp).second) {
+          ++skipped;
           continue;
         }
-        last_stamp[key] = t.header.stamp;
       }
       try {
         buffer->setTransform(t, "bag", is_static);
