@@ -19,7 +19,8 @@ const char kUsage[] =
     "usage: validate_bag IN.bag [--base-frame F] [--odom-frame F] [--max-gap S]\n"
     "  --base-frame F  the robot frame tf must reach (default base_link)\n"
     "  --odom-frame F  the odometry frame (default odom)\n"
-    "  --max-gap S     a larger step between two stamps of a stream is a gap (default 2 s)\n"
+    "  --max-gap S     a step between two stamps of a stream longer than this (default 2 s) and\n"
+    "                  than 5x the stream's median step is a gap\n"
     "Exit status: 0 nothing found, 1 problems found, 2 bad usage or a bag that cannot be read.\n";
 
 struct Arguments {

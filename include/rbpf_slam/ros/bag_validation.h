@@ -14,7 +14,9 @@ namespace rosbridge {
 struct BagValidationOptions {
   std::string base_frame = "base_link";
   std::string odom_frame = "odom";
-  double max_gap_s = 2.0;  // a larger step between consecutive stamps of a stream is a gap
+  // A step between consecutive stamps of a stream is a gap when it is longer than this and
+  // than 5 times the stream's median step.
+  double max_gap_s = 2.0;
 };
 
 /// What one stream (a topic, or one tf parent -> child edge) looked like.
@@ -24,7 +26,8 @@ struct StreamReport {
   long backwards = 0;   // stamp older than the previous one of the stream
   long duplicates = 0;  // stamp equal to the previous one
   long zero_stamps = 0;
-  long gaps = 0;        // steps larger than max_gap_s
+  long gaps = 0;                 // steps larger than gap_threshold_s
+  double gap_threshold_s = 0.0;  // max(max_gap_s, 5 x the median step)
   double largest_gap_s = 0.0;
   double first_gap_at_s = -1.0;  // bag-relative time of the first gap
   long invalid_values = 0;       // NaN / -inf ranges, non-finite transforms
