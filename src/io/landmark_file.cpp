@@ -62,6 +62,11 @@ core::LandmarkEstimate readLandmark(const YAML::Node& node, const std::string& w
   } else if (type == "point") {
     l.mean << readNumber(node, "x", where), readNumber(node, "y", where);
     l.start = l.end = l.mean;
+  } else if (type.empty() && node["x_m"] && node["y_m"]) {
+    throw std::runtime_error(where +
+                             ": surveyed positions (x_m, y_m) of a ground-truth file "
+                             "(OUT.landmarks.yaml of mrclam_to_bag or simulate), not a map; a "
+                             "map is written by offline_slam (landmarks.yaml) or ~save_map");
   } else {
     throw std::runtime_error(where + ": type = '" + type + "' is not point or line");
   }

@@ -49,6 +49,11 @@ Arguments parseArguments(int argc, char** argv) {
       arguments.positional.push_back(cursor.arg());
     }
   }
+  if (!arguments.options.interpolate_reference &&
+      arguments.options.max_interpolation_gap_s !=
+          io::EvaluationOptions().max_interpolation_gap_s) {
+    throw std::invalid_argument("--max-gap applies only with --interpolate");
+  }
   if (arguments.positional.size() != 2) {
     throw std::invalid_argument("expected ESTIMATE.tum and REFERENCE.tum, got " +
                                 std::to_string(arguments.positional.size()) + " file argument(s)");

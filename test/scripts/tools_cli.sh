@@ -93,6 +93,8 @@ expect "evaluate bad number" 2 "--max-dt needs a non-negative number" "$bin/eval
 expect "evaluate one file" 2 "expected ESTIMATE.tum and REFERENCE.tum" "$bin/evaluate" "$work/a.tum"
 expect "evaluate missing file" 1 "no_such_input" "$bin/evaluate" "$work/a.tum" "$missing.tum"
 expect "evaluate itself" 0 "ate" "$bin/evaluate" "$work/a.tum" "$work/a.tum"
+expect "evaluate --max-gap without --interpolate" 2 "--max-gap applies only with --interpolate" \
+  "$bin/evaluate" "$work/a.tum" "$work/a.tum" --max-gap 1
 expect "render_grid required" 2 "are required" "$bin/render_grid" --bag x.bag
 expect "render_grid missing reference" 1 "no_such_input" "$bin/render_grid" --bag "$missing.bag" \
   --reference "$missing.tum" --config "$root/config/grid_pf_laser.yaml" --output "$work/g"

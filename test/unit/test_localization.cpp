@@ -99,6 +99,10 @@ TEST(LandmarkFile, BrokenFilesAreRejectedNamingTheEntry) {
   expectError("landmarks:\n  - {id: 1, type: point, x: 1, y: 2, covariance: [1, 0, 0, -1]}\n",
               "not symmetric positive definite");
   expectError("other: 1\n", "'landmarks' (a list) is missing");
+  // The ground truth that mrclam_to_bag and simulate write beside their bags has the same
+  // file name pattern: say what it is (it used to give "type = '' is not point or line").
+  expectError("landmarks:\n  - {id: 6, x_m: 1.5, y_m: 2.7, sd_x_m: 0.001, sd_y_m: 0.001}\n",
+              "surveyed positions (x_m, y_m) of a ground-truth file");
   EXPECT_THROW(io::loadLandmarksYaml(tempPath("does_not_exist.yaml")), std::runtime_error);
 }
 

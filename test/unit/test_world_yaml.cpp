@@ -190,6 +190,20 @@ TEST(WorldYaml, RejectsNegativeNoiseNamingFileAndField) {
                  path + ": sensors.laser.range_noise_m = -1 is out of range [0, inf)");
 }
 
+/// In range but absurd: a beam every 1e-9 deg ran out of memory ("vector::_M_default_append")
+/// and a 1 GHz control loop simulated for hours.
+TEST(WorldYaml, RejectsAbsurdBeamCountsAndControlRates) {
+  const std::string beams =
+      writeWorld("beams.yaml", replaced(kMinimalWorld, "range_noise_m: 0.01",
+                                        "range_noise_m: 0.01\n    resolution_deg: 1.0e-9"));
+  expectContains(loadError(beams), beams + ": sensors.laser.resolution_deg = ");
+  expectContains(loadError(beams), "beams a scan (at most 100000)");
+  const std::string rate = writeWorld(
+      "rate.yaml",
+      replaced(kMinimalWorld, "radius_m: 0.2", "radius_m: 0.2\n  control_rate_hz: 1.0e9"));
+  expectContains(loadError(rate), rate + ": robot.control_rate_hz = ");
+}
+
 TEST(WorldYaml, RejectsAnUnclosedPolygonNamingFileAndField) {
   const std::string path = writeWorld(
       "unclosed.yaml", replaced(kMinimalWorld, ", [2.5, 2.5], [2.5, 1.5]]", ", [2.5, 2.5]]"));

@@ -75,7 +75,8 @@ void checkRobot(const RobotConfig& robot) {
   positive("robot.max_turn_rate_deg_s", robot.max_turn_rate_deg_s);
   checkRange("robot.max_steering_deg", robot.max_steering_deg, 0.0, 90.0, true, true);
   nonNegative("robot.max_steering_rate_deg_s", robot.max_steering_rate_deg_s);
-  positive("robot.control_rate_hz", robot.control_rate_hz);
+  // 10 kHz is far above any robot's control loop; more only makes a run take hours.
+  checkRange("robot.control_rate_hz", robot.control_rate_hz, 0.0, 10000.0, true);
   positive("robot.lookahead_m", robot.lookahead_m);
   positive("robot.waypoint_tolerance_m", robot.waypoint_tolerance_m);
   if (robot.drive == DriveType::kBicycle && robot.controller == ControllerType::kTurnThenDrive) {
@@ -118,6 +119,12 @@ void checkLaser(const LaserConfig& laser, double control_rate_hz) {
   checkRate(p + ".rate_hz", laser.rate_hz, control_rate_hz);
   checkRange(p + ".fov_deg", laser.fov_deg, 0.0, 360.0, true);
   checkRange(p + ".resolution_deg", laser.resolution_deg, 0.0, laser.fov_deg, true);
+  // A beam every 0.001 deg is 360000 beams a scan: beyond any laser and any memory budget.
+  if (laser.resolution_deg > 0.0 && laser.fov_deg / laser.resolution_deg > 100000.0) {
+    fail(p + ".resolution_deg = " + number(laser.resolution_deg) + " gives " +
+         number(std::floor(laser.fov_deg / laser.resolution_deg)) +
+         " beams a scan (at most 100000)");
+  }
   checkRangeLimits(p, laser.min_range_m, laser.max_range_m);
   nonNegative(p + ".range_noise_m", laser.range_noise_m);
   checkRange(p + ".mount_x_m", laser.mount_x_m, -kInf, kInf, true, true);
