@@ -222,7 +222,7 @@ std::vector<Eigen::Vector2d> toBasePoints(const sensor_msgs::PointCloud& msg,
 }
 
 core::FeatureSet toFeatureSet(const FeatureArray& msg, const core::Pose2& frame_in_base,
-                              int* dropped) {
+                              int* dropped, bool upside_down) {
   core::FeatureSet set;
   set.stamp = msg.header.stamp.toSec();
   *dropped = 0;
@@ -237,6 +237,11 @@ core::FeatureSet toFeatureSet(const FeatureArray& msg, const core::Pose2& frame_
         !f.covariance.allFinite()) {
       ++*dropped;
       continue;
+    }
+    if (upside_down) {  // y of the frame is -y of a level one: bearings turn the other way
+      f.bearing = -f.bearing;
+      f.covariance(0, 1) = -f.covariance(0, 1);
+      f.covariance(1, 0) = -f.covariance(1, 0);
     }
     if (!identity) {  // re-express in the base frame (covariance kept: a small offset)
       const Eigen::Vector2d in_frame(f.range * std::cos(f.bearing), f.range * std::sin(f.bearing));
@@ -261,6 +266,13 @@ core::FeatureSet toFeatureSet(const FeatureArray& msg, const core::Pose2& frame_
         !f.start.allFinite() || !f.end.allFinite()) {
       ++*dropped;
       continue;
+    }
+    if (upside_down) {  // mirrored about the frame's x axis: the normal's angle turns over
+      f.theta = -f.theta;
+      f.covariance(0, 1) = -f.covariance(0, 1);
+      f.covariance(1, 0) = -f.covariance(1, 0);
+      f.start.y() = -f.start.y();
+      f.end.y() = -f.end.y();
     }
     if (!identity) {
       const double theta = f.theta + frame_in_base.z();

@@ -38,11 +38,12 @@ LandmarkTrackerNode::LandmarkTrackerNode(ros::NodeHandle nh, ros::NodeHandle pri
 
 void LandmarkTrackerNode::featuresCallback(const FeatureArray::ConstPtr& msg) {
   const io::RosOptions& o = config_.ros;
-  core::Pose2 odom_pose, frame_in_base;
+  core::Pose2 odom_pose;
+  SensorMount frame;
   try {
     odom_pose =
         toPose2(tf_buffer_.lookupTransform(o.odom_frame, o.base_frame, msg->header.stamp).transform);
-    frame_in_base = toPose2(
+    frame = toSensorMount(
         tf_buffer_
             .lookupTransform(o.base_frame, stripSlash(msg->header.frame_id), msg->header.stamp)
             .transform);
@@ -50,8 +51,11 @@ void LandmarkTrackerNode::featuresCallback(const FeatureArray::ConstPtr& msg) {
     drop("no tf", "tf " + msg->header.frame_id, std::string("No transform: ") + e.what());
     return;
   }
+  if (isTilted(frame)) {
+    warnings_.warn("tilt " + msg->header.frame_id, tiltWarning(msg->header.frame_id, frame));
+  }
   int dropped = 0;
-  core::FeatureSet features = toFeatureSet(*msg, frame_in_base, &dropped);
+  core::FeatureSet features = toFeatureSet(*msg, frame.pose, &dropped, frame.upside_down);
   if (dropped > 0) {
     warnings_.warn("non-finite features", "Dropped " + std::to_string(dropped) +
                                               " feature(s) with non-finite values");

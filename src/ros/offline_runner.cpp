@@ -521,7 +521,8 @@ OfflineSummary OfflineRunner::run() {
       result = pipeline_.processSonar(readings, odom_pose, stamp.toSec());
     } else {
       int dropped = 0;
-      result = pipeline_.processFeatures(toFeatureSet(*features, mount.pose, &dropped), odom_pose);
+      result = pipeline_.processFeatures(
+          toFeatureSet(*features, mount.pose, &dropped, mount.upside_down), odom_pose);
       summary.dropped_features += dropped;
     }
     const double ms =

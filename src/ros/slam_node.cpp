@@ -242,7 +242,7 @@ void SlamNode::featuresCallback(const FeatureArray::ConstPtr& msg) {
   SensorMount frame;
   if (!lookupPoses(msg->header, &odom_pose, &frame)) return;
   int dropped = 0;
-  const core::FeatureSet features = toFeatureSet(*msg, frame.pose, &dropped);
+  const core::FeatureSet features = toFeatureSet(*msg, frame.pose, &dropped, frame.upside_down);
   if (dropped > 0) {
     diagnostics_.recordDrop("non-finite feature", dropped);
     warnThrottled("non-finite features", "Dropped " + std::to_string(dropped) +

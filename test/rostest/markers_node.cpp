@@ -3,6 +3,7 @@
 
 #include <gtest/gtest.h>
 #include <ros/time.h>
+#include <tf2/LinearMath/Quaternion.h>
 
 #include <algorithm>
 #include <array>
@@ -229,6 +230,54 @@ TEST(PointCloud2, ConvertsToThePointsOfAPointCloud) {
   auto big_endian = cloud2({{1.0f, 2.0f, 0.0f}});
   big_endian.is_bigendian = true;
   EXPECT_FALSE(rosbridge::toPointCloud(big_endian, &out, &error));
+}
+
+/// Features in a frame mounted upside down (rolled by pi, then turned): where they are in the
+/// base frame is what the full 3D rotation of tf says. Before session 13 only the yaw was used,
+/// so bearings and line normals came out mirrored.
+TEST(FeatureConversion, AnUpsideDownFrameMirrorsBearingsAndLines) {
+  const geometry_msgs::Transform t = mountRpy(M_PI, 0.0, 0.5);
+  const auto mount = rosbridge::toSensorMount(t);
+  ASSERT_TRUE(mount.upside_down);
+  const tf2::Quaternion q(t.rotation.x, t.rotation.y, t.rotation.z, t.rotation.w);
+  auto toBase = [&](double x, double y) {
+    const tf2::Vector3 v = tf2::quatRotate(q, tf2::Vector3(x, y, 0.0));
+    return Eigen::Vector2d(v.x() + t.translation.x, v.y() + t.translation.y);
+  };
+  rbpf_slam::FeatureArray msg;
+  rbpf_slam::PointFeature p;
+  p.range = 2.0;
+  p.bearing = 0.3;
+  p.covariance = {0.01, 0.002, 0.002, 0.001};
+  p.id = -1;
+  msg.points.push_back(p);
+  rbpf_slam::LineFeature l;  // the line x = 1.5 of the frame, from y = -1 to y = 2
+  l.rho = 1.5;
+  l.theta = 0.0;
+  l.covariance = {0.01, 0.001, 0.001, 0.002};
+  l.start.x = 1.5;
+  l.start.y = -1.0;
+  l.end.x = 1.5;
+  l.end.y = 2.0;
+  msg.lines.push_back(l);
+  int dropped = 0;
+  const core::FeatureSet set =
+      rosbridge::toFeatureSet(msg, mount.pose, &dropped, mount.upside_down);
+  ASSERT_EQ(set.points.size(), 1u);
+  ASSERT_EQ(set.lines.size(), 1u);
+  const Eigen::Vector2d point = toBase(2.0 * std::cos(0.3), 2.0 * std::sin(0.3));
+  const auto& f = set.points[0];
+  EXPECT_NEAR(f.range * std::cos(f.bearing), point.x(), 1e-9);
+  EXPECT_NEAR(f.range * std::sin(f.bearing), point.y(), 1e-9);
+  EXPECT_NEAR(f.covariance(0, 1), -0.002, 1e-12);  // the bearing turns the other way
+  const auto& line = set.lines[0];
+  const Eigen::Vector2d a = toBase(1.5, -1.0), b = toBase(1.5, 2.0);
+  EXPECT_NEAR((line.start - a).norm(), 0.0, 1e-9);
+  EXPECT_NEAR((line.end - b).norm(), 0.0, 1e-9);
+  // Both end points lie on the converted line: rho = x cos(theta) + y sin(theta).
+  for (const Eigen::Vector2d& e : {a, b}) {
+    EXPECT_NEAR(e.x() * std::cos(line.theta) + e.y() * std::sin(line.theta), line.rho, 1e-9);
+  }
 }
 
 TEST(CovarianceEllipse, TwoSigmaAxesFollowTheEigenvectors) {

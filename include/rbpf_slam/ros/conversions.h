@@ -82,9 +82,10 @@ bool toPointCloud(const sensor_msgs::PointCloud2& msg, sensor_msgs::PointCloud* 
                   std::string* error);
 
 /// Features from a message whose frame is at frame_in_base; features with non-finite values
-/// are dropped and counted in *dropped.
+/// are dropped and counted in *dropped. upside_down (SensorMount's): the frame's y axis
+/// points the other way in the base frame, so bearings and line normals are mirrored first.
 core::FeatureSet toFeatureSet(const FeatureArray& msg, const core::Pose2& frame_in_base,
-                              int* dropped);
+                              int* dropped, bool upside_down = false);
 FeatureArray toMsg(const core::FeatureSet& features, const std_msgs::Header& header);
 
 /// A core grid as nav_msgs/OccupancyGrid (same cell order and values) in frame at stamp.
