@@ -2,9 +2,13 @@
 
 #include <rosgraph_msgs/Clock.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <map>
 #include <stdexcept>
+#include <utility>
+#include <vector>
 
 #include "rbpf_slam/io/world_yaml.h"
 
@@ -26,6 +30,36 @@ core::sim::SimulatorOptions simulatorOptions(const SimNodeOptions& options) {
 SimNodeOptions loadSimNodeOptions(const ros::NodeHandle& private_nh) {
   SimNodeOptions options;
   const std::string ns = private_nh.getNamespace();
+  // Every private parameter must be one of these, of its type: ros::param() would fall back
+  // to the default on a mistyped name or value without a word (`_rate:=fast` ran at 1x).
+  using Type = XmlRpc::XmlRpcValue::Type;
+  const std::map<std::string, std::pair<std::vector<Type>, const char*>> known = {
+      {"world", {{Type::TypeString}, "a file path"}},
+      {"seed", {{Type::TypeInt}, "an integer"}},
+      {"rate", {{Type::TypeDouble, Type::TypeInt}, "a number"}},
+      {"duration", {{Type::TypeDouble, Type::TypeInt}, "a number"}},
+      {"start_delay", {{Type::TypeDouble, Type::TypeInt}, "a number"}},
+      {"publish_clock", {{Type::TypeBoolean}, "true or false"}},
+      {"ground_truth_file", {{Type::TypeString}, "a file path"}},
+      {"tf_prefix", {{Type::TypeString}, "a string"}}};  // added by ROS itself
+  XmlRpc::XmlRpcValue tree;
+  if (private_nh.getParam("", tree) && tree.getType() == Type::TypeStruct) {
+    for (auto it = tree.begin(); it != tree.end(); ++it) {
+      const auto k = known.find(it->first);
+      if (k == known.end()) {
+        std::string list;
+        for (const auto& [name, type] : known) {
+          if (name != "tf_prefix") list += (list.empty() ? "" : ", ") + name;
+        }
+        throw std::invalid_argument(ns + "/" + it->first + " is not a sim_node parameter (" + list +
+                                    ")");
+      }
+      const auto& types = k->second.first;
+      if (std::find(types.begin(), types.end(), it->second.getType()) == types.end()) {
+        throw std::invalid_argument(ns + "/" + it->first + " must be " + k->second.second);
+      }
+    }
+  }
   if (!private_nh.getParam("world", options.world) || options.world.empty()) {
     throw std::invalid_argument(ns + "/world is required: the path of a world file (worlds/)");
   }

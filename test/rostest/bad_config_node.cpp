@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "rbpf_slam/ros/param_loader.h"
+#include "rbpf_slam/ros/sim_node.h"
 
 namespace rbpf_slam {
 namespace {
@@ -143,6 +144,41 @@ TEST(LoadConfigFromParams, SameRulesAsYamlFiles) {
   nh.deleteParam("motion/alpah2");
   nh.setParam("resample_threshold", std::nan(""));
   EXPECT_THROW(rosbridge::loadConfigFromParams(nh), io::ConfigError);
+  nh.deleteParam("");
+}
+
+// sim_node's parameters: a mistyped name or a value of the wrong type used to fall back to
+// the default without a word (`_rate:=fast` ran at 1x, `_seeed:=3` with seed 0).
+TEST(SimNodeParameters, MistypedNamesAndValuesAreRefused) {
+  ros::NodeHandle nh("~sim");
+  nh.deleteParam("");
+  nh.setParam("world", std::string("worlds/test_small.yaml"));
+  nh.setParam("seed", 3);
+  nh.setParam("rate", 2);  // an integer is a number
+  nh.setParam("publish_clock", true);
+  const rosbridge::SimNodeOptions ok = rosbridge::loadSimNodeOptions(nh);
+  EXPECT_EQ(ok.seed, 3);
+  EXPECT_DOUBLE_EQ(ok.rate, 2.0);
+  auto errorWith = [&nh](const std::string& key, const XmlRpc::XmlRpcValue& value) {
+    XmlRpc::XmlRpcValue copy = value;
+    nh.setParam(key, copy);
+    std::string message;
+    try {
+      rosbridge::loadSimNodeOptions(nh);
+    } catch (const std::invalid_argument& e) {
+      message = e.what();
+    }
+    nh.deleteParam(key);
+    return message;
+  };
+  EXPECT_NE(
+      errorWith("seeed", XmlRpc::XmlRpcValue(3)).find("sim/seeed is not a sim_node parameter"),
+      std::string::npos);
+  nh.setParam("rate", 2);
+  EXPECT_NE(errorWith("rate", XmlRpc::XmlRpcValue("fast")).find("sim/rate must be a number"),
+            std::string::npos);
+  EXPECT_NE(errorWith("seed", XmlRpc::XmlRpcValue(2.5)).find("sim/seed must be an integer"),
+            std::string::npos);
   nh.deleteParam("");
 }
 
