@@ -1,5 +1,6 @@
 #include "rbpf_slam/io/victoria_park.h"
 
+#include <cerrno>
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
@@ -27,8 +28,9 @@ double number(const std::string& token, const std::string& source, std::size_t l
 
 long index(const std::string& token, const std::string& source, std::size_t line) {
   char* end = nullptr;
+  errno = 0;
   const long value = std::strtol(token.c_str(), &end, 10);
-  if (token.empty() || end != token.c_str() + token.size() || value < 0) {
+  if (token.empty() || end != token.c_str() + token.size() || value < 0 || errno == ERANGE) {
     fail(source, line, "'" + token + "' is not a non-negative integer index");
   }
   return value;

@@ -55,11 +55,15 @@ struct StreamState {
   /// stream's median step (a laser log with a scan every 3 s has no gap at 8 s).
   void countGaps(double max_gap_s) {
     constexpr double kPeriods = 5.0;
+    constexpr size_t kMinSteps = 10;  // fewer: no typical period to speak of
     if (steps.empty()) return;
-    std::vector<double> sorted;
-    for (const auto& s : steps) sorted.push_back(s.first);
-    std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
-    report.gap_threshold_s = std::max(max_gap_s, kPeriods * sorted[sorted.size() / 2]);
+    report.gap_threshold_s = max_gap_s;
+    if (steps.size() >= kMinSteps) {
+      std::vector<double> sorted;
+      for (const auto& s : steps) sorted.push_back(s.first);
+      std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
+      report.gap_threshold_s = std::max(max_gap_s, kPeriods * sorted[sorted.size() / 2]);
+    }
     for (const auto& [step, at] : steps) {
       if (step <= report.gap_threshold_s) continue;
       ++report.gaps;

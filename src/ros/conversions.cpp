@@ -183,12 +183,25 @@ bool toPointCloud(const sensor_msgs::PointCloud2& msg, sensor_msgs::PointCloud* 
     *error = "big-endian clouds are not supported";
     return false;
   }
-  const uint64_t points = static_cast<uint64_t>(msg.width) * msg.height;
-  if (msg.point_step == 0 || points * msg.point_step > msg.data.size()) {
-    *error = "data holds " + std::to_string(msg.data.size()) + " bytes, width x height x " +
-             "point_step needs " + std::to_string(points * msg.point_step);
+  // Rows of row_step bytes (width points each, maybe padded); sizes checked by division so
+  // that no product can overflow.
+  const uint64_t width = msg.width, height = msg.height, step = msg.point_step;
+  const uint64_t row_step = msg.row_step, size = msg.data.size();
+  bool fits = true;
+  if (width > 0 && height > 0) {
+    fits = step > 0 && size / step >= width;  // one row's points
+    if (fits && height > 1) {
+      fits = row_step / step >= width && size / row_step >= height - 1 &&
+             size - (height - 1) * row_step >= width * step;
+    }
+  }
+  if (!fits) {
+    *error = "data holds " + std::to_string(size) + " bytes, too few for " + std::to_string(width) +
+             " x " + std::to_string(height) + " points of " + std::to_string(step) +
+             " bytes (row_step " + std::to_string(row_step) + ")";
     return false;
   }
+  const uint64_t points = width * height;  // at most size: checked above
   auto read = [&msg](uint64_t at, int bytes) {
     if (bytes == 4) {
       float v;
@@ -203,7 +216,7 @@ bool toPointCloud(const sensor_msgs::PointCloud2& msg, sensor_msgs::PointCloud* 
   out->channels.clear();
   out->points.resize(points);
   for (uint64_t i = 0; i < points; ++i) {
-    const uint64_t base = i * msg.point_step;
+    const uint64_t base = (i / width) * row_step + (i % width) * step;
     out->points[i].x = static_cast<float>(read(base + x, x_bytes));
     out->points[i].y = static_cast<float>(read(base + y, y_bytes));
     out->points[i].z = z >= 0 ? static_cast<float>(read(base + z, z_bytes)) : 0.0f;

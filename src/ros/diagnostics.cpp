@@ -76,6 +76,9 @@ diagnostic_msgs::DiagnosticArray SlamDiagnostics::report(const ros::Time& stamp,
   status.values.push_back(keyValue("resets", text(resets_total_)));
   if (odometry_gaps_ >= 0) status.values.push_back(keyValue("odometry gaps", text(odometry_gaps_)));
   status.values.push_back(keyValue("paused", paused_ ? "true" : "false"));
+  if (skipped_features_total_ > 0) {
+    status.values.push_back(keyValue("features the filter skipped", text(skipped_features_total_)));
+  }
   for (const auto& [cause, count] : drops_total_) {
     status.values.push_back(keyValue("dropped: " + cause, text(count)));
   }

@@ -71,7 +71,10 @@ SlamNode::SlamNode(ros::NodeHandle nh, ros::NodeHandle private_nh,
   } else if (config_.frontend == "sonar") {
     sonar_input_ = subscribeFiltered(ros_options.sonar_topic, &SlamNode::sonarCallback);
   }
-  features_input_ = subscribeFiltered(ros_options.features_topic, &SlamNode::featuresCallback);
+  // grid_pf maps raw readings only; as offline_slam, the node leaves features alone.
+  if (config_.filter.variant != "grid_pf") {
+    features_input_ = subscribeFiltered(ros_options.features_topic, &SlamNode::featuresCallback);
+  }
   odometry_tf_subscriber_ = nh_.subscribe("/tf", 100, &SlamNode::odometryTfCallback, this);
 
   pose_publisher_ = private_nh_.advertise<geometry_msgs::PoseWithCovarianceStamped>("pose", 10);
@@ -159,19 +162,28 @@ void SlamNode::sonarCallback(const sensor_msgs::Range::ConstPtr& msg) {
 
 void SlamNode::sonarCloudArrived(const topic_tools::ShapeShifter::ConstPtr& msg) {
   const std::string& type = msg->getDataType();
-  if (type == "sensor_msgs/PointCloud") {
-    sonar_cloud_input_->add(msg->instantiate<sensor_msgs::PointCloud>());
-    return;
-  }
-  if (type == "sensor_msgs/PointCloud2") {
-    auto cloud = boost::make_shared<sensor_msgs::PointCloud>();
-    std::string error;
-    if (toPointCloud(*msg->instantiate<sensor_msgs::PointCloud2>(), cloud.get(), &error)) {
-      sonar_cloud_input_->add(cloud);
+  // Decoding happens here, not in roscpp: a message that does not decode (a truncated one
+  // from a damaged bag) must be dropped, not end the node.
+  try {
+    if (type == "sensor_msgs/PointCloud") {
+      sonar_cloud_input_->add(msg->instantiate<sensor_msgs::PointCloud>());
       return;
     }
+    if (type == "sensor_msgs/PointCloud2") {
+      auto cloud = boost::make_shared<sensor_msgs::PointCloud>();
+      std::string error;
+      if (toPointCloud(*msg->instantiate<sensor_msgs::PointCloud2>(), cloud.get(), &error)) {
+        sonar_cloud_input_->add(cloud);
+        return;
+      }
+      diagnostics_.recordDrop("bad sonar cloud");
+      warnThrottled("sonar cloud2", "Dropping a sonar_cloud PointCloud2: " + error);
+      return;
+    }
+  } catch (const std::exception& e) {
     diagnostics_.recordDrop("bad sonar cloud");
-    warnThrottled("sonar cloud2", "Dropping a sonar_cloud PointCloud2: " + error);
+    warnThrottled("sonar cloud decode",
+                  "Dropping a sonar_cloud " + type + " that does not decode: " + e.what());
     return;
   }
   diagnostics_.recordDrop("sonar cloud of another type");
@@ -371,7 +383,7 @@ void SlamNode::handleResult(core::FrameResult result, const ros::Time& stamp, do
   stale_drops_in_a_row_ = 0;
   const int rejected = pipeline_.session().lastStats().features_rejected;
   if (rejected > 0) {
-    diagnostics_.recordDrop("feature the filter cannot use", rejected);
+    diagnostics_.recordSkippedFeatures(rejected);
     warnThrottled("features rejected",
                   "The " + config_.filter.variant + " filter skipped " + std::to_string(rejected) +
                       " feature(s) of the frame at " + std::to_string(stamp.toSec()) +
@@ -602,7 +614,7 @@ void SlamNode::resetAll(const std::string& why) {
   if (scan_input_) scan_input_->clear();
   if (sonar_input_) sonar_input_->clear();
   if (sonar_cloud_input_) sonar_cloud_input_->clear();
-  features_input_->clear();
+  if (features_input_) features_input_->clear();
   updates_ = 0;
   map_published_at_update_ = -1;  // the new map's first grid is published like the first one
   stale_drops_in_a_row_ = 0;

@@ -227,8 +227,8 @@ void writeLandmarks(const std::string& path, const Arguments& arguments,
 int run(const Arguments& arguments) {
   ros::Time::init();
   io::MrclamRobot data = io::readMrclamRobot(arguments.dataset_dir, arguments.robot);
-  const std::size_t measurements_read = data.measurements.size();
   io::cropMrclamRobot(arguments.duration_s, &data);
+  const std::size_t measurements_read = data.measurements.size();  // within --duration
   if (data.ground_truth.empty()) {
     throw std::runtime_error("no ground truth during the odometry's time span");
   }
@@ -260,9 +260,10 @@ int run(const Arguments& arguments) {
             << counts.features << " landmark sightings in " << counts.feature_messages
             << " /features messages (" << (arguments.known_ids ? "known" : "unknown")
             << " ids; dropped " << robots << " sightings of robots and " << unknown
-            << " of unknown barcodes; " << measurements_read << " read), " << counts.ground_truth
-            << " ground-truth poses; " << not_integrated << " command interval(s) over "
-            << arguments.max_gap_s << " s not integrated\n"
+            << " of unknown barcodes, of " << measurements_read << " sightings"
+            << (arguments.duration_s > 0.0 ? " within --duration" : "") << "), "
+            << counts.ground_truth << " ground-truth poses; " << not_integrated
+            << " command interval(s) over " << arguments.max_gap_s << " s not integrated\n"
             << "mrclam_to_bag: wrote " << arguments.bag_path << ", " << reference_path << ", "
             << odometry_path << ", " << landmarks_path << "\n";
   return 0;

@@ -18,6 +18,7 @@
 #include <cstdio>
 #include <iostream>
 #include <optional>
+#include <set>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -127,12 +128,8 @@ int run(const Arguments& arguments) {
     if (!msg) continue;
     for (const auto& t : msg->transforms) {
       if (stripSlash(t.header.frame_id) == config.ros.base_frame) {
-        const auto mount = rbpf_slam::rosbridge::toSensorMount(t.transform);
-        if (rbpf_slam::rosbridge::isTilted(mount)) {
-          std::fprintf(stderr, "render_grid: %s\n",
-                       rbpf_slam::rosbridge::tiltWarning(t.child_frame_id, mount).c_str());
-        }
-        mounts.emplace_back(stripSlash(t.child_frame_id), mount);
+        mounts.emplace_back(stripSlash(t.child_frame_id),
+                            rbpf_slam::rosbridge::toSensorMount(t.transform));
       }
     }
   }
@@ -144,6 +141,7 @@ int run(const Arguments& arguments) {
   core::TiledLogOddsGrid grid(options.resolution_m, start.x() - half_x, start.y() - half_y, width,
                               height, options.tile_cells);
   long scans = 0, unmatched = 0, bad = 0;
+  std::set<std::string> tilt_warned;  // scan frames warned about, once each
   const std::string topic = stripSlash(config.ros.scan_topic);
   for (const rosbag::MessageInstance& m :
        rosbag::View(bag, rosbag::TopicQuery(std::vector<std::string>{"/" + topic, topic}))) {
@@ -164,6 +162,10 @@ int run(const Arguments& arguments) {
                                  frame);
       }
       mount = it->second;
+      if (rbpf_slam::rosbridge::isTilted(mount) && tilt_warned.insert(frame).second) {
+        std::fprintf(stderr, "render_grid: %s\n",
+                     rbpf_slam::rosbridge::tiltWarning(frame, mount).c_str());
+      }
     }
     auto scan = std::make_shared<core::RangeScan>();
     std::string error;

@@ -219,7 +219,26 @@ TEST(PointCloud2, ConvertsToThePointsOfAPointCloud) {
   auto truncated = cloud2({{1.0f, 2.0f, 0.0f}, {3.0f, 4.0f, 0.0f}});
   truncated.data.resize(20);
   EXPECT_FALSE(rosbridge::toPointCloud(truncated, &out, &error));
-  EXPECT_NE(error.find("needs 32"), std::string::npos) << error;
+  EXPECT_NE(error.find("too few for 2 x 1 points"), std::string::npos) << error;
+  // Sizes that overflow a 64-bit product are refused, not allocated.
+  auto huge = cloud2({{1.0f, 2.0f, 0.0f}});
+  huge.width = huge.height = 1u << 24;
+  huge.point_step = 1u << 16;
+  huge.row_step = 0;
+  huge.fields[0].offset = 0;
+  EXPECT_FALSE(rosbridge::toPointCloud(huge, &out, &error));
+  // Two rows padded to 40 bytes: the second row starts at row_step, not at width x point_step.
+  auto padded =
+      cloud2({{1.0f, 2.0f, 0.0f}, {3.0f, 4.0f, 0.0f}, {5.0f, 6.0f, 0.0f}, {7.0f, 8.0f, 0.0f}});
+  padded.width = 2;
+  padded.height = 2;
+  padded.row_step = 40;
+  padded.data.insert(padded.data.begin() + 32, 8, 0);  // pad row 0
+  padded.data.insert(padded.data.end(), 8, 0);         // pad row 1
+  ASSERT_TRUE(rosbridge::toPointCloud(padded, &out, &error)) << error;
+  ASSERT_EQ(out.points.size(), 4u);
+  EXPECT_FLOAT_EQ(out.points[2].x, 5.0f);
+  EXPECT_FLOAT_EQ(out.points[3].y, 8.0f);
   auto no_y = cloud2({{1.0f, 2.0f, 0.0f}});
   no_y.fields[1].name = "v";
   EXPECT_FALSE(rosbridge::toPointCloud(no_y, &out, &error));

@@ -83,6 +83,12 @@ TEST(VictoriaPark, MalformedLinesNameTheLine) {
   EXPECT_NE(errorOf(std::string(kLog) + "LANDMARK -4 1 1 1 0.4 0 0.4\n").find("vp.txt:8:"),
             std::string::npos);
   EXPECT_NE(errorOf("# nothing\n").find("no ODOMETRY"), std::string::npos);
+  // An index beyond a long: named as such (it was clamped and reported as a broken chain).
+  const std::string huge =
+      errorOf(std::string(kLog) + "ODOMETRY 4 99999999999999999999 1 0 0 1 0 0 1 0 1\n");
+  EXPECT_NE(huge.find("'99999999999999999999' is not a non-negative integer index"),
+            std::string::npos)
+      << huge;
   EXPECT_NE(errorOf(std::string(kLog) + "LANDMARK 4 1 0 0 0.4 0 0.4\n").find("zero range"),
             std::string::npos);
 }

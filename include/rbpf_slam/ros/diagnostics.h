@@ -40,6 +40,9 @@ class SlamDiagnostics {
   /// cause is a short fixed phrase ("no tf", "bad scan").
   void recordDrop(const std::string& cause, long count = 1);
   void recordReset() { ++resets_total_; }
+  /// Features of used frames that the filter skipped (a kind it ignores, degenerate):
+  /// reported as a count, not as a problem (dpf on line features would warn for ever).
+  void recordSkippedFeatures(long count) { skipped_features_total_ += count; }
   /// Steps taken across an odometry gap so far (SlamSession::gaps); reported once set.
   void setOdometryGaps(long total) { odometry_gaps_ = total; }
   void setPaused(bool paused) { paused_ = paused; }
@@ -56,6 +59,7 @@ class SlamDiagnostics {
   std::map<std::string, long> drops_period_, drops_total_;
   bool paused_ = false;
   long odometry_gaps_ = -1;  // -1: not reported
+  long skipped_features_total_ = 0;
 };
 
 }  // namespace rosbridge
