@@ -368,7 +368,7 @@ OfflineSummary OfflineRunner::run() {
                                                        : ros_options.sonar_topic;
   }
   // grid_pf maps raw readings only: line and point features are of no use to it.
-  const bool uses_features = config_.filter.variant != "grid_pf";
+  const bool uses_features = pipeline_.session().filter().usesLandmarkFeatures();
   std::vector<std::string> topics;
   if (uses_features) {
     topics = {"/" + stripSlash(ros_options.features_topic), stripSlash(ros_options.features_topic)};

@@ -72,7 +72,7 @@ SlamNode::SlamNode(ros::NodeHandle nh, ros::NodeHandle private_nh,
     sonar_input_ = subscribeFiltered(ros_options.sonar_topic, &SlamNode::sonarCallback);
   }
   // grid_pf maps raw readings only; as offline_slam, the node leaves features alone.
-  if (config_.filter.variant != "grid_pf") {
+  if (pipeline_.session().filter().usesLandmarkFeatures()) {
     features_input_ = subscribeFiltered(ros_options.features_topic, &SlamNode::featuresCallback);
   }
   odometry_tf_subscriber_ = nh_.subscribe("/tf", 100, &SlamNode::odometryTfCallback, this);

@@ -588,6 +588,9 @@ TEST(FaultInjector, CentralisedFilterGetsTheSameDisturbance) {
   grid->update(FeatureSet());
   GridMapData data;
   EXPECT_TRUE(grid->occupancyGrid(data));
+  // ... and what the variant reads: a wrapped grid_pf still leaves features alone.
+  EXPECT_FALSE(grid->usesLandmarkFeatures());
+  EXPECT_TRUE(wrapped->usesLandmarkFeatures());
 }
 
 TEST(DpfOptions, OutOfRangeValuesAreNamed) {

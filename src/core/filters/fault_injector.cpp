@@ -41,6 +41,7 @@ class FaultInjectedFilter : public SlamFilter {
   bool setMapping(bool enabled) override { return inner_->setMapping(enabled); }
   bool occupancyGrid(GridMapData& out) const override { return inner_->occupancyGrid(out); }
   std::vector<Pose2> bestPath() const override { return inner_->bestPath(); }
+  bool usesLandmarkFeatures() const override { return inner_->usesLandmarkFeatures(); }
 
  private:
   std::unique_ptr<SlamFilter> inner_;

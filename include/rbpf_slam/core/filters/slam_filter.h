@@ -103,6 +103,9 @@ class SlamFilter {
   /// update() since the last reset, oldest first, which after a loop closure is the path
   /// consistent with its map, unlike the sequence of estimate()s. Default: empty (none).
   virtual std::vector<Pose2> bestPath() const { return {}; }
+  /// False for variants that map raw readings only (grid_pf): drivers then leave the
+  /// `features` topic alone instead of feeding it frames that only move the robot.
+  virtual bool usesLandmarkFeatures() const { return true; }
 };
 
 /// Builds the variant named by options.variant; throws std::invalid_argument if unknown or

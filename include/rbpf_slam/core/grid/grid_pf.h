@@ -43,6 +43,7 @@ class GridParticleFilter : public SlamFilter {
   bool resetPose(const Pose2& pose, const Eigen::Matrix3d& covariance) override;
   bool setMapping(bool enabled) override;
   bool occupancyGrid(GridMapData& out) const override;
+  bool usesLandmarkFeatures() const override { return false; }
 
   /// The grid of the particle with the highest weight.
   const TiledLogOddsGrid& bestGrid() const;
