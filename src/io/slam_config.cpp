@@ -364,6 +364,11 @@ SlamConfig parseSlamConfigTree(const YAML::Node& root, const std::string& source
     throw ConfigError(source + ": localization_only = true needs map_file (a landmarks YAML "
                                "written by ~save_map or offline_slam)");
   }
+  if (config.filter.variant == "grid_pf" && config.frontend == "features") {
+    throw ConfigError(source +
+                      ": variant grid_pf maps raw laser or sonar readings: frontend "
+                      "must be laser or sonar, not features");
+  }
   validateAs(config.filter, source);
   validateAs(config.session, source);
   validateAs(config.laser, source);

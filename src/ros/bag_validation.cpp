@@ -55,13 +55,15 @@ struct StreamState {
   /// stream's median step (a laser log with a scan every 3 s has no gap at 8 s).
   void countGaps(double max_gap_s) {
     constexpr double kPeriods = 5.0;
-    constexpr size_t kMinSteps = 10;  // fewer: no typical period to speak of
     if (steps.empty()) return;
     report.gap_threshold_s = max_gap_s;
-    if (steps.size() >= kMinSteps) {
+    // The typical step: the median without the largest step, so that in a short stream a
+    // hole does not set its own yardstick. Two steps or fewer: max_gap_s alone.
+    if (steps.size() >= 3) {
       std::vector<double> sorted;
       for (const auto& s : steps) sorted.push_back(s.first);
-      std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
+      std::sort(sorted.begin(), sorted.end());
+      sorted.pop_back();
       report.gap_threshold_s = std::max(max_gap_s, kPeriods * sorted[sorted.size() / 2]);
     }
     for (const auto& [step, at] : steps) {
@@ -97,68 +99,78 @@ BagReport validateBag(const std::string& path, const BagValidationOptions& optio
   std::map<std::string, std::set<std::string>> tf_neighbours;
   std::map<std::string, std::string> range_topics;  // topics of sensor_msgs/Range
   std::set<std::string> odometry_topics;            // nav_msgs/Odometry (SLAM reads tf)
+  std::map<std::string, long> undecodable;          // per topic: messages of a damaged bag
   for (const rosbag::MessageInstance& m : view) {
     const std::string topic = m.getTopic();
-    if (const auto tf = m.instantiate<tf2_msgs::TFMessage>()) {
-      const bool is_static = topic.find("tf_static") != std::string::npos;
-      for (const auto& t : tf->transforms) {
-        const std::string parent = stripSlash(t.header.frame_id);
-        const std::string child = stripSlash(t.child_frame_id);
-        const std::string edge = "tf " + parent + " -> " + child;
-        StreamState& s = streams[edge];
-        s.report.name = edge;
-        const auto& q = t.transform.rotation;
-        const auto& p = t.transform.translation;
-        if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z) ||
-            !std::isfinite(q.x) || !std::isfinite(q.y) || !std::isfinite(q.z) ||
-            !std::isfinite(q.w)) {
+    try {
+      if (const auto tf = m.instantiate<tf2_msgs::TFMessage>()) {
+        const bool is_static = topic.find("tf_static") != std::string::npos;
+        for (const auto& t : tf->transforms) {
+          const std::string parent = stripSlash(t.header.frame_id);
+          const std::string child = stripSlash(t.child_frame_id);
+          const std::string edge = "tf " + parent + " -> " + child;
+          StreamState& s = streams[edge];
+          s.report.name = edge;
+          const auto& q = t.transform.rotation;
+          const auto& p = t.transform.translation;
+          if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z) ||
+              !std::isfinite(q.x) || !std::isfinite(q.y) || !std::isfinite(q.z) ||
+              !std::isfinite(q.w)) {
+            ++s.report.invalid_values;
+          }
+          if (!is_static)
+            s.add(t.header.stamp, begin);
+          else
+            ++s.report.messages;
+          if (!parent.empty() && !child.empty()) {
+            tf_neighbours[parent].insert(child);
+            tf_neighbours[child].insert(parent);
+          }
+        }
+        continue;
+      }
+      StreamState& s = streams[topic];
+      s.report.name = topic;
+      std_msgs::Header header;
+      if (const auto scan = m.instantiate<sensor_msgs::LaserScan>()) {
+        header = scan->header;
+        for (float r : scan->ranges) {
+          if (std::isnan(r) || (std::isinf(r) && r < 0)) ++s.report.invalid_values;
+        }
+      } else if (const auto range = m.instantiate<sensor_msgs::Range>()) {
+        header = range->header;
+        range_topics[topic] = topic;
+        if (!std::isfinite(range->range) && !(std::isinf(range->range) && range->range > 0)) {
           ++s.report.invalid_values;
         }
-        if (!is_static)
-          s.add(t.header.stamp, begin);
-        else ++s.report.messages;
-        if (!parent.empty() && !child.empty()) {
-          tf_neighbours[parent].insert(child);
-          tf_neighbours[child].insert(parent);
-        }
+      } else if (const auto cloud = m.instantiate<sensor_msgs::PointCloud>()) {
+        header = cloud->header;
+      } else if (const auto features = m.instantiate<FeatureArray>()) {
+        header = features->header;
+      } else if (const auto odometry = m.instantiate<nav_msgs::Odometry>()) {
+        header = odometry->header;
+        odometry_topics.insert(topic);
+      } else {
+        ++s.report.messages;  // a type without a header we look at: counted only
+        continue;
       }
-      continue;
-    }
-    StreamState& s = streams[topic];
-    s.report.name = topic;
-    std_msgs::Header header;
-    if (const auto scan = m.instantiate<sensor_msgs::LaserScan>()) {
-      header = scan->header;
-      for (float r : scan->ranges) {
-        if (std::isnan(r) || (std::isinf(r) && r < 0)) ++s.report.invalid_values;
+      s.report.frames.insert(stripSlash(header.frame_id));
+      // Range topics carry one stream per transducer frame: check the order per frame.
+      if (range_topics.count(topic)) {
+        StreamState& per_frame = streams[topic + " [" + stripSlash(header.frame_id) + "]"];
+        per_frame.report.name = topic + " [" + stripSlash(header.frame_id) + "]";
+        per_frame.add(header.stamp, begin);
+        ++s.report.messages;
+      } else {
+        s.add(header.stamp, begin);
       }
-    } else if (const auto range = m.instantiate<sensor_msgs::Range>()) {
-      header = range->header;
-      range_topics[topic] = topic;
-      if (!std::isfinite(range->range) && !(std::isinf(range->range) && range->range > 0)) {
-        ++s.report.invalid_values;
-      }
-    } else if (const auto cloud = m.instantiate<sensor_msgs::PointCloud>()) {
-      header = cloud->header;
-    } else if (const auto features = m.instantiate<FeatureArray>()) {
-      header = features->header;
-    } else if (const auto odometry = m.instantiate<nav_msgs::Odometry>()) {
-      header = odometry->header;
-      odometry_topics.insert(topic);
-    } else {
-      ++s.report.messages;  // a type without a header we look at: counted only
-      continue;
+    } catch (const std::exception&) {
+      ++undecodable[topic];
     }
-    s.report.frames.insert(stripSlash(header.frame_id));
-    // Range topics carry one stream per transducer frame: check the order per frame.
-    if (range_topics.count(topic)) {
-      StreamState& per_frame = streams[topic + " [" + stripSlash(header.frame_id) + "]"];
-      per_frame.report.name = topic + " [" + stripSlash(header.frame_id) + "]";
-      per_frame.add(header.stamp, begin);
-      ++s.report.messages;
-    } else {
-      s.add(header.stamp, begin);
-    }
+  }
+  for (const auto& [topic, count] : undecodable) {
+    report.problems.push_back(topic + ": " + std::to_string(count) +
+                              " message(s) that do not decode (a damaged bag)");
   }
 
   // Frames tf can reach from the base frame (edges at any time).

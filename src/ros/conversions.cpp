@@ -195,6 +195,11 @@ bool toPointCloud(const sensor_msgs::PointCloud2& msg, sensor_msgs::PointCloud* 
              size - (height - 1) * row_step >= width * step;
     }
   }
+  if (!fits && height > 1 && step > 0 && row_step / step < width) {
+    *error = "row_step " + std::to_string(row_step) + " is shorter than " + std::to_string(width) +
+             " points of " + std::to_string(step) + " bytes";
+    return false;
+  }
   if (!fits) {
     *error = "data holds " + std::to_string(size) + " bytes, too few for " + std::to_string(width) +
              " x " + std::to_string(height) + " points of " + std::to_string(step) +
@@ -225,11 +230,12 @@ bool toPointCloud(const sensor_msgs::PointCloud2& msg, sensor_msgs::PointCloud* 
 }
 
 std::vector<Eigen::Vector2d> toBasePoints(const sensor_msgs::PointCloud& msg,
-                                          const core::Pose2& frame_in_base) {
+                                          const core::Pose2& frame_in_base, bool upside_down) {
   std::vector<Eigen::Vector2d> points;
   points.reserve(msg.points.size());
+  const double mirror = upside_down ? -1.0 : 1.0;
   for (const auto& p : msg.points) {
-    points.push_back(core::transformPoint(frame_in_base, Eigen::Vector2d(p.x, p.y)));
+    points.push_back(core::transformPoint(frame_in_base, Eigen::Vector2d(p.x, mirror * p.y)));
   }
   return points;
 }

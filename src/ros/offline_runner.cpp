@@ -90,6 +90,16 @@ struct TfSegment {
 
 const std::vector<std::string> kTfTopics{"/tf", "/tf_static", "tf", "tf_static"};
 
+/// The message, or null when it is of another type or does not decode (a damaged bag).
+template <typename Message>
+boost::shared_ptr<Message> instantiateOrNull(const rosbag::MessageInstance& m) {
+  try {
+    return m.instantiate<Message>();
+  } catch (const std::exception&) {
+    return nullptr;
+  }
+}
+
 /// The stamps of the odometry (odom_frame -> base_frame on tf), in bag order, each with the
 /// time the bag received it.
 std::vector<OdometryArrival> readOdometry(const rosbag::Bag& bag, const std::string& odom_frame,
@@ -98,7 +108,7 @@ std::vector<OdometryArrival> readOdometry(const rosbag::Bag& bag, const std::str
   rosbag::View view(bag, rosbag::TopicQuery(kTfTopics));
   for (const rosbag::MessageInstance& m : view) {
     if (topicIs(m.getTopic(), "tf_static")) continue;
-    const auto msg = m.instantiate<tf2_msgs::TFMessage>();
+    const auto msg = instantiateOrNull<tf2_msgs::TFMessage>(m);
     if (!msg) continue;
     for (const auto& t : msg->transforms) {
       // A non-finite transform is refused by tf2: no odometry arrived with it.
@@ -151,8 +161,11 @@ long loadTransforms(const rosbag::Bag& bag, const std::vector<ros::Time>& run_st
   long skipped = 0;
   rosbag::View view(bag, rosbag::TopicQuery(kTfTopics));
   for (const rosbag::MessageInstance& m : view) {
-    const auto msg = m.instantiate<tf2_msgs::TFMessage>();
-    if (!msg) continue;
+    const auto msg = instantiateOrNull<tf2_msgs::TFMessage>(m);
+    if (!msg) {
+      ++skipped;  // not a TFMessage, or one that does not decode
+      continue;
+    }
     while (next_start < run_starts.size() && m.getTime() >= run_starts[next_start]) {
       segments->push_back({run_starts[next_start++], std::make_unique<tf2::BufferCore>(cache)});
       for (const auto& t : statics) segments->back().buffer->setTransform(t, "bag", true);
@@ -406,33 +419,42 @@ OfflineSummary OfflineRunner::run() {
     sensor_msgs::Range::ConstPtr range;
     sensor_msgs::PointCloud::ConstPtr cloud;
     FeatureArray::ConstPtr features;
-    if ((scan = m.instantiate<sensor_msgs::LaserScan>())) {
-      frame = scan->header.frame_id;
-      stamp = scan->header.stamp;
-    } else if ((range = m.instantiate<sensor_msgs::Range>())) {
-      frame = range->header.frame_id;
-      stamp = range->header.stamp;
-    } else if ((cloud = m.instantiate<sensor_msgs::PointCloud>())) {
-      frame = cloud->header.frame_id;
-      stamp = cloud->header.stamp;
-    } else if (const auto cloud2 = m.instantiate<sensor_msgs::PointCloud2>()) {
-      // RosAria's sonar_pointcloud2: the same points.
-      auto converted = boost::make_shared<sensor_msgs::PointCloud>();
-      std::string error;
-      if (!toPointCloud(*cloud2, converted.get(), &error)) {
-        if (summary.dropped_bad_message++ == 0)
-          summary.first_bad_message = m.getTopic() + ": " + error;
+    // A message that does not decode (a damaged bag) is counted, not the end of the run.
+    try {
+      if ((scan = m.instantiate<sensor_msgs::LaserScan>())) {
+        frame = scan->header.frame_id;
+        stamp = scan->header.stamp;
+      } else if ((range = m.instantiate<sensor_msgs::Range>())) {
+        frame = range->header.frame_id;
+        stamp = range->header.stamp;
+      } else if ((cloud = m.instantiate<sensor_msgs::PointCloud>())) {
+        frame = cloud->header.frame_id;
+        stamp = cloud->header.stamp;
+      } else if (const auto cloud2 = m.instantiate<sensor_msgs::PointCloud2>()) {
+        // RosAria's sonar_pointcloud2: the same points.
+        auto converted = boost::make_shared<sensor_msgs::PointCloud>();
+        std::string error;
+        if (!toPointCloud(*cloud2, converted.get(), &error)) {
+          if (summary.dropped_bad_message++ == 0)
+            summary.first_bad_message = m.getTopic() + ": " + error;
+          continue;
+        }
+        cloud = converted;
+        frame = cloud->header.frame_id;
+        stamp = cloud->header.stamp;
+      } else if ((features = m.instantiate<FeatureArray>())) {
+        frame = features->header.frame_id;
+        stamp = features->header.stamp;
+      } else {
+        if (summary.dropped_bad_message++ == 0) {
+          summary.first_bad_message = m.getTopic() + ": unreadable " + m.getDataType();
+        }
         continue;
       }
-      cloud = converted;
-      frame = cloud->header.frame_id;
-      stamp = cloud->header.stamp;
-    } else if ((features = m.instantiate<FeatureArray>())) {
-      frame = features->header.frame_id;
-      stamp = features->header.stamp;
-    } else {
+    } catch (const std::exception& e) {
       if (summary.dropped_bad_message++ == 0) {
-        summary.first_bad_message = m.getTopic() + ": unreadable " + m.getDataType();
+        summary.first_bad_message =
+            m.getTopic() + ": a message that does not decode (" + e.what() + ")";
       }
       continue;
     }
@@ -515,8 +537,9 @@ OfflineSummary OfflineRunner::run() {
       }
       int unmatched = 0;
       const std::vector<core::ConeReading> readings = core::coneReadingsFromCloud(
-          toBasePoints(*cloud, mount.pose), transducers, ros_options.sonar_cloud_fov, 0.0,
-          ros_options.sonar_cloud_max_range, stamp.toSec(), kCloudAxisTolerance, &unmatched);
+          toBasePoints(*cloud, mount.pose, mount.upside_down), transducers,
+          ros_options.sonar_cloud_fov, 0.0, ros_options.sonar_cloud_max_range, stamp.toSec(),
+          kCloudAxisTolerance, &unmatched);
       summary.dropped_cloud_points += unmatched;
       result = pipeline_.processSonar(readings, odom_pose, stamp.toSec());
     } else {

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <map>
 #include <stdexcept>
@@ -43,6 +44,7 @@ SimNodeOptions loadSimNodeOptions(const ros::NodeHandle& private_nh) {
       {"ground_truth_file", {{Type::TypeString}, "a file path"}},
       {"tf_prefix", {{Type::TypeString}, "a string"}}};  // added by ROS itself
   XmlRpc::XmlRpcValue tree;
+  std::map<std::string, double> numbers;  // numeric parameters given as text
   if (private_nh.getParam("", tree) && tree.getType() == Type::TypeStruct) {
     for (auto it = tree.begin(); it != tree.end(); ++it) {
       const auto k = known.find(it->first);
@@ -55,6 +57,17 @@ SimNodeOptions loadSimNodeOptions(const ros::NodeHandle& private_nh) {
                                     ")");
       }
       const auto& types = k->second.first;
+      const bool number = std::find(types.begin(), types.end(), Type::TypeDouble) != types.end();
+      if (number && it->second.getType() == Type::TypeString) {
+        // roslaunch passes "1e3" as a string: a number all the same.
+        const std::string text = static_cast<std::string>(it->second);
+        char* end = nullptr;
+        const double value = std::strtod(text.c_str(), &end);
+        if (!text.empty() && end == text.c_str() + text.size() && std::isfinite(value)) {
+          numbers[it->first] = value;
+          continue;
+        }
+      }
       if (std::find(types.begin(), types.end(), it->second.getType()) == types.end()) {
         throw std::invalid_argument(ns + "/" + it->first + " must be " + k->second.second);
       }
@@ -67,6 +80,9 @@ SimNodeOptions loadSimNodeOptions(const ros::NodeHandle& private_nh) {
   private_nh.param("rate", options.rate, options.rate);
   private_nh.param("duration", options.duration_s, options.duration_s);
   private_nh.param("start_delay", options.start_delay_s, options.start_delay_s);
+  if (numbers.count("rate")) options.rate = numbers["rate"];
+  if (numbers.count("duration")) options.duration_s = numbers["duration"];
+  if (numbers.count("start_delay")) options.start_delay_s = numbers["start_delay"];
   bool use_sim_time = false;
   ros::param::param("/use_sim_time", use_sim_time, false);
   private_nh.param("publish_clock", options.publish_clock, use_sim_time);

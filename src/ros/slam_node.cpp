@@ -217,8 +217,9 @@ void SlamNode::sonarCloudCallback(const sensor_msgs::PointCloud::ConstPtr& msg) 
   }
   int unmatched = 0;
   const std::vector<core::ConeReading> readings = core::coneReadingsFromCloud(
-      toBasePoints(*msg, cloud_frame.pose), sonar_transducers_, o.sonar_cloud_fov, 0.0,
-      o.sonar_cloud_max_range, msg->header.stamp.toSec(), kAxisTolerance, &unmatched);
+      toBasePoints(*msg, cloud_frame.pose, cloud_frame.upside_down), sonar_transducers_,
+      o.sonar_cloud_fov, 0.0, o.sonar_cloud_max_range, msg->header.stamp.toSec(), kAxisTolerance,
+      &unmatched);
   if (unmatched > 0) {
     diagnostics_.recordDrop("sonar cloud point off every axis", unmatched);
     warnThrottled("sonar cloud points", std::to_string(unmatched) +

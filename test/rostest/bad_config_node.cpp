@@ -179,6 +179,9 @@ TEST(SimNodeParameters, MistypedNamesAndValuesAreRefused) {
             std::string::npos);
   EXPECT_NE(errorWith("seed", XmlRpc::XmlRpcValue(2.5)).find("sim/seed must be an integer"),
             std::string::npos);
+  // roslaunch gives rate:=1e3 as the text "1e3": still a number.
+  nh.setParam("rate", std::string("1e3"));
+  EXPECT_DOUBLE_EQ(rosbridge::loadSimNodeOptions(nh).rate, 1000.0);
   nh.deleteParam("");
 }
 

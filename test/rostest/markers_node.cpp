@@ -299,6 +299,22 @@ TEST(FeatureConversion, AnUpsideDownFrameMirrorsBearingsAndLines) {
   }
 }
 
+TEST(FeatureConversion, AnUpsideDownCloudFrameMirrorsItsPoints) {
+  const geometry_msgs::Transform t = mountRpy(M_PI, 0.0, 0.5);
+  const auto mount = rosbridge::toSensorMount(t);
+  const tf2::Quaternion q(t.rotation.x, t.rotation.y, t.rotation.z, t.rotation.w);
+  sensor_msgs::PointCloud cloud;
+  geometry_msgs::Point32 p;
+  p.x = 1.0f;
+  p.y = 0.5f;
+  cloud.points.push_back(p);
+  const auto points = rosbridge::toBasePoints(cloud, mount.pose, mount.upside_down);
+  ASSERT_EQ(points.size(), 1u);
+  const tf2::Vector3 v = tf2::quatRotate(q, tf2::Vector3(1.0, 0.5, 0.0));
+  EXPECT_NEAR(points[0].x(), v.x() + t.translation.x, 1e-6);
+  EXPECT_NEAR(points[0].y(), v.y() + t.translation.y, 1e-6);
+}
+
 TEST(CovarianceEllipse, TwoSigmaAxesFollowTheEigenvectors) {
   Eigen::Matrix2d cov;
   const double angle = 0.3;

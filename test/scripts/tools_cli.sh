@@ -80,6 +80,26 @@ expect "offline_slam grid_pf without raw readings" 1 \
   "no messages on 'ir' \(grid_pf maps raw sonar readings, not features\); the bag has .*'/scan'" \
   "$bin/offline_slam" --bag "$head_bag" --config "$root/config/grid_pf.yaml" \
   --output "$work/grid" --no-progress
+# A damaged bag: one /scan message cut short. offline_slam maps the rest and names it;
+# validate_bag reports it (both stopped at it before, with no topic named).
+/usr/bin/python3 - "$head_bag" "$work/cut.bag" <<'PY'
+import sys
+import rosbag
+cut = False
+with rosbag.Bag(sys.argv[1]) as bag, rosbag.Bag(sys.argv[2], "w") as out:
+    for topic, raw, t in bag.read_messages(raw=True):
+        if topic == "/scan" and not cut and t.to_sec() > bag.get_start_time() + 100:
+            datatype, data, md5sum, position, pytype = raw
+            raw = (datatype, data[: len(data) // 2], md5sum, position, pytype)
+            cut = True
+        out.write(topic, raw, t, raw=True)
+PY
+expect "offline_slam a message cut short" 0 \
+  "malformed message\(s\); the first: /scan: a message that does not decode" \
+  "$bin/offline_slam" --bag "$work/cut.bag" --config "$laser_config" --output "$work/cut" \
+  --no-progress --set particles=5
+expect "validate_bag a message cut short" 1 "/scan: 1 message\(s\) that do not decode" \
+  "$bin/validate_bag" "$work/cut.bag"
 cp "$head_bag" "$work/same.bag"
 size_before=$(stat -c %s "$work/same.bag")
 expect "offline_slam output bag = input bag" 1 "is the input bag .*would destroy the recording" \

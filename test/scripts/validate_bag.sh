@@ -13,6 +13,25 @@ if ! "$bin/validate_bag" "$work/clean.bag" >"$work/clean.txt"; then
   echo "FAIL: the clean bag was reported:"; cat "$work/clean.txt"; exit 1
 fi
 grep -q "no problems found" "$work/clean.txt" || { echo "FAIL: no verdict"; exit 1; }
+# Short streams: four scans 3 s apart are no gap, a 40 s hole among four scans is one.
+/usr/bin/python3 - "$work" <<'PY'
+import sys
+import rosbag, rospy
+from sensor_msgs.msg import LaserScan
+for name, times in (("steady", [10, 13, 16, 19]), ("hole", [10, 13, 16, 56])):
+    with rosbag.Bag("%s/%s.bag" % (sys.argv[1], name), "w") as out:
+        for t in times:
+            scan = LaserScan()
+            scan.header.stamp = rospy.Time(t)
+            scan.header.frame_id = "base_link"
+            out.write("/scan", scan, rospy.Time(t))
+PY
+"$bin/validate_bag" "$work/steady.bag" --max-gap 2 >"$work/steady.txt" 2>&1 || true
+"$bin/validate_bag" "$work/hole.bag" --max-gap 2 >"$work/hole.txt" 2>&1 || true
+if grep -q "/scan: .*gap" "$work/steady.txt"; then
+  echo "FAIL: scans 3 s apart reported as gaps:"; grep gap "$work/steady.txt"; exit 1
+fi
+grep -q "/scan: 1 gap" "$work/hole.txt" || { echo "FAIL: the 40 s hole was missed:"; cat "$work/hole.txt"; exit 1; }
 # A real log that maps fine (a scan every ~3 s, repeated odometry stamps that SLAM skips) is
 # no problem either; before session 13 it gave 80 "gaps" and exit 1.
 if ! "$bin/validate_bag" "$root/test/data/intel_head.bag" >"$work/intel.txt"; then

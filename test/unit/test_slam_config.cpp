@@ -108,6 +108,11 @@ TEST(SlamConfig, RepeatedAndEmptyKeysAreErrors) {
       << errorOf("'': 7");
 }
 
+TEST(SlamConfig, GridPfNeedsRawReadings) {
+  EXPECT_NE(errorOf("variant: grid_pf\nfrontend: features").find("frontend must be laser or sonar"),
+            std::string::npos);
+}
+
 /// --set mistakes name the --set argument, not a yaml-cpp internal.
 TEST(SlamConfig, BadOverridesNameTheArgument) {
   auto overrideError = [](const std::string& assignment) {

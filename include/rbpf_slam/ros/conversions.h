@@ -71,13 +71,15 @@ bool toRangeScan(const sensor_msgs::LaserScan& msg, const core::Pose2& sensor_in
 bool toConeReading(const sensor_msgs::Range& msg, const core::Pose2& sensor_in_base,
                    core::ConeReading* reading, std::string* error);
 
-/// The points of a cloud whose frame is at frame_in_base, in the base frame (z dropped).
+/// The points of a cloud whose frame is at frame_in_base, in the base frame (z dropped);
+/// upside_down (SensorMount's) mirrors y first.
 std::vector<Eigen::Vector2d> toBasePoints(const sensor_msgs::PointCloud& msg,
-                                          const core::Pose2& frame_in_base);
+                                          const core::Pose2& frame_in_base,
+                                          bool upside_down = false);
 /// A PointCloud2 (RosAria's sonar_pointcloud2) as a PointCloud with the same header and
 /// points (x, y and, when present, z; other fields dropped). Returns false and sets error when
-/// the cloud has no float x and y fields, is big-endian, or its data is shorter than its
-/// width x height x point_step says.
+/// the cloud has no float x and y fields within point_step, is big-endian, has rows shorter
+/// than width x point_step (row_step), or data shorter than its rows need.
 bool toPointCloud(const sensor_msgs::PointCloud2& msg, sensor_msgs::PointCloud* out,
                   std::string* error);
 
