@@ -20,7 +20,7 @@ const char kUsage[] =
     "  --base-frame F  the robot frame tf must reach (default base_link)\n"
     "  --odom-frame F  the odometry frame (default odom)\n"
     "  --max-gap S     a step between two stamps of a stream longer than this (default 2 s) and\n"
-    "                  than 5x the stream's median step is a gap\n"
+    "                  than 5x the stream's median step (the largest left out) is a gap\n"
     "Exit status: 0 nothing found, 1 problems found, 2 bad usage or a bag that cannot be read.\n";
 
 struct Arguments {

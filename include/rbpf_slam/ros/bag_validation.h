@@ -15,7 +15,7 @@ struct BagValidationOptions {
   std::string base_frame = "base_link";
   std::string odom_frame = "odom";
   // A step between consecutive stamps of a stream is a gap when it is longer than this and
-  // than 5 times the stream's median step.
+  // than 5 times the stream's median step (the largest step left out; 3 steps or more).
   double max_gap_s = 2.0;
 };
 
@@ -27,7 +27,7 @@ struct StreamReport {
   long duplicates = 0;  // stamp equal to the previous one
   long zero_stamps = 0;
   long gaps = 0;                 // steps larger than gap_threshold_s
-  double gap_threshold_s = 0.0;  // max(max_gap_s, 5 x the median step)
+  double gap_threshold_s = 0.0;  // max(max_gap_s, 5 x the median step without the largest)
   double largest_gap_s = 0.0;
   double first_gap_at_s = -1.0;  // bag-relative time of the first gap
   long invalid_values = 0;       // NaN / -inf ranges, non-finite transforms
