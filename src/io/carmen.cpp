@@ -12,6 +12,7 @@
 #include <stdexcept>
 
 #include "rbpf_slam/core/random.h"
+#include "rbpf_slam/io/plausibility.h"
 
 namespace rbpf_slam {
 namespace io {
@@ -60,18 +61,19 @@ bool malformed(CarmenLog* log, std::size_t line_number, const std::string& why) 
   return false;
 }
 
-// Plausibility limits: finite numbers far outside them are corrupt data. Log stamps stay below
-// 3e9 s so that the converter's offset (2010-01-01) keeps them within ROS's 32-bit seconds.
+// Log stamps stay below 3e9 s so that the converter's offset (2010-01-01) keeps them within
+// kMaxRosStampS.
 constexpr double kMaxLogStampS = 3.0e9;
-constexpr double kMaxCoordinateM = 1e6;
-constexpr double kMaxSpeed = 100.0;  // m/s and rad/s
+static_assert(kMaxLogStampS + 1262304000.0 < kMaxRosStampS, "carmen_to_bag's offset");
 
 /// Empty when the pose, velocities and stamp are plausible; else what is not.
 std::string implausible(const core::Pose2& pose, double stamp, double v = 0.0, double w = 0.0) {
-  if (std::abs(pose.x()) > kMaxCoordinateM || std::abs(pose.y()) > kMaxCoordinateM) {
+  if (std::abs(pose.x()) > kMaxPlausibleCoordinateM ||
+      std::abs(pose.y()) > kMaxPlausibleCoordinateM) {
     return "a position beyond 1e6 m";
   }
-  if (std::abs(v) > kMaxSpeed || std::abs(w) > kMaxSpeed) return "a velocity beyond 100";
+  if (std::abs(v) > kMaxPlausibleSpeed || std::abs(w) > kMaxPlausibleSpeed)
+    return "a velocity beyond 100";
   if (!(stamp >= 0.0 && stamp <= kMaxLogStampS)) return "a stamp outside [0, 3e9] s";
   return "";
 }

@@ -8,6 +8,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "rbpf_slam/io/plausibility.h"
+
 namespace rbpf_slam {
 namespace io {
 namespace {
@@ -64,13 +66,6 @@ std::vector<Row> readRows(std::istream& in, const std::string& source, std::size
   return rows;
 }
 
-// Plausibility limits: finite numbers far outside them are corrupt data, which would otherwise
-// overflow the dead reckoning or ros::Time (stamps are Unix seconds within 32 bits).
-constexpr double kMaxStampS = 4294967295.0;
-constexpr double kMaxSpeed = 100.0;      // m/s and rad/s
-constexpr double kMaxCoordinateM = 1e6;  // poses and landmarks
-constexpr double kMaxRangeM = 1000.0;
-
 void requireWithin(const std::string& source, std::size_t line, const char* what, double value,
                    double lo, double hi) {
   if (value < lo || value > hi) {
@@ -81,7 +76,7 @@ void requireWithin(const std::string& source, std::size_t line, const char* what
 }
 
 void requireStamp(const std::string& source, std::size_t line, double stamp) {
-  requireWithin(source, line, "t", stamp, 0.0, kMaxStampS);
+  requireWithin(source, line, "t", stamp, 0.0, kMaxRosStampS);
 }
 
 int toInteger(double value, const std::string& source, std::size_t line, const char* what) {
@@ -109,8 +104,8 @@ std::vector<MrclamOdometry> parseMrclamOdometry(std::istream& in, const std::str
   std::vector<MrclamOdometry> odometry;
   for (const Row& row : readRows(in, source, 3, "t v w")) {
     requireStamp(source, row.line, row.values[0]);
-    requireWithin(source, row.line, "v", row.values[1], -kMaxSpeed, kMaxSpeed);
-    requireWithin(source, row.line, "w", row.values[2], -kMaxSpeed, kMaxSpeed);
+    requireWithin(source, row.line, "v", row.values[1], -kMaxPlausibleSpeed, kMaxPlausibleSpeed);
+    requireWithin(source, row.line, "w", row.values[2], -kMaxPlausibleSpeed, kMaxPlausibleSpeed);
     odometry.push_back({row.values[0], row.values[1], row.values[2], row.line});
   }
   return odometry;
@@ -128,7 +123,7 @@ std::vector<MrclamMeasurement> parseMrclamMeasurements(std::istream& in,
     m.line = row.line;
     if (m.range_m < 0.0) throw lineError(source, row.line, "negative range");
     requireStamp(source, row.line, m.stamp);
-    requireWithin(source, row.line, "range", m.range_m, 0.0, kMaxRangeM);
+    requireWithin(source, row.line, "range", m.range_m, 0.0, kMaxPlausibleRangeM);
     measurements.push_back(m);
   }
   return measurements;
@@ -150,8 +145,10 @@ std::vector<StampedPose> parseMrclamGroundTruth(std::istream& in, const std::str
   std::vector<StampedPose> poses;
   for (const Row& row : readRows(in, source, 4, "t x y theta")) {
     requireStamp(source, row.line, row.values[0]);
-    requireWithin(source, row.line, "x", row.values[1], -kMaxCoordinateM, kMaxCoordinateM);
-    requireWithin(source, row.line, "y", row.values[2], -kMaxCoordinateM, kMaxCoordinateM);
+    requireWithin(source, row.line, "x", row.values[1], -kMaxPlausibleCoordinateM,
+                  kMaxPlausibleCoordinateM);
+    requireWithin(source, row.line, "y", row.values[2], -kMaxPlausibleCoordinateM,
+                  kMaxPlausibleCoordinateM);
     StampedPose pose;
     pose.stamp = row.values[0];
     pose.pose = core::Pose2(row.values[1], row.values[2], core::wrapAngle(row.values[3]));

@@ -330,6 +330,37 @@ OfflineRunner::OfflineRunner(const io::SlamConfig& config, const OfflineOptions&
   io::applyMapConfig(config_, &pipeline_.session());
 }
 
+std::vector<std::string> describeOutcome(const OfflineSummary& s, const OfflineOptions& options,
+                                         const std::string& variant, bool* failed) {
+  std::vector<std::string> lines;
+  *failed = false;
+  if (s.dropped_no_tf > 0) {
+    lines.push_back("dropped " + std::to_string(s.dropped_no_tf) +
+                    " frame(s) without tf; the first: " + s.first_tf_error);
+  }
+  if (s.dropped_bad_message > 0) {
+    lines.push_back("dropped " + std::to_string(s.dropped_bad_message) +
+                    " malformed message(s); the first: " + s.first_bad_message);
+  }
+  if (s.features_rejected > 0) {
+    lines.push_back("the " + variant + " filter skipped " + std::to_string(s.features_rejected) +
+                    " feature(s) it cannot use (non-finite or degenerate, or of a kind it "
+                    "ignores: dpf uses points with known ids only)");
+  }
+  if (s.updates == 0) {
+    lines.push_back("no frame was used (" + std::to_string(s.frames) + " read, " +
+                    std::to_string(s.dropped_no_tf) + " without tf, " +
+                    std::to_string(s.dropped_bad_message) + " malformed, " +
+                    std::to_string(s.rejected) + " rejected by the session): nothing was mapped");
+    *failed = true;
+  }
+  if (!options.reference_path.empty() && !s.has_reference) {
+    lines.push_back("--reference " + options.reference_path + " was not evaluated");
+    *failed = true;
+  }
+  return lines;
+}
+
 OfflineSummary OfflineRunner::run() {
   OfflineSummary summary;
   // The output directory (and its parents) first, not after a long run; also where a caller

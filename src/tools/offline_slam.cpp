@@ -86,36 +86,14 @@ int run(const Arguments& arguments) {
       "summary.json,map.png,map.pgm,map.yaml}%s%s\n",
       options.output_dir.c_str(), options.output_bag.empty() ? "" : " and ",
       options.output_bag.c_str());
-  if (s.dropped_no_tf > 0) {
-    std::fprintf(stderr, "offline_slam: dropped %ld frame(s) without tf; the first: %s\n",
-                 s.dropped_no_tf, s.first_tf_error.c_str());
-  }
-  if (s.dropped_bad_message > 0) {
-    std::fprintf(stderr, "offline_slam: dropped %ld malformed message(s); the first: %s\n",
-                 s.dropped_bad_message, s.first_bad_message.c_str());
-  }
-  if (s.features_rejected > 0) {
-    std::fprintf(stderr,
-                 "offline_slam: the %s filter skipped %ld feature(s) it cannot use (non-finite or "
-                 "degenerate, or of a kind it ignores: dpf uses points with known ids only)\n",
-                 config.filter.variant.c_str(), s.features_rejected);
+  bool failed = false;
+  for (const std::string& line :
+       rbpf_slam::rosbridge::describeOutcome(s, options, config.filter.variant, &failed)) {
+    std::fprintf(stderr, "offline_slam: %s\n", line.c_str());
   }
   // The outputs are written either way (they show what happened), but a run that used no
   // frame, or whose requested reference could not be evaluated, did not do its work.
-  int status = 0;
-  if (s.updates == 0) {
-    std::fprintf(stderr,
-                 "offline_slam: no frame was used (%ld read, %ld without tf, %ld malformed, %ld "
-                 "rejected by the session): nothing was mapped\n",
-                 s.frames, s.dropped_no_tf, s.dropped_bad_message, s.rejected);
-    status = 1;
-  }
-  if (!options.reference_path.empty() && !s.has_reference) {
-    std::fprintf(stderr, "offline_slam: --reference %s was not evaluated\n",
-                 options.reference_path.c_str());
-    status = 1;
-  }
-  return status;
+  return failed ? 1 : 0;
 }
 
 }  // namespace

@@ -58,6 +58,14 @@ struct OfflineSummary {
   std::string trajectory_source;   // best_particle_path | online_estimate
 };
 
+/// What a finished run should tell its user, one line each: the first failed tf lookup and
+/// malformed message behind the drop counts, the features the filter skipped, and why the run
+/// did not do its work (no frame used; a reference given but not evaluated), which also sets
+/// *failed. Empty for a clean run.
+std::vector<std::string> describeOutcome(const OfflineSummary& summary,
+                                         const OfflineOptions& options, const std::string& variant,
+                                         bool* failed);
+
 class OfflineRunner {
  public:
   OfflineRunner(const io::SlamConfig& config, const OfflineOptions& options);
