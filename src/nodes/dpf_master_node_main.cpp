@@ -3,7 +3,9 @@
 //  - live (default): rbpf_slam_node's topics, tf and services, with the remote filter;
 //  - ~bag set: reads the bag like offline_slam (same pipeline, as fast as the locals answer)
 //    and writes ~output/{trajectory.tum,landmarks.yaml,summary.json,map.png}, then
-//    ~output/dpf_master.done, and exits (on an error: ~output/dpf_master.error with the message).
+//    ~output/dpf_master.done, and exits 0. On an error, or a run that used no frame or could not
+//    evaluate ~reference (offline_slam's rules), it writes ~output/dpf_master.error with the
+//    message instead and exits 1.
 #include <ros/ros.h>
 
 #include <exception>
@@ -42,6 +44,18 @@ int runBag(ros::NodeHandle nh, ros::NodeHandle private_nh) {
   }
   ROS_INFO("dpf_master_node: %ld updates, %d landmarks, %.1f s wall, update %.2f ms mean",
            s.updates, s.landmarks, s.wall_s, s.update_ms_mean);
+  // The same end-of-run report and verdict as offline_slam: a run that used no frame, or whose
+  // ~reference could not be evaluated, is an error (dpf_master.error, exit 1), not "done".
+  bool failed = false;
+  std::string report;
+  for (const std::string& line : rb::describeOutcome(s, options, config.filter.variant, &failed)) {
+    ROS_WARN("dpf_master_node: %s", line.c_str());
+    report += line + "\n";
+  }
+  if (failed) {
+    std::ofstream(options.output_dir + "/dpf_master.error") << report;
+    return 1;
+  }
   std::ofstream(options.output_dir + "/dpf_master.done") << s.updates << "\n";
   return 0;
 }

@@ -82,15 +82,19 @@ std::string fixed(double v, int digits = 1) {
 
 }  // namespace
 
+void openBagForReading(rosbag::Bag* bag, const std::string& path) {
+  try {
+    bag->open(path, rosbag::bagmode::Read);
+  } catch (const rosbag::BagException& e) {
+    throw std::runtime_error(path + ": cannot open bag: " + e.what());
+  }
+}
+
 BagReport validateBag(const std::string& path, const BagValidationOptions& options) {
   BagReport report;
   report.path = path;
   rosbag::Bag bag;
-  try {
-    bag.open(path, rosbag::bagmode::Read);
-  } catch (const rosbag::BagException& e) {
-    throw std::runtime_error(path + ": cannot open bag: " + e.what());
-  }
+  openBagForReading(&bag, path);
   rosbag::View view(bag);
   const ros::Time begin = view.getBeginTime();
   report.duration_s = (view.getEndTime() - begin).toSec();

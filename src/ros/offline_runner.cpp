@@ -28,6 +28,7 @@
 #include "rbpf_slam/io/landmark_file.h"
 #include "rbpf_slam/io/map_image.h"
 #include "rbpf_slam/io/trajectory.h"
+#include "rbpf_slam/ros/bag_validation.h"
 #include "rbpf_slam/ros/conversions.h"
 #include "rbpf_slam/ros/markers.h"
 #include "rbpf_slam/ros/node_support.h"
@@ -379,11 +380,7 @@ OfflineSummary OfflineRunner::run() {
     }
   }
   rosbag::Bag bag;
-  try {
-    bag.open(options_.bag_path, rosbag::bagmode::Read);
-  } catch (const rosbag::BagException& e) {
-    throw std::runtime_error(options_.bag_path + ": cannot open bag: " + e.what());
-  }
+  openBagForReading(&bag, options_.bag_path);
   const auto wall_start = std::chrono::steady_clock::now();
   const std::clock_t cpu_start = std::clock();
   rosbag::View full(bag);

@@ -29,6 +29,7 @@
 #include "rbpf_slam/io/slam_config.h"
 #include "rbpf_slam/io/tool_arguments.h"
 #include "rbpf_slam/io/trajectory.h"
+#include "rbpf_slam/ros/bag_validation.h"
 #include "rbpf_slam/ros/conversions.h"
 #include "rbpf_slam/ros/node_support.h"
 
@@ -119,7 +120,8 @@ int run(const Arguments& arguments) {
     const core::Pose2 to_estimate = core::compose(estimate.front().pose, core::inverse(at_start));
     for (auto& p : reference) p.pose = core::compose(to_estimate, p.pose);
   }
-  rosbag::Bag bag(bag_path, rosbag::bagmode::Read);
+  rosbag::Bag bag;
+  rbpf_slam::rosbridge::openBagForReading(&bag, bag_path);
   // Static sensor mounts: base -> sensor frame from tf_static (identity if the same frame).
   std::vector<std::pair<std::string, rbpf_slam::rosbridge::SensorMount>> mounts;
   const std::vector<std::string> static_topics{"/tf_static", "tf_static"};

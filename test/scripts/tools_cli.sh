@@ -118,6 +118,15 @@ expect "evaluate --max-gap without --interpolate" 2 "--max-gap applies only with
 expect "render_grid required" 2 "are required" "$bin/render_grid" --bag x.bag
 expect "render_grid missing reference" 1 "no_such_input" "$bin/render_grid" --bag "$missing.bag" \
   --reference "$missing.tum" --config "$root/config/grid_pf_laser.yaml" --output "$work/g"
+# A bag file cut short (a copy interrupted mid-way): every reader names the file.
+head -c 800000 "$root/test/data/intel_head.bag" >"$work/truncated.bag"
+expect "render_grid truncated bag" 1 "truncated.bag: cannot open bag" "$bin/render_grid" \
+  --bag "$work/truncated.bag" --reference "$root/test/data/intel_head.ref.tum" \
+  --config "$root/config/grid_pf_laser.yaml" --output "$work/g"
+expect "offline_slam truncated bag" 1 "truncated.bag: cannot open bag" "$bin/offline_slam" \
+  --bag "$work/truncated.bag" --config "$root/config/laser_fastslam2.yaml" --output "$work/t"
+expect "validate_bag truncated bag" 2 "truncated.bag: cannot open bag" "$bin/validate_bag" \
+  "$work/truncated.bag"
 expect "validate_bag bad gap" 2 "--max-gap needs a positive number" "$bin/validate_bag" x.bag \
   --max-gap 0
 expect "evaluate unlimited gap" 0 "ate" "$bin/evaluate" "$work/a.tum" "$work/a.tum" \
