@@ -17,6 +17,7 @@
 #include <utility>
 #include <vector>
 
+#include "rbpf_slam/ros/bag_files.h"
 #include "rbpf_slam/ros/node_support.h"
 
 namespace rbpf_slam {
@@ -81,14 +82,6 @@ std::string fixed(double v, int digits = 1) {
 }
 
 }  // namespace
-
-void openBagForReading(rosbag::Bag* bag, const std::string& path) {
-  try {
-    bag->open(path, rosbag::bagmode::Read);
-  } catch (const rosbag::BagException& e) {
-    throw std::runtime_error(path + ": cannot open bag: " + e.what());
-  }
-}
 
 BagReport validateBag(const std::string& path, const BagValidationOptions& options) {
   BagReport report;

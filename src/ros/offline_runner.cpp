@@ -28,7 +28,7 @@
 #include "rbpf_slam/io/landmark_file.h"
 #include "rbpf_slam/io/map_image.h"
 #include "rbpf_slam/io/trajectory.h"
-#include "rbpf_slam/ros/bag_validation.h"
+#include "rbpf_slam/ros/bag_files.h"
 #include "rbpf_slam/ros/conversions.h"
 #include "rbpf_slam/ros/markers.h"
 #include "rbpf_slam/ros/node_support.h"
@@ -264,16 +264,8 @@ void checkTopicTypes(rosbag::View& view, const std::string& bag_path, const io::
 /// published (map -> odom on /tf, ~pose, ~landmarks, and ~trajectory at the end), for rviz.
 class ResultBag {
  public:
-  ResultBag(const std::string& path, const io::RosOptions& ros) : ros_(ros) {
-    const std::filesystem::path parent = std::filesystem::path(path).parent_path();
-    std::error_code ignored;  // an unwritable place is reported by open below
-    if (!parent.empty()) std::filesystem::create_directories(parent, ignored);
-    try {
-      bag_.open(path, rosbag::bagmode::Write);
-    } catch (const rosbag::BagException& e) {
-      throw std::runtime_error(path + ": cannot write the output bag: " + e.what());
-    }
-  }
+  ResultBag(const std::string& path, const io::RosOptions& ros)
+      : ros_(ros), bag_(makeParents(path)) {}
 
   void update(const ros::Time& stamp, const core::SlamSession& session) {
     std_msgs::Header header;
@@ -309,12 +301,19 @@ class ResultBag {
     if (!session.trajectory().empty() && !last.isZero()) {
       bag_.write("/rbpf_slam_node/trajectory", last, toPath(session.trajectory(), ros_.map_frame));
     }
-    bag_.close();
+    bag_.commit();
   }
 
  private:
+  static const std::string& makeParents(const std::string& path) {
+    const std::filesystem::path parent = std::filesystem::path(path).parent_path();
+    std::error_code ignored;  // an unwritable place is reported when the bag is opened
+    if (!parent.empty()) std::filesystem::create_directories(parent, ignored);
+    return path;
+  }
+
   const io::RosOptions ros_;
-  rosbag::Bag bag_;
+  PartialBag bag_;  // the output bag appears when complete
   LandmarkMarkers markers_;
 };
 

@@ -26,6 +26,7 @@
 #include "rbpf_slam/io/carmen.h"
 #include "rbpf_slam/io/tool_arguments.h"
 #include "rbpf_slam/io/trajectory.h"
+#include "rbpf_slam/ros/bag_files.h"
 #include "rbpf_slam/ros/conversions.h"
 
 namespace {
@@ -171,7 +172,7 @@ void writeBag(const Arguments& arguments, const io::CarmenLog& log,
   });
   events.insert(events.begin(), Event{events.front().stamp, 0, 0});
 
-  rosbag::Bag bag(arguments.bag_path, rosbag::bagmode::Write);
+  rbpf_slam::rosbridge::PartialBag output(arguments.bag_path);  // the bag appears when complete
   std::uint32_t odometry_seq = 0, scan_seq = 0;
   for (const Event& event : events) {
     const ros::Time stamp = toRosTime(event.stamp);
@@ -186,21 +187,21 @@ void writeBag(const Arguments& arguments, const io::CarmenLog& log,
       (*header)["message_definition"] = ros::message_traits::definition(tf_static);
       (*header)["callerid"] = "/carmen_to_bag";
       (*header)["latching"] = "1";  // so that rosbag play latches it like a static broadcaster
-      bag.write("/tf_static", stamp, tf_static, header);
+      output.write("/tf_static", stamp, tf_static, header);
     } else if (event.kind == 1) {
       const io::StampedPose* previous = event.index > 0 ? &odometry[event.index - 1] : nullptr;
       const nav_msgs::Odometry message =
           toOdometry(odometry[event.index], previous, odometry_seq++);
-      bag.write("/odom", stamp, message);
+      output.write("/odom", stamp, message);
       tf2_msgs::TFMessage tf;
       tf.transforms.push_back(rosbridge::toTransformStamped(odometry[event.index].pose, "odom", "base_link", stamp));
       tf.transforms.back().header.seq = message.header.seq;
-      bag.write("/tf", stamp, tf);
+      output.write("/tf", stamp, tf);
     } else {
-      bag.write("/scan", stamp, toScan(log.lasers[event.index], scan_seq++));
+      output.write("/scan", stamp, toScan(log.lasers[event.index], scan_seq++));
     }
   }
-  bag.close();
+  output.commit();
 }
 
 /// The work once the arguments are understood; the exit status.

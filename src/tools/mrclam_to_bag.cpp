@@ -30,6 +30,7 @@
 #include "rbpf_slam/io/mrclam.h"
 #include "rbpf_slam/io/tool_arguments.h"
 #include "rbpf_slam/io/trajectory.h"
+#include "rbpf_slam/ros/bag_files.h"
 #include "rbpf_slam/ros/conversions.h"
 
 namespace {
@@ -176,31 +177,31 @@ Counts writeBag(const Arguments& arguments, const io::MrclamRobot& data,
   }
 
   Counts counts;
-  rosbag::Bag bag(arguments.bag_path, rosbag::bagmode::Write);
+  rbpf_slam::rosbridge::PartialBag output(arguments.bag_path);  // the bag appears when complete
   std::uint32_t gt_seq = 0, feature_seq = 0;
   for (const Event& event : events) {
     const ros::Time stamp(event.stamp);
     if (event.kind == 0) {
       const io::StampedPose& pose = odometry[event.index];
       const io::MrclamOdometry& command = *command_at[event.index];
-      bag.write("/tf", stamp, odomTransform(pose.pose, stamp));
-      bag.write("/odom", stamp,
-                odometryMessage("odom", pose.pose, command.v_mps, command.w_radps, stamp,
-                                static_cast<std::uint32_t>(counts.odometry++)));
+      output.write("/tf", stamp, odomTransform(pose.pose, stamp));
+      output.write("/odom", stamp,
+                   odometryMessage("odom", pose.pose, command.v_mps, command.w_radps, stamp,
+                                   static_cast<std::uint32_t>(counts.odometry++)));
     } else if (event.kind == 1) {
       const io::StampedPose& pose = data.ground_truth[event.index];
-      bag.write("/ground_truth", stamp,
-                odometryMessage("map", pose.pose, 0.0, 0.0, stamp, gt_seq++));
+      output.write("/ground_truth", stamp,
+                   odometryMessage("map", pose.pose, 0.0, 0.0, stamp, gt_seq++));
       ++counts.ground_truth;
     } else {
       const rbpf_slam::FeatureArray message =
           featureMessage(groups[event.index], arguments, feature_seq++);
-      bag.write("/features", stamp, message);
+      output.write("/features", stamp, message);
       ++counts.feature_messages;
       counts.features += message.points.size();
     }
   }
-  bag.close();
+  output.commit();
   return counts;
 }
 

@@ -29,7 +29,7 @@
 #include "rbpf_slam/io/slam_config.h"
 #include "rbpf_slam/io/tool_arguments.h"
 #include "rbpf_slam/io/trajectory.h"
-#include "rbpf_slam/ros/bag_validation.h"
+#include "rbpf_slam/ros/bag_files.h"
 #include "rbpf_slam/ros/conversions.h"
 #include "rbpf_slam/ros/node_support.h"
 

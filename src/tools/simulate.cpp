@@ -22,6 +22,7 @@
 #include "rbpf_slam/core/sim/simulator.h"
 #include "rbpf_slam/io/tool_arguments.h"
 #include "rbpf_slam/io/world_yaml.h"
+#include "rbpf_slam/ros/bag_files.h"
 #include "rbpf_slam/ros/sim_messages.h"
 
 namespace {
@@ -66,9 +67,10 @@ Arguments parseArguments(int argc, char** argv) {
 class BagWriter {
  public:
   BagWriter(const std::string& path, const sim::Simulator& simulator, const std::string& ref_path)
-      : simulator_(simulator), reference_(std::fopen(ref_path.c_str(), "w"), &std::fclose) {
+      : simulator_(simulator),
+        bag_(path),
+        reference_(std::fopen(ref_path.c_str(), "w"), &std::fclose) {
     if (!reference_) throw std::runtime_error(ref_path + ": cannot be written");
-    bag_.open(path, rosbag::bagmode::Write);
     const tf2_msgs::TFMessage mounts =
         rosbridge::simStaticTransforms(simulator_, clock_.stamp(0.0));
     if (!mounts.transforms.empty()) put("/tf_static", clock_.stamp(0.0), mounts);
@@ -92,7 +94,7 @@ class BagWriter {
   }
 
   void close() {
-    bag_.close();
+    bag_.commit();
     if (std::fflush(reference_.get()) != 0) throw std::runtime_error("ground truth not written");
   }
   const std::map<std::string, long>& counts() const { return counts_; }
@@ -107,7 +109,7 @@ class BagWriter {
 
   const sim::Simulator& simulator_;
   const rosbridge::SimClock clock_;
-  rosbag::Bag bag_;
+  rosbridge::PartialBag bag_;                        // the bag appears when complete
   std::unique_ptr<FILE, int (*)(FILE*)> reference_;  // TUM ground truth, one line per odometry
   std::map<std::string, long> counts_;
 };

@@ -24,6 +24,7 @@
 #include "rbpf_slam/io/tool_arguments.h"
 #include "rbpf_slam/io/trajectory.h"
 #include "rbpf_slam/io/victoria_park.h"
+#include "rbpf_slam/ros/bag_files.h"
 #include "rbpf_slam/ros/conversions.h"
 
 namespace {
@@ -104,7 +105,7 @@ int run(const Arguments& arguments) {
   if (arguments.max_poses > 0 && static_cast<long>(poses.size()) > arguments.max_poses) {
     poses.resize(arguments.max_poses);
   }
-  rosbag::Bag bag(arguments.bag_path, rosbag::bagmode::Write);
+  rbpf_slam::rosbridge::PartialBag output(arguments.bag_path);  // the bag appears when complete
   std::vector<io::StampedPose> track;
   std::uint32_t feature_seq = 0;
   std::size_t features = 0;
@@ -114,7 +115,7 @@ int run(const Arguments& arguments) {
     const core::Pose2& pose = poses[k].odometry;
     tf2_msgs::TFMessage tf;
     tf.transforms.push_back(rosbridge::toTransformStamped(pose, "odom", "base_link", stamp));
-    bag.write("/tf", stamp, tf);
+    output.write("/tf", stamp, tf);
     Eigen::Vector3d twist = Eigen::Vector3d::Zero();
     if (k > 0) {
       const core::Pose2 d = core::between(poses[k - 1].odometry, pose);
@@ -122,15 +123,15 @@ int run(const Arguments& arguments) {
     }
     nav_msgs::Odometry odometry = rosbridge::toOdometryMsg(pose, twist, "odom", "base_link", stamp);
     odometry.header.seq = static_cast<std::uint32_t>(k);
-    bag.write("/odom", stamp, odometry);
+    output.write("/odom", stamp, odometry);
     if (!poses[k].landmarks.empty()) {
       const auto message = featureMessage(poses[k], stamp, arguments.unknown_ids, feature_seq++);
       features += message.points.size();
-      bag.write("/features", stamp, message);
+      output.write("/features", stamp, message);
     }
     track.push_back({t, pose});
   }
-  bag.close();
+  output.commit();
   const std::string odometry_path = io::besideBag(arguments.bag_path, ".odom.tum");
   io::writeTum(odometry_path, track);
   std::cerr << "victoria_park_to_bag: " << poses.size() << " poses over "

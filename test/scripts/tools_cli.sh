@@ -127,6 +127,18 @@ expect "offline_slam truncated bag" 1 "truncated.bag: cannot open bag" "$bin/off
   --bag "$work/truncated.bag" --config "$root/config/laser_fastslam2.yaml" --output "$work/t"
 expect "validate_bag truncated bag" 2 "truncated.bag: cannot open bag" "$bin/validate_bag" \
   "$work/truncated.bag"
+# A write that fails half-way (here a file size limit; on a robot, a full disk): the tool says
+# which bag, exits 1, and leaves neither a truncated bag nor its .part file (before: rosbag threw
+# from a destructor, std::terminate, and a truncated bag stayed).
+limited() { (trap '' XFSZ; ulimit -f 100; exec "$@"); }
+expect "simulate write fails" 1 "big.bag: Error" limited "$bin/simulate" \
+  --world "$root/worlds/test_small.yaml" --output "$work/big.bag" --duration 100
+expect "offline_slam --output-bag write fails" 1 "res.bag: Error" limited "$bin/offline_slam" \
+  --bag "$root/test/data/intel_head.bag" --config "$root/config/laser_fastslam2.yaml" \
+  --output "$work/r" --output-bag "$work/r/res.bag" --no-progress --set particles=5
+for left in big.bag big.bag.part r/res.bag r/res.bag.part; do
+  [ ! -e "$work/$left" ] || { echo "FAIL: $left left behind by a failed write"; status=1; }
+done
 expect "validate_bag bad gap" 2 "--max-gap needs a positive number" "$bin/validate_bag" x.bag \
   --max-gap 0
 expect "evaluate unlimited gap" 0 "ate" "$bin/evaluate" "$work/a.tum" "$work/a.tum" \

@@ -8,17 +8,8 @@
 #include <string>
 #include <vector>
 
-namespace rosbag {
-class Bag;
-}
-
 namespace rbpf_slam {
 namespace rosbridge {
-
-/// Opens PATH for reading into BAG; a missing, truncated or unindexed file throws
-/// std::runtime_error "PATH: cannot open bag: <rosbag's reason>" (rosbag's own message does not
-/// name the file).
-void openBagForReading(rosbag::Bag* bag, const std::string& path);
 
 struct BagValidationOptions {
   std::string base_frame = "base_link";

@@ -1,0 +1,58 @@
+#pragma once
+// Opening bags for the tools: errors that name the file, and output bags that appear only
+// when complete.
+
+#include <rosbag/bag.h>
+
+#include <memory>
+#include <stdexcept>
+#include <string>
+
+namespace rbpf_slam {
+namespace rosbridge {
+
+/// Opens PATH for reading into BAG; a missing, truncated or unindexed file throws
+/// std::runtime_error "PATH: cannot open bag: <rosbag's reason>" (rosbag's own message does not
+/// name the file).
+void openBagForReading(rosbag::Bag* bag, const std::string& path);
+
+/// An output bag written as PATH.part and renamed to PATH by commit(), so that a run that stops
+/// while writing (disk full, a file size limit, an error half-way) ends with its error message
+/// and leaves neither a truncated PATH nor the .part file behind. An existing PATH is replaced
+/// only by the commit.
+class PartialBag {
+ public:
+  /// Throws std::runtime_error naming PATH when PATH.part cannot be created.
+  explicit PartialBag(const std::string& path);
+  /// Without commit(): closes and removes PATH.part.
+  ~PartialBag();
+  PartialBag(const PartialBag&) = delete;
+  PartialBag& operator=(const PartialBag&) = delete;
+
+  /// rosbag::Bag::write, with a write error (disk full, ...) rethrown as std::runtime_error
+  /// naming PATH (rosbag's own message does not).
+  /// CONNECTION_HEADER as in rosbag::Bag::write (e.g. to mark /tf_static latched).
+  template <typename Message>
+  void write(const std::string& topic, const ros::Time& stamp, const Message& message,
+             const boost::shared_ptr<ros::M_string>& connection_header = nullptr) {
+    try {
+      bag_->write(topic, stamp, message, connection_header);
+    } catch (const rosbag::BagException& e) {
+      throw std::runtime_error(path_ + ": " + e.what());
+    }
+  }
+  const std::string& path() const { return path_; }
+  /// Closes the bag and renames PATH.part to PATH; throws std::runtime_error naming PATH when
+  /// either fails (the .part file is then removed).
+  void commit();
+
+ private:
+  std::string path_, partial_;
+  // On the heap so that a bag whose close() failed can be abandoned: rosbag::Bag's destructor
+  // would close again, throw, and end the process (std::terminate).
+  std::unique_ptr<rosbag::Bag> bag_;
+  bool committed_ = false;
+};
+
+}  // namespace rosbridge
+}  // namespace rbpf_slam

@@ -1,0 +1,59 @@
+#include "rbpf_slam/ros/bag_files.h"
+
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <stdexcept>
+
+namespace rbpf_slam {
+namespace rosbridge {
+
+void openBagForReading(rosbag::Bag* bag, const std::string& path) {
+  try {
+    bag->open(path, rosbag::bagmode::Read);
+  } catch (const rosbag::BagException& e) {
+    throw std::runtime_error(path + ": cannot open bag: " + e.what());
+  }
+}
+
+PartialBag::PartialBag(const std::string& path)
+    : path_(path), partial_(path + ".part"), bag_(std::make_unique<rosbag::Bag>()) {
+  try {
+    bag_->open(partial_, rosbag::bagmode::Write);
+  } catch (const rosbag::BagException& e) {
+    throw std::runtime_error(path_ + ": cannot write the bag (" + partial_ + "): " + e.what());
+  }
+}
+
+PartialBag::~PartialBag() {
+  if (committed_) return;
+  try {
+    bag_->close();
+  } catch (...) {
+    // The run already failed (typically the same write error again). rosbag::Bag's destructor
+    // would retry the close and throw from a destructor, so the handle is abandoned instead.
+    static_cast<void>(bag_.release());
+  }
+  std::remove(partial_.c_str());
+}
+
+void PartialBag::commit() {
+  try {
+    bag_->close();
+  } catch (const rosbag::BagException& e) {
+    static_cast<void>(bag_.release());  // as in the destructor: no second close
+    std::remove(partial_.c_str());
+    committed_ = true;  // nothing left for the destructor
+    throw std::runtime_error(path_ + ": cannot finish the bag: " + e.what());
+  }
+  if (std::rename(partial_.c_str(), path_.c_str()) != 0) {
+    const std::string reason = std::strerror(errno);
+    std::remove(partial_.c_str());
+    committed_ = true;
+    throw std::runtime_error(path_ + ": cannot rename " + partial_ + " to it: " + reason);
+  }
+  committed_ = true;
+}
+
+}  // namespace rosbridge
+}  // namespace rbpf_slam
