@@ -195,6 +195,7 @@ class BagPlaybackTest : public ::testing::Test {
     private_nh.param<std::string>("reference", reference_path_, "");
     private_nh.param("position_tolerance", position_tolerance_, 1.0);
     private_nh.param("ate_tolerance", ate_tolerance_, 0.0);
+    private_nh.param("ate_odometry_ratio", ate_odometry_ratio_, 0.0);
     private_nh.param("yaw_tolerance", yaw_tolerance_, 0.3);
     double end_margin = 1.0, settle = 10.0, timeout = 600.0;
     private_nh.param("end_margin", end_margin, end_margin);
@@ -225,7 +226,8 @@ class BagPlaybackTest : public ::testing::Test {
   static std::string reference_path_;
   static std::vector<StampedPose> reference_;
   static double position_tolerance_, yaw_tolerance_;
-  static double ate_tolerance_;  // 0: the ~trajectory's ATE is not checked
+  static double ate_tolerance_;       // 0: the ~trajectory's ATE is not checked
+  static double ate_odometry_ratio_;  // 0: ... nor compared with odometry's
   static bool ended_;
   static std::unique_ptr<PlaybackObserver> observer_;
   static std::unique_ptr<ros::AsyncSpinner> spinner_;
@@ -235,6 +237,7 @@ std::string BagPlaybackTest::reference_path_;
 std::vector<StampedPose> BagPlaybackTest::reference_;
 double BagPlaybackTest::position_tolerance_ = 1.0;
 double BagPlaybackTest::ate_tolerance_ = 0.0;
+double BagPlaybackTest::ate_odometry_ratio_ = 0.0;
 double BagPlaybackTest::yaw_tolerance_ = 0.3;
 bool BagPlaybackTest::ended_ = false;
 std::unique_ptr<PlaybackObserver> BagPlaybackTest::observer_;
@@ -341,8 +344,13 @@ TEST_F(BagPlaybackTest, FinalPoseMatchesReference) {
 
 // The whole ~trajectory against the reference (ATE after a rigid 2D alignment): one final
 // pose says less than the path, and wanders more from run to run.
+// With ~ate_odometry_ratio the ATE must also be at most that fraction of odometry's own ATE
+// (odom -> base_link from tf at the same stamps, aligned the same way): a node that ignored its
+// sensors and published odometry would pass an absolute bound on a short run.
 TEST_F(BagPlaybackTest, TrajectoryAteWithinTolerance) {
-  if (ate_tolerance_ <= 0.0) return;  // not asked for by this launch file
+  if (ate_tolerance_ <= 0.0 && ate_odometry_ratio_ <= 0.0) {
+    GTEST_SKIP() << "neither ~ate_tolerance nor ~ate_odometry_ratio set by this launch file";
+  }
   ASSERT_FALSE(reference_.empty());
   nav_msgs::Path path;
   {
@@ -350,19 +358,43 @@ TEST_F(BagPlaybackTest, TrajectoryAteWithinTolerance) {
     path = observer_->last_path_;
   }
   ASSERT_FALSE(path.poses.empty()) << "nothing on ~trajectory";
-  std::vector<io::StampedPose> estimate, reference;
+  std::vector<io::StampedPose> estimate, odometry, reference;
+  int odometry_missing = 0;
   for (const auto& p : path.poses) {
     estimate.push_back({p.header.stamp.toSec(), rosbridge::toPose2(p.pose)});
+    try {
+      odometry.push_back(
+          {p.header.stamp.toSec(),
+           rosbridge::toPose2(
+               observer_->tf()
+                   .lookupTransform(observer_->odomFrame(), observer_->baseFrame(), p.header.stamp)
+                   .transform)});
+    } catch (const tf2::TransformException&) {
+      ++odometry_missing;
+    }
   }
   for (const auto& r : reference_) reference.push_back({r.stamp, r.pose});
   io::EvaluationOptions options;
   const io::EvaluationResult result = io::evaluateTrajectory(estimate, reference, options);
+  const io::EvaluationResult odometry_result = io::evaluateTrajectory(odometry, reference, options);
   std::cout << "[bag_playback] trajectory ATE " << result.ate_rmse_m << " m over "
-            << result.matched_poses << " poses (tolerance " << ate_tolerance_ << " m)"
-            << std::endl;
+            << result.matched_poses << " poses (tolerance " << ate_tolerance_
+            << " m); odometry alone " << odometry_result.ate_rmse_m << " m over "
+            << odometry_result.matched_poses << " poses (ratio "
+            << result.ate_rmse_m / odometry_result.ate_rmse_m << ", at most " << ate_odometry_ratio_
+            << ")" << std::endl;
   RecordProperty("ate_rmse_m", std::to_string(result.ate_rmse_m));
+  RecordProperty("odometry_ate_rmse_m", std::to_string(odometry_result.ate_rmse_m));
   EXPECT_GE(result.matched_poses, estimate.size() / 2);
-  EXPECT_LE(result.ate_rmse_m, ate_tolerance_);
+  if (ate_tolerance_ > 0.0) {
+    EXPECT_LE(result.ate_rmse_m, ate_tolerance_);
+  }
+  if (ate_odometry_ratio_ > 0.0) {
+    ASSERT_GE(odometry_result.matched_poses, estimate.size() / 2)
+        << odometry_missing << " trajectory stamps without odom -> base in tf";
+    EXPECT_LE(result.ate_rmse_m, ate_odometry_ratio_ * odometry_result.ate_rmse_m)
+        << "the trajectory is not clearly better than odometry alone";
+  }
 }
 
 // Runs last (gtest keeps the order of definition): it clears the node's map.

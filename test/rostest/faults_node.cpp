@@ -140,14 +140,17 @@ class FaultsTest : public ::testing::Test {
       ros::WallDuration(0.1).sleep();
     }
   }
-  /// Waits for a /diagnostics report produced after everything sent so far was handled.
+  /// Waits for a /diagnostics report produced after everything sent so far was handled. A node
+  /// that reports nothing for 15 s fails the test: the counters read next would be stale, and
+  /// a "nothing changed" check would pass without testing anything.
   static void settle() {
     ros::WallDuration(0.3).sleep();
     const ros::WallTime since = ros::WallTime::now();
-    const ros::WallTime deadline = since + ros::WallDuration(5.0);
+    const ros::WallTime deadline = since + ros::WallDuration(15.0);
     while (observer_->lastDiagnostics() <= since && ros::WallTime::now() < deadline) {
       ros::WallDuration(0.05).sleep();
     }
+    if (observer_->lastDiagnostics() <= since) ADD_FAILURE() << "no /diagnostics for 15 s";
   }
   /// Waits (up to 20 s of wall time, for a loaded machine) until the node has published a
   /// pose stamped at the robot's current time; true if it did.
@@ -198,6 +201,7 @@ TEST_F(FaultsTest, B_InvalidBeamsAreSkippedNotFitted) {
     for (float& r : msg.ranges) r = value;  // all of them
     robot_->publish(msg);
   }
+  EXPECT_TRUE(caughtUp()) << "a scan whose beams are all invalid was not processed";
   settle();
   // Processed (no features from the invalid beams), not dropped as malformed.
   EXPECT_EQ(observer_->diagnostic("dropped: bad scan"), bad_before);
@@ -240,6 +244,7 @@ TEST_F(FaultsTest, C_MalformedScanHeadersAreDroppedAndCounted) {
     }
     robot_->publish(msg);
   }
+  EXPECT_TRUE(caughtUp()) << "the reversed scan (usable) was not processed";
   settle();
   EXPECT_EQ(observer_->diagnostic("dropped: bad scan"), bad_before + malformed);
   EXPECT_EQ(observer_->nonFinite(), 0);

@@ -181,15 +181,21 @@ class SonarFaultsTest : public ::testing::Test {
       ros::WallDuration(0.1).sleep();
     }
   }
-  /// Waits for reports of both nodes produced after everything sent so far was handled.
+  /// Waits for reports of both nodes produced after everything sent so far was handled. A node
+  /// that reports nothing for 15 s fails the test (the counters read next would be stale).
   static void settle() {
     ros::WallDuration(0.3).sleep();
     const ros::WallTime since = ros::WallTime::now();
-    const ros::WallTime deadline = since + ros::WallDuration(5.0);
+    const ros::WallTime deadline = since + ros::WallDuration(15.0);
     while ((observer_->lastDiagnostics(kSlam) <= since ||
             observer_->lastDiagnostics(kExtractor) <= since) &&
            ros::WallTime::now() < deadline) {
       ros::WallDuration(0.05).sleep();
+    }
+    if (observer_->lastDiagnostics(kSlam) <= since)
+      ADD_FAILURE() << "no slam /diagnostics for 15 s";
+    if (observer_->lastDiagnostics(kExtractor) <= since) {
+      ADD_FAILURE() << "no extractor /diagnostics for 15 s";
     }
   }
   /// A counter of a node's /diagnostics, 0 while it has not been reported.
