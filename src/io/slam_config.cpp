@@ -114,6 +114,7 @@ void readHinf(YamlSection section, core::HinfOptions* o) {
   section.read("mode", &o->mode);
   section.read("theta_pose", &o->theta_pose);
   section.read("theta_landmark", &o->theta_landmark);
+  section.read("adapt_steps", &o->adapt_steps);
   section.read("gamma_position", &o->gamma_position);
   section.read("gamma_heading", &o->gamma_heading);
   section.read("gamma_landmark", &o->gamma_landmark);

@@ -72,6 +72,9 @@ diagnostic_msgs::DiagnosticArray SlamDiagnostics::report(const ros::Time& stamp,
     status.values.push_back(keyValue("resamples", text(stats.resamples)));
     status.values.push_back(keyValue("weight resets", text(stats.weight_resets)));
     status.values.push_back(keyValue("numeric fallbacks", text(stats.fallbacks)));
+    if (stats.attenuation > 0.0) {
+      status.values.push_back(keyValue("H-infinity theta", text(stats.attenuation)));
+    }
   }
   status.values.push_back(keyValue("resets", text(resets_total_)));
   if (odometry_gaps_ >= 0) status.values.push_back(keyValue("odometry gaps", text(odometry_gaps_)));

@@ -646,6 +646,7 @@ OfflineSummary OfflineRunner::run() {
   summary.landmarks = static_cast<int>(pipeline_.session().filter().landmarks().size());
   summary.particles = config_.filter.particles;
   summary.fallbacks = pipeline_.session().filter().stats().fallbacks;
+  summary.hinf_theta = pipeline_.session().filter().stats().attenuation;
   summary.relocalizations = pipeline_.session().filter().stats().relocalizations;
   summary.heading_measurements = pipeline_.session().filter().stats().heading_measurements;
   summary.robust_steps = pipeline_.session().filter().stats().robust_steps;
@@ -719,6 +720,7 @@ OfflineSummary OfflineRunner::writeOutputs(const OfflineSummary& in) const {
        << "  \"landmarks\": " << summary.landmarks << ",\n"
        << "  \"particles\": " << summary.particles << ",\n"
        << "  \"fallbacks\": " << summary.fallbacks << ",\n"
+       << "  \"hinf_theta\": " << summary.hinf_theta << ",\n"
        << "  \"relocalizations\": " << summary.relocalizations << ",\n"
        << "  \"heading_measurements\": " << summary.heading_measurements << ",\n"
        << "  \"robust_steps\": " << summary.robust_steps << ",\n"

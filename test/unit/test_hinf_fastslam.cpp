@@ -8,8 +8,10 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "rbpf_slam/core/filters/estimator_rule.h"
@@ -272,6 +274,45 @@ TEST(HinfRelative, EkfProposalCovarianceKeepsTheHinfMean) {
   EXPECT_GT((drawn.correction_scale - Eigen::Matrix3d::Identity()).norm(), 1e-3);
 }
 
+// Adaptive mode: theta = 1 - s with s the scale of R the innovations are consistent with. A
+// stand-in filter whose innovations have variance true_scale x R gives NIS = 2 true_scale / s at
+// the scale s in use; the rule must settle at s = true_scale, within [1 - theta_pose, 1].
+TEST(HinfAdaptive, ThetaSettlesWhereTheInnovationsAreConsistent) {
+  HinfOptions o;
+  o.mode = "adaptive";
+  o.theta_pose = 0.99;
+  o.adapt_steps = 20;
+  for (const auto& [true_scale, expected_theta] : std::vector<std::pair<double, double>>{
+           {0.04, 0.96}, {0.25, 0.75}, {1.0, 0.0}, {3.0, 0.0}, {0.001, 0.99}}) {
+    HinfRule rule(o);
+    EXPECT_EQ(rule.theta(), 0.0) << "no innovation yet: the EKF";
+    for (int step = 0; step < 400; ++step) {
+      const double scale = 1.0 - rule.theta();
+      rule.observeInnovations(5 * 2.0 * true_scale / scale, 5);  // five observations a step
+    }
+    EXPECT_NEAR(rule.theta(), expected_theta, 0.01) << "R overstated " << 1.0 / true_scale << "x";
+    EXPECT_NEAR(rule.weightNoiseScale(), 1.0, 1e-12) << "marginal weights: R as given";
+    rule.observeInnovations(std::numeric_limits<double>::quiet_NaN(), 3);  // ignored
+    rule.observeInnovations(4.0, 0);                                       // ignored
+    EXPECT_NEAR(rule.theta(), expected_theta, 0.01);
+    rule.reset();
+    EXPECT_EQ(rule.theta(), 0.0) << "reset forgets the learnt scale";
+  }
+  o.weight = "attenuated";
+  HinfRule attenuated(o);
+  for (int step = 0; step < 400; ++step) {
+    attenuated.observeInnovations(2.0 * 0.25 / (1.0 - attenuated.theta()), 1);
+  }
+  EXPECT_NEAR(attenuated.weightNoiseScale(), 0.25, 0.01);
+  o.mode = "relative";
+  o.theta_pose = 0.8;
+  HinfRule relative(o);
+  relative.observeInnovations(0.01, 1);
+  EXPECT_DOUBLE_EQ(relative.theta(), 0.8) << "relative mode: theta as configured";
+  o.mode = "absolute";
+  EXPECT_EQ(HinfRule(o).theta(), 0.0);
+}
+
 TEST(MotionRandomWalk, GrowsWithTheStepDuration) {
   // A stationary step of dt seconds: only the floors and the random walk remain.
   MotionOptions o;
@@ -364,6 +405,14 @@ TEST(HinfOptions, BadValuesAreRejectedByName) {
   options.hinf.theta_pose = 0.5;
   options.hinf.mode = "scaled";
   EXPECT_THROW(createFilter(options), std::invalid_argument);
+  options.hinf.mode = "adaptive";
+  options.hinf.adapt_steps = 0;
+  try {
+    createFilter(options);
+    FAIL() << "adapt_steps 0 accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("hinf.adapt_steps"), std::string::npos) << e.what();
+  }
 }
 
 /// Point landmarks on a 30 m x 30 m square, seen from a robot driving a circle
@@ -400,6 +449,7 @@ struct RunResult {
   double odom_ate = 0.0;  // same for dead reckoning
   long fallbacks = 0;
   bool finite = true;
+  double attenuation = 0.0;  // the filter's theta at the end
 };
 
 /// Drives 1.5 circles with noisy odometry; the filter is told `reported`
@@ -434,6 +484,7 @@ RunResult runCircle(const FilterOptions& options, unsigned seed, double reported
   result.ate = std::sqrt(sq / steps);
   result.odom_ate = std::sqrt(odom_sq / steps);
   EXPECT_EQ(filter->stats().fallbacks, result.fallbacks);
+  result.attenuation = filter->stats().attenuation;
   return result;
 }
 
@@ -469,6 +520,25 @@ TEST(HinfFastSlam, StaysAccurateWhenTheMeasurementNoiseIsOverstated) {
   EXPECT_TRUE(r.finite);
   EXPECT_LT(r.ate, 0.5) << "odometry " << r.odom_ate << ", FastSLAM 2.0 " << f.ate;
   EXPECT_LT(r.ate, 0.3 * r.odom_ate);
+}
+
+// The filter feeds its innovations to the adaptive rule: told a measurement noise 10 x 25 times
+// the truth (100 x 625 in variance) it learns a large attenuation and is then more accurate than
+// FastSLAM 2.0 told the same; told the truth it stays close to the EKF.
+TEST(HinfFastSlam, AdaptiveAttenuationLearnsAnOverstatedNoise) {
+  FilterOptions options = circleOptions("hinf_fastslam");
+  options.hinf.mode = "adaptive";
+  options.hinf.theta_pose = 0.99;
+  options.hinf.adapt_steps = 20;
+  options.hinf.proposal_covariance = "ekf";
+  const RunResult wrong = runCircle(options, 21, 0.5, 0.05);
+  const RunResult right = runCircle(options, 21, 0.05, 0.002);
+  const RunResult f = runCircle(circleOptions("fastslam2"), 21, 0.5, 0.05);
+  EXPECT_TRUE(wrong.finite && right.finite);
+  EXPECT_GT(wrong.attenuation, 0.9);
+  EXPECT_LT(right.attenuation, 0.5);
+  EXPECT_EQ(f.attenuation, 0.0);
+  EXPECT_LT(wrong.ate, f.ate) << "odometry " << wrong.odom_ate;
 }
 
 TEST(HinfFastSlam, CountsFallbacksAndNeverPublishesNaN) {

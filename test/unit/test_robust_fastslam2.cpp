@@ -221,6 +221,39 @@ TEST_F(CorruptedStretch, KnownIdsDoNotMakeNewerLandmarksOldEvidence) {
   EXPECT_EQ(named.robustStats().fallbacks, unnamed.robustStats().fallbacks);
 }
 
+// The moved post A is seen at steps 21-25. A particle kept from S_20 gets those observations in
+// the replay (section IV), where A no longer matches and becomes a new landmark: it must carry
+// the step it was observed at (21), as in the lineages that mapped it then, not the step of the
+// robust event (29). Creation steps decide what is old evidence at later events.
+TEST_F(CorruptedStretch, ReplayedLandmarksKeepTheStepTheyWereObservedAt) {
+  struct Inspected : RobustFastSlam2 {
+    using RobustFastSlam2::RobustFastSlam2;
+    const Particle& particle(int i) const { return particles_[i]; }
+  };
+  Inspected robust(options("robust_fastslam2"));
+  run(&robust);
+  int replayed = 0, mapped_moved_post = 0;
+  for (int i = 0; i < static_cast<int>(robust.origins().size()); ++i) {
+    if (robust.origins()[i] != 20) continue;  // kept from S_20: steps 21-28 were replayed
+    ++replayed;
+    // Posts A and B are mapped at step 1; any other landmark comes from the moved A.
+    const LandmarkMap& map = *robust.particle(i).map;
+    int later = 0;
+    for (int j = 0; j < map.size(); ++j) {
+      if (map[j].created_step == 1) continue;
+      ++later;
+      EXPECT_GE(map[j].created_step, 21) << "particle " << i;
+      EXPECT_LE(map[j].created_step, 25) << "particle " << i << ": stamped with the robust step";
+      EXPECT_LE(map[j].last_seen_step, 25) << "particle " << i;
+    }
+    // (A few replays draw a path along which the moved post still matches A.)
+    EXPECT_LE(later, 1) << "particle " << i << ": the moved post, mapped once in the replay";
+    mapped_moved_post += later;
+  }
+  EXPECT_GT(replayed, 30) << "the scenario must keep particles from S_20";
+  EXPECT_GT(mapped_moved_post, replayed / 2) << "the replays must map the moved post";
+}
+
 // A particle kept from an older set skipped the steps since that set: its path gets them from
 // the intermediate path (sampled in the replay, or the estimated means without it), so the best
 // particle's path has one pose per update and no jump, like FastSLAM 2.0's, and offline_slam

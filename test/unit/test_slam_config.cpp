@@ -187,6 +187,7 @@ TEST(SlamConfig, LandmarksHinfConfigSelectsHinfFastSlam) {
   const core::HinfOptions defaults;
   EXPECT_EQ(c.filter.hinf.mode, defaults.mode);
   EXPECT_DOUBLE_EQ(c.filter.hinf.theta_pose, defaults.theta_pose);
+  EXPECT_EQ(c.filter.hinf.adapt_steps, defaults.adapt_steps);
   EXPECT_DOUBLE_EQ(c.filter.hinf.theta_landmark, defaults.theta_landmark);
   EXPECT_DOUBLE_EQ(c.filter.hinf.gamma_position, defaults.gamma_position);
   EXPECT_DOUBLE_EQ(c.filter.hinf.gamma_heading, defaults.gamma_heading);

@@ -45,6 +45,7 @@ struct OfflineSummary {
   int landmarks = 0;
   int particles = 0;
   long fallbacks = 0;  // H-infinity steps that fell back to the EKF (since the last reset)
+  double hinf_theta = 0.0;   // the H-infinity attenuation at the end (adaptive: learnt)
   long relocalizations = 0;  // particle proposals started from a searched pose correction
   long heading_measurements = 0;  // particle proposals conditioned on the heading prior
   long robust_steps = 0;          // robust_fastslam2: steps sampled from several ancestor sets

@@ -2,6 +2,7 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/Dense>
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -34,7 +35,11 @@ void validate(const HinfOptions& o) {
   requireRange("hinf.gamma_heading", o.gamma_heading, 0.0, inf, true);
   requireRange("hinf.gamma_landmark", o.gamma_landmark, 0.0, inf, true);
   requireRange("hinf.max_inflation", o.max_inflation, 1.0, inf);
-  requireOneOf("hinf.mode", o.mode, {"relative", "absolute"});
+  requireOneOf("hinf.mode", o.mode, {"relative", "absolute", "adaptive"});
+  if (o.adapt_steps < 1 || o.adapt_steps > 100000) {
+    throw std::invalid_argument("hinf.adapt_steps must be in [1, 100000], got " +
+                                std::to_string(o.adapt_steps));
+  }
   requireRange("hinf.theta_pose", o.theta_pose, 0.0, 1.0, false, true);
   requireRange("hinf.theta_landmark", o.theta_landmark, 0.0, 1.0, false, true);
   requireOneOf("hinf.proposal_covariance", o.proposal_covariance, {"hinf", "ekf"});
@@ -175,10 +180,10 @@ HinfRule::HinfRule(const HinfOptions& options) : options_(options) { validate(op
 Attenuation<3> HinfRule::attenuatePose(const Eigen::Matrix3d& prior_covariance,
                                        const Eigen::Matrix3d& ekf_covariance) const {
   Attenuation<3> a;
-  if (options_.mode == "relative") {
-    a = hinfAttenuationInformation<3>(
-        ekf_covariance, relativeGammaInverse<3>(prior_covariance, options_.theta_pose),
-        options_.gain == "posterior", kNoInflationGuard);
+  if (options_.mode == "relative" || options_.mode == "adaptive") {
+    a = hinfAttenuationInformation<3>(ekf_covariance,
+                                      relativeGammaInverse<3>(prior_covariance, theta()),
+                                      options_.gain == "posterior", kNoInflationGuard);
   } else {
     const Eigen::Vector3d gamma(options_.gamma_position, options_.gamma_position,
                                 options_.gamma_heading);
@@ -190,15 +195,36 @@ Attenuation<3> HinfRule::attenuatePose(const Eigen::Matrix3d& prior_covariance,
 }
 
 double HinfRule::weightNoiseScale() const {
-  if (options_.weight == "attenuated" && options_.mode == "relative") {
-    return 1.0 - options_.theta_pose;
-  }
+  if (options_.weight == "attenuated" && options_.mode != "absolute") return 1.0 - theta();
   return 1.0;
+}
+
+double HinfRule::theta() const {
+  if (options_.mode == "relative") return options_.theta_pose;
+  if (options_.mode != "adaptive") return 0.0;
+  return 1.0 - noise_scale_;
+}
+
+void HinfRule::reset() {
+  noise_scale_ = mean_wanted_scale_ = 1.0;
+  nis_steps_ = 0;
+}
+
+void HinfRule::observeInnovations(double nis_sum, long count) {
+  if (options_.mode != "adaptive" || count <= 0 || !std::isfinite(nis_sum)) return;
+  // The NIS was taken with R scaled by noise_scale_ = 1 - theta; the scale that would have made
+  // it 2 (consistent) is noise_scale_ * NIS / 2. A running mean over the first adapt_steps
+  // steps, then an exponential one of that length.
+  // (The mean is taken before clamping: NIS is skewed, E[NIS] = 2 only on average.)
+  const double wanted = noise_scale_ * 0.5 * nis_sum / count;
+  nis_steps_ = std::min(nis_steps_ + 1, options_.adapt_steps);
+  mean_wanted_scale_ += (wanted - mean_wanted_scale_) / nis_steps_;
+  noise_scale_ = std::clamp(mean_wanted_scale_, 1.0 - options_.theta_pose, 1.0);
 }
 
 Correction<2> HinfRule::correctLandmark(const Eigen::Matrix2d& p, const Eigen::Matrix2d& h,
                                         const Eigen::Matrix2d& r) const {
-  if (options_.mode == "relative") {
+  if (options_.mode == "relative" || options_.mode == "adaptive") {
     Correction<2> c = ekfCorrection<2>(p, h, r);
     if (!c.ok) return c;
     const Attenuation<2> a = hinfAttenuationInformation<2>(

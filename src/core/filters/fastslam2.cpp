@@ -86,6 +86,7 @@ void FastSlam2::reset(const Pose2& initial_pose) {
   next_landmark_id_ = 0;
   step_ = 0;
   stats_ = FilterStats();
+  rule_->reset();
 }
 
 void FastSlam2::predict(const MotionInput& motion) {
@@ -200,8 +201,8 @@ void FastSlam2::addLandmark(LandmarkMap* map, const Pose2& pose, const Observati
     lm.mean = pointFromObservation(pose, observation.z, &g);
   }
   lm.covariance = symmetrize(g * observation.noise * g.transpose());  // Havangi eq. 35
-  lm.last_seen_step = step_;
-  lm.created_step = step_;
+  lm.last_seen_step = observationStep();
+  lm.created_step = observationStep();
   map->add(lm);
 }
 
@@ -236,7 +237,7 @@ bool FastSlam2::updateLandmark(LandmarkMap* map, const Match& match, const Pose2
     lm.extent_max = std::max({lm.extent_max, a, b});
   }
   ++lm.observations;
-  lm.last_seen_step = step_;
+  lm.last_seen_step = observationStep();
   if (lm.mean.allFinite() && lm.covariance.allFinite()) map->set(match.index, lm);
   return !c.fallback;
 }
@@ -264,6 +265,14 @@ FastSlam2::Proposal FastSlam2::refineProposal(const LandmarkMap& map, const Pose
       const Correction<3> c = ekfCorrection<3>(q.cov, h, m.landmark_innovation_cov);
       if (!c.ok) continue;
       if (!pointwise) q.log_likelihood += ll;  // the marginal weight of FastSLAM 2.0
+      // NIS under the rule's attenuated model (R scaled by 1 - theta; FastSLAM 2.0: R).
+      const Eigen::Matrix2d s1 =
+          h * q.cov * h.transpose() + (1.0 - rule_->theta()) * m.landmark_innovation_cov;
+      const double nis = v.dot(s1.inverse() * v);
+      if (std::isfinite(nis)) {
+        q.nis_sum += nis;
+        ++q.nis_count;
+      }
       q.mean += c.gain * v;
       q.mean.z() = wrapAngle(q.mean.z());
       q.cov = c.covariance;
@@ -320,6 +329,8 @@ FastSlam2::ParticleUpdate FastSlam2::updateParticle(Particle* particle,
   double& log_likelihood = q.log_likelihood;
   const std::vector<std::pair<int, int>>& matched = q.matched;
   const std::vector<int>& fresh = q.fresh;
+  result.nis_sum = q.nis_sum;
+  result.nis_count = q.nis_count;
   if (rule_->attenuatesPose() && !matched.empty()) {
     // H-infinity proposal (Havangi eqs. 20-23, every matched landmark of the step stacked, the
     // landmark's uncertainty counted in R as in FastSLAM 2.0).
@@ -440,6 +451,14 @@ UpdateStats FastSlam2::update(const FeatureSet& features) {
     stats.relocalized += results[i].relocalized;
   }
   stats_.relocalizations += stats.relocalized;
+  double nis_sum = 0.0;
+  long nis_count = 0;
+  for (const ParticleUpdate& r : results) {
+    nis_sum += r.nis_sum;
+    nis_count += r.nis_count;
+  }
+  rule_->observeInnovations(nis_sum, nis_count);
+  stats_.attenuation = rule_->theta();
   for (auto& p : particles_) p.path = std::make_shared<PathNode>(p.pose, std::move(p.path));
   stats_.fallbacks += stats.fallbacks;
   // Report the association of the most probable particle of this step, found before

@@ -21,15 +21,21 @@ struct HinfOptions {
   /// theta of the prior information, P+ = ((1 - theta) P^-1 + H^T R^-1 H)^-1. The condition
   /// holds for every theta < 1 whatever the units and scale of the problem, and the posterior
   /// gain is then the EKF gain with R scaled by (1 - theta): it undoes an overstated R by up
-  /// to the factor 1 / (1 - theta). "absolute" (default, as config/landmarks_hinf.yaml):
-  /// Gamma = diag(gamma_*) below. Relative theta_pose 0.8 with the EKF draw is the better car
-  /// setting but costs MRCLAM runs (docs/results.md), so it is not the default.
-  std::string mode = "absolute";
-  /// theta of the pose proposal and of the landmark filters in "relative" mode, in [0, 1)
-  /// (0: the EKF). theta_pose: the best of 0.5 / 0.8 / 0.9 / 0.95 / 0.97 / 0.99 on
-  /// worlds/havangi_car.yaml (benchmarks/run_experiments, docs/results.md); the landmark
-  /// attenuation is off.
-  double theta_pose = 0.8;
+  /// to the factor 1 / (1 - theta). "absolute": Gamma = diag(gamma_*) below (the paper's form,
+  /// fits one problem's scale only). "adaptive" (default, as config/landmarks_hinf.yaml; our
+  /// addition, not in the paper): the relative form with theta learnt from the innovations.
+  std::string mode = "adaptive";
+  /// "adaptive": theta = 1 - s, s the scale of R at which the mean normalised innovation
+  /// squared v^T S^-1 v of the matched observations (S with R scaled by s) would be 2, i.e. the
+  /// innovations consistent, averaged over about adapt_steps steps and kept within
+  /// [1 - theta_pose, 1]. An overstated R is undone, a right or understated one left alone
+  /// (theta 0: FastSLAM 2.0's step). theta_pose is then the cap.
+  int adapt_steps = 20;
+  /// theta of the pose proposal (relative mode; the cap in adaptive mode) and of the landmark
+  /// filters (relative and adaptive modes, fixed), in [0, 1) (0: the EKF). Adaptive theta_pose
+  /// 0.99 and adapt_steps 20: worlds/havangi_car.yaml and MRCLAM (docs/results.md, session 14);
+  /// the landmark attenuation is off.
+  double theta_pose = 0.99;
   double theta_landmark = 0.0;
   /// Attenuation gamma of the pose proposal (eqs. 22, 23) and of the landmark
   /// filters (eqs. 33, 34). The H-infinity covariance is P+ = (P^-1 + H^T R^-1
@@ -52,8 +58,8 @@ struct HinfOptions {
   /// "ekf", the EKF's posterior of the same step, around the H-infinity mean. P+ bounds the
   /// worst-case error rather than being the spread of the posterior; with an overstated R it is
   /// up to 1 / (1 - theta) times the prediction and, the weights being flat then, drawing from
-  /// it is a random walk that wide. Default "hinf" (the paper), as the shipped config.
-  std::string proposal_covariance = "hinf";
+  /// it is a random walk that wide. Default "ekf", as the shipped config (the paper: "hinf").
+  std::string proposal_covariance = "ekf";
   /// Importance weight: "marginal", N(z; z_hat, H P H^T + R) accumulated over
   /// the sequential proposal updates as in FastSLAM 2.0; or "pointwise", eq. 36
   /// evaluated at the drawn pose: p(z | s) p(s | s_prev, u) / q(s); or "attenuated" (relative
@@ -151,6 +157,13 @@ class EstimatorRule {
   /// Marginal weight N(v; H P H^T + k R): the factor k on the measurement's (and landmark's)
   /// part of the innovation covariance; 1 for FastSLAM 2.0.
   virtual double weightNoiseScale() const { return 1.0; }
+  /// After each filter step: the sum of v^T S^-1 v over the matched observations of every
+  /// particle (S = H P H^T + R of the sequential proposal) and how many there were.
+  virtual void observeInnovations(double /*nis_sum*/, long /*count*/) {}
+  /// The attenuation theta in use (relative and adaptive modes), 0 otherwise.
+  virtual double theta() const { return 0.0; }
+  /// With the filter's reset: forgets what observeInnovations learnt.
+  virtual void reset() {}
 };
 
 /// FastSLAM 2.0 (Montemerlo et al. 2003): EKF everywhere.
@@ -172,9 +185,17 @@ class HinfRule : public EstimatorRule {
                                 const Eigen::Matrix2d& r) const override;
   bool pointwiseWeights() const override { return options_.weight == "pointwise"; }
   double weightNoiseScale() const override;
+  void observeInnovations(double nis_sum, long count) override;
+  double theta() const override;
+  void reset() override;
 
  private:
   const HinfOptions options_;
+  // Adaptive mode: 1 - theta, the scale of R that the recent innovations were consistent with,
+  // and the steps it covers.
+  double noise_scale_ = 1.0;
+  double mean_wanted_scale_ = 1.0;  // the running mean before clamping
+  int nis_steps_ = 0;
 };
 
 }  // namespace core

@@ -65,6 +65,7 @@ struct FilterStats {
   long robust_steps = 0;          // robust_fastslam2: steps sampled from several ancestor sets
   double last_neff = 0.0;
   int landmarks = 0;  // in the best particle
+  double attenuation = 0.0;  // hinf_fastslam: the theta in use (hinf.mode relative / adaptive)
 };
 
 /// A SLAM filter. Not thread-safe; time is always an argument (the core reads no clock).
