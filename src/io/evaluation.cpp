@@ -21,12 +21,17 @@ std::vector<StampedPose> sortedByStamp(std::vector<StampedPose> poses) {
 bool stampLess(const StampedPose& pose, double stamp) { return pose.stamp < stamp; }
 
 // Index of the pose nearest to stamp in non-empty poses sorted by stamp; on a tie, the later
-// one; among equal stamps, the first.
-std::size_t nearestIndex(const std::vector<StampedPose>& poses, double stamp) {
+// one (the earlier with prefer_earlier); among equal stamps, the first. The one-to-one match
+// looks up the reference with one rule and back with the other, so that two streams offset by
+// exactly half a period still pair up.
+std::size_t nearestIndex(const std::vector<StampedPose>& poses, double stamp,
+                         bool prefer_earlier = false) {
   const std::size_t after = static_cast<std::size_t>(
       std::lower_bound(poses.begin(), poses.end(), stamp, stampLess) - poses.begin());
   if (after == poses.size()) return poses.size() - 1;
-  if (after > 0 && stamp - poses[after - 1].stamp < poses[after].stamp - stamp) {
+  const double to_before = after > 0 ? stamp - poses[after - 1].stamp : 0.0;
+  const double to_after = poses[after].stamp - stamp;
+  if (after > 0 && (to_before < to_after || (prefer_earlier && to_before == to_after))) {
     // Step back to the first of a run of equal stamps.
     std::size_t before = after - 1;
     while (before > 0 && poses[before - 1].stamp == poses[before].stamp) --before;
@@ -113,7 +118,7 @@ std::vector<PosePair> associate(const std::vector<StampedPose>& estimate,
     const double dt = sorted_reference[j].stamp - query.stamp;
     if (std::abs(dt) > options.max_dt_s) continue;
     if (!options.interpolate_reference &&
-        nearestIndex(sorted_estimate, sorted_reference[j].stamp) != i) {
+        nearestIndex(sorted_estimate, sorted_reference[j].stamp, true) != i) {
       continue;
     }
     pair.dt = dt;

@@ -2,6 +2,7 @@
 // Prints ATE and relative pose errors of a trajectory against a reference as JSON on stdout.
 // Exit status: 0 on success, 2 on bad usage, 1 for unreadable files or no matched poses.
 
+#include <algorithm>
 #include <iostream>
 #include <optional>
 #include <stdexcept>
@@ -70,6 +71,14 @@ int run(const Arguments& arguments) {
   if (reference.empty()) throw std::runtime_error(positional[1] + ": no poses");
   const auto result = io::evaluateTrajectory(estimate, reference, arguments.options);
   std::cout << io::toJson(result);
+  // Figures over a few poses say little about the trajectory: say so (the stamps may not line
+  // up within --max-dt, e.g. another clock or another rate).
+  if (2 * result.matched_poses < std::min(estimate.size(), reference.size())) {
+    std::cerr << "evaluate: only " << result.matched_poses << " of " << estimate.size()
+              << " estimate poses matched a reference pose (" << reference.size()
+              << " poses) within --max-dt " << arguments.options.max_dt_s
+              << " s; the figures cover those only\n";
+  }
   return 0;
 }
 

@@ -5,7 +5,8 @@
 # through rbpf_slam_node (rosbag play --clock), for each case below: the laser front end on
 # the Intel and the ACES slice, the sonar front end (Range messages) on the Intel slice, and
 # range-bearing features on 150 s of MRCLAM robot 1 (converted at test time from
-# ../shared/data/mrclam6; skipped when that is not there).
+# the shared data's mrclam6, lib/shared_data.sh; skipped, and named in the last line, when that
+# is not there).
 # Fails if either crashes, writes or publishes anything non-finite, stops updating after any
 # fault window, or does not start a new map at the loop; and offline_slam, if its gap check
 # misses the tf gap or counts frames far apart as a gap while the odometry flows (1b).
@@ -20,6 +21,8 @@ root=$(cd "$here/../.." && pwd)
 bin="${RBPF_BIN:-$root/build/devel/lib/rbpf_slam}"
 [ -x "$bin/offline_slam" ] && [ -x "$bin/rbpf_slam_node" ] || { echo "FAIL: not built ($bin)"; exit 1; }
 source "$here/lib/launch.sh"
+source "$here/lib/shared_data.sh"
+skipped=()
 
 # name: bag, config, whether landmarks must exist at the end (the sonar ring of these logs, one every
 # ~3 s, maps nothing; see docs/results.md).
@@ -41,13 +44,15 @@ echo "== $name: ${case_bag[$name]} with ${case_config[$name]}"
 local bag="${case_bag[$name]}"
 [ "${bag#/}" != "$bag" ] || bag="$root/test/data/$bag"
 if [ "${case_bag[$name]}" = mrclam ]; then
-  local data="$root/../shared/data/mrclam6"
-  [ -d "$data" ] || { echo "SKIP $name: $data not found"; return 0; }
+  local data
+  data="$(shared_data_dir)/mrclam6"
+  [ -d "$data" ] || { echo "SKIP $name: no shared data with mrclam6"; skipped+=("$name"); return 0; }
   bag="$work/mrclam.bag"
   "$bin/mrclam_to_bag" "$data" 1 "$bag" --duration 150 >"$work/convert.log" 2>&1 \
     || { echo "FAIL: mrclam_to_bag"; tail "$work/convert.log"; return 1; }
 fi
-/usr/bin/python3 "$root/test/tools/corrupt_bag.py" "$bag" "$work/corrupt.bag" >"$work/windows.json"
+/usr/bin/python3 "$root/test/tools/corrupt_bag.py" "$bag" "$work/corrupt.bag" >"$work/windows.json" \
+  || { echo "FAIL: corrupt_bag.py"; return 1; }
 
 # 1. The offline runner.
 "$bin/offline_slam" --bag "$work/corrupt.bag" --config "$config" --output "$work/offline" \
@@ -57,7 +62,8 @@ fi
 # max_time_gap at half the tf gap's length the corrupted bag has a gap and the original none
 # (although frames may be further apart: the MRCLAM slice goes 24 and 27 s without a sighting).
 local gap_limit
-gap_limit=$(/usr/bin/python3 -c "import json; w = json.load(open('$work/windows.json'))['tf_gap']; print(0.5 * (w[1] - w[0]))")
+gap_limit=$(/usr/bin/python3 -c "import json; w = json.load(open('$work/windows.json'))['tf_gap']; print(0.5 * (w[1] - w[0]))") \
+  || { echo "FAIL: no tf_gap window in $work/windows.json"; return 1; }
 for input in corrupt original; do
   local input_bag="$work/corrupt.bag"
   [ $input = original ] && input_bag="$bag"
@@ -223,5 +229,6 @@ for name in "${cases[@]}"; do
   [ -n "${case_bag[$name]:-}" ] || { echo "FAIL: no case '$name' (${!case_bag[*]})"; exit 2; }
   run_case "$name" || status=1
 done
+if [ ${#skipped[@]} -gt 0 ]; then echo "skipped (no data): ${skipped[*]}"; fi
 [ $status -eq 0 ] && echo "PASS: ${cases[*]}" || echo "FAIL"
 exit $status

@@ -11,6 +11,7 @@ world="$root/worlds/test_small.yaml"
 "$bin/simulate" --world "$world" --output "$work/a.bag" --seed 9 >/dev/null
 "$bin/simulate" --world "$world" --output "$work/b.bag" --seed 9 >/dev/null
 cmp -s "$work/a.ref.tum" "$work/b.ref.tum" || { echo "FAIL: simulate is not deterministic"; exit 1; }
+cmp -s "$work/a.bag" "$work/b.bag" || { echo "FAIL: simulate wrote two different bags"; exit 1; }
 
 for config in laser_fastslam2 landmarks_fastslam2; do
   for run in 1 2; do

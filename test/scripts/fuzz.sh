@@ -2,7 +2,8 @@
 # Fuzzing: builds the libFuzzer targets of test/fuzz/ with clang (address and undefined
 # behaviour sanitizers, the code under test compiled in) and runs each for FUZZ_SECONDS
 # (default 60). Fails on any crash, sanitizer report or broken invariant; the input that
-# found it is kept in build/fuzz/. Prints SKIP and passes when clang's libFuzzer is missing.
+# found it is kept in build/fuzz/. Prints SKIP and exits 77 (scripts/test.sh: skipped) when
+# clang's libFuzzer is missing.
 set -euo pipefail
 
 here=$(cd "$(dirname "$0")" && pwd)
@@ -12,13 +13,13 @@ out="$root/build/fuzz"
 mkdir -p "$out/obj"
 if ! command -v clang++ >/dev/null; then
   echo "SKIP: clang++ not installed"
-  exit 0
+  exit 77
 fi
 echo 'extern "C" int LLVMFuzzerTestOneInput(const unsigned char*, unsigned long) { return 0; }' \
   >"$out/probe.cpp"
 if ! clang++ -fsanitize=fuzzer "$out/probe.cpp" -o "$out/probe" 2>/dev/null; then
   echo "SKIP: clang++ has no libFuzzer runtime"
-  exit 0
+  exit 77
 fi
 
 export FUZZ_FLAGS="-std=c++17 -O1 -g -fsanitize=fuzzer-no-link,address,undefined \

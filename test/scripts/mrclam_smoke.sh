@@ -2,17 +2,18 @@
 # Smoke test of the MRCLAM path: converts the first 120 s of Robot1 of the shared UTIAS MRCLAM
 # dataset 6, runs FastSLAM 2.0 (config/landmarks_fastslam2.yaml, unknown association) over it
 # and fails unless the filter updated, mapped landmarks and wrote a trajectory without NaN.
-# Prints SKIP and passes when the dataset is not there.
+# Prints SKIP and exits 77 (scripts/test.sh: skipped) when the dataset is not there.
 set -euo pipefail
 
 here=$(cd "$(dirname "$0")" && pwd)
 root=$(cd "$here/../.." && pwd)
 bin="${RBPF_BIN:-$root/build/devel/lib/rbpf_slam}"  # RBPF_BIN: another build
-data="$root/../shared/data/mrclam6"
+source "$here/lib/shared_data.sh"
+data="$(shared_data_dir)/mrclam6"
 
 if [ ! -d "$data" ]; then
-  echo "SKIP: $data not found"
-  exit 0
+  echo "SKIP: no shared data with mrclam6 (RBPF_SHARED_DATA, ../shared/data, /work/shared/data)"
+  exit "$SKIP_STATUS"
 fi
 for tool in mrclam_to_bag offline_slam; do
   if [ ! -x "$bin/$tool" ]; then

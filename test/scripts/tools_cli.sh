@@ -113,6 +113,10 @@ expect "evaluate bad number" 2 "--max-dt needs a non-negative number" "$bin/eval
 expect "evaluate one file" 2 "expected ESTIMATE.tum and REFERENCE.tum" "$bin/evaluate" "$work/a.tum"
 expect "evaluate missing file" 1 "no_such_input" "$bin/evaluate" "$work/a.tum" "$missing.tum"
 expect "evaluate itself" 0 "ate" "$bin/evaluate" "$work/a.tum" "$work/a.tum"
+printf '1 0 0 0 0 0 0 1\n2 1 0 0 0 0 0 1\n3 2 0 0 0 0 0 1\n4 3 0 0 0 0 0 1\n' >"$work/four.tum"
+printf '1 0 0 0 0 0 0 1\n10 1 0 0 0 0 0 1\n20 2 0 0 0 0 0 1\n30 3 0 0 0 0 0 1\n' >"$work/far.tum"
+expect "evaluate few matches" 0 "only 1 of 4 estimate poses matched" "$bin/evaluate" \
+  "$work/four.tum" "$work/far.tum"
 expect "evaluate --max-gap without --interpolate" 2 "--max-gap applies only with --interpolate" \
   "$bin/evaluate" "$work/a.tum" "$work/a.tum" --max-gap 1
 expect "render_grid required" 2 "are required" "$bin/render_grid" --bag x.bag

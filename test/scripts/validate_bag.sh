@@ -26,8 +26,15 @@ for name, times in (("steady", [10, 13, 16, 19]), ("hole", [10, 13, 16, 56])):
             scan.header.frame_id = "base_link"
             out.write("/scan", scan, rospy.Time(t))
 PY
-"$bin/validate_bag" "$work/steady.bag" --max-gap 2 >"$work/steady.txt" 2>&1 || true
-"$bin/validate_bag" "$work/hole.bag" --max-gap 2 >"$work/hole.txt" 2>&1 || true
+# validate_bag exits 0 for no problem, 1 for problems found; anything else (a crash, a refused
+# argument) is a failure of the test, and the steady bag must get its /scan summary line.
+for name in steady hole; do
+  result=0
+  "$bin/validate_bag" "$work/$name.bag" --max-gap 2 >"$work/$name.txt" 2>&1 || result=$?
+  if [ "$result" -gt 1 ]; then echo "FAIL: validate_bag $name.bag exited $result:"; cat "$work/$name.txt"; exit 1; fi
+done
+grep -qE "^ */scan +4 messages" "$work/steady.txt" \
+  || { echo "FAIL: no /scan summary for the steady bag:"; cat "$work/steady.txt"; exit 1; }
 if grep -q "/scan: .*gap" "$work/steady.txt"; then
   echo "FAIL: scans 3 s apart reported as gaps:"; grep gap "$work/steady.txt"; exit 1
 fi

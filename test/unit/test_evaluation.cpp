@@ -166,6 +166,25 @@ TEST(Associate, DenseEstimateMatchesEachReferenceOnce) {
   }
 }
 
+// Two streams of the same period offset by exactly half of it: every estimate pose is equally
+// near two reference poses. Looking up with one tie rule and back with the same one matched
+// almost nothing (1 of 6 with an ATE of 0); each estimate pose must pair with one reference pose.
+TEST(Associate, StreamsHalfAPeriodApartPairUp) {
+  std::vector<StampedPose> estimate, reference;
+  for (int k = 0; k < 6; ++k) {
+    estimate.push_back({100.0 + 0.5 * k, core::Pose2(k, 0.0, 0.0)});
+    reference.push_back({100.25 + 0.5 * k, core::Pose2(k + 0.5, 0.0, 0.0)});
+  }
+  EvaluationOptions options;
+  options.max_dt_s = 0.3;
+  const std::vector<PosePair> pairs = associate(estimate, reference, options);
+  ASSERT_EQ(pairs.size(), 6u);
+  for (size_t i = 0; i < pairs.size(); ++i) {
+    EXPECT_NEAR(pairs[i].dt, 0.25, 1e-9) << i;  // each with the reference pose after it
+    EXPECT_DOUBLE_EQ(pairs[i].reference.x(), pairs[i].estimate.x() + 0.5) << i;
+  }
+}
+
 TEST(Associate, ShiftedClockMatchesOnlyWithLargerTolerance) {
   const std::vector<StampedPose> reference = makeTrajectory(10);
   std::vector<StampedPose> estimate = reference;
