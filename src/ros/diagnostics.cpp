@@ -79,6 +79,9 @@ diagnostic_msgs::DiagnosticArray SlamDiagnostics::report(const ros::Time& stamp,
   status.values.push_back(keyValue("resets", text(resets_total_)));
   if (odometry_gaps_ >= 0) status.values.push_back(keyValue("odometry gaps", text(odometry_gaps_)));
   status.values.push_back(keyValue("paused", paused_ ? "true" : "false"));
+  if (same_stamp_total_ > 0) {
+    status.values.push_back(keyValue("frames at the last frame's stamp", text(same_stamp_total_)));
+  }
   if (skipped_features_total_ > 0) {
     status.values.push_back(keyValue("features the filter skipped", text(skipped_features_total_)));
   }

@@ -347,6 +347,12 @@ std::vector<std::string> describeOutcome(const OfflineSummary& s, const OfflineO
                     " feature(s) it cannot use (non-finite or degenerate, or of a kind it "
                     "ignores: dpf uses points with known ids only)");
   }
+  if (s.same_stamp > 0) {
+    lines.push_back(std::to_string(s.same_stamp) +
+                    " frame(s) had the stamp of the frame before (another input of the same "
+                    "instant, e.g. features published with their scan's stamp, or a repeated "
+                    "message) and were not used");
+  }
   if (s.updates == 0) {
     lines.push_back("no frame was used (" + std::to_string(s.frames) + " read, " +
                     std::to_string(s.dropped_no_tf) + " without tf, " +
@@ -593,6 +599,9 @@ OfflineSummary OfflineRunner::run() {
       case core::FrameResult::kSkippedNoMotion:
         ++summary.skipped;
         break;
+      case core::FrameResult::kSkippedSameStamp:
+        ++summary.same_stamp;
+        break;
       default:
         ++summary.rejected;
     }
@@ -708,6 +717,7 @@ OfflineSummary OfflineRunner::writeOutputs(const OfflineSummary& in) const {
        << "  \"updates\": " << summary.updates << ",\n"
        << "  \"skipped_no_motion\": " << summary.skipped << ",\n"
        << "  \"rejected\": " << summary.rejected << ",\n"
+       << "  \"same_stamp\": " << summary.same_stamp << ",\n"
        << "  \"resets\": " << summary.resets << ",\n"
        << "  \"gaps\": " << summary.gaps << ",\n"
        << "  \"dropped_no_tf\": " << summary.dropped_no_tf << ",\n"

@@ -44,6 +44,8 @@ const char* describe(core::FrameResult result) {
       return "rejected (odometry pose not finite)";
     case core::FrameResult::kReset:
       return "first frame of a new map (the session reset)";
+    case core::FrameResult::kSkippedSameStamp:
+      return "skipped (the stamp of the last frame: another input of that instant, or a repeat)";
   }
   return "unknown";
 }
@@ -369,6 +371,10 @@ void SlamNode::handleResult(core::FrameResult result, const ros::Time& stamp, do
     ROS_WARN_STREAM("rbpf_slam_node: frame at " << stamp << ": " << describe(result)
                                                 << " (stamps went back, or an odometry gap with "
                                                    "gap_action: reset)");
+  }
+  if (result == core::FrameResult::kSkippedSameStamp) {
+    diagnostics_.recordSameStamp();  // counted, not a problem (slam_session.h)
+    return;
   }
   if (result != core::FrameResult::kUpdated && result != core::FrameResult::kFirstFrame &&
       result != core::FrameResult::kReset) {

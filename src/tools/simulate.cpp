@@ -69,7 +69,9 @@ class BagWriter {
   BagWriter(const std::string& path, const sim::Simulator& simulator, const std::string& ref_path)
       : simulator_(simulator),
         bag_(path),
-        reference_(std::fopen(ref_path.c_str(), "w"), &std::fclose) {
+        ref_path_(ref_path),
+        ref_partial_(ref_path + ".part"),
+        reference_(std::fopen(ref_partial_.c_str(), "w"), &std::fclose) {
     if (!reference_) throw std::runtime_error(ref_path + ": cannot be written");
     const tf2_msgs::TFMessage mounts =
         rosbridge::simStaticTransforms(simulator_, clock_.stamp(0.0));
@@ -93,9 +95,19 @@ class BagWriter {
     if (messages.features) put("/features", stamp, *messages.features);
   }
 
+  /// Like the bag, the ground truth appears only when complete (REF.part renamed).
+  ~BagWriter() {
+    if (!committed_) std::remove(ref_partial_.c_str());
+  }
+
   void close() {
     bag_.commit();
-    if (std::fflush(reference_.get()) != 0) throw std::runtime_error("ground truth not written");
+    if (std::fclose(reference_.release()) != 0 ||
+        std::rename(ref_partial_.c_str(), ref_path_.c_str()) != 0) {
+      std::remove(ref_partial_.c_str());
+      throw std::runtime_error(ref_path_ + ": ground truth not written");
+    }
+    committed_ = true;
   }
   const std::map<std::string, long>& counts() const { return counts_; }
   const rosbridge::SimClock& clock() const { return clock_; }
@@ -110,7 +122,9 @@ class BagWriter {
   const sim::Simulator& simulator_;
   const rosbridge::SimClock clock_;
   rosbridge::PartialBag bag_;                        // the bag appears when complete
+  const std::string ref_path_, ref_partial_;
   std::unique_ptr<FILE, int (*)(FILE*)> reference_;  // TUM ground truth, one line per odometry
+  bool committed_ = false;
   std::map<std::string, long> counts_;
 };
 

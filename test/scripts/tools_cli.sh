@@ -140,7 +140,7 @@ expect "simulate write fails" 1 "big.bag: Error" limited "$bin/simulate" \
 expect "offline_slam --output-bag write fails" 1 "res.bag: Error" limited "$bin/offline_slam" \
   --bag "$root/test/data/intel_head.bag" --config "$root/config/laser_fastslam2.yaml" \
   --output "$work/r" --output-bag "$work/r/res.bag" --no-progress --set particles=5
-for left in big.bag big.bag.part r/res.bag r/res.bag.part; do
+for left in big.bag big.bag.part big.ref.tum big.ref.tum.part r/res.bag r/res.bag.part; do
   [ ! -e "$work/$left" ] || { echo "FAIL: $left left behind by a failed write"; status=1; }
 done
 expect "validate_bag bad gap" 2 "--max-gap needs a positive number" "$bin/validate_bag" x.bag \

@@ -275,39 +275,41 @@ TEST(HinfRelative, EkfProposalCovarianceKeepsTheHinfMean) {
 }
 
 // Adaptive mode: theta = 1 - s with s the scale of R the innovations are consistent with. A
-// stand-in filter whose innovations have variance true_scale x R gives NIS = 2 true_scale / s at
-// the scale s in use; the rule must settle at s = true_scale, within [1 - theta_pose, 1].
+// stand-in filter whose innovations have variance true_scale x R gives NIS values with mean
+// 2 true_scale / s at the scale s in use; the rule must settle at s = true_scale, within
+// [1 - theta_pose, 1].
 TEST(HinfAdaptive, ThetaSettlesWhereTheInnovationsAreConsistent) {
   HinfOptions o;
   o.mode = "adaptive";
   o.theta_pose = 0.99;
   o.adapt_steps = 20;
+  auto step = [&](HinfRule* rule, double true_scale) {
+    const double m = 2.0 * true_scale / (1.0 - rule->theta());
+    rule->observeInnovations({0.2 * m, m, 1.8 * m, 0.5 * m, 1.5 * m});  // five matches, mean m
+  };
   for (const auto& [true_scale, expected_theta] : std::vector<std::pair<double, double>>{
            {0.04, 0.96}, {0.25, 0.75}, {1.0, 0.0}, {3.0, 0.0}, {0.001, 0.99}}) {
     HinfRule rule(o);
+    EXPECT_TRUE(rule.learnsFromInnovations());
     EXPECT_EQ(rule.theta(), 0.0) << "no innovation yet: the EKF";
-    for (int step = 0; step < 400; ++step) {
-      const double scale = 1.0 - rule.theta();
-      rule.observeInnovations(5 * 2.0 * true_scale / scale, 5);  // five observations a step
-    }
+    for (int k = 0; k < 400; ++k) step(&rule, true_scale);
     EXPECT_NEAR(rule.theta(), expected_theta, 0.01) << "R overstated " << 1.0 / true_scale << "x";
     EXPECT_NEAR(rule.weightNoiseScale(), 1.0, 1e-12) << "marginal weights: R as given";
-    rule.observeInnovations(std::numeric_limits<double>::quiet_NaN(), 3);  // ignored
-    rule.observeInnovations(4.0, 0);                                       // ignored
+    rule.observeInnovations({std::numeric_limits<double>::quiet_NaN()});  // ignored
+    rule.observeInnovations({});                                          // ignored
     EXPECT_NEAR(rule.theta(), expected_theta, 0.01);
     rule.reset();
     EXPECT_EQ(rule.theta(), 0.0) << "reset forgets the learnt scale";
   }
   o.weight = "attenuated";
   HinfRule attenuated(o);
-  for (int step = 0; step < 400; ++step) {
-    attenuated.observeInnovations(2.0 * 0.25 / (1.0 - attenuated.theta()), 1);
-  }
+  for (int k = 0; k < 400; ++k) step(&attenuated, 0.25);
   EXPECT_NEAR(attenuated.weightNoiseScale(), 0.25, 0.01);
   o.mode = "relative";
   o.theta_pose = 0.8;
   HinfRule relative(o);
-  relative.observeInnovations(0.01, 1);
+  EXPECT_FALSE(relative.learnsFromInnovations());
+  relative.observeInnovations({0.01});
   EXPECT_DOUBLE_EQ(relative.theta(), 0.8) << "relative mode: theta as configured";
   o.mode = "absolute";
   EXPECT_EQ(HinfRule(o).theta(), 0.0);

@@ -222,10 +222,12 @@ TEST_F(CorruptedStretch, KnownIdsDoNotMakeNewerLandmarksOldEvidence) {
 }
 
 // The moved post A is seen at steps 21-25. A particle kept from S_20 gets those observations in
-// the replay (section IV), where A no longer matches and becomes a new landmark: it must carry
-// the step it was observed at (21), as in the lineages that mapped it then, not the step of the
-// robust event (29). Creation steps decide what is old evidence at later events.
-TEST_F(CorruptedStretch, ReplayedLandmarksKeepTheStepTheyWereObservedAt) {
+// the replay (section IV), where A no longer matches and becomes a new landmark. It is stamped
+// with the robust step (29), when the kept particle learnt it, so that later events treat it as
+// newer than their ancestor sets (oldLandmarkObservations). A review proposed the stored steps
+// (21-25, as in the lineages that saw it live); measured worse on 20 seeds (docs/results.md,
+// session 14), so this is deliberate and guarded here.
+TEST_F(CorruptedStretch, ReplayedLandmarksCountAsLearntAtTheRobustStep) {
   struct Inspected : RobustFastSlam2 {
     using RobustFastSlam2::RobustFastSlam2;
     const Particle& particle(int i) const { return particles_[i]; }
@@ -238,17 +240,11 @@ TEST_F(CorruptedStretch, ReplayedLandmarksKeepTheStepTheyWereObservedAt) {
     ++replayed;
     // Posts A and B are mapped at step 1; any other landmark comes from the moved A.
     const LandmarkMap& map = *robust.particle(i).map;
-    int later = 0;
     for (int j = 0; j < map.size(); ++j) {
       if (map[j].created_step == 1) continue;
-      ++later;
-      EXPECT_GE(map[j].created_step, 21) << "particle " << i;
-      EXPECT_LE(map[j].created_step, 25) << "particle " << i << ": stamped with the robust step";
-      EXPECT_LE(map[j].last_seen_step, 25) << "particle " << i;
+      ++mapped_moved_post;
+      EXPECT_GE(map[j].created_step, 29) << "particle " << i;
     }
-    // (A few replays draw a path along which the moved post still matches A.)
-    EXPECT_LE(later, 1) << "particle " << i << ": the moved post, mapped once in the replay";
-    mapped_moved_post += later;
   }
   EXPECT_GT(replayed, 30) << "the scenario must keep particles from S_20";
   EXPECT_GT(mapped_moved_post, replayed / 2) << "the replays must map the moved post";

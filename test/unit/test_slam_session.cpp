@@ -36,7 +36,7 @@ TEST(SlamSession, OneStaleFrameIsRejectedAndTheMapKept) {
   for (int i = 1; i <= 10; ++i) frame(&session, i);
   ASSERT_EQ(session.trajectory().size(), 10u);
   EXPECT_EQ(frame(&session, 5.0), core::FrameResult::kRejectedStamp);  // 5 s late
-  EXPECT_EQ(frame(&session, 10.0), core::FrameResult::kRejectedStamp);  // duplicate
+  EXPECT_EQ(frame(&session, 10.0), core::FrameResult::kSkippedSameStamp);  // the same instant
   EXPECT_EQ(frame(&session, 0.0), core::FrameResult::kRejectedStamp);   // zero stamp
   EXPECT_EQ(frame(&session, 11.0), core::FrameResult::kUpdated);
   EXPECT_EQ(session.resets(), 0);
@@ -47,6 +47,20 @@ TEST(SlamSession, OneStaleFrameIsRejectedAndTheMapKept) {
   EXPECT_EQ(frame(&session, 12.0), core::FrameResult::kUpdated);
   frame(&session, 2.0);
   EXPECT_EQ(session.resets(), 0);
+}
+
+// A frame at the last frame's stamp (another input of the same instant, or a repeat) is
+// skipped, not used twice, not an error, and does not break or extend a run of late frames.
+TEST(SlamSession, AFrameAtTheLastStampIsSkipped) {
+  core::SlamSession session = makeSession(3);
+  for (int i = 1; i <= 10; ++i) frame(&session, i);
+  EXPECT_EQ(frame(&session, 10.0), core::FrameResult::kSkippedSameStamp);
+  EXPECT_EQ(session.trajectory().size(), 10u);
+  EXPECT_EQ(frame(&session, 1.0), core::FrameResult::kRejectedStamp);
+  EXPECT_EQ(frame(&session, 10.0), core::FrameResult::kSkippedSameStamp);
+  EXPECT_EQ(frame(&session, 1.5), core::FrameResult::kRejectedStamp);
+  EXPECT_EQ(frame(&session, 2.0), core::FrameResult::kReset) << "still three late frames in a row";
+  EXPECT_EQ(session.resets(), 1);
 }
 
 TEST(SlamSession, ARestartedClockStartsANewMapAfterEnoughFrames) {

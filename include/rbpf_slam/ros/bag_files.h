@@ -16,10 +16,10 @@ namespace rosbridge {
 /// name the file).
 void openBagForReading(rosbag::Bag* bag, const std::string& path);
 
-/// An output bag written as PATH.part and renamed to PATH by commit(), so that a run that stops
+/// An output bag written as PATH.part and renamed to PATH by commit(), so that a run that fails
 /// while writing (disk full, a file size limit, an error half-way) ends with its error message
 /// and leaves neither a truncated PATH nor the .part file behind. An existing PATH is replaced
-/// only by the commit.
+/// only by the commit. (A process killed by a signal can still leave PATH.part, never PATH.)
 class PartialBag {
  public:
   /// Throws std::runtime_error naming PATH when PATH.part cannot be created.

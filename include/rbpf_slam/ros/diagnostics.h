@@ -43,6 +43,9 @@ class SlamDiagnostics {
   /// Features of used frames that the filter skipped (a kind it ignores, degenerate):
   /// reported as a count, not as a problem (dpf on line features would warn for ever).
   void recordSkippedFeatures(long count) { skipped_features_total_ += count; }
+  /// Frames at the stamp of the last frame (another input of the same instant): a count, not
+  /// a problem.
+  void recordSameStamp() { ++same_stamp_total_; }
   /// Steps taken across an odometry gap so far (SlamSession::gaps); reported once set.
   void setOdometryGaps(long total) { odometry_gaps_ = total; }
   void setPaused(bool paused) { paused_ = paused; }
@@ -60,6 +63,7 @@ class SlamDiagnostics {
   bool paused_ = false;
   long odometry_gaps_ = -1;  // -1: not reported
   long skipped_features_total_ = 0;
+  long same_stamp_total_ = 0;
 };
 
 }  // namespace rosbridge

@@ -28,8 +28,9 @@ struct OfflineSummary {
   double bag_duration_s = 0.0;
   long frames = 0;
   long updates = 0;
-  long skipped = 0;
-  long rejected = 0;
+  long skipped = 0;     // no motion since the last update (linear_update, angular_update)
+  long same_stamp = 0;  // at the stamp of the frame before (another input of that instant)
+  long rejected = 0;    // older stamps, non-finite odometry
   long resets = 0;
   long gaps = 0;  // steps across a time gap or odometry jump (max_time_gap, max_odometry_jump)
   long dropped_no_tf = 0;

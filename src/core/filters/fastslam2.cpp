@@ -201,8 +201,8 @@ void FastSlam2::addLandmark(LandmarkMap* map, const Pose2& pose, const Observati
     lm.mean = pointFromObservation(pose, observation.z, &g);
   }
   lm.covariance = symmetrize(g * observation.noise * g.transpose());  // Havangi eq. 35
-  lm.last_seen_step = observationStep();
-  lm.created_step = observationStep();
+  lm.last_seen_step = step_;
+  lm.created_step = step_;
   map->add(lm);
 }
 
@@ -237,7 +237,7 @@ bool FastSlam2::updateLandmark(LandmarkMap* map, const Match& match, const Pose2
     lm.extent_max = std::max({lm.extent_max, a, b});
   }
   ++lm.observations;
-  lm.last_seen_step = observationStep();
+  lm.last_seen_step = step_;
   if (lm.mean.allFinite() && lm.covariance.allFinite()) map->set(match.index, lm);
   return !c.fallback;
 }
@@ -265,13 +265,13 @@ FastSlam2::Proposal FastSlam2::refineProposal(const LandmarkMap& map, const Pose
       const Correction<3> c = ekfCorrection<3>(q.cov, h, m.landmark_innovation_cov);
       if (!c.ok) continue;
       if (!pointwise) q.log_likelihood += ll;  // the marginal weight of FastSLAM 2.0
-      // NIS under the rule's attenuated model (R scaled by 1 - theta; FastSLAM 2.0: R).
-      const Eigen::Matrix2d s1 =
-          h * q.cov * h.transpose() + (1.0 - rule_->theta()) * m.landmark_innovation_cov;
-      const double nis = v.dot(s1.inverse() * v);
-      if (std::isfinite(nis)) {
-        q.nis_sum += nis;
-        ++q.nis_count;
+      if (rule_->learnsFromInnovations()) {
+        // NIS with the landmark's part (R and the landmark's covariance) scaled by 1 - theta,
+        // the scale the rule is testing; the proposal's sequential covariance is the EKF's.
+        const Eigen::Matrix2d s1 =
+            h * q.cov * h.transpose() + (1.0 - rule_->theta()) * m.landmark_innovation_cov;
+        const double nis = v.dot(s1.inverse() * v);
+        if (std::isfinite(nis)) q.nis.push_back(nis);
       }
       q.mean += c.gain * v;
       q.mean.z() = wrapAngle(q.mean.z());
@@ -329,8 +329,7 @@ FastSlam2::ParticleUpdate FastSlam2::updateParticle(Particle* particle,
   double& log_likelihood = q.log_likelihood;
   const std::vector<std::pair<int, int>>& matched = q.matched;
   const std::vector<int>& fresh = q.fresh;
-  result.nis_sum = q.nis_sum;
-  result.nis_count = q.nis_count;
+  result.nis = std::move(q.nis);
   if (rule_->attenuatesPose() && !matched.empty()) {
     // H-infinity proposal (Havangi eqs. 20-23, every matched landmark of the step stacked, the
     // landmark's uncertainty counted in R as in FastSLAM 2.0).
@@ -451,13 +450,11 @@ UpdateStats FastSlam2::update(const FeatureSet& features) {
     stats.relocalized += results[i].relocalized;
   }
   stats_.relocalizations += stats.relocalized;
-  double nis_sum = 0.0;
-  long nis_count = 0;
-  for (const ParticleUpdate& r : results) {
-    nis_sum += r.nis_sum;
-    nis_count += r.nis_count;
+  if (rule_->learnsFromInnovations()) {
+    std::vector<double> nis;
+    for (ParticleUpdate& r : results) nis.insert(nis.end(), r.nis.begin(), r.nis.end());
+    rule_->observeInnovations(std::move(nis));
   }
-  rule_->observeInnovations(nis_sum, nis_count);
   stats_.attenuation = rule_->theta();
   for (auto& p : particles_) p.path = std::make_shared<PathNode>(p.pose, std::move(p.path));
   stats_.fallbacks += stats.fallbacks;

@@ -329,11 +329,11 @@ std::vector<Pose2> RobustFastSlam2::replayIntermediatePath(Particle* particle, c
   for (int j = static_cast<int>(path.means.size()) - 1; j >= 0; --j) {
     const std::vector<Observation>& observations = records[j]->observations;
     if (observations.empty()) continue;
-    // Landmarks created or seen here belong to the stored step, as in the lineages that
-    // processed it then (creation steps decide what is old evidence, oldLandmarkObservations).
-    observation_step_ = records[j]->step;
+    // Landmarks created or seen here are stamped with the robust step (step_), not the stored
+    // step: the kept particle learnt them now. Creation steps decide what is old evidence at
+    // later events (oldLandmarkObservations); stamping the stored steps instead, consistent
+    // with the lineages that saw them live, was measured worse (docs/results.md, session 14).
     updateParticle(&replay, path.means[j], path.covariances[j], observations);
-    observation_step_ = -1;
     poses[j] = replay.pose;
     ++robust_stats_.replayed_steps;
   }

@@ -72,7 +72,8 @@ FrameResult SlamSession::process(double stamp, const Pose2& odom_pose,
   if (!std::isfinite(stamp) || stamp <= 0.0) return FrameResult::kRejectedStamp;
   if (!odom_pose.allFinite()) return FrameResult::kRejectedPose;
   bool restarted = false;
-  if (has_previous_ && stamp <= last_stamp_) {
+  if (has_previous_ && stamp == last_stamp_) return FrameResult::kSkippedSameStamp;
+  if (has_previous_ && stamp < last_stamp_) {
     // A large jump back in several frames in a row is a restarted clock (a looping bag):
     // start a new map. One late message (a slow driver) must not wipe the map: it is rejected.
     const bool far_back = options_.reset_on_time_jump_back_s > 0.0 &&

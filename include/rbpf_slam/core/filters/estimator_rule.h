@@ -8,6 +8,7 @@
 #include <limits>
 #include <memory>
 #include <string>
+#include <vector>
 
 namespace rbpf_slam {
 namespace core {
@@ -28,8 +29,8 @@ struct HinfOptions {
   /// "adaptive": theta = 1 - s, s the scale of R at which the mean normalised innovation
   /// squared v^T S^-1 v of the matched observations (S with R scaled by s) would be 2, i.e. the
   /// innovations consistent, averaged over about adapt_steps steps and kept within
-  /// [1 - theta_pose, 1]. An overstated R is undone, a right or understated one left alone
-  /// (theta 0: FastSLAM 2.0's step). theta_pose is then the cap.
+  /// [1 - theta_pose, 1]. An overstated R is undone, a right or understated one left nearly
+  /// alone (theta near 0, FastSLAM 2.0's step at 0). theta_pose is then the cap.
   int adapt_steps = 20;
   /// theta of the pose proposal (relative mode; the cap in adaptive mode) and of the landmark
   /// filters (relative and adaptive modes, fixed), in [0, 1) (0: the EKF). Adaptive theta_pose
@@ -157,9 +158,11 @@ class EstimatorRule {
   /// Marginal weight N(v; H P H^T + k R): the factor k on the measurement's (and landmark's)
   /// part of the innovation covariance; 1 for FastSLAM 2.0.
   virtual double weightNoiseScale() const { return 1.0; }
-  /// After each filter step: the sum of v^T S^-1 v over the matched observations of every
-  /// particle (S = H P H^T + R of the sequential proposal) and how many there were.
-  virtual void observeInnovations(double /*nis_sum*/, long /*count*/) {}
+  /// True: the filter collects the normalised innovations squared for observeInnovations.
+  virtual bool learnsFromInnovations() const { return false; }
+  /// After each filter step: v^T S^-1 v of every matched observation of every particle, S =
+  /// H P H^T + (1 - theta()) L of the sequential proposal (L: the landmark's part, with R).
+  virtual void observeInnovations(std::vector<double> /*nis*/) {}
   /// The attenuation theta in use (relative and adaptive modes), 0 otherwise.
   virtual double theta() const { return 0.0; }
   /// With the filter's reset: forgets what observeInnovations learnt.
@@ -185,7 +188,8 @@ class HinfRule : public EstimatorRule {
                                 const Eigen::Matrix2d& r) const override;
   bool pointwiseWeights() const override { return options_.weight == "pointwise"; }
   double weightNoiseScale() const override;
-  void observeInnovations(double nis_sum, long count) override;
+  bool learnsFromInnovations() const override { return options_.mode == "adaptive"; }
+  void observeInnovations(std::vector<double> nis) override;
   double theta() const override;
   void reset() override;
 

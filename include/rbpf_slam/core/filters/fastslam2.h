@@ -74,8 +74,7 @@ class FastSlam2 : public SlamFilter {
     int fallbacks = 0;  // H-infinity corrections that fell back to the EKF
     int removed = 0;    // landmarks dropped by existence management
     bool relocalized = false;  // the proposal started from a searched pose correction
-    double nis_sum = 0.0;      // v^T S^-1 v of the proposal's matches (EstimatorRule feedback)
-    int nis_count = 0;
+    std::vector<double> nis;   // v^T S^-1 v of the proposal's matches (EstimatorRule feedback)
   };
   /// The proposal of one particle before drawing: the prior refined by each associated
   /// observation in turn (Montemerlo 2003, eq. 3.7), with the marginal log-likelihood.
@@ -85,8 +84,7 @@ class FastSlam2 : public SlamFilter {
     double log_likelihood = 0.0;
     std::vector<std::pair<int, int>> matched;  // (observation, landmark index)
     std::vector<int> fresh;                    // observations that start new landmarks
-    double nis_sum = 0.0;                      // v^T S^-1 v of the matches, S with R unscaled
-    int nis_count = 0;
+    std::vector<double> nis;  // v^T S^-1 v of the matches (when the rule learns from them)
   };
   Proposal refineProposal(const LandmarkMap& map, const Pose2& prior_mean,
                           const Eigen::Matrix3d& prior_cov,
@@ -170,10 +168,6 @@ class FastSlam2 : public SlamFilter {
   int next_landmark_id_ = 0;
   bool mapping_ = true;  // false: localization only, the maps stay as they are
   int step_ = 0;
-  /// The step that landmark updates stamp (created_step, last_seen_step): step_, except while
-  /// the robust filter replays a stored step's observations, which belong to that step.
-  int observation_step_ = -1;
-  int observationStep() const { return observation_step_ >= 0 ? observation_step_ : step_; }
   double last_drift_turn_ = 0.0;  // HeadingStep::drift_turn of the latest update()
   FilterStats stats_;
 };

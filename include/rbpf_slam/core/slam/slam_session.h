@@ -35,9 +35,20 @@ void validate(const SessionOptions& options);
 /// What became of a frame. kFirstFrame and kReset both start a map: kReset when the session
 /// itself threw the previous one away (stamps far back several times in a row, or an odometry
 /// gap with gap_action: reset), which the caller should report and follow (clear what it
-/// derived from the old run).
-enum class FrameResult { kUpdated, kSkippedNoMotion, kFirstFrame, kRejectedStamp,
-                         kRejectedPose, kReset };
+/// derived from the old run). kSkippedSameStamp: a frame at exactly the stamp of the last one,
+/// i.e. another input of the same instant (the simulator stamps `scan` and `features` alike;
+/// `laser_features` stamps its features with their scan's) or the same message again; not
+/// used (fusing it would count one scan twice when the features came from it) and not an
+/// error. kRejectedStamp: an older (or zero, or non-finite) stamp.
+enum class FrameResult {
+  kUpdated,
+  kSkippedNoMotion,
+  kFirstFrame,
+  kRejectedStamp,
+  kRejectedPose,
+  kReset,
+  kSkippedSameStamp
+};
 
 struct TrajectoryPoint {
   double stamp = 0.0;
