@@ -3,14 +3,14 @@ compare_results). Runs are paired by seed: the same simulated bag for both filte
 
 import numpy as np
 
+MIN_SEEDS = 5  # below this a bootstrap over seeds says nothing
+
 
 def paired(top, bottom):
     """The seeds in both {seed: value} maps, sorted, and the two value arrays in that order."""
     seeds = sorted(set(top) & set(bottom))
     return seeds, np.array([top[s] for s in seeds]), np.array([bottom[s] for s in seeds])
 
-
-MIN_SEEDS = 5  # below this a bootstrap over seeds says nothing
 
 
 def ratio_interval(top, bottom, draws=2000, level=0.90):
