@@ -236,7 +236,7 @@ TEST(MrclamConfig, LandmarksFastSlam2Loads) {
       loadSlamConfig(std::string(RBPF_SOURCE_DIR) + "/config/landmarks_fastslam2.yaml");
   EXPECT_EQ(config.frontend, "features");
   EXPECT_EQ(config.filter.variant, "fastslam2");
-  EXPECT_EQ(config.filter.particles, 100);
+  EXPECT_EQ(config.filter.particles, 500);
   EXPECT_FALSE(config.filter.use_lines);
   EXPECT_TRUE(config.filter.use_points);
   EXPECT_FALSE(config.scan_matching.enabled);
