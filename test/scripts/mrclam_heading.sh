@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Regression test of the landmark configs on real data (docs/results.md, "Session 15: MRCLAM
-# heading noise" and "Session 16: 500 particles on MRCLAM"): FastSLAM 2.0
+# heading noise" and "Session 16: where the MRCLAM maps go wrong"): FastSLAM 2.0
 # (config/landmarks_fastslam2.yaml, unknown association) on every robot of the shared UTIAS
 # MRCLAM dataset 6, seeds 1-9 (45 runs, about two minutes), through benchmarks/run_mrclam.
 # With the rotation noise sized for the commands' real over-rotation the runs no longer lock
