@@ -89,7 +89,8 @@ void runStream(benchmark::State& state, const core::FilterOptions& options) {
 
 /// FastSLAM 2.0 with N particles (range(0)).
 void BM_FastSlam2Stream(benchmark::State& state) {
-  core::FilterOptions options = configOptions("landmarks_fastslam2", static_cast<int>(state.range(0)));
+  core::FilterOptions options =
+      configOptions("landmarks_fastslam2", static_cast<int>(state.range(0)));
   // The robust config's motion noise (landmarks_fastslam2.yaml's rotation noise was narrowed
   // for MRCLAM in session 15), so that both filters do the same work per particle.
   options.motion = configOptions("landmarks_robust", 1).motion;
