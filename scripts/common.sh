@@ -16,7 +16,8 @@ APT_PACKAGES=(ros-base-dev libtf2-ros-dev libtf2-geometry-msgs-dev libsensor-msg
   libgtest-dev
   python3-roslaunch python3-rosmaster rosbash python3-rostopic python3-rosbag python3-sensor-msgs
   libyaml-cpp-dev
-  libbenchmark-dev zlib1g-dev cmake g++ make python3-numpy python3-yaml rviz xvfb imagemagick)
+  libbenchmark-dev zlib1g-dev cmake g++ make python3-numpy python3-yaml python3-matplotlib rviz
+  xvfb imagemagick)
 
 install_missing() {
   local missing=()

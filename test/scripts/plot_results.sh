@@ -1,0 +1,104 @@
+#!/usr/bin/env bash
+# benchmarks/plot_results on two small hand-made run_experiments outputs: both figures are
+# written as PNG images, and bad input (a world one file lacks, two configs in one file, a run
+# whose trajectory is missing, a NaN in a trajectory) exits 1 with a message naming it.
+set -euo pipefail
+
+source "$(dirname "$0")/lib/offline.sh"
+plot="$root/benchmarks/plot_results"
+status=0
+
+# make_runs OUT CONFIG OFFSET: results.json with worlds w1 and w2, seeds 1-3, each run with a
+# trajectory (the true square path shifted by OFFSET m) and three landmarks.
+mkdir -p "$work/bags"
+/usr/bin/python3 - "$work/bags" <<'PY'
+import sys
+bags = sys.argv[1]
+for world in ("w1", "w2"):
+    for seed in (1, 2, 3):
+        stem = f"{bags}/{world}_seed{seed}"
+        with open(stem + ".ref.tum", "w") as f:
+            for i in range(40):
+                x, y = (i, 0) if i < 20 else (20, i - 20)
+                f.write(f"{i * 0.2:.1f} {x * 0.5} {y * 0.5} 0 0 0 0 1\n")
+        with open(stem + ".landmarks.yaml", "w") as f:
+            f.write("landmarks:\n  - {id: 0, x_m: 2, y_m: 1}\n"
+                    "  - {id: 1, x_m: 6, y_m: -1, after_x_m: 6.5, after_y_m: -1}\n")
+PY
+make_runs() {
+  /usr/bin/python3 - "$work" "$@" <<'PY'
+import json, os, sys
+work, out, config, offset = sys.argv[1], sys.argv[2], sys.argv[3], float(sys.argv[4])
+runs = []
+for world in ("w1", "w2"):
+    for seed in (1, 2, 3):
+        run_dir = f"{work}/{out}/runs/{world}/{seed}"
+        os.makedirs(run_dir)
+        with open(f"{work}/bags/{world}_seed{seed}.ref.tum") as f, \
+                open(run_dir + "/trajectory.tum", "w") as g:
+            for line in f:
+                v = line.split()
+                g.write(f"{v[0]} {float(v[1]) + offset} {v[2]} 0 0 0 0 1\n")
+        with open(run_dir + "/landmarks.yaml", "w") as g:
+            g.write("landmarks:\n  - {id: 4, type: point, x: 2.1, y: 1.0}\n"
+                    "  - {id: 5, type: point, x: 6.4, y: -1.1}\n"
+                    "  - {id: 6, type: line, rho: 3, theta: 0}\n")
+        runs.append({"world": world, "config": config, "seed": seed, "status": "ok",
+                     "bag": f"{work}/bags/{world}_seed{seed}.bag", "run_dir": run_dir,
+                     "final_position_error_m": 0.1 * seed + offset,
+                     "point_landmarks": 3, "spurious_landmarks": seed % 2,
+                     "duplicate_landmarks": 1, "landmark_error_m": 0.05 * seed})
+json.dump({"runs": runs}, open(f"{work}/{out}/results.json", "w"))
+PY
+}
+mkdir -p "$work/a" "$work/b"
+make_runs a cfg_a 0.0
+make_runs b cfg_b 0.3
+
+# expect NAME WANTED_STATUS PATTERN COMMAND...
+expect() {
+  local name=$1 wanted=$2 pattern=$3
+  shift 3
+  local got=0
+  "$@" >"$work/out" 2>&1 || got=$?
+  if [ "$got" -ne "$wanted" ] || ! grep -qE -e "$pattern" "$work/out"; then
+    echo "FAIL: $name: exit status $got (expected $wanted), output:"; sed 's/^/  /' "$work/out"
+    status=1
+  else
+    echo "ok: $name"
+  fi
+}
+
+expect "two figures" 0 "wrote .*fig_seeds.png, .*fig_map.png" \
+  "$plot" "$work/a/results.json" "$work/b/results.json" --out "$work/fig" \
+  --map-world w2 --map-seed 3
+for png in fig_seeds fig_map; do
+  if [ "$(head -c 8 "$work/$png.png" | od -An -tx1 | tr -d ' \n')" != "89504e470d0a1a0a" ] ||
+     [ "$(stat -c %s "$work/$png.png")" -lt 10000 ]; then
+    echo "FAIL: $png.png is not a PNG image of a plausible size"; status=1
+  else
+    echo "ok: $png.png is a PNG image ($(stat -c %s "$work/$png.png") bytes)"
+  fi
+done
+expect "a world one file lacks" 1 "worlds \['w3'\] not run by both" \
+  "$plot" "$work/a/results.json" "$work/b/results.json" --out "$work/x" --worlds w1,w3
+expect "--map-world without --map-seed" 2 "go together" \
+  "$plot" "$work/a/results.json" "$work/b/results.json" --out "$work/x" --map-world w1
+/usr/bin/python3 - "$work" <<'PY'
+import json, sys
+work = sys.argv[1]
+data = json.load(open(f"{work}/a/results.json"))
+data["runs"][0]["config"] = "other"
+json.dump(data, open(f"{work}/a/mixed.json", "w"))
+PY
+expect "two configs in one file" 1 "holds configs \['cfg_a', 'other'\]" \
+  "$plot" "$work/a/mixed.json" "$work/b/results.json" --out "$work/x"
+rm "$work/b/runs/w1/2/trajectory.tum"
+expect "a missing trajectory" 1 "cannot read trajectory .*w1/2/trajectory.tum" \
+  "$plot" "$work/a/results.json" "$work/b/results.json" --out "$work/x" \
+  --map-world w1 --map-seed 2
+sed -i '5s/^\([^ ]*\) [^ ]*/\1 nan/' "$work/a/runs/w2/1/trajectory.tum"
+expect "a NaN in a trajectory" 1 "w2/1/trajectory.tum is not a TUM trajectory with finite" \
+  "$plot" "$work/a/results.json" "$work/b/results.json" --out "$work/x" \
+  --map-world w2 --map-seed 1
+exit $status
