@@ -91,9 +91,11 @@ void runStream(benchmark::State& state, const core::FilterOptions& options) {
 void BM_FastSlam2Stream(benchmark::State& state) {
   core::FilterOptions options =
       configOptions("landmarks_fastslam2", static_cast<int>(state.range(0)));
-  // The robust config's motion noise (landmarks_fastslam2.yaml's rotation noise was narrowed
-  // for MRCLAM in session 15), so that both filters do the same work per particle.
-  options.motion = configOptions("landmarks_robust", 1).motion;
+  // The robust config's motion noise and landmark existence (landmarks_fastslam2.yaml's were
+  // set for MRCLAM in sessions 15 and 17), so that both filters do the same work per particle.
+  const core::FilterOptions robust = configOptions("landmarks_robust", 1);
+  options.motion = robust.motion;
+  options.existence = robust.existence;
   runStream(state, options);
 }
 BENCHMARK(BM_FastSlam2Stream)

@@ -1,5 +1,6 @@
 """Pieces of the shipped configs as offline_slam --set overrides (used by run_experiments and
-run_dpf to give a baseline the motion noise of the filter it is compared with)."""
+run_dpf to give a baseline the motion noise, and the landmark existence settings, of the filter
+it is compared with)."""
 
 from pathlib import Path
 
@@ -13,11 +14,16 @@ def _load(config_name):
     return (yaml.safe_load(path.read_text()) or {}) if path.exists() else {}
 
 
-def motion_overrides(config_name):
-    """--set overrides giving config/`config_name`.yaml's motion block (empty when the file is
+def block_overrides(config_name, block):
+    """--set overrides giving config/`config_name`.yaml's `block` section (empty when the file is
     missing or has none)."""
-    motion = _load(config_name).get("motion") or {}
-    return ["motion.%s=%s" % (key, value) for key, value in motion.items()]
+    section = _load(config_name).get(block) or {}
+    return ["%s.%s=%s" % (block, key, value) for key, value in section.items()]
+
+
+def motion_overrides(config_name):
+    """block_overrides(config_name, "motion")."""
+    return block_overrides(config_name, "motion")
 
 
 def key_overrides(config_name, keys):

@@ -240,6 +240,9 @@ TEST(MrclamConfig, LandmarksFastSlam2Loads) {
   EXPECT_FALSE(config.filter.use_lines);
   EXPECT_TRUE(config.filter.use_points);
   EXPECT_FALSE(config.scan_matching.enabled);
+  // Negative evidence inside the camera's view (session 17; test/scripts/mrclam_heading.sh).
+  EXPECT_DOUBLE_EQ(config.filter.existence.visible_range_m, 3.0);
+  EXPECT_DOUBLE_EQ(config.filter.existence.visible_fov_rad, 0.6);
 }
 
 }  // namespace
