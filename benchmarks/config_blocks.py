@@ -2,6 +2,7 @@
 run_dpf to give a baseline the motion noise, and the landmark existence settings, of the filter
 it is compared with)."""
 
+import sys
 from pathlib import Path
 
 import yaml
@@ -14,11 +15,23 @@ def _load(config_name):
     return (yaml.safe_load(path.read_text()) or {}) if path.exists() else {}
 
 
-def block_overrides(config_name, block):
+def _value(value):
+    """A YAML scalar as offline_slam --set takes it (booleans as true / false)."""
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if value is None or isinstance(value, (list, dict)):
+        raise ValueError("config_blocks: cannot pass %r as a --set value" % (value,))
+    return str(value)
+
+
+def block_overrides(config_name, block, required=False):
     """--set overrides giving config/`config_name`.yaml's `block` section (empty when the file is
-    missing or has none)."""
+    missing or has none; with `required`, that is an error: a pin that pins nothing)."""
     section = _load(config_name).get(block) or {}
-    return ["%s.%s=%s" % (block, key, value) for key, value in section.items()]
+    if required and not section:
+        sys.exit("config_blocks: config/%s.yaml has no '%s' block to pin onto the baseline"
+                 % (config_name, block))
+    return ["%s.%s=%s" % (block, key, _value(value)) for key, value in section.items()]
 
 
 def motion_overrides(config_name):
@@ -29,4 +42,4 @@ def motion_overrides(config_name):
 def key_overrides(config_name, keys):
     """--set overrides giving config/`config_name`.yaml's top-level `keys` (those it has)."""
     config = _load(config_name)
-    return ["%s=%s" % (key, config[key]) for key in keys if key in config]
+    return ["%s=%s" % (key, _value(config[key])) for key in keys if key in config]

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # benchmarks/plot_results on two small hand-made run_experiments outputs: both figures are
 # written as PNG images, and bad input (a world one file lacks, two configs in one file, a run
-# whose trajectory is missing, a NaN in a trajectory) exits 1 with a message naming it.
+# whose trajectory is missing, a NaN in a trajectory, an output directory that does not exist)
+# exits 1 with a message naming it (a bad option: 2, the usage).
 set -euo pipefail
 
 source "$(dirname "$0")/lib/offline.sh"
@@ -93,6 +94,23 @@ json.dump(data, open(f"{work}/a/mixed.json", "w"))
 PY
 expect "two configs in one file" 1 "holds configs \['cfg_a', 'other'\]" \
   "$plot" "$work/a/mixed.json" "$work/b/results.json" --out "$work/x"
+expect "an output directory that does not exist" 1 "directory .*/no_dir does not exist" \
+  "$plot" "$work/a/results.json" "$work/b/results.json" --out "$work/no_dir/x"
+/usr/bin/python3 - "$work" <<'PY'
+import json, sys
+work = sys.argv[1]
+data = json.load(open(f"{work}/a/results.json"))
+failed = [dict(r, status="failed") for r in data["runs"]]
+json.dump({"runs": failed}, open(f"{work}/a/failed.json", "w"))
+data["runs"][0]["landmark_error_m"] = float("nan")  # a run without a matched landmark
+del data["runs"][1]["duplicate_landmarks"]
+data["runs"][2]["status"] = "failed"
+json.dump(data, open(f"{work}/a/gaps.json", "w"))
+PY
+expect "no successful runs" 1 "no successful runs in .*failed.json" \
+  "$plot" "$work/a/failed.json" "$work/b/results.json" --out "$work/x"
+expect "NaN, missing keys and a failed seed are plotted around" 0 "wrote .*gaps_seeds.png" \
+  "$plot" "$work/a/gaps.json" "$work/b/results.json" --out "$work/gaps"
 rm "$work/b/runs/w1/2/trajectory.tum"
 expect "a missing trajectory" 1 "cannot read trajectory .*w1/2/trajectory.tum" \
   "$plot" "$work/a/results.json" "$work/b/results.json" --out "$work/x" \
