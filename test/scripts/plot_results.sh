@@ -85,28 +85,26 @@ expect "a world one file lacks" 1 "worlds \['w3'\] not run by both" \
   "$plot" "$work/a/results.json" "$work/b/results.json" --out "$work/x" --worlds w1,w3
 expect "--map-world without --map-seed" 2 "go together" \
   "$plot" "$work/a/results.json" "$work/b/results.json" --out "$work/x" --map-world w1
+# Variants of a/results.json: mixed.json (two configs), failed.json (no successful run) and
+# gaps.json (a NaN landmark error, a missing key, a failed seed).
 /usr/bin/python3 - "$work" <<'PY'
 import json, sys
 work = sys.argv[1]
-data = json.load(open(f"{work}/a/results.json"))
-data["runs"][0]["config"] = "other"
-json.dump(data, open(f"{work}/a/mixed.json", "w"))
+runs = json.load(open(f"{work}/a/results.json"))["runs"]
+def write(name, changed):
+    json.dump({"runs": changed}, open(f"{work}/a/{name}.json", "w"))
+write("mixed", [dict(runs[0], config="other")] + runs[1:])
+write("failed", [dict(r, status="failed") for r in runs])
+gaps = [dict(r) for r in runs]
+gaps[0]["landmark_error_m"] = float("nan")  # a run without a matched landmark
+del gaps[1]["duplicate_landmarks"]
+gaps[2]["status"] = "failed"
+write("gaps", gaps)
 PY
 expect "two configs in one file" 1 "holds configs \['cfg_a', 'other'\]" \
   "$plot" "$work/a/mixed.json" "$work/b/results.json" --out "$work/x"
 expect "an output directory that does not exist" 1 "directory .*/no_dir does not exist" \
   "$plot" "$work/a/results.json" "$work/b/results.json" --out "$work/no_dir/x"
-/usr/bin/python3 - "$work" <<'PY'
-import json, sys
-work = sys.argv[1]
-data = json.load(open(f"{work}/a/results.json"))
-failed = [dict(r, status="failed") for r in data["runs"]]
-json.dump({"runs": failed}, open(f"{work}/a/failed.json", "w"))
-data["runs"][0]["landmark_error_m"] = float("nan")  # a run without a matched landmark
-del data["runs"][1]["duplicate_landmarks"]
-data["runs"][2]["status"] = "failed"
-json.dump(data, open(f"{work}/a/gaps.json", "w"))
-PY
 expect "no successful runs" 1 "no successful runs in .*failed.json" \
   "$plot" "$work/a/failed.json" "$work/b/results.json" --out "$work/x"
 expect "NaN, missing keys and a failed seed are plotted around" 0 "wrote .*gaps_seeds.png" \
