@@ -101,8 +101,12 @@ del gaps[1]["duplicate_landmarks"]
 gaps[2]["status"] = "failed"
 write("gaps", gaps)
 PY
-expect "two configs in one file" 1 "holds configs \['cfg_a', 'other'\]" \
+expect "two configs in one file" 1 "holds configs \['cfg_a', 'other'\]; name one" \
   "$plot" "$work/a/mixed.json" "$work/b/results.json" --out "$work/x"
+expect "one of two configs chosen" 0 "wrote .*chosen_seeds.png" \
+  "$plot" "$work/a/mixed.json" "$work/b/results.json" --out "$work/chosen" --baseline-config cfg_a
+expect "a config the file lacks" 1 "no successful runs of cfg_z in .*results.json" \
+  "$plot" "$work/a/results.json" "$work/b/results.json" --out "$work/x" --candidate-config cfg_z
 expect "an output directory that does not exist" 1 "directory .*/no_dir does not exist" \
   "$plot" "$work/a/results.json" "$work/b/results.json" --out "$work/no_dir/x"
 expect "no successful runs" 1 "no successful runs in .*failed.json" \
