@@ -1,5 +1,5 @@
 """Pieces of the shipped configs as offline_slam --set overrides (used by run_experiments and
-run_dpf to give a baseline the motion noise, and the landmark existence settings, of the filter
+run_dpf to give a baseline the motion noise, landmark existence and particle count of the filter
 it is compared with)."""
 
 import sys
@@ -24,22 +24,15 @@ def _value(value):
     return str(value)
 
 
-def block_overrides(config_name, block, required=False):
-    """--set overrides giving config/`config_name`.yaml's `block` section (empty when the file is
-    missing or has none; with `required`, that is an error: a pin that pins nothing)."""
-    section = _load(config_name).get(block) or {}
-    if required and not section:
-        sys.exit("config_blocks: config/%s.yaml has no '%s' block to pin onto the baseline"
-                 % (config_name, block))
-    return ["%s.%s=%s" % (block, key, _value(value)) for key, value in section.items()]
-
-
-def motion_overrides(config_name):
-    """block_overrides(config_name, "motion")."""
-    return block_overrides(config_name, "motion")
-
-
-def key_overrides(config_name, keys):
-    """--set overrides giving config/`config_name`.yaml's top-level `keys` (those it has)."""
+def pinned_overrides(config_name, blocks=(), keys=()):
+    """--set overrides giving config/`config_name`.yaml's sections `blocks` (each must be there:
+    a pin that pins nothing is an error) and its top-level `keys` (those it has)."""
     config = _load(config_name)
-    return ["%s=%s" % (key, _value(config[key])) for key in keys if key in config]
+    overrides = []
+    for block in blocks:
+        section = config.get(block) or {}
+        if not section:
+            sys.exit("config_blocks: config/%s.yaml has no '%s' block to pin onto the baseline"
+                     % (config_name, block))
+        overrides += ["%s.%s=%s" % (block, key, _value(value)) for key, value in section.items()]
+    return overrides + ["%s=%s" % (key, _value(config[key])) for key in keys if key in config]

@@ -6,6 +6,7 @@
 set -euo pipefail
 
 source "$(dirname "$0")/lib/offline.sh"
+source "$(dirname "$0")/lib/expect.sh"
 plot="$root/benchmarks/plot_results"
 status=0
 
@@ -55,20 +56,6 @@ PY
 mkdir -p "$work/a" "$work/b"
 make_runs a cfg_a 0.0
 make_runs b cfg_b 0.3
-
-# expect NAME WANTED_STATUS PATTERN COMMAND...
-expect() {
-  local name=$1 wanted=$2 pattern=$3
-  shift 3
-  local got=0
-  "$@" >"$work/out" 2>&1 || got=$?
-  if [ "$got" -ne "$wanted" ] || ! grep -qE -e "$pattern" "$work/out"; then
-    echo "FAIL: $name: exit status $got (expected $wanted), output:"; sed 's/^/  /' "$work/out"
-    status=1
-  else
-    echo "ok: $name"
-  fi
-}
 
 expect "two figures" 0 "wrote .*fig_seeds.png, .*fig_map.png" \
   "$plot" "$work/a/results.json" "$work/b/results.json" --out "$work/fig" \

@@ -6,23 +6,8 @@
 set -euo pipefail
 
 source "$(dirname "$0")/lib/offline.sh"
+source "$(dirname "$0")/lib/expect.sh"
 status=0
-
-# expect NAME WANTED_STATUS PATTERN COMMAND...: runs COMMAND, checks its exit status and that
-# its output (stdout and stderr) matches PATTERN.
-expect() {
-  local name=$1 wanted=$2 pattern=$3
-  shift 3
-  local got=0
-  "$@" >"$work/out" 2>&1 || got=$?
-  if [ "$got" -ne "$wanted" ]; then
-    echo "FAIL: $name: exit status $got, expected $wanted"; sed 's/^/  /' "$work/out"; status=1
-  elif ! grep -qE -e "$pattern" "$work/out"; then
-    echo "FAIL: $name: output does not match '$pattern'"; sed 's/^/  /' "$work/out"; status=1
-  else
-    echo "ok: $name ($got)"
-  fi
-}
 
 missing="$work/no_such_input"
 expect "carmen_to_bag --help" 0 "usage: carmen_to_bag" "$bin/carmen_to_bag" --help
