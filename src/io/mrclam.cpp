@@ -221,6 +221,14 @@ void cropMrclamRobot(double duration_s, MrclamRobot* data) {
       g.end());
 }
 
+void delayMrclamCommands(double delay_s, MrclamRobot* data) {
+  if (!std::isfinite(delay_s) || delay_s < 0.0) {
+    throw std::invalid_argument("command delay must be finite and >= 0 s, got " +
+                                std::to_string(delay_s));
+  }
+  for (MrclamOdometry& command : data->odometry) command.stamp += delay_s;
+}
+
 core::Pose2 interpolatePose(const std::vector<StampedPose>& trajectory, double stamp) {
   if (trajectory.empty()) throw std::invalid_argument("interpolatePose: empty trajectory");
   if (stamp <= trajectory.front().stamp) return trajectory.front().pose;

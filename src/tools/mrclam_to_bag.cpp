@@ -42,7 +42,7 @@ namespace rosbridge = rbpf_slam::rosbridge;
 const char kUsage[] =
     "usage: mrclam_to_bag DATASET_DIR ROBOT OUT.bag [--known-ids] [--duration S]\n"
     "                     [--sigma-range-m F] [--sigma-range-per-m F] [--sigma-bearing-rad F]\n"
-    "                     [--max-gap S]\n"
+    "                     [--max-gap S] [--command-delay S]\n"
     "  ROBOT                  1..5 (RobotN_*.dat in DATASET_DIR)\n"
     "  --known-ids            give every feature its landmark subject as id (default: -1)\n"
     "  --duration S           keep only the first S seconds after the first odometry command\n"
@@ -51,6 +51,8 @@ const char kUsage[] =
     "  --sigma-bearing-rad F  feature bearing sigma (default 0.02 rad)\n"
     "  --max-gap S            commands further apart are not integrated (the robot stood\n"
     "                         still; default 2 s: dataset 6 drives with commands 1.03 s apart)\n"
+    "  --command-delay S      apply each velocity command this much after its stamp (default\n"
+    "                         0 s; the commands lead Vicon by 0.15-0.2 s on dataset 6)\n"
     "Writes OUT.bag (/tf, /odom, /features, /ground_truth), OUT.ref.tum, OUT.odom.tum and\n"
     "OUT.landmarks.yaml.\n";
 
@@ -67,6 +69,7 @@ struct Arguments {
   double sigma_range_per_m = 0.035;
   double sigma_bearing_rad = 0.02;
   double max_gap_s = io::kMrclamMaxCommandGapS;
+  double command_delay_s = 0.0;
 };
 
 Arguments parseArguments(int argc, char** argv) {
@@ -87,6 +90,8 @@ Arguments parseArguments(int argc, char** argv) {
       arguments.sigma_bearing_rad = non_negative();
     } else if (cursor.arg() == "--max-gap") {
       arguments.max_gap_s = cursor.number(io::NumberRule::kPositive);
+    } else if (cursor.arg() == "--command-delay") {
+      arguments.command_delay_s = non_negative();
     } else if (cursor.isOption()) {
       cursor.unknown();
     } else {
@@ -229,6 +234,7 @@ int run(const Arguments& arguments) {
   ros::Time::init();
   io::MrclamRobot data = io::readMrclamRobot(arguments.dataset_dir, arguments.robot);
   io::cropMrclamRobot(arguments.duration_s, &data);
+  io::delayMrclamCommands(arguments.command_delay_s, &data);
   const std::size_t measurements_read = data.measurements.size();  // within --duration
   if (data.ground_truth.empty()) {
     throw std::runtime_error("no ground truth during the odometry's time span");

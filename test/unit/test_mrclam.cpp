@@ -154,6 +154,19 @@ TEST(MrclamRead, ReadsADirectoryAndCrops) {
   MrclamRobot uncropped = all;
   cropMrclamRobot(0.0, &uncropped);
   EXPECT_EQ(uncropped.odometry.size(), 3u);
+
+  // The commands move later by the delay; measurements and ground truth keep their stamps.
+  MrclamRobot delayed = all;
+  delayMrclamCommands(0.25, &delayed);
+  ASSERT_EQ(delayed.odometry.size(), 3u);
+  EXPECT_DOUBLE_EQ(delayed.odometry[0].stamp, 100.25);
+  EXPECT_DOUBLE_EQ(delayed.odometry[2].stamp, 105.25);
+  EXPECT_DOUBLE_EQ(delayed.odometry[2].v_mps, 0.1);
+  EXPECT_DOUBLE_EQ(delayed.measurements[0].stamp, 100.5);
+  EXPECT_DOUBLE_EQ(delayed.ground_truth[0].stamp, 99.0);
+  EXPECT_THROW(delayMrclamCommands(-0.1, &delayed), std::invalid_argument);
+  EXPECT_THROW(delayMrclamCommands(std::nan(""), &delayed), std::invalid_argument);
+  EXPECT_DOUBLE_EQ(delayed.odometry[0].stamp, 100.25);  // unchanged by the rejected delays
 }
 
 TEST(MrclamOdometryIntegration, StraightLineAndCircle) {

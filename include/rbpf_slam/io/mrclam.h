@@ -91,6 +91,12 @@ MrclamRobot readMrclamRobot(const std::string& directory, int robot);
 /// truth, where start is the first odometry stamp; duration_s <= 0 keeps everything.
 void cropMrclamRobot(double duration_s, MrclamRobot* data);
 
+/// Moves every odometry command `delay_s` later: the logged velocity commands lead the robot's
+/// motion (dataset 6, fitted against Vicon: 0.15-0.2 s on all five robots), so a command is
+/// applied from its stamp + delay_s. Measurements and ground truth keep their stamps. Throws
+/// std::invalid_argument for a negative or non-finite delay.
+void delayMrclamCommands(double delay_s, MrclamRobot* data);
+
 /// The ground-truth pose at `stamp`, interpolated linearly (heading along the shorter arc)
 /// between the two poses around it; the end pose outside the span. Throws std::invalid_argument
 /// on an empty trajectory. `trajectory` must be sorted by stamp.
