@@ -274,6 +274,37 @@ TEST(HinfRelative, EkfProposalCovarianceKeepsTheHinfMean) {
   EXPECT_GT((drawn.correction_scale - Eigen::Matrix3d::Identity()).norm(), 1e-3);
 }
 
+// proposal_covariance scaled: the draw is the EKF posterior with R scaled by 1 - theta, the
+// Gaussian whose mean the H-infinity step gives, i.e. (P^-1 + H^T ((1 - theta) R)^-1 H)^-1.
+TEST(HinfRelative, ScaledProposalCovarianceIsTheEkfWithScaledNoise) {
+  const Eigen::Matrix3d p = Eigen::Vector3d(0.04, 0.04, 0.01).asDiagonal();
+  Eigen::Matrix<double, 2, 3> h;
+  h << -0.8, -0.6, 0.0, 0.12, -0.16, -1.0;
+  const Eigen::Matrix2d r = Eigen::Vector2d(0.01, 0.0004).asDiagonal();
+  const Eigen::Matrix3d ekf = ekfCorrection<3>(p, h, r).covariance;
+  HinfOptions o;
+  o.mode = "relative";
+  o.theta_pose = 0.9;
+  o.proposal_covariance = "scaled";
+  const Attenuation<3> scaled = HinfRule(o).attenuatePose(p, ekf);
+  const Eigen::Matrix3d expected =
+      (p.inverse() + h.transpose() * (0.1 * r).inverse() * h).inverse();
+  EXPECT_LT((scaled.covariance - expected).norm(), 1e-9 * expected.norm());
+  o.proposal_covariance = "ekf";
+  const Attenuation<3> drawn = HinfRule(o).attenuatePose(p, ekf);
+  EXPECT_EQ(scaled.correction_scale, drawn.correction_scale);  // the same mean
+  EXPECT_LT(expected.trace(), ekf.trace());  // narrower than the EKF's with R as given
+  // Absolute gammas have no noise scale: the combination is refused by name.
+  o.mode = "absolute";
+  o.proposal_covariance = "scaled";
+  try {
+    validate(o);
+    ADD_FAILURE() << "proposal_covariance scaled with mode absolute accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("hinf.proposal_covariance"), std::string::npos);
+  }
+}
+
 // Adaptive mode: theta = 1 - s with s the scale of R the innovations are consistent with. A
 // stand-in filter whose innovations have variance true_scale x R gives NIS values with mean
 // 2 true_scale / s at the scale s in use; the rule must settle at s = true_scale, within

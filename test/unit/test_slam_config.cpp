@@ -183,7 +183,9 @@ TEST(SlamConfig, LandmarksHinfConfigSelectsHinfFastSlam) {
   EXPECT_GT(c.filter.hinf.gamma_landmark, 0.0);
   EXPECT_EQ(c.filter.hinf.gain, "posterior");
   // The code defaults are the shipped config's (the unit tests of test_hinf_fastslam rely on
-  // them); gamma_landmark is 1e12 in YAML, infinity in the code: both the EKF.
+  // them); gamma_landmark is 1e12 in YAML, infinity in the code: both the EKF. Except the
+  // proposal's draw: `scaled` in the config (session 18), `ekf` in the code, because `scaled`
+  // is refused with mode absolute and a config that only sets that mode must stay valid.
   const core::HinfOptions defaults;
   EXPECT_EQ(c.filter.hinf.mode, defaults.mode);
   EXPECT_DOUBLE_EQ(c.filter.hinf.theta_pose, defaults.theta_pose);
@@ -193,10 +195,12 @@ TEST(SlamConfig, LandmarksHinfConfigSelectsHinfFastSlam) {
   EXPECT_DOUBLE_EQ(c.filter.hinf.gamma_heading, defaults.gamma_heading);
   EXPECT_GE(c.filter.hinf.gamma_landmark, 1e12);
   EXPECT_EQ(c.filter.hinf.gain, defaults.gain);
-  EXPECT_EQ(c.filter.hinf.proposal_covariance, defaults.proposal_covariance);
+  EXPECT_EQ(c.filter.hinf.proposal_covariance, "scaled");
+  EXPECT_EQ(defaults.proposal_covariance, "ekf");
   EXPECT_EQ(c.filter.hinf.weight, defaults.weight);
   EXPECT_DOUBLE_EQ(c.filter.hinf.max_inflation, defaults.max_inflation);
-  EXPECT_EQ(c.filter.existence.visible_range_m, 0.0);  // documented: off on MRCLAM
+  EXPECT_EQ(c.filter.existence.visible_range_m, 3.0);  // on since session 18, as in fastslam2
+  EXPECT_EQ(c.filter.existence.visible_fov_rad, 0.6);
   EXPECT_EQ(c.filter.existence.max_count, 10);
   EXPECT_EQ(core::createFilter(c.filter)->variant(), "hinf_fastslam");
 }

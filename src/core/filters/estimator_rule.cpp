@@ -42,7 +42,12 @@ void validate(const HinfOptions& o) {
   }
   requireRange("hinf.theta_pose", o.theta_pose, 0.0, 1.0, false, true);
   requireRange("hinf.theta_landmark", o.theta_landmark, 0.0, 1.0, false, true);
-  requireOneOf("hinf.proposal_covariance", o.proposal_covariance, {"hinf", "ekf"});
+  requireOneOf("hinf.proposal_covariance", o.proposal_covariance, {"hinf", "ekf", "scaled"});
+  if (o.proposal_covariance == "scaled" && o.mode == "absolute") {
+    throw std::invalid_argument(
+        "hinf.proposal_covariance 'scaled' needs hinf.mode relative or adaptive (absolute "
+        "gammas have no noise scale), got mode 'absolute'");
+  }
   requireOneOf("hinf.gain", o.gain, {"posterior", "prior"});
   requireOneOf("hinf.weight", o.weight, {"pointwise", "marginal", "attenuated"});
 }
@@ -191,6 +196,9 @@ Attenuation<3> HinfRule::attenuatePose(const Eigen::Matrix3d& prior_covariance,
                            options_.max_inflation);
   }
   if (options_.proposal_covariance == "ekf") a.covariance = ekf_covariance;
+  // The EKF posterior with R scaled by 1 - theta, whose mean the H-infinity step gives:
+  // P+^-1 = (1 - theta) P^-1 + H^T R^-1 H = (1 - theta) (P^-1 + H^T ((1 - theta) R)^-1 H).
+  if (options_.proposal_covariance == "scaled") a.covariance *= 1.0 - theta();
   return a;
 }
 
