@@ -7,7 +7,7 @@
 # at most 1.2 of it with the right noise (the issue's 0.6 and 1.2 over 10 seeds; 20 seeds here,
 # as the ratio of 10 varies by +-0.1 from block to block). Measured: 0.58 and 0.71 as shipped;
 # with the EKF's draw (--set hinf.proposal_covariance=ekf, sessions 14-17) 0.68 and 0.76, and it
-# fails. About 20 s. Extra arguments go to run_experiments; KEEP_WORK=1 keeps the runs.
+# fails. About 15 s. Extra arguments go to run_experiments; KEEP_WORK=1 keeps the runs.
 set -euo pipefail
 
 source "$(dirname "$0")/lib/offline.sh"

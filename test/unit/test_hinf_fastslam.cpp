@@ -294,14 +294,42 @@ TEST(HinfRelative, ScaledProposalCovarianceIsTheEkfWithScaledNoise) {
   const Attenuation<3> drawn = HinfRule(o).attenuatePose(p, ekf);
   EXPECT_EQ(scaled.correction_scale, drawn.correction_scale);  // the same mean
   EXPECT_LT(expected.trace(), ekf.trace());  // narrower than the EKF's with R as given
-  // Absolute gammas have no noise scale: the combination is refused by name.
-  o.mode = "absolute";
+
+  // Three observations folded in one after the other (as FastSlam2::refineProposal does): the
+  // same as the stacked EKF with every R scaled.
+  Eigen::Matrix<double, 2, 3> h2, h3;
+  h2 << 0.6, -0.8, 0.0, 0.16, 0.12, -1.0;
+  h3 << -0.28, 0.96, 0.0, -0.19, -0.05, -1.0;
+  const Eigen::Matrix2d r2 = Eigen::Vector2d(0.04, 0.001).asDiagonal();
+  Eigen::Matrix3d sequential = ekf;
+  for (const auto& [hk, rk] : {std::make_pair(h2, r2), std::make_pair(h3, r)}) {
+    sequential = ekfCorrection<3>(sequential, hk, rk).covariance;
+  }
+  const Eigen::Matrix3d stacked =
+      (p.inverse() + h.transpose() * (0.1 * r).inverse() * h +
+       h2.transpose() * (0.1 * r2).inverse() * h2 + h3.transpose() * (0.1 * r).inverse() * h3)
+          .inverse();
   o.proposal_covariance = "scaled";
-  try {
-    validate(o);
-    ADD_FAILURE() << "proposal_covariance scaled with mode absolute accepted";
-  } catch (const std::invalid_argument& e) {
-    EXPECT_NE(std::string(e.what()).find("hinf.proposal_covariance"), std::string::npos);
+  const Attenuation<3> three = HinfRule(o).attenuatePose(p, sequential);
+  EXPECT_LT((three.covariance - stacked).norm(), 1e-9 * stacked.norm());
+
+  // No attenuated step (a prior that cannot be inverted): the draw is the EKF's, not shrunk.
+  const Eigen::Matrix3d singular = Eigen::Vector3d(0.04, 0.04, 0.0).asDiagonal();
+  const Attenuation<3> none = HinfRule(o).attenuatePose(singular, ekf);
+  EXPECT_EQ(none.covariance, ekf);
+
+  // Absolute gammas have no noise scale, the prior gain another mean: both refused by name.
+  for (const auto& [mode, gain] : {std::make_pair("absolute", "posterior"),
+                                   std::make_pair("relative", "prior")}) {
+    o.mode = mode;
+    o.gain = gain;
+    try {
+      validate(o);
+      ADD_FAILURE() << "proposal_covariance scaled accepted with mode " << mode << ", gain "
+                    << gain;
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find("hinf.proposal_covariance"), std::string::npos);
+    }
   }
 }
 

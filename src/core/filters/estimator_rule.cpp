@@ -43,10 +43,13 @@ void validate(const HinfOptions& o) {
   requireRange("hinf.theta_pose", o.theta_pose, 0.0, 1.0, false, true);
   requireRange("hinf.theta_landmark", o.theta_landmark, 0.0, 1.0, false, true);
   requireOneOf("hinf.proposal_covariance", o.proposal_covariance, {"hinf", "ekf", "scaled"});
-  if (o.proposal_covariance == "scaled" && o.mode == "absolute") {
+  // 'scaled' is the EKF posterior at the noise scale 1 - theta, around the mean the posterior
+  // gain gives: it needs a theta (not the absolute gammas) and that gain.
+  if (o.proposal_covariance == "scaled" && (o.mode == "absolute" || o.gain != "posterior")) {
     throw std::invalid_argument(
-        "hinf.proposal_covariance 'scaled' needs hinf.mode relative or adaptive (absolute "
-        "gammas have no noise scale), got mode 'absolute'");
+        "hinf.proposal_covariance 'scaled' needs hinf.mode relative or adaptive and hinf.gain "
+        "posterior, got mode '" + o.mode + "', gain '" + o.gain +
+        "' (set hinf.proposal_covariance to ekf or hinf for those)");
   }
   requireOneOf("hinf.gain", o.gain, {"posterior", "prior"});
   requireOneOf("hinf.weight", o.weight, {"pointwise", "marginal", "attenuated"});
@@ -185,10 +188,12 @@ HinfRule::HinfRule(const HinfOptions& options) : options_(options) { validate(op
 Attenuation<3> HinfRule::attenuatePose(const Eigen::Matrix3d& prior_covariance,
                                        const Eigen::Matrix3d& ekf_covariance) const {
   Attenuation<3> a;
+  bool attenuated = false;  // a relative step applied (theta > 0, prior invertible, no fallback)
   if (options_.mode == "relative" || options_.mode == "adaptive") {
-    a = hinfAttenuationInformation<3>(ekf_covariance,
-                                      relativeGammaInverse<3>(prior_covariance, theta()),
+    const Eigen::Matrix3d gamma_inverse = relativeGammaInverse<3>(prior_covariance, theta());
+    a = hinfAttenuationInformation<3>(ekf_covariance, gamma_inverse,
                                       options_.gain == "posterior", kNoInflationGuard);
+    attenuated = !gamma_inverse.isZero() && !a.fallback;
   } else {
     const Eigen::Vector3d gamma(options_.gamma_position, options_.gamma_position,
                                 options_.gamma_heading);
@@ -197,8 +202,13 @@ Attenuation<3> HinfRule::attenuatePose(const Eigen::Matrix3d& prior_covariance,
   }
   if (options_.proposal_covariance == "ekf") a.covariance = ekf_covariance;
   // The EKF posterior with R scaled by 1 - theta, whose mean the H-infinity step gives:
-  // P+^-1 = (1 - theta) P^-1 + H^T R^-1 H = (1 - theta) (P^-1 + H^T ((1 - theta) R)^-1 H).
-  if (options_.proposal_covariance == "scaled") a.covariance *= 1.0 - theta();
+  // P+^-1 = (1 - theta) P^-1 + H^T R^-1 H = (1 - theta) (P^-1 + H^T ((1 - theta) R)^-1 H),
+  // R with the landmark's part, H stacked over the step's matches (up to the linearisation
+  // points of the sequential updates). Without an attenuated step (theta 0, a singular prior,
+  // a fallback) the mean is the EKF's and so is the draw.
+  if (options_.proposal_covariance == "scaled") {
+    a.covariance = attenuated ? Eigen::Matrix3d((1.0 - theta()) * a.covariance) : ekf_covariance;
+  }
   return a;
 }
 

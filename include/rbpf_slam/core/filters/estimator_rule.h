@@ -59,7 +59,10 @@ struct HinfOptions {
   /// "ekf", the EKF's posterior of the same step, around the H-infinity mean. P+ bounds the
   /// worst-case error rather than being the spread of the posterior; with an overstated R it is
   /// up to 1 / (1 - theta) times the prediction and, the weights being flat then, drawing from
-  /// it is a random walk that wide. Default "ekf", as the shipped config (the paper: "hinf").
+  /// it is a random walk that wide. Or "scaled" (modes relative and adaptive, posterior gain):
+  /// the EKF's posterior with R scaled by 1 - theta, (1 - theta) P+, the Gaussian whose mean the
+  /// step gives (shipped in config/landmarks_hinf.yaml since session 18). Default "ekf", valid
+  /// with every mode (the paper: "hinf").
   std::string proposal_covariance = "ekf";
   /// Importance weight: "marginal", N(z; z_hat, H P H^T + R) accumulated over
   /// the sequential proposal updates as in FastSLAM 2.0; or "pointwise", eq. 36
