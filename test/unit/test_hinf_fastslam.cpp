@@ -255,19 +255,28 @@ TEST(HinfRelative, IsScaleFree) {
   EXPECT_EQ(none.correction_scale, Eigen::Matrix3d::Identity());
 }
 
+// One observation of a relative-mode step (theta 0.9), shared by the proposal-draw tests.
+struct ProposalStep {
+  Eigen::Matrix3d p = Eigen::Vector3d(0.04, 0.04, 0.01).asDiagonal();
+  Eigen::Matrix<double, 2, 3> h =
+      (Eigen::Matrix<double, 2, 3>() << -0.8, -0.6, 0.0, 0.12, -0.16, -1.0).finished();
+  Eigen::Matrix2d r = Eigen::Vector2d(0.01, 0.0004).asDiagonal();
+  Eigen::Matrix3d ekf = ekfCorrection<3>(p, h, r).covariance;
+  static HinfOptions options(const std::string& draw) {
+    HinfOptions o;
+    o.mode = "relative";
+    o.theta_pose = 0.9;
+    o.proposal_covariance = draw;
+    return o;
+  }
+};
+
 TEST(HinfRelative, EkfProposalCovarianceKeepsTheHinfMean) {
-  const Eigen::Matrix3d p = Eigen::Vector3d(0.04, 0.04, 0.01).asDiagonal();
-  Eigen::Matrix<double, 2, 3> h;
-  h << -0.8, -0.6, 0.0, 0.12, -0.16, -1.0;
-  const Eigen::Matrix2d r = Eigen::Vector2d(0.01, 0.0004).asDiagonal();
-  const Eigen::Matrix3d ekf = ekfCorrection<3>(p, h, r).covariance;
-  HinfOptions o;
-  o.mode = "relative";
-  o.theta_pose = 0.9;
-  o.proposal_covariance = "hinf";
-  const Attenuation<3> paper = HinfRule(o).attenuatePose(p, ekf);
-  o.proposal_covariance = "ekf";
-  const Attenuation<3> drawn = HinfRule(o).attenuatePose(p, ekf);
+  const ProposalStep step;
+  const Eigen::Matrix3d& p = step.p;
+  const Eigen::Matrix3d& ekf = step.ekf;
+  const Attenuation<3> paper = HinfRule(ProposalStep::options("hinf")).attenuatePose(p, ekf);
+  const Attenuation<3> drawn = HinfRule(ProposalStep::options("ekf")).attenuatePose(p, ekf);
   EXPECT_EQ(drawn.covariance, ekf);
   EXPECT_EQ(drawn.correction_scale, paper.correction_scale);
   EXPECT_GT((paper.covariance - ekf).norm(), 1e-6);  // P+ is wider than the EKF's
@@ -277,21 +286,17 @@ TEST(HinfRelative, EkfProposalCovarianceKeepsTheHinfMean) {
 // proposal_covariance scaled: the draw is the EKF posterior with R scaled by 1 - theta, the
 // Gaussian whose mean the H-infinity step gives, i.e. (P^-1 + H^T ((1 - theta) R)^-1 H)^-1.
 TEST(HinfRelative, ScaledProposalCovarianceIsTheEkfWithScaledNoise) {
-  const Eigen::Matrix3d p = Eigen::Vector3d(0.04, 0.04, 0.01).asDiagonal();
-  Eigen::Matrix<double, 2, 3> h;
-  h << -0.8, -0.6, 0.0, 0.12, -0.16, -1.0;
-  const Eigen::Matrix2d r = Eigen::Vector2d(0.01, 0.0004).asDiagonal();
-  const Eigen::Matrix3d ekf = ekfCorrection<3>(p, h, r).covariance;
-  HinfOptions o;
-  o.mode = "relative";
-  o.theta_pose = 0.9;
-  o.proposal_covariance = "scaled";
+  const ProposalStep step;
+  const Eigen::Matrix3d& p = step.p;
+  const Eigen::Matrix<double, 2, 3>& h = step.h;
+  const Eigen::Matrix2d& r = step.r;
+  const Eigen::Matrix3d& ekf = step.ekf;
+  HinfOptions o = ProposalStep::options("scaled");
   const Attenuation<3> scaled = HinfRule(o).attenuatePose(p, ekf);
   const Eigen::Matrix3d expected =
       (p.inverse() + h.transpose() * (0.1 * r).inverse() * h).inverse();
   EXPECT_LT((scaled.covariance - expected).norm(), 1e-9 * expected.norm());
-  o.proposal_covariance = "ekf";
-  const Attenuation<3> drawn = HinfRule(o).attenuatePose(p, ekf);
+  const Attenuation<3> drawn = HinfRule(ProposalStep::options("ekf")).attenuatePose(p, ekf);
   EXPECT_EQ(scaled.correction_scale, drawn.correction_scale);  // the same mean
   EXPECT_LT(expected.trace(), ekf.trace());  // narrower than the EKF's with R as given
 
@@ -309,7 +314,6 @@ TEST(HinfRelative, ScaledProposalCovarianceIsTheEkfWithScaledNoise) {
       (p.inverse() + h.transpose() * (0.1 * r).inverse() * h +
        h2.transpose() * (0.1 * r2).inverse() * h2 + h3.transpose() * (0.1 * r).inverse() * h3)
           .inverse();
-  o.proposal_covariance = "scaled";
   const Attenuation<3> three = HinfRule(o).attenuatePose(p, sequential);
   EXPECT_LT((three.covariance - stacked).norm(), 1e-9 * stacked.norm());
 
