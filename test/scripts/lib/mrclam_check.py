@@ -3,11 +3,13 @@
 
 usage: mrclam_check.py RESULTS.json --runs N [--min-halved N] [--max-mean-ratio X]
                        [--min-clean N] [--max-spurious X] [--min-within N] [--min-all-three N]
+                       [--hint TEXT ...]
 
 Figures over the runs: ATE at most half the odometry's ("halved"), the mean of ATE / odometry
 ATE, runs with at most 2 spurious landmarks ("clean"), spurious landmarks per run, runs with
 every matched landmark within 0.3 m ("within") and runs meeting those three targets at once.
-Prints them with their limits, then PASS, or each figure outside its limit and exits 1.
+Prints them with their limits, then PASS, or each figure outside its limit, the hints (what
+such a failure has meant before) and exits 1.
 """
 
 import argparse
@@ -26,6 +28,8 @@ def main(argv):
     parser.add_argument("--max-spurious", type=float, default=math.inf)
     parser.add_argument("--min-within", type=int, default=0)
     parser.add_argument("--min-all-three", type=int, default=0)
+    parser.add_argument("--hint", action="append", default=[],
+                        help="printed on failure (repeatable)")
     a = parser.parse_args(argv)
     runs = json.load(open(a.results))
     runs = runs["runs"] if isinstance(runs, dict) else runs
@@ -60,6 +64,9 @@ def main(argv):
         shown = "%.2f" % value if isinstance(value, float) else str(value)
         print("%s: %s (%s)%s" % (name, shown, limit, "" if ok else "  <- FAIL"))
         failed = failed or not ok
+    if failed:
+        for hint in a.hint:
+            print("hint: " + hint)
     print("FAIL" if failed else "PASS")
     return 1 if failed else 0
 
