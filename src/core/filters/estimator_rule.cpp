@@ -43,6 +43,8 @@ void validate(const HinfOptions& o) {
   requireRange("hinf.theta_pose", o.theta_pose, 0.0, 1.0, false, true);
   requireRange("hinf.theta_landmark", o.theta_landmark, 0.0, 1.0, false, true);
   requireOneOf("hinf.proposal_covariance", o.proposal_covariance, {"hinf", "ekf", "scaled"});
+  requireOneOf("hinf.gain", o.gain, {"posterior", "prior"});
+  requireOneOf("hinf.weight", o.weight, {"pointwise", "marginal", "attenuated"});
   // 'scaled' is the EKF posterior at the noise scale 1 - theta, around the mean the posterior
   // gain gives: it needs a theta (not the absolute gammas) and that gain.
   if (o.proposal_covariance == "scaled" && (o.mode == "absolute" || o.gain != "posterior")) {
@@ -51,8 +53,6 @@ void validate(const HinfOptions& o) {
         "posterior, got mode '" + o.mode + "', gain '" + o.gain +
         "' (set hinf.proposal_covariance to ekf or hinf for those)");
   }
-  requireOneOf("hinf.gain", o.gain, {"posterior", "prior"});
-  requireOneOf("hinf.weight", o.weight, {"pointwise", "marginal", "attenuated"});
 }
 
 template <int N>
