@@ -22,12 +22,12 @@ def main(argv):
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("results")
     parser.add_argument("--runs", type=int, required=True, help="runs expected")
-    parser.add_argument("--min-halved", type=int, default=0)
-    parser.add_argument("--max-mean-ratio", type=float, default=math.inf)
-    parser.add_argument("--min-clean", type=int, default=0)
-    parser.add_argument("--max-spurious", type=float, default=math.inf)
-    parser.add_argument("--min-within", type=int, default=0)
-    parser.add_argument("--min-all-three", type=int, default=0)
+    parser.add_argument("--min-halved", type=int)
+    parser.add_argument("--max-mean-ratio", type=float)
+    parser.add_argument("--min-clean", type=int)
+    parser.add_argument("--max-spurious", type=float)
+    parser.add_argument("--min-within", type=int)
+    parser.add_argument("--min-all-three", type=int)
     parser.add_argument("--hint", action="append", default=[],
                         help="printed on failure (repeatable)")
     a = parser.parse_args(argv)
@@ -41,28 +41,25 @@ def main(argv):
     halved = [r["ate_ratio"] <= 0.5 for r in runs]
     clean = [r["spurious"] <= 2 for r in runs]
     within = [r["max_err_m"] <= 0.3 for r in runs]  # NaN (nothing matched) counts as not within
-    figures = [  # (name, value, limit, True when the value is within it)
-        ("runs with the odometry's ATE halved", sum(halved), ">= %d" % a.min_halved,
-         sum(halved) >= a.min_halved),
-        ("mean ATE / odometry ATE", sum(ratios) / len(ratios), "<= %g" % a.max_mean_ratio,
-         sum(ratios) / len(ratios) <= a.max_mean_ratio),
-        ("runs with <= 2 spurious landmarks", sum(clean), ">= %d" % a.min_clean,
-         sum(clean) >= a.min_clean),
-        ("spurious landmarks per run", sum(r["spurious"] for r in runs) / len(runs),
-         "<= %g" % a.max_spurious,
-         sum(r["spurious"] for r in runs) / len(runs) <= a.max_spurious),
-        ("runs with every matched landmark within 0.3 m", sum(within), ">= %d" % a.min_within,
-         sum(within) >= a.min_within),
-        ("runs meeting all three targets", sum(h and c and w for h, c, w in zip(halved, clean, within)),
-         ">= %d" % a.min_all_three,
-         sum(h and c and w for h, c, w in zip(halved, clean, within)) >= a.min_all_three),
+    all_three = [h and c and w for h, c, w in zip(halved, clean, within)]
+    figures = [  # (name, value, at least (True) or at most, limit; None: not checked)
+        ("runs with the odometry's ATE halved", sum(halved), True, a.min_halved),
+        ("mean ATE / odometry ATE", sum(ratios) / len(ratios), False, a.max_mean_ratio),
+        ("runs with <= 2 spurious landmarks", sum(clean), True, a.min_clean),
+        ("spurious landmarks per run", sum(r["spurious"] for r in runs) / len(runs), False,
+         a.max_spurious),
+        ("runs with every matched landmark within 0.3 m", sum(within), True, a.min_within),
+        ("runs meeting all three targets", sum(all_three), True, a.min_all_three),
     ]
-    unchecked = {">= 0", "<= inf"}
     failed = False
-    for name, value, limit, ok in figures:
-        limit = "not checked" if limit in unchecked else limit
+    for name, value, at_least, limit in figures:
         shown = "%.2f" % value if isinstance(value, float) else str(value)
-        print("%s: %s (%s)%s" % (name, shown, limit, "" if ok else "  <- FAIL"))
+        if limit is None:
+            print("%s: %s (not checked)" % (name, shown))
+            continue
+        ok = value >= limit if at_least else value <= limit
+        print("%s: %s (%s %g)%s" % (name, shown, ">=" if at_least else "<=", limit,
+                                    "" if ok else "  <- FAIL"))
         failed = failed or not ok
     if failed:
         for hint in a.hint:
