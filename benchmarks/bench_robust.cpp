@@ -91,11 +91,13 @@ void runStream(benchmark::State& state, const core::FilterOptions& options) {
 void BM_FastSlam2Stream(benchmark::State& state) {
   core::FilterOptions options =
       configOptions("landmarks_fastslam2", static_cast<int>(state.range(0)));
-  // The robust config's motion noise and landmark existence (landmarks_fastslam2.yaml's were
-  // set for MRCLAM in sessions 15 and 17), so that both filters do the same work per particle.
+  // The robust config's motion noise, landmark existence and association (landmarks_fastslam2
+  // .yaml's were set for MRCLAM in sessions 15, 17 and 19), so that both filters do the same
+  // work per particle.
   const core::FilterOptions robust = configOptions("landmarks_robust", 1);
   options.motion = robust.motion;
   options.existence = robust.existence;
+  options.association = robust.association;
   runStream(state, options);
 }
 BENCHMARK(BM_FastSlam2Stream)

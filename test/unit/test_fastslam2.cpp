@@ -326,6 +326,107 @@ TEST(FastSlam2, UpdateStatsDescribeTheMostProbableParticle) {
   EXPECT_EQ(stats.new_landmarks, 0);
 }
 
+// Data association sampling (association.sample): with two landmarks inside the gate each
+// particle draws its match with probability proportional to the match likelihoods, which are
+// computed here by hand, and is weighted by their sum; with one landmark in the gate, or with
+// sampling off, the step is FastSLAM 2.0's maximum-likelihood one and draws no random number.
+class ProposalFastSlam2 : public FastSlam2 {
+ public:
+  using FastSlam2::FastSlam2;
+  using FastSlam2::Proposal;
+  using FastSlam2::refineProposal;
+};
+
+namespace {
+/// log N(z; h(pose, landmark), H_pose P H_pose^T + H_lm Sigma H_lm^T + R) at pose (0, 0, 0).
+double handMatchLogLikelihood(const Eigen::Vector2d& z, const Eigen::Vector2d& lm,
+                              const Eigen::Matrix2d& lm_cov, const Eigen::Matrix3d& pose_cov,
+                              const Eigen::Matrix2d& r) {
+  const double q = lm.squaredNorm(), d = std::sqrt(q);
+  Eigen::Matrix<double, 2, 3> hp;
+  hp << -lm.x() / d, -lm.y() / d, 0.0, lm.y() / q, -lm.x() / q, -1.0;
+  const Eigen::Matrix2d hl = -hp.leftCols<2>();
+  const Eigen::Matrix2d s = hp * pose_cov * hp.transpose() + hl * lm_cov * hl.transpose() + r;
+  const Eigen::Vector2d v(z.x() - d, wrapAngle(z.y() - std::atan2(lm.y(), lm.x())));
+  return -0.5 * v.dot(s.inverse() * v) - 0.5 * std::log(s.determinant()) - std::log(2 * M_PI);
+}
+}  // namespace
+
+TEST(FastSlam2, SampledAssociationDrawsByLikelihoodAndWeighsByTheirSum) {
+  FilterOptions options;
+  options.particles = 1;
+  const Eigen::Vector2d a(5.0, 0.05), b(5.0, -0.2);  // both within the gate of the sighting
+  const Eigen::Matrix2d lm_cov = 1e-3 * Eigen::Matrix2d::Identity();
+  LandmarkMap map;
+  for (const Eigen::Vector2d& at : {a, b}) {
+    Landmark lm;
+    lm.id = map.size();
+    lm.mean = at;
+    lm.covariance = lm_cov;
+    map.add(lm);
+  }
+  const Eigen::Matrix3d pose_cov = Eigen::Vector3d(0.01, 0.01, 0.0004).asDiagonal();
+  Observation o;
+  o.z << 5.0, 0.0;
+  o.noise = Eigen::Vector2d(0.01, 0.0004).asDiagonal();
+  const double la = handMatchLogLikelihood(o.z, a, lm_cov, pose_cov, o.noise);
+  const double lb = handMatchLogLikelihood(o.z, b, lm_cov, pose_cov, o.noise);
+  ASSERT_GT(la, lb);
+  const double p_a = 1.0 / (1.0 + std::exp(lb - la));
+  ASSERT_GT(p_a, 0.55);  // a clear but not certain preference for a
+  ASSERT_LT(p_a, 0.95);
+  const double sum = la + std::log1p(std::exp(lb - la));
+
+  // Maximum likelihood (sample false, or no generator): always a, weighted by a's likelihood.
+  const ProposalFastSlam2 ml(options);
+  Rng rng(7);
+  const Rng untouched = rng;
+  ProposalFastSlam2::Proposal q = ml.refineProposal(map, Pose2::Zero(), pose_cov, {o}, &rng);
+  ASSERT_EQ(q.matched.size(), 1u);
+  EXPECT_EQ(q.matched[0].second, 0);
+  EXPECT_NEAR(q.log_likelihood, la, 1e-9);
+  EXPECT_TRUE(rng == untouched) << "sampling off drew a random number";
+
+  options.association.sample = true;
+  const ProposalFastSlam2 sampling(options);
+  const int draws = 4000;
+  int took_a = 0;
+  for (int i = 0; i < draws; ++i) {
+    q = sampling.refineProposal(map, Pose2::Zero(), pose_cov, {o}, &rng);
+    ASSERT_EQ(q.matched.size(), 1u);
+    took_a += q.matched[0].second == 0;
+    ASSERT_NEAR(q.log_likelihood, sum, 1e-9) << "weight is not the sum of the likelihoods";
+  }
+  const double sigma = std::sqrt(p_a * (1.0 - p_a) / draws);
+  EXPECT_NEAR(static_cast<double>(took_a) / draws, p_a, 4.0 * sigma);
+  // The proposal moves towards the landmark drawn: towards a's bearing when a was taken.
+  rng.seed(11);
+  for (int i = 0; i < 50; ++i) {
+    q = sampling.refineProposal(map, Pose2::Zero(), pose_cov, {o}, &rng);
+    const double towards = q.matched[0].second == 0 ? a.y() : b.y();
+    EXPECT_GT(q.mean.z() * towards, 0.0) << "heading corrected away from the drawn landmark";
+  }
+
+  // One landmark in the gate, or a known identity: FastSLAM 2.0's step, no number drawn.
+  LandmarkMap one;
+  one.add(map[0]);
+  Rng fresh(3);
+  const Rng fresh_copy = fresh;
+  const ProposalFastSlam2::Proposal single =
+      sampling.refineProposal(one, Pose2::Zero(), pose_cov, {o}, &fresh);
+  const ProposalFastSlam2::Proposal reference = ml.refineProposal(one, Pose2::Zero(), pose_cov, {o});
+  EXPECT_TRUE(fresh == fresh_copy);
+  EXPECT_EQ(single.mean, reference.mean);
+  EXPECT_EQ(single.cov, reference.cov);
+  EXPECT_EQ(single.log_likelihood, reference.log_likelihood);
+  Observation known = o;
+  known.known_id = 1;
+  q = sampling.refineProposal(map, Pose2::Zero(), pose_cov, {known}, &fresh);
+  ASSERT_EQ(q.matched.size(), 1u);
+  EXPECT_EQ(q.matched[0].second, 1);
+  EXPECT_TRUE(fresh == fresh_copy);
+}
+
 // Covariances that are zero, indefinite or asymmetric fall back to the configured noise
 // floors; a line given with rho < 0 is the same line as (-rho, theta + pi); thousands of
 // features in one frame are taken without harm.

@@ -37,6 +37,20 @@ double logGaussianPose(const Pose2& pose, const Pose2& mean, const Eigen::Matrix
 
 Eigen::Matrix2d symmetrize(const Eigen::Matrix2d& m) { return 0.5 * (m + m.transpose()); }
 
+/// log(sum exp(values)), computed around the largest value; -inf when none is finite.
+double logSumExp(const std::vector<double>& values) {
+  double top = -INFINITY;
+  for (double v : values) {
+    if (std::isfinite(v)) top = std::max(top, v);
+  }
+  if (!std::isfinite(top)) return -INFINITY;
+  double sum = 0.0;
+  for (double v : values) {
+    if (std::isfinite(v)) sum += std::exp(v - top);
+  }
+  return top + std::log(sum);
+}
+
 }  // namespace
 
 PathNode::~PathNode() {
@@ -100,7 +114,8 @@ std::vector<Observation> FastSlam2::prepare(const FeatureSet& features, int* rej
 
 FastSlam2::Match FastSlam2::associate(const LandmarkMap& map, const Pose2& pose,
                                       const Eigen::Matrix3d& pose_cov,
-                                      const Observation& observation) const {
+                                      const Observation& observation,
+                                      std::vector<Match>* gated) const {
   // Only the landmarks the spatial index offers: a superset of those passing the pre-gate,
   // in ascending index order, so the result is the scan's (associateByScan).
   const ObservationInMap seen = inMap(pose, observation);
@@ -119,7 +134,7 @@ FastSlam2::Match FastSlam2::associate(const LandmarkMap& map, const Pose2& pose,
   } else {
     map.pointCandidates(seen.value, pointPregateRadius(observation), &candidates);
   }
-  return associateAmong(map, pose, pose_cov, observation, seen, &candidates);
+  return associateAmong(map, pose, pose_cov, observation, seen, &candidates, gated);
 }
 
 FastSlam2::Match FastSlam2::associateByScan(const LandmarkMap& map, const Pose2& pose,
@@ -144,8 +159,10 @@ FastSlam2::Match FastSlam2::associateAmong(const LandmarkMap& map, const Pose2& 
                                            const Eigen::Matrix3d& pose_cov,
                                            const Observation& observation,
                                            const ObservationInMap& seen,
-                                           const std::vector<int>* candidates) const {
+                                           const std::vector<int>* candidates,
+                                           std::vector<Match>* gated) const {
   Match best;
+  if (gated) gated->clear();
   const bool is_line = observation.type == LandmarkType::kLine;
   // The observation in the map frame at the current pose estimate, for a cheap pre-gate.
   const Eigen::Vector2d& in_map = seen.value;
@@ -175,7 +192,11 @@ FastSlam2::Match FastSlam2::associateAmong(const LandmarkMap& map, const Pose2& 
     const Eigen::Matrix2d s = z_cov + p.h_pose * pose_cov * p.h_pose.transpose();
     const Eigen::Vector2d v = innovation(observation.z, p.z);
     const double d2 = v.dot(s.inverse() * v);
-    if (std::isfinite(d2) && d2 < best.distance2) {
+    if (!std::isfinite(d2)) continue;
+    if (gated && d2 < options_.association.gate_chi2) {
+      gated->push_back(Match{i, d2, p, z_cov});
+    }
+    if (d2 < best.distance2) {
       best.distance2 = d2;
       best.index = i;
       best.prediction = p;
@@ -242,26 +263,59 @@ bool FastSlam2::updateLandmark(LandmarkMap* map, const Match& match, const Pose2
   return !c.fallback;
 }
 
+double FastSlam2::matchLogLikelihood(const Eigen::Matrix3d& pose_cov,
+                                     const Observation& observation, const Match& match) const {
+  // The marginal likelihood of FastSLAM 2.0's weight: the pose's and the landmark's uncertainty
+  // and the measurement noise (the last two scaled by the rule's weight noise scale).
+  const Eigen::Matrix<double, 2, 3>& h = match.prediction.h_pose;
+  const Eigen::Matrix2d s =
+      h * pose_cov * h.transpose() + rule_->weightNoiseScale() * match.landmark_innovation_cov;
+  Eigen::Matrix2d s_inv;
+  return logGaussian2(innovation(observation.z, match.prediction.z), s, &s_inv);
+}
+
 FastSlam2::Proposal FastSlam2::refineProposal(const LandmarkMap& map, const Pose2& prior_mean,
                                               const Eigen::Matrix3d& prior_cov,
-                                              const std::vector<Observation>& observations) const {
+                                              const std::vector<Observation>& observations,
+                                              Rng* rng) const {
   Proposal q;
   q.mean = prior_mean;
   q.cov = prior_cov;
   const bool pointwise = rule_->pointwiseWeights();
   const AssociationOptions& a = options_.association;
+  std::vector<Match> gated;
+  std::vector<double> likelihoods;
   for (size_t k = 0; k < observations.size(); ++k) {
     const Observation& o = observations[k];
-    const Match m = associate(map, q.mean, q.cov, o);
+    const bool sampling = a.sample && rng && o.known_id < 0;
+    Match m = associate(map, q.mean, q.cov, o, sampling ? &gated : nullptr);
     if (m.index >= 0 && m.distance2 < a.gate_chi2) {
+      double ll = 0.0;
+      if (sampling && gated.size() > 1) {
+        // Data association sampling: draw the match by likelihood, weigh by their sum.
+        likelihoods.clear();
+        for (const Match& g : gated) likelihoods.push_back(matchLogLikelihood(q.cov, o, g));
+        const double total = logSumExp(likelihoods);
+        if (!std::isfinite(total)) continue;
+        const double u = sampleUniform(*rng);
+        double cumulative = 0.0;
+        size_t pick = gated.size() - 1;
+        for (size_t j = 0; j < gated.size(); ++j) {
+          if (std::isfinite(likelihoods[j])) cumulative += std::exp(likelihoods[j] - total);
+          if (u < cumulative) {
+            pick = j;
+            break;
+          }
+        }
+        m = gated[pick];
+        ll = total;
+      } else {
+        ll = matchLogLikelihood(q.cov, o, m);
+      }
+      if (!std::isfinite(ll)) continue;
       // Proposal: refine the pose Gaussian with this observation (Montemerlo 2003, eq. 3.7).
       const Eigen::Matrix<double, 2, 3>& h = m.prediction.h_pose;
-      const Eigen::Matrix2d s =
-          h * q.cov * h.transpose() + rule_->weightNoiseScale() * m.landmark_innovation_cov;
-      Eigen::Matrix2d s_inv;
       const Eigen::Vector2d v = innovation(o.z, m.prediction.z);
-      const double ll = logGaussian2(v, s, &s_inv);
-      if (!std::isfinite(ll)) continue;
       const Correction<3> c = ekfCorrection<3>(q.cov, h, m.landmark_innovation_cov);
       if (!c.ok) continue;
       if (!pointwise) q.log_likelihood += ll;  // the marginal weight of FastSLAM 2.0
@@ -322,7 +376,7 @@ FastSlam2::ParticleUpdate FastSlam2::updateParticle(Particle* particle,
   const bool pointwise = rule_->pointwiseWeights();
   const LandmarkMap& map = *particle->map;
   Pose2 predicted_mean = predicted;
-  Proposal q = refineProposal(map, predicted_mean, motion_cov, observations);
+  Proposal q = refineProposal(map, predicted_mean, motion_cov, observations, &rng_);
   result.relocalized = relocalize(map, motion_cov, observations, &predicted_mean, &q);
   Pose2& mean = q.mean;
   Eigen::Matrix3d& cov = q.cov;

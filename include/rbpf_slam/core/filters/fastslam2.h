@@ -88,7 +88,8 @@ class FastSlam2 : public SlamFilter {
   };
   Proposal refineProposal(const LandmarkMap& map, const Pose2& prior_mean,
                           const Eigen::Matrix3d& prior_cov,
-                          const std::vector<Observation>& observations) const;
+                          const std::vector<Observation>& observations,
+                          Rng* rng = nullptr) const;
   /// When `proposal` (from the motion prior) leaves most observations unmatched, searches a
   /// pose correction (relocalization.h); if the proposal from the corrected pose associates
   /// clearly more, replaces *proposal with it, sets *prior_mean to the corrected pose and
@@ -112,8 +113,9 @@ class FastSlam2 : public SlamFilter {
   };
   /// Maximum-likelihood landmark for an observation among those the map's spatial index
   /// offers near it.
+  /// With `gated`, also every landmark inside the association gate, in index order.
   Match associate(const LandmarkMap& map, const Pose2& pose, const Eigen::Matrix3d& pose_cov,
-                  const Observation& observation) const;
+                  const Observation& observation, std::vector<Match>* gated = nullptr) const;
   /// The same by a scan of every landmark, O(N): the reference associate() must equal.
   Match associateByScan(const LandmarkMap& map, const Pose2& pose,
                         const Eigen::Matrix3d& pose_cov, const Observation& observation) const;
@@ -132,7 +134,11 @@ class FastSlam2 : public SlamFilter {
   /// The maximum-likelihood match among `candidates` (every landmark when null).
   Match associateAmong(const LandmarkMap& map, const Pose2& pose, const Eigen::Matrix3d& pose_cov,
                        const Observation& observation, const ObservationInMap& seen,
-                       const std::vector<int>* candidates) const;
+                       const std::vector<int>* candidates,
+                       std::vector<Match>* gated = nullptr) const;
+  /// log N(z; predicted z, H_pose P H_pose^T + scale (H_lm Sigma H_lm^T + R)) of a match.
+  double matchLogLikelihood(const Eigen::Matrix3d& pose_cov, const Observation& observation,
+                            const Match& match) const;
   void addLandmark(LandmarkMap* map, const Pose2& pose, const Observation& observation);
   /// The heading prior's part of a step, the same for every particle: drift tracking's turn of
   /// every particle's predicted heading (0 without it), and the walls that measure the heading,

@@ -20,6 +20,11 @@ struct AssociationOptions {
   double gate_chi2 = 9.21;          // Mahalanobis^2 gate (99% for 2 dof)
   double new_landmark_chi2 = 13.8;  // beyond every gate by this much: a new landmark
   double line_overlap_margin_m = 1.0;  // a line matches only if the segments come this close
+  // Each particle draws its match among the landmarks inside the gate with probability
+  // proportional to their likelihoods, and is weighted by their sum (data association sampling,
+  // Nieto et al. 2003), instead of taking the most likely one (false: FastSLAM 2.0's maximum
+  // likelihood).
+  bool sample = false;
 };
 
 /// Measurement noise assumed by the filter when a feature carries no covariance of its own.
