@@ -35,6 +35,7 @@ void readAssociation(YamlSection section, core::AssociationOptions* o) {
   section.read("new_landmark_chi2", &o->new_landmark_chi2);
   section.read("line_overlap_margin_m", &o->line_overlap_margin_m);
   section.read("sample", &o->sample);
+  section.read("sample_weight", &o->sample_weight);
   section.finish();
 }
 

@@ -5,8 +5,10 @@
 # 0.033 and 0.110 m on this world (docs/results.md, "Session 16"). Fails unless, over filter
 # seeds 1-10, the mean online ATE is at most 0.67 x the odometry's and at least 8 of the 10 runs
 # are within sim_landmarks.test's 0.75 x the odometry's. Measured (odometry 0.090 m): 500
-# particles as shipped, mean 0.047 m (0.52 x), 10 of 10; 100 particles (`--set particles=100`
-# as an argument), mean 0.062 m (0.69 x), 7 of 10.
+# particles with sampled association as shipped (session 19), mean 0.050 m (0.55 x), 10 of 10;
+# with the most likely match (`--set association.sample=false`) 0.047 m (0.52 x), 10 of 10;
+# 100 particles (`--set particles=100` as an argument), mean 0.063 m (0.70 x), 7 of 10, and it
+# fails (0.062 m, 0.69 x, 7 of 10 with the most likely match).
 # Extra arguments go to each filter run's offline_slam (e.g. --set particles=100 to see it fail).
 set -euo pipefail
 

@@ -333,6 +333,8 @@ TEST(FastSlam2, UpdateStatsDescribeTheMostProbableParticle) {
 class ProposalFastSlam2 : public FastSlam2 {
  public:
   using FastSlam2::FastSlam2;
+  ProposalFastSlam2(const FilterOptions& options, std::unique_ptr<EstimatorRule> rule)
+      : FastSlam2(options, std::move(rule)) {}
   using FastSlam2::Proposal;
   using FastSlam2::refineProposal;
 };
@@ -399,6 +401,33 @@ TEST(FastSlam2, SampledAssociationDrawsByLikelihoodAndWeighsByTheirSum) {
   }
   const double sigma = std::sqrt(p_a * (1.0 - p_a) / draws);
   EXPECT_NEAR(static_cast<double>(took_a) / draws, p_a, 4.0 * sigma);
+  // sample_weight max: the same draw, weighted by the most likely match as without sampling.
+  options.association.sample_weight = "max";
+  const ProposalFastSlam2 sampling_max(options);
+  options.association.sample_weight = "sum";
+  int took_a_max = 0;
+  for (int i = 0; i < 400; ++i) {
+    q = sampling_max.refineProposal(map, Pose2::Zero(), pose_cov, {o}, &rng);
+    took_a_max += q.matched[0].second == 0;
+    ASSERT_NEAR(q.log_likelihood, la, 1e-9);
+  }
+  EXPECT_GT(took_a_max, 200);
+  EXPECT_LT(took_a_max, 380) << "max weighs like maximum likelihood but must still sample";
+  options.association.sample_weight = "mean";
+  EXPECT_THROW(validate(options), std::invalid_argument);
+  options.association.sample_weight = "sum";
+  // Pointwise weights (H-infinity, Havangi eq. 36) add the drawn match's likelihood at the drawn
+  // pose later: the proposal carries only the draw's correction, sum over drawn.
+  HinfOptions pointwise;
+  pointwise.mode = "relative";
+  pointwise.theta_pose = 0.5;
+  pointwise.weight = "pointwise";
+  const ProposalFastSlam2 sampling_pointwise(options, std::make_unique<HinfRule>(pointwise));
+  for (int i = 0; i < 50; ++i) {
+    q = sampling_pointwise.refineProposal(map, Pose2::Zero(), pose_cov, {o}, &rng);
+    const double drawn = q.matched[0].second == 0 ? la : lb;
+    ASSERT_NEAR(q.log_likelihood, sum - drawn, 1e-9);
+  }
   // The proposal moves towards the landmark drawn: towards a's bearing when a was taken.
   rng.seed(11);
   for (int i = 0; i < 50; ++i) {

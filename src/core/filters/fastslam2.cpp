@@ -290,27 +290,32 @@ FastSlam2::Proposal FastSlam2::refineProposal(const LandmarkMap& map, const Pose
     const bool sampling = a.sample && rng && o.known_id < 0;
     Match m = associate(map, q.mean, q.cov, o, sampling ? &gated : nullptr);
     if (m.index >= 0 && m.distance2 < a.gate_chi2) {
-      double ll = 0.0;
+      double ll = 0.0;       // the weight's factor for this observation (log)
+      double drawn_ll = 0.0;  // the likelihood of the match taken (log)
       if (sampling && gated.size() > 1) {
-        // Data association sampling: draw the match by likelihood, weigh by their sum.
+        // Data association sampling: draw the match by likelihood.
         likelihoods.clear();
         for (const Match& g : gated) likelihoods.push_back(matchLogLikelihood(q.cov, o, g));
         const double total = logSumExp(likelihoods);
         if (!std::isfinite(total)) continue;
         const double u = sampleUniform(*rng);
         double cumulative = 0.0;
-        size_t pick = gated.size() - 1;
+        int pick = -1;
         for (size_t j = 0; j < gated.size(); ++j) {
-          if (std::isfinite(likelihoods[j])) cumulative += std::exp(likelihoods[j] - total);
-          if (u < cumulative) {
-            pick = j;
-            break;
-          }
+          if (!std::isfinite(likelihoods[j])) continue;
+          pick = static_cast<int>(j);  // the last finite one if rounding leaves u above the sum
+          cumulative += std::exp(likelihoods[j] - total);
+          if (u < cumulative) break;
         }
         m = gated[pick];
-        ll = total;
+        drawn_ll = likelihoods[pick];
+        // sum: the importance weight of the draw (the association's marginal, every landmark
+        // in the gate equally likely a priori); max: the most likely match's, as without
+        // sampling (a particle is not favoured for having copies of a landmark in the gate).
+        ll = a.sample_weight == "max" ? *std::max_element(likelihoods.begin(), likelihoods.end())
+                                      : total;
       } else {
-        ll = matchLogLikelihood(q.cov, o, m);
+        ll = drawn_ll = matchLogLikelihood(q.cov, o, m);
       }
       if (!std::isfinite(ll)) continue;
       // Proposal: refine the pose Gaussian with this observation (Montemerlo 2003, eq. 3.7).
@@ -318,7 +323,9 @@ FastSlam2::Proposal FastSlam2::refineProposal(const LandmarkMap& map, const Pose
       const Eigen::Vector2d v = innovation(o.z, m.prediction.z);
       const Correction<3> c = ekfCorrection<3>(q.cov, h, m.landmark_innovation_cov);
       if (!c.ok) continue;
-      if (!pointwise) q.log_likelihood += ll;  // the marginal weight of FastSLAM 2.0
+      // The marginal weight of FastSLAM 2.0; the pointwise weight adds the drawn match's
+      // likelihood at the drawn pose later, so only the draw's correction goes in here.
+      q.log_likelihood += pointwise ? ll - drawn_ll : ll;
       if (rule_->learnsFromInnovations()) {
         // NIS with the landmark's part (R and the landmark's covariance) scaled by 1 - theta,
         // the scale the rule is testing; the proposal's sequential covariance is the EKF's.

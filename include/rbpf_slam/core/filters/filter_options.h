@@ -25,6 +25,9 @@ struct AssociationOptions {
   // Nieto et al. 2003), instead of taking the most likely one (false: FastSLAM 2.0's maximum
   // likelihood).
   bool sample = false;
+  // The weight of a sampled match: "sum" of the gated landmarks' likelihoods (the draw's
+  // importance weight) or "max", the most likely one's as without sampling (no gain for copies).
+  std::string sample_weight = "sum";
 };
 
 /// Measurement noise assumed by the filter when a feature carries no covariance of its own.
