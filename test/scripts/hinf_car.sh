@@ -27,21 +27,22 @@ import json
 import math
 import sys
 
-runs = json.load(open(sys.argv[1]))
-runs = runs["runs"] if isinstance(runs, dict) else runs
-
-
-def mean_ate(config):
-    values = [r["ate_rmse_m"] for r in runs if r["config"] == config]
-    if len(values) != 20 or not all(v is not None and math.isfinite(v) for v in values):
-        sys.exit("FAIL: expected 20 runs of '%s' with a finite ATE, got %s" % (config, values))
-    return sum(values) / len(values)
-
+results = json.load(open(sys.argv[1]))
+runs = results["runs"]
+# The ratios as run_experiments computed them (its "comparisons"), for 20 runs of each config.
+comparisons = {c["title"]: c for c in results.get("comparisons", [])}
 
 failed = False
 for noise, limit in (("wrong R", 0.62), ("right R", 1.2)):
-    hinf = mean_ate("hinf_fastslam, " + noise)
-    ratio = hinf / mean_ate("fastslam2, " + noise)
+    for config in ("hinf_fastslam, " + noise, "fastslam2, " + noise):
+        values = [r["ate_rmse_m"] for r in runs if r["config"] == config]
+        if len(values) != 20 or not all(v is not None and math.isfinite(v) for v in values):
+            sys.exit("FAIL: expected 20 runs of '%s' with a finite ATE, got %s" % (config, values))
+    title = "H-infinity / FastSLAM 2.0 ATE, " + noise
+    if title not in comparisons:
+        sys.exit("FAIL: run_experiments wrote no comparison '%s' to results.json" % title)
+    c = comparisons[title]
+    ratio, hinf = c["ratio"], c["numerator_ate_m"]
     ok = ratio <= limit and hinf <= 0.25
     failed = failed or not ok
     print("car, seeds 1-20, %s: H-infinity / FastSLAM 2.0 ATE %.3f (at most %.2f), H-infinity "
