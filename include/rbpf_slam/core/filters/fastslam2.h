@@ -1,7 +1,8 @@
 #pragma once
 // FastSLAM 2.0 (Montemerlo et al. 2003) over point and line landmarks: the pose proposal
 // is refined by each associated observation, each landmark is a 2D EKF, association is
-// per-particle maximum likelihood with a Mahalanobis gate.
+// per-particle maximum likelihood with a Mahalanobis gate (or, with association.sample, drawn
+// among the landmarks inside the gate by likelihood).
 
 #include <memory>
 #include <vector>
