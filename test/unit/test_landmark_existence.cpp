@@ -79,6 +79,49 @@ TEST(LandmarkExistence, TentativeLandmarksNeedEnoughSightings) {
   EXPECT_EQ(landmarksToRemove(o, map, Pose2::Zero(), 10, &counters), std::vector<int>{1});
 }
 
+TEST(LandmarkExistence, DuplicatesSeenNowAreMergedIntoTheBetterObservedOne) {
+  ExistenceOptions o;
+  o.merge_chi2 = 9.21;
+  o.merge_min_observations = 10;
+  o.merge_max_distance_m = 0.5;
+  const auto point = [](double x, double y, int last_seen, int observations, double sigma) {
+    Landmark lm = pointAt(x, y, 1, last_seen, 1);
+    lm.observations = observations;
+    lm.covariance = Eigen::Matrix2d::Identity() * sigma * sigma;
+    return lm;
+  };
+  LandmarkMap map;
+  map.add(point(2.0, 0.0, 10, 150, 0.01));   // 0: seen now
+  map.add(point(2.04, 0.0, 9, 170, 0.01));   // 1: its copy, d2 = 0.04^2 / 2e-4 = 8: kept (more seen)
+  map.add(point(2.0, 0.17, 10, 200, 0.01));  // 2: a neighbour 0.17 m away, d2 = 144: kept
+  map.add(point(5.0, 0.0, 10, 12, 0.1));     // 3: seen now, d2 = 0.05^2 / 0.02 = 0.125 ...
+  map.add(point(5.05, 0.0, 9, 5, 0.1));      // 4: ... but this one is too young to merge
+  map.add(point(8.0, 0.0, 9, 50, 0.01));     // 5: a copy of 6, but neither was seen now
+  map.add(point(8.02, 0.0, 9, 40, 0.01));    // 6
+  std::vector<int> counters;
+  EXPECT_EQ(landmarksToRemove(o, map, Pose2::Zero(), 10, &counters), std::vector<int>{0});
+  // Off (merge_chi2 0), or a tighter gate than the copy's d2: nothing is merged.
+  ExistenceOptions off = o;
+  off.merge_chi2 = 0.0;
+  EXPECT_TRUE(landmarksToRemove(off, map, Pose2::Zero(), 10, &counters).empty());
+  off = o;
+  off.merge_chi2 = 7.0;
+  EXPECT_TRUE(landmarksToRemove(off, map, Pose2::Zero(), 10, &counters).empty());
+  off = o;
+  off.merge_max_distance_m = 0.03;
+  EXPECT_TRUE(landmarksToRemove(off, map, Pose2::Zero(), 10, &counters).empty());
+  // Landmarks with a known identity are distinct, however close.
+  LandmarkMap identified = map;
+  Landmark first = identified[0];
+  first.identified = true;
+  identified.set(0, first);
+  EXPECT_TRUE(landmarksToRemove(o, identified, Pose2::Zero(), 10, &counters).empty());
+  // Merging alone switches existence management on.
+  EXPECT_TRUE(existenceEnabled(o));
+  o.merge_chi2 = -1.0;
+  EXPECT_THROW(validate(o), std::invalid_argument);
+}
+
 TEST(LandmarkExistence, SharedMapIsCopiedOnlyWhenSomethingChanges) {
   const ExistenceOptions o = viewOptions();
   auto map = std::make_shared<LandmarkMap>();

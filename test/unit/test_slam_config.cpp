@@ -211,6 +211,13 @@ TEST(SlamConfig, HinfAndExistenceErrorsNameTheKey) {
   EXPECT_NE(gamma.find("hinf.gamma_heading = 0 is out of range"), std::string::npos) << gamma;
   EXPECT_NE(errorOf("hinf: {gain: kalman}").find("not one of: posterior"), std::string::npos);
   EXPECT_NE(errorOf("existence: {max_count: 0}").find("existence.max_count"), std::string::npos);
+  EXPECT_NE(errorOf("existence: {merge_chi2: -1}").find("existence.merge_chi2"),
+            std::string::npos);
+  EXPECT_NE(errorOf("existence: {merge_min_observations: 0}")
+                .find("existence.merge_min_observations"),
+            std::string::npos);
+  EXPECT_NE(errorOf("existence: {merge_max_distance_m: 0}").find("existence.merge_max_distance_m"),
+            std::string::npos);
   const std::string fov = errorOf("existence: {visible_range_m: 4, visible_min_range_m: 5}");
   EXPECT_NE(fov.find("existence.visible_min_range_m"), std::string::npos) << fov;
   EXPECT_NE(errorOf("variant: hinf").find("hinf_fastslam"), std::string::npos);

@@ -210,6 +210,7 @@ FastSlam2::Match FastSlam2::associateAmong(const LandmarkMap& map, const Pose2& 
 void FastSlam2::addLandmark(LandmarkMap* map, const Pose2& pose, const Observation& observation) {
   Landmark lm;
   lm.id = observation.known_id >= 0 ? observation.known_id : next_landmark_id_++;
+  lm.identified = observation.known_id >= 0;
   lm.type = observation.type;
   Eigen::Matrix2d g;
   if (observation.type == LandmarkType::kLine) {

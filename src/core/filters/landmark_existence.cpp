@@ -1,5 +1,6 @@
 #include "rbpf_slam/core/filters/landmark_existence.h"
 
+#include <Eigen/Cholesky>
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
@@ -11,8 +12,41 @@ namespace rbpf_slam {
 namespace core {
 
 bool existenceEnabled(const ExistenceOptions& o) {
-  return o.min_observations > 1 || o.visible_range_m > 0.0;
+  return o.min_observations > 1 || o.visible_range_m > 0.0 || o.merge_chi2 > 0.0;
 }
+
+namespace {
+
+bool mature(const ExistenceOptions& o, const Landmark& lm) {
+  return lm.type == LandmarkType::kPoint && !lm.identified &&
+         lm.observations >= o.merge_min_observations;
+}
+
+/// Marks in `drop` the duplicates among the point landmarks seen in update `step`: for each
+/// such pair (see ExistenceOptions::merge_chi2) the less observed one (the newer on a tie).
+void markDuplicates(const ExistenceOptions& o, const LandmarkMap& map, int step,
+                    std::vector<bool>* drop) {
+  std::vector<int> near;
+  for (int i = 0; i < map.size(); ++i) {
+    const Landmark& a = map[i];
+    if ((*drop)[i] || a.last_seen_step != step || !mature(o, a)) continue;
+    map.pointCandidates(a.mean, o.merge_max_distance_m, &near);
+    for (int j : near) {
+      const Landmark& b = map[j];
+      if (j == i || (*drop)[j] || !mature(o, b)) continue;
+      const Eigen::Vector2d d = b.mean - a.mean;
+      if (d.norm() >= o.merge_max_distance_m) continue;
+      const double d2 = d.dot((a.covariance + b.covariance).ldlt().solve(d));
+      if (!(d2 < o.merge_chi2)) continue;
+      const bool keep_a = a.observations > b.observations ||
+                          (a.observations == b.observations && a.created_step <= b.created_step);
+      (*drop)[keep_a ? j : i] = true;
+      if (!keep_a) break;
+    }
+  }
+}
+
+}  // namespace
 
 bool predictedVisible(const ExistenceOptions& o, const Pose2& pose, const Eigen::Vector2d& point) {
   if (!(o.visible_range_m > 0.0)) return false;
@@ -27,6 +61,8 @@ std::vector<int> landmarksToRemove(const ExistenceOptions& o, const LandmarkMap&
                                    const Pose2& pose, int step, std::vector<int>* counters) {
   std::vector<int> remove;
   counters->resize(map.size());
+  std::vector<bool> duplicate(map.size(), false);
+  if (o.merge_chi2 > 0.0) markDuplicates(o, map, step, &duplicate);
   for (int i = 0; i < map.size(); ++i) {
     const Landmark& lm = map[i];
     int count = lm.existence;
@@ -38,7 +74,7 @@ std::vector<int> landmarksToRemove(const ExistenceOptions& o, const LandmarkMap&
     (*counters)[i] = count;
     const bool on_probation =
         lm.observations < o.min_observations && step - lm.created_step >= o.tentative_updates;
-    if (count <= 0 || on_probation) remove.push_back(i);
+    if (count <= 0 || on_probation || duplicate[i]) remove.push_back(i);
   }
   return remove;
 }
@@ -76,6 +112,9 @@ void validate(const ExistenceOptions& o) {
   }
   requireRange("existence.visible_fov_rad", o.visible_fov_rad, 0.0, 2.0 * M_PI, true);
   requireRange("existence.max_count", o.max_count, 1, 1000000);
+  requireRange("existence.merge_chi2", o.merge_chi2, 0.0, 1000.0);
+  requireRange("existence.merge_min_observations", o.merge_min_observations, 1, 1000000);
+  requireRange("existence.merge_max_distance_m", o.merge_max_distance_m, 0.0, 100.0, true);
 }
 
 }  // namespace core
