@@ -79,7 +79,7 @@ TEST(LandmarkExistence, TentativeLandmarksNeedEnoughSightings) {
   EXPECT_EQ(landmarksToRemove(o, map, Pose2::Zero(), 10, &counters), std::vector<int>{1});
 }
 
-TEST(LandmarkExistence, DuplicatesSeenNowAreMergedIntoTheBetterObservedOne) {
+TEST(LandmarkExistence, OfTwoCopiesTheLessObservedIsRemoved) {
   ExistenceOptions o;
   o.merge_chi2 = 9.21;
   o.merge_min_observations = 10;
@@ -116,6 +116,38 @@ TEST(LandmarkExistence, DuplicatesSeenNowAreMergedIntoTheBetterObservedOne) {
   first.identified = true;
   identified.set(0, first);
   EXPECT_TRUE(landmarksToRemove(o, identified, Pose2::Zero(), 10, &counters).empty());
+  // The seen landmark wins against a less observed copy (which goes), and keeps the larger
+  // existence counter; on equal sightings the older one wins.
+  LandmarkMap pair;
+  pair.add(point(2.0, 0.0, 10, 150, 0.01));  // seen now, counter 1 -> 2
+  Landmark copy = point(2.04, 0.0, 9, 120, 0.01);
+  copy.existence = 5;
+  pair.add(copy);
+  EXPECT_EQ(landmarksToRemove(o, pair, Pose2(0.0, 0.0, M_PI), 10, &counters),
+            std::vector<int>{1});
+  EXPECT_EQ(counters[0], 5);
+  copy.observations = 150;
+  copy.created_step = 0;  // older than the seen one (created at 1)
+  pair.set(1, copy);
+  EXPECT_EQ(landmarksToRemove(o, pair, Pose2(0.0, 0.0, M_PI), 10, &counters),
+            std::vector<int>{0});
+  // A chain A-B-C (A-C beyond the gate): B wins against A, and is not removed in the same
+  // update for losing against C.
+  LandmarkMap chain;
+  chain.add(point(2.0, 0.0, 10, 20, 0.01));    // A, seen
+  chain.add(point(2.04, 0.0, 9, 30, 0.01));    // B
+  chain.add(point(2.08, 0.0, 10, 40, 0.01));   // C, seen (A-C: d2 = 32)
+  EXPECT_EQ(landmarksToRemove(o, chain, Pose2(0.0, 0.0, M_PI), 10, &counters),
+            std::vector<int>{0});
+  // A copy removed by negative evidence in this update (in view, missed, counter 1 -> 0) wins
+  // nothing: the seen landmark stays, although less observed.
+  LandmarkMap missed;
+  missed.add(point(2.0, 0.0, 10, 15, 0.01));   // seen
+  missed.add(point(2.04, 0.0, 9, 150, 0.01));  // in view, not seen, counter 1
+  ExistenceOptions view = o;
+  view.visible_range_m = 4.0;
+  view.visible_fov_rad = 1.0;
+  EXPECT_EQ(landmarksToRemove(view, missed, Pose2::Zero(), 10, &counters), std::vector<int>{1});
   // Merging alone switches existence management on.
   EXPECT_TRUE(existenceEnabled(o));
   o.merge_chi2 = -1.0;

@@ -259,6 +259,7 @@ bool FastSlam2::updateLandmark(LandmarkMap* map, const Match& match, const Pose2
     lm.extent_max = std::max({lm.extent_max, a, b});
   }
   ++lm.observations;
+  lm.identified = lm.identified || observation.known_id >= 0;  // e.g. a landmark of a loaded map
   lm.last_seen_step = step_;
   if (lm.mean.allFinite() && lm.covariance.allFinite()) map->set(match.index, lm);
   return !c.fallback;

@@ -22,25 +22,35 @@ bool mature(const ExistenceOptions& o, const Landmark& lm) {
          lm.observations >= o.merge_min_observations;
 }
 
-/// Marks in `drop` the duplicates among the point landmarks seen in update `step`: for each
-/// such pair (see ExistenceOptions::merge_chi2) the less observed one (the newer on a tie).
-void markDuplicates(const ExistenceOptions& o, const LandmarkMap& map, int step,
-                    std::vector<bool>* drop) {
+/// Adds to `removed` the duplicates among the landmarks it does not hold yet: for each pair of
+/// mature point landmarks, one seen in update `step`, within ExistenceOptions::merge_chi2 of
+/// each other, the less observed one (the newer on a tie). The other keeps the larger of the
+/// two existence counters, and is not removed in the same update (of a chain A-B-C, where B wins
+/// against A and would lose against C, A goes and B stays until a later update).
+void removeDuplicates(const ExistenceOptions& o, const LandmarkMap& map, int step,
+                      std::vector<bool>* removed, std::vector<int>* counters) {
+  std::vector<bool> won(map.size(), false);
   std::vector<int> near;
   for (int i = 0; i < map.size(); ++i) {
     const Landmark& a = map[i];
-    if ((*drop)[i] || a.last_seen_step != step || !mature(o, a)) continue;
+    if ((*removed)[i] || a.last_seen_step != step || !mature(o, a)) continue;
     map.pointCandidates(a.mean, o.merge_max_distance_m, &near);
     for (int j : near) {
       const Landmark& b = map[j];
-      if (j == i || (*drop)[j] || !mature(o, b)) continue;
+      if (j == i || (*removed)[j] || !mature(o, b)) continue;
       const Eigen::Vector2d d = b.mean - a.mean;
-      if (d.norm() >= o.merge_max_distance_m) continue;
-      const double d2 = d.dot((a.covariance + b.covariance).ldlt().solve(d));
-      if (!(d2 < o.merge_chi2)) continue;
+      if (!(d.norm() < o.merge_max_distance_m)) continue;
+      const Eigen::LLT<Eigen::Matrix2d> llt(a.covariance + b.covariance);
+      if (llt.info() != Eigen::Success) continue;  // not positive definite: no test
+      const double d2 = d.dot(llt.solve(d));
+      if (!(d2 >= 0.0 && d2 < o.merge_chi2)) continue;
       const bool keep_a = a.observations > b.observations ||
                           (a.observations == b.observations && a.created_step <= b.created_step);
-      (*drop)[keep_a ? j : i] = true;
+      const int winner = keep_a ? i : j, loser = keep_a ? j : i;
+      if (won[loser]) continue;
+      (*removed)[loser] = true;
+      won[winner] = true;
+      (*counters)[winner] = std::max((*counters)[winner], (*counters)[loser]);
       if (!keep_a) break;
     }
   }
@@ -59,10 +69,8 @@ bool predictedVisible(const ExistenceOptions& o, const Pose2& pose, const Eigen:
 
 std::vector<int> landmarksToRemove(const ExistenceOptions& o, const LandmarkMap& map,
                                    const Pose2& pose, int step, std::vector<int>* counters) {
-  std::vector<int> remove;
   counters->resize(map.size());
-  std::vector<bool> duplicate(map.size(), false);
-  if (o.merge_chi2 > 0.0) markDuplicates(o, map, step, &duplicate);
+  std::vector<bool> removed(map.size(), false);
   for (int i = 0; i < map.size(); ++i) {
     const Landmark& lm = map[i];
     int count = lm.existence;
@@ -74,7 +82,12 @@ std::vector<int> landmarksToRemove(const ExistenceOptions& o, const LandmarkMap&
     (*counters)[i] = count;
     const bool on_probation =
         lm.observations < o.min_observations && step - lm.created_step >= o.tentative_updates;
-    if (count <= 0 || on_probation || duplicate[i]) remove.push_back(i);
+    removed[i] = count <= 0 || on_probation;
+  }
+  if (o.merge_chi2 > 0.0) removeDuplicates(o, map, step, &removed, counters);
+  std::vector<int> remove;
+  for (int i = 0; i < map.size(); ++i) {
+    if (removed[i]) remove.push_back(i);
   }
   return remove;
 }

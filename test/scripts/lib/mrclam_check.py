@@ -3,11 +3,12 @@
 
 usage: mrclam_check.py RESULTS.json --runs N [--min-halved N] [--max-mean-ratio X]
                        [--min-clean N] [--max-spurious X] [--min-within N] [--min-all-three N]
-                       [--hint TEXT ...]
+                       [--max-copy-pairs N] [--hint TEXT ...]
 
 Figures over the runs: ATE at most half the odometry's ("halved"), the mean of ATE / odometry
 ATE, runs with at most 2 spurious landmarks ("clean"), spurious landmarks per run, runs with
-every matched landmark within 0.3 m ("within") and runs meeting those three targets at once.
+every matched landmark within 0.3 m ("within"), runs meeting those three targets at once, and
+the pairs of copies of one landmark in the final maps (run_mrclam's copy_pairs, summed).
 Prints them with their limits, then PASS, or each figure outside its limit, the hints (what
 such a failure has meant before) and exits 1.
 """
@@ -28,6 +29,7 @@ def main(argv):
     parser.add_argument("--max-spurious", type=float)
     parser.add_argument("--min-within", type=int)
     parser.add_argument("--min-all-three", type=int)
+    parser.add_argument("--max-copy-pairs", type=int)
     parser.add_argument("--hint", action="append", default=[],
                         help="printed on failure (repeatable)")
     a = parser.parse_args(argv)
@@ -50,6 +52,8 @@ def main(argv):
          a.max_spurious),
         ("runs with every matched landmark within 0.3 m", sum(within), True, a.min_within),
         ("runs meeting all three targets", sum(all_three), True, a.min_all_three),
+        ("copy pairs in the final maps", sum(r.get("copy_pairs", float("nan")) for r in runs), False,
+         a.max_copy_pairs),
     ]
     failed = False
     for name, value, at_least, limit in figures:

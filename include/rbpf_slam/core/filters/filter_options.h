@@ -64,12 +64,15 @@ struct ExistenceOptions {
   double visible_fov_rad = M_PI;     // full width of the field of view, centred ahead
   int max_count = 5;  // existence counter: +1 per sighting up to this, -1 per unexplained miss
   // Duplicates: a point landmark seen in this update and another point landmark, both seen at
-  // least merge_min_observations times, whose means differ by less than merge_chi2 in the
-  // Mahalanobis metric of their summed covariances (and by less than merge_max_distance_m) are
-  // one landmark mapped twice (e.g. once while the pose was off): the less observed one is
-  // removed. A copy next to its original is always in view with it, so negative evidence cannot
-  // remove it, and with sampled association both keep being matched. Landmarks mapped from
-  // features with a known id are never merged. 0: off.
+  // least merge_min_observations times, whose means differ by less than merge_chi2 (chi-square,
+  // in the Mahalanobis metric of their summed covariances) and by less than
+  // merge_max_distance_m are one landmark mapped twice (e.g. once while the pose was off): the
+  // less observed one is removed (not fused: its estimate is dropped), the other keeps the
+  // larger existence counter. A copy next to its original is in view with it, so negative
+  // evidence cannot remove it, and with sampled association both keep being matched. Landmarks
+  // of features with a known id are never removed as duplicates. Checked after each update that
+  // runs the existence bookkeeping (not on robust_fastslam2's ancestor steps). 0: off; the
+  // other two defaults were chosen on MRCLAM dataset 6 (barcodes 0.17 m apart).
   double merge_chi2 = 0.0;
   int merge_min_observations = 10;
   double merge_max_distance_m = 0.5;
