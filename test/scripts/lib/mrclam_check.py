@@ -52,8 +52,8 @@ def main(argv):
          a.max_spurious),
         ("runs with every matched landmark within 0.3 m", sum(within), True, a.min_within),
         ("runs meeting all three targets", sum(all_three), True, a.min_all_three),
-        ("copy pairs in the final maps", sum(r.get("copy_pairs", float("nan")) for r in runs), False,
-         a.max_copy_pairs),
+        ("copy pairs in the final maps",
+         sum(r.get("copy_pairs", float("nan")) for r in runs), False, a.max_copy_pairs),
     ]
     failed = False
     for name, value, at_least, limit in figures:

@@ -26,7 +26,7 @@ struct Landmark {
   int last_seen_step = 0;
   int created_step = 0;
   int existence = 1;  // existence counter (landmark_existence.h)
-  bool identified = false;  // mapped from features with a known id (never merged as a duplicate)
+  bool identified = false;  // mapped from features with a known id (never removed as a copy)
 };
 
 /// Pre-gate of a line observation against map lines (FastSlam2::associate): normals within
