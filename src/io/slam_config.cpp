@@ -91,6 +91,7 @@ void readExistence(YamlSection section, core::ExistenceOptions* o) {
   section.read("visible_min_range_m", &o->visible_min_range_m);
   section.read("visible_fov_rad", &o->visible_fov_rad);
   section.read("max_count", &o->max_count);
+  section.read("sighting_count", &o->sighting_count);
   section.read("merge_chi2", &o->merge_chi2);
   section.read("merge_min_observations", &o->merge_min_observations);
   section.read("merge_max_distance_m", &o->merge_max_distance_m);

@@ -61,6 +61,20 @@ TEST(LandmarkExistence, CounterRisesWithSightingsAndFallsWithMisses) {
   EXPECT_EQ(remove, std::vector<int>{3});
 }
 
+TEST(LandmarkExistence, ASightingCanWeighAsSeveralMisses) {
+  ExistenceOptions o = viewOptions();
+  o.max_count = 10;
+  o.sighting_count = 3;
+  LandmarkMap map;
+  map.add(pointAt(2.0, 0.0, 1, 10, 1));   // seen now: 1 -> 4
+  map.add(pointAt(2.0, 0.2, 1, 10, 9));   // seen now: capped at 10
+  map.add(pointAt(3.0, 0.0, 1, 9, 4));    // in view, missed: still one count, 4 -> 3
+  map.add(pointAt(2.0, 0.5, 10, 10, 1));  // created now: keeps its initial count
+  std::vector<int> counters;
+  EXPECT_TRUE(landmarksToRemove(o, map, Pose2::Zero(), 10, &counters).empty());
+  EXPECT_EQ(counters, (std::vector<int>{4, 10, 3, 1}));
+}
+
 TEST(LandmarkExistence, TentativeLandmarksNeedEnoughSightings) {
   ExistenceOptions o;
   o.min_observations = 3;

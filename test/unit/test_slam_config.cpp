@@ -199,9 +199,11 @@ TEST(SlamConfig, LandmarksHinfConfigSelectsHinfFastSlam) {
   EXPECT_EQ(defaults.proposal_covariance, "ekf");
   EXPECT_EQ(c.filter.hinf.weight, defaults.weight);
   EXPECT_DOUBLE_EQ(c.filter.hinf.max_inflation, defaults.max_inflation);
-  EXPECT_EQ(c.filter.existence.visible_range_m, 3.0);  // on since session 18, as in fastslam2
+  EXPECT_EQ(c.filter.existence.visible_range_m, 5.0);  // on since session 18, 5 m since 21
   EXPECT_EQ(c.filter.existence.visible_fov_rad, 0.6);
   EXPECT_EQ(c.filter.existence.max_count, 10);
+  EXPECT_EQ(c.filter.existence.sighting_count, 2);
+  EXPECT_EQ(core::ExistenceOptions().sighting_count, 1);
   EXPECT_EQ(core::createFilter(c.filter)->variant(), "hinf_fastslam");
 }
 
@@ -211,6 +213,8 @@ TEST(SlamConfig, HinfAndExistenceErrorsNameTheKey) {
   EXPECT_NE(gamma.find("hinf.gamma_heading = 0 is out of range"), std::string::npos) << gamma;
   EXPECT_NE(errorOf("hinf: {gain: kalman}").find("not one of: posterior"), std::string::npos);
   EXPECT_NE(errorOf("existence: {max_count: 0}").find("existence.max_count"), std::string::npos);
+  EXPECT_NE(errorOf("existence: {sighting_count: 0}").find("existence.sighting_count"),
+            std::string::npos);
   EXPECT_NE(errorOf("existence: {merge_chi2: -1}").find("existence.merge_chi2"),
             std::string::npos);
   EXPECT_NE(errorOf("existence: {merge_min_observations: 0}")

@@ -75,7 +75,7 @@ std::vector<int> landmarksToRemove(const ExistenceOptions& o, const LandmarkMap&
     const Landmark& lm = map[i];
     int count = lm.existence;
     if (lm.last_seen_step == step) {
-      if (lm.created_step != step) count = std::min(count + 1, o.max_count);
+      if (lm.created_step != step) count = std::min(count + o.sighting_count, o.max_count);
     } else if (lm.type == LandmarkType::kPoint && predictedVisible(o, pose, lm.mean)) {
       --count;  // in view, not seen: negative evidence
     }
@@ -125,6 +125,7 @@ void validate(const ExistenceOptions& o) {
   }
   requireRange("existence.visible_fov_rad", o.visible_fov_rad, 0.0, 2.0 * M_PI, true);
   requireRange("existence.max_count", o.max_count, 1, 1000000);
+  requireRange("existence.sighting_count", o.sighting_count, 1, 1000000);
   requireRange("existence.merge_chi2", o.merge_chi2, 0.0, 1000.0);
   requireRange("existence.merge_min_observations", o.merge_min_observations, 1, 1000000);
   requireRange("existence.merge_max_distance_m", o.merge_max_distance_m, 0.0, 100.0, true);
