@@ -38,7 +38,7 @@ source "$here/lib/mrclam.sh"
 mrclam_run landmarks_fastslam2 "$@"
 /usr/bin/python3 "$here/lib/mrclam_check.py" "$work/results.json" --runs 45 --min-halved 33 \
   --max-mean-ratio 0.42 --min-clean 28 --max-spurious 3.3 --min-within 27 --min-all-three 21 \
-  --max-copy-pairs 3 \
+  --max-copy-pairs 3 --max-close-pairs 15 \
   --hint "copy pairs: copies next to their landmarks are kept (merge_chi2 0: 11 pairs)" \
   --hint "<= 2 spurious / all three: session 20's 3 m, one count per sighting (25 runs, 20)" \
   --hint "all three: the most likely landmark of a group taken (association.sample false: 16)" \

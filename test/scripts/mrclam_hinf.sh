@@ -26,7 +26,7 @@ source "$here/lib/mrclam.sh"
 mrclam_run landmarks_hinf "$@"
 /usr/bin/python3 "$here/lib/mrclam_check.py" "$work/results.json" --runs 45 --min-halved 34 \
   --max-mean-ratio 0.38 --min-clean 29 --max-spurious 3.0 --min-within 23 --min-all-three 21 \
-  --max-copy-pairs 3 \
+  --max-copy-pairs 3 --max-close-pairs 18 \
   --hint "copy pairs: copies next to their landmarks kept (merge_chi2 0: 17 pairs)" \
   --hint "spurious / all three: session 20's 3 m, one count per sighting (3.1 per run, 20)" \
   --hint "<= 2 spurious: the most likely landmark of a group taken (association.sample false: 21)" \

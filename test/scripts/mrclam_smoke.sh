@@ -55,5 +55,21 @@ if grep -qiE 'nan|inf' "$trajectory"; then
   echo "FAIL: the trajectory holds non-finite values"
   status=1
 fi
-[ "$status" -eq 0 ] && echo "PASS: $updates updates, $landmarks landmarks"
+# tools/mrclam_detection_rates.py (the camera's detection rates, docs/results.md session 21):
+# robot 1 sees a landmark in view in some but not all frames at 1.5-2.5 m, and a missing
+# dataset is named.
+rates=$(/usr/bin/python3 "$root/tools/mrclam_detection_rates.py" "$data" --robots 1)
+near=$(printf '%s\n' "$rates" | awk -F'|' '$2 ~ /1.5-2.5/ { print $4 + 0 }')
+if ! awk -v p="${near:-x}" 'BEGIN { exit !(p > 0.1 && p < 0.9) }'; then
+  echo "FAIL: detection rate at 1.5-2.5 m = ${near:-missing}, expected within 0.1-0.9"
+  status=1
+fi
+if message=$(/usr/bin/python3 "$root/tools/mrclam_detection_rates.py" "$work/none" 2>&1); then
+  echo "FAIL: mrclam_detection_rates.py accepted a missing dataset"
+  status=1
+elif ! printf '%s' "$message" | grep -q "missing .*none/Barcodes.dat"; then
+  echo "FAIL: mrclam_detection_rates.py did not name the missing file: $message"
+  status=1
+fi
+[ "$status" -eq 0 ] && echo "PASS: $updates updates, $landmarks landmarks, detection rate $near"
 exit "$status"

@@ -3,12 +3,14 @@
 
 usage: mrclam_check.py RESULTS.json --runs N [--min-halved N] [--max-mean-ratio X]
                        [--min-clean N] [--max-spurious X] [--min-within N] [--min-all-three N]
-                       [--max-copy-pairs N] [--hint TEXT ...]
+                       [--max-copy-pairs N] [--max-close-pairs N] [--hint TEXT ...]
 
 Figures over the runs: ATE at most half the odometry's ("halved"), the mean of ATE / odometry
 ATE, runs with at most 2 spurious landmarks ("clean"), spurious landmarks per run, runs with
-every matched landmark within 0.3 m ("within"), runs meeting those three targets at once, and
-the pairs of copies of one landmark in the final maps (run_mrclam's copy_pairs, summed).
+every matched landmark within 0.3 m ("within"), runs meeting those three targets at once, the
+pairs of copies of one landmark in the final maps (run_mrclam's copy_pairs: within chi2 9.21 of
+each other, both seen at least 10 times; summed) and every pair within chi2 9.21 of each other,
+young ones included (close_pairs, summed).
 Prints them with their limits, then PASS, or each figure outside its limit, the hints (what
 such a failure has meant before) and exits 1.
 """
@@ -30,6 +32,7 @@ def main(argv):
     parser.add_argument("--min-within", type=int)
     parser.add_argument("--min-all-three", type=int)
     parser.add_argument("--max-copy-pairs", type=int)
+    parser.add_argument("--max-close-pairs", type=int)
     parser.add_argument("--hint", action="append", default=[],
                         help="printed on failure (repeatable)")
     a = parser.parse_args(argv)
@@ -54,6 +57,8 @@ def main(argv):
         ("runs meeting all three targets", sum(all_three), True, a.min_all_three),
         ("copy pairs in the final maps",
          sum(r.get("copy_pairs", float("nan")) for r in runs), False, a.max_copy_pairs),
+        ("close pairs in the final maps (young ones too)",
+         sum(r.get("close_pairs", float("nan")) for r in runs), False, a.max_close_pairs),
     ]
     failed = False
     for name, value, at_least, limit in figures:

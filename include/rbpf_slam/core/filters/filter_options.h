@@ -62,11 +62,13 @@ struct ExistenceOptions {
   double visible_range_m = 0.0;      // negative evidence for points within [min, max] range;
   double visible_min_range_m = 0.0;  // visible_range_m = 0 switches it off
   double visible_fov_rad = M_PI;     // full width of the field of view, centred ahead
-  int max_count = 5;  // existence counter: +1 per sighting up to this, -1 per unexplained miss
-  // What one sighting adds to the counter (capped at max_count). A miss always takes one away,
-  // so with 1 a landmark the sensor detects in fewer than half of the frames that have it in
-  // view (a barcode camera: about 0.3-0.5 per frame at 1-6 m on MRCLAM) is eventually dropped;
-  // k > 1 weighs a sighting as k misses.
+  int max_count = 5;  // existence counter: +sighting_count per sighting up to this, -1 per
+                      // unexplained miss; a new landmark starts at 1 (its first sighting)
+  // What each later sighting adds to the counter (capped at max_count). A miss always takes one
+  // away, so with 1 a landmark the sensor detects in fewer than half of the frames that have it
+  // in view (a barcode camera: about 0.3-0.5 per frame at 1-6 m on MRCLAM) is eventually
+  // dropped; k > 1 weighs a sighting as k misses (a landmark then gains on average when it is
+  // detected in more than 1 / (k + 1) of those frames).
   int sighting_count = 1;
   // Duplicates: a point landmark seen in this update and another point landmark, both seen at
   // least merge_min_observations times, whose means differ by less than merge_chi2 (chi-square,
