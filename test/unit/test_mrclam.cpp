@@ -253,9 +253,11 @@ TEST(MrclamConfig, LandmarksFastSlam2Loads) {
   EXPECT_FALSE(config.filter.use_lines);
   EXPECT_TRUE(config.filter.use_points);
   EXPECT_FALSE(config.scan_matching.enabled);
-  // Negative evidence inside the camera's view (session 17; test/scripts/mrclam_heading.sh).
-  EXPECT_DOUBLE_EQ(config.filter.existence.visible_range_m, 3.0);
+  // Negative evidence inside the camera's view (session 17; out to 5 m with a sighting worth two
+  // misses since session 21; test/scripts/mrclam_heading.sh).
+  EXPECT_DOUBLE_EQ(config.filter.existence.visible_range_m, 5.0);
   EXPECT_DOUBLE_EQ(config.filter.existence.visible_fov_rad, 0.6);
+  EXPECT_EQ(config.filter.existence.sighting_count, 2);
 }
 
 }  // namespace
