@@ -456,6 +456,68 @@ TEST(FastSlam2, SampledAssociationDrawsByLikelihoodAndWeighsByTheirSum) {
   EXPECT_TRUE(fresh == fresh_copy);
 }
 
+// association.exclusive: two features of one frame that both fall in the gate of one mapped
+// point landmark (and of no other) take it once: the closer fit matches it (the first in the
+// frame on a tie), the other starts a new landmark, as two barcodes of a group do when one
+// landmark stands for both. Off, both match it.
+TEST(FastSlam2, ExclusiveAssociationMatchesALandmarkOncePerFrame) {
+  FilterOptions options;
+  options.particles = 1;
+  options.association.new_landmark_chi2 = options.association.gate_chi2;  // no ambiguous band
+  LandmarkMap map;
+  Landmark lm;
+  lm.mean << 4.0, 0.0;
+  lm.covariance = 0.01 * Eigen::Matrix2d::Identity();
+  map.add(lm);
+  const Eigen::Matrix3d pose_cov = Eigen::Vector3d(1e-4, 1e-4, 1e-5).asDiagonal();
+  Observation first, second;
+  first.z << 4.0, 0.02;   // 0.08 m to the left of the landmark
+  second.z << 4.0, -0.02;  // 0.08 m to the right: 0.16 m between them, one landmark's gate
+  first.noise = second.noise = Eigen::Vector2d(0.01, 0.0004).asDiagonal();
+  const ProposalFastSlam2 shared(options);
+  ProposalFastSlam2::Proposal q =
+      shared.refineProposal(map, Pose2::Zero(), pose_cov, {first, second});
+  ASSERT_EQ(q.matched.size(), 2u) << "both sightings should fall in the landmark's gate";
+  EXPECT_EQ(q.matched[0].second, 0);
+  EXPECT_EQ(q.matched[1].second, 0);
+  EXPECT_TRUE(q.fresh.empty());
+
+  options.association.exclusive = true;
+  const ProposalFastSlam2 exclusive(options);
+  q = exclusive.refineProposal(map, Pose2::Zero(), pose_cov, {first, second});
+  ASSERT_EQ(q.matched.size(), 1u);
+  EXPECT_EQ(q.matched[0].first, 0);  // the first feature of the frame keeps the landmark
+  EXPECT_EQ(q.matched[0].second, 0);
+  EXPECT_EQ(q.fresh, std::vector<int>{1});  // the second is a new landmark
+
+  // The closest fit takes its landmark first, whatever the features' order in the frame: with
+  // the landmark at the second sighting, the first feature is the new one.
+  map.set(0, [&] { Landmark moved = lm; moved.mean << 4.0, -0.08; return moved; }());
+  q = exclusive.refineProposal(map, Pose2::Zero(), pose_cov, {first, second});
+  ASSERT_EQ(q.matched.size(), 1u);
+  EXPECT_EQ(q.matched[0].first, 1);
+  EXPECT_EQ(q.fresh, std::vector<int>{0});
+
+  // A landmark for each sighting: each takes its own.
+  Landmark left = lm;
+  left.mean << 4.0, 0.08;
+  map.add(left);
+  q = exclusive.refineProposal(map, Pose2::Zero(), pose_cov, {first, second});
+  ASSERT_EQ(q.matched.size(), 2u);
+  for (const auto& [feature, landmark] : q.matched) EXPECT_EQ(landmark, feature == 0 ? 1 : 0);
+  EXPECT_TRUE(q.fresh.empty());
+
+  // Known identities are matched by id, never excluded.
+  Observation known_a = first, known_b = second;
+  known_a.known_id = known_b.known_id = 5;
+  LandmarkMap identified;
+  lm.id = 5;
+  lm.identified = true;
+  identified.add(lm);
+  q = exclusive.refineProposal(identified, Pose2::Zero(), pose_cov, {known_a, known_b});
+  EXPECT_EQ(q.matched.size(), 2u);
+}
+
 // Covariances that are zero, indefinite or asymmetric fall back to the configured noise
 // floors; a line given with rho < 0 is the same line as (-rho, theta + pi); thousands of
 // features in one frame are taken without harm.

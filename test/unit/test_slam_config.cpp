@@ -138,9 +138,12 @@ TEST(SlamConfig, OverridesApplyDottedKeys) {
   YAML::Node root = YAML::Load("particles: 5");
   applyOverride(&root, "association.gate_chi2=4.5");
   applyOverride(&root, "particles=7");
+  applyOverride(&root, "association.exclusive=true");
   const SlamConfig c = parseSlamConfig(root, "t");
   EXPECT_EQ(c.filter.particles, 7);
   EXPECT_DOUBLE_EQ(c.filter.association.gate_chi2, 4.5);
+  EXPECT_TRUE(c.filter.association.exclusive);
+  EXPECT_FALSE(core::AssociationOptions().exclusive);
   EXPECT_THROW(applyOverride(&root, "novalue"), ConfigError);
 }
 
@@ -214,6 +217,7 @@ TEST(SlamConfig, MrclamConfigsShareTheExistenceSettings) {
     EXPECT_EQ(c.filter.existence.max_count, 10) << name;
     EXPECT_EQ(c.filter.existence.sighting_count, 2) << name;
     EXPECT_EQ(c.filter.existence.merge_chi2, 9.21) << name;
+    EXPECT_FALSE(c.filter.association.exclusive) << name;  // session 22: tried, not shipped
   }
   EXPECT_EQ(core::ExistenceOptions().sighting_count, 1);
   EXPECT_EQ(core::ExistenceOptions().visible_range_m, 0.0);

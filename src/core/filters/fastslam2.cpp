@@ -3,6 +3,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <numeric>
 
 #include "rbpf_slam/core/filters/landmark_existence.h"
 #include "rbpf_slam/core/filters/measurement_models.h"
@@ -115,7 +116,8 @@ std::vector<Observation> FastSlam2::prepare(const FeatureSet& features, int* rej
 FastSlam2::Match FastSlam2::associate(const LandmarkMap& map, const Pose2& pose,
                                       const Eigen::Matrix3d& pose_cov,
                                       const Observation& observation,
-                                      std::vector<Match>* gated) const {
+                                      std::vector<Match>* gated,
+                                      const std::vector<int>* exclude) const {
   // Only the landmarks the spatial index offers: a superset of those passing the pre-gate,
   // in ascending index order, so the result is the scan's (associateByScan).
   const ObservationInMap seen = inMap(pose, observation);
@@ -133,6 +135,14 @@ FastSlam2::Match FastSlam2::associate(const LandmarkMap& map, const Pose2& pose,
     map.lineCandidates(query, &candidates);
   } else {
     map.pointCandidates(seen.value, pointPregateRadius(observation), &candidates);
+  }
+  if (exclude && !exclude->empty()) {
+    candidates.erase(std::remove_if(candidates.begin(), candidates.end(),
+                                    [exclude](int i) {
+                                      return std::find(exclude->begin(), exclude->end(), i) !=
+                                             exclude->end();
+                                    }),
+                     candidates.end());
   }
   return associateAmong(map, pose, pose_cov, observation, seen, &candidates, gated);
 }
@@ -287,10 +297,26 @@ FastSlam2::Proposal FastSlam2::refineProposal(const LandmarkMap& map, const Pose
   const AssociationOptions& a = options_.association;
   std::vector<Match> gated;
   std::vector<double> likelihoods;
-  for (size_t k = 0; k < observations.size(); ++k) {
+  std::vector<int> taken;  // point landmarks matched by an earlier feature of this frame
+  // Exclusive: the frame's features take their landmarks in order of their best match's
+  // Mahalanobis distance at the prior (the closest fit first), so that of two barcodes a mapped
+  // landmark could stand for, the one it was mapped from keeps it.
+  std::vector<size_t> order(observations.size());
+  std::iota(order.begin(), order.end(), 0);
+  if (a.exclusive && observations.size() > 1) {
+    std::vector<double> best(observations.size());
+    for (size_t k = 0; k < observations.size(); ++k) {
+      best[k] = associate(map, prior_mean, prior_cov, observations[k]).distance2;
+    }
+    std::stable_sort(order.begin(), order.end(),
+                     [&best](size_t i, size_t j) { return best[i] < best[j]; });
+  }
+  for (size_t k : order) {
     const Observation& o = observations[k];
     const bool sampling = a.sample && rng && o.known_id < 0;
-    Match m = associate(map, q.mean, q.cov, o, sampling ? &gated : nullptr);
+    const bool exclusive = a.exclusive && o.known_id < 0 && o.type == LandmarkType::kPoint;
+    Match m = associate(map, q.mean, q.cov, o, sampling ? &gated : nullptr,
+                        exclusive ? &taken : nullptr);
     if (m.index >= 0 && m.distance2 < a.gate_chi2) {
       double ll = 0.0;       // the weight's factor for this observation (log)
       double drawn_ll = 0.0;  // the likelihood of the match taken (log)
@@ -340,6 +366,7 @@ FastSlam2::Proposal FastSlam2::refineProposal(const LandmarkMap& map, const Pose
       q.mean.z() = wrapAngle(q.mean.z());
       q.cov = c.covariance;
       q.matched.emplace_back(static_cast<int>(k), m.index);
+      if (exclusive) taken.push_back(m.index);
     } else if (m.index < 0 || m.distance2 > a.new_landmark_chi2) {
       // Likelihood of a new landmark: as if observed at the new-landmark threshold.
       const double scale = rule_->weightNoiseScale();  // as for a match (1: FastSLAM 2.0)

@@ -115,8 +115,10 @@ class FastSlam2 : public SlamFilter {
   /// Maximum-likelihood landmark for an observation among those the map's spatial index
   /// offers near it.
   /// With `gated`, also every landmark inside the association gate, in index order.
+  /// Landmarks listed in `exclude` (e.g. matched by another feature of the frame) are skipped.
   Match associate(const LandmarkMap& map, const Pose2& pose, const Eigen::Matrix3d& pose_cov,
-                  const Observation& observation, std::vector<Match>* gated = nullptr) const;
+                  const Observation& observation, std::vector<Match>* gated = nullptr,
+                  const std::vector<int>* exclude = nullptr) const;
   /// The same by a scan of every landmark, O(N): the reference associate() must equal.
   Match associateByScan(const LandmarkMap& map, const Pose2& pose,
                         const Eigen::Matrix3d& pose_cov, const Observation& observation) const;

@@ -28,6 +28,10 @@ struct AssociationOptions {
   // The weight of a sampled match: "sum" of the gated landmarks' likelihoods (the draw's
   // importance weight) or "max", the most likely one's as without sampling (no gain for copies).
   std::string sample_weight = "sum";
+  // One-to-one within a frame: a point landmark matched by one feature of the frame is not a
+  // candidate for the frame's other features (features without a known id). The features take
+  // their landmarks in order of their best match's Mahalanobis distance at the prior pose.
+  bool exclusive = false;
 };
 
 /// Measurement noise assumed by the filter when a feature carries no covariance of its own.
