@@ -474,9 +474,9 @@ TEST(FastSlam2, ExclusiveAssociationMatchesALandmarkOncePerFrame) {
   first.z << 4.0, 0.02;   // 0.08 m to the left of the landmark
   second.z << 4.0, -0.02;  // 0.08 m to the right: 0.16 m between them, one landmark's gate
   first.noise = second.noise = Eigen::Vector2d(0.01, 0.0004).asDiagonal();
-  const ProposalFastSlam2 shared(options);
+  const ProposalFastSlam2 plain(options);
   ProposalFastSlam2::Proposal q =
-      shared.refineProposal(map, Pose2::Zero(), pose_cov, {first, second});
+      plain.refineProposal(map, Pose2::Zero(), pose_cov, {first, second});
   ASSERT_EQ(q.matched.size(), 2u) << "both sightings should fall in the landmark's gate";
   EXPECT_EQ(q.matched[0].second, 0);
   EXPECT_EQ(q.matched[1].second, 0);
@@ -489,6 +489,16 @@ TEST(FastSlam2, ExclusiveAssociationMatchesALandmarkOncePerFrame) {
   EXPECT_EQ(q.matched[0].first, 0);  // the first feature of the frame keeps the landmark
   EXPECT_EQ(q.matched[0].second, 0);
   EXPECT_EQ(q.fresh, std::vector<int>{1});  // the second is a new landmark
+  // The same with sampled association: the taken landmark is not drawn a second time.
+  options.association.sample = true;
+  const ProposalFastSlam2 sampled(options);
+  options.association.sample = false;
+  Rng rng(5);
+  for (int i = 0; i < 20; ++i) {
+    q = sampled.refineProposal(map, Pose2::Zero(), pose_cov, {first, second}, &rng);
+    ASSERT_EQ(q.matched.size(), 1u);
+    EXPECT_EQ(q.fresh.size(), 1u);
+  }
 
   // The closest fit takes its landmark first, whatever the features' order in the frame: with
   // the landmark at the second sighting, the first feature is the new one.
@@ -498,7 +508,7 @@ TEST(FastSlam2, ExclusiveAssociationMatchesALandmarkOncePerFrame) {
   EXPECT_EQ(q.matched[0].first, 1);
   EXPECT_EQ(q.fresh, std::vector<int>{0});
 
-  // A landmark for each sighting: each takes its own.
+  // A landmark for each sighting: each takes its own (nothing is excluded needlessly).
   Landmark left = lm;
   left.mean << 4.0, 0.08;
   map.add(left);
@@ -507,7 +517,8 @@ TEST(FastSlam2, ExclusiveAssociationMatchesALandmarkOncePerFrame) {
   for (const auto& [feature, landmark] : q.matched) EXPECT_EQ(landmark, feature == 0 ? 1 : 0);
   EXPECT_TRUE(q.fresh.empty());
 
-  // Known identities are matched by id, never excluded.
+  // Known identities are matched by id, never excluded; but the landmark a known id took is
+  // not offered to an unidentified feature of the frame.
   Observation known_a = first, known_b = second;
   known_a.known_id = known_b.known_id = 5;
   LandmarkMap identified;
@@ -515,6 +526,12 @@ TEST(FastSlam2, ExclusiveAssociationMatchesALandmarkOncePerFrame) {
   lm.identified = true;
   identified.add(lm);
   q = exclusive.refineProposal(identified, Pose2::Zero(), pose_cov, {known_a, known_b});
+  EXPECT_EQ(q.matched.size(), 2u);
+  q = exclusive.refineProposal(identified, Pose2::Zero(), pose_cov, {known_a, second});
+  ASSERT_EQ(q.matched.size(), 1u);
+  EXPECT_EQ(q.matched[0].first, 0);
+  EXPECT_EQ(q.fresh, std::vector<int>{1});
+  q = plain.refineProposal(identified, Pose2::Zero(), pose_cov, {known_a, second});
   EXPECT_EQ(q.matched.size(), 2u);
 }
 

@@ -206,7 +206,7 @@ TEST(SlamConfig, LandmarksHinfConfigSelectsHinfFastSlam) {
   EXPECT_EQ(core::createFilter(c.filter)->variant(), "hinf_fastslam");
 }
 
-TEST(SlamConfig, MrclamConfigsShareTheExistenceSettings) {
+TEST(SlamConfig, MrclamConfigsShareTheExistenceAndAssociationSettings) {
   // Session 21: negative evidence out to 5 m, a sighting worth two misses, in both MRCLAM
   // configs (docs/results.md); the code defaults keep one count per sighting.
   for (const char* name : {"landmarks_fastslam2.yaml", "landmarks_hinf.yaml"}) {

@@ -286,6 +286,28 @@ double FastSlam2::matchLogLikelihood(const Eigen::Matrix3d& pose_cov,
   return logGaussian2(innovation(observation.z, match.prediction.z), s, &s_inv);
 }
 
+std::vector<size_t> FastSlam2::associationOrder(
+    const LandmarkMap& map, const Pose2& prior_mean, const Eigen::Matrix3d& prior_cov,
+    const std::vector<Observation>& observations) const {
+  std::vector<size_t> order(observations.size());
+  std::iota(order.begin(), order.end(), 0);
+  if (!options_.association.exclusive) return order;
+  std::vector<size_t> slots;  // the unidentified point features, in frame order
+  for (size_t k = 0; k < observations.size(); ++k) {
+    if (observations[k].type == LandmarkType::kPoint && observations[k].known_id < 0) {
+      slots.push_back(k);
+    }
+  }
+  if (slots.size() < 2) return order;
+  std::vector<double> best(observations.size(), 0.0);
+  for (size_t k : slots) best[k] = associate(map, prior_mean, prior_cov, observations[k]).distance2;
+  std::vector<size_t> sorted = slots;
+  std::stable_sort(sorted.begin(), sorted.end(),
+                   [&best](size_t i, size_t j) { return best[i] < best[j]; });
+  for (size_t i = 0; i < slots.size(); ++i) order[slots[i]] = sorted[i];
+  return order;
+}
+
 FastSlam2::Proposal FastSlam2::refineProposal(const LandmarkMap& map, const Pose2& prior_mean,
                                               const Eigen::Matrix3d& prior_cov,
                                               const std::vector<Observation>& observations,
@@ -297,24 +319,12 @@ FastSlam2::Proposal FastSlam2::refineProposal(const LandmarkMap& map, const Pose
   const AssociationOptions& a = options_.association;
   std::vector<Match> gated;
   std::vector<double> likelihoods;
-  std::vector<int> taken;  // point landmarks matched by an earlier feature of this frame
-  // Exclusive: the frame's features take their landmarks in order of their best match's
-  // Mahalanobis distance at the prior (the closest fit first), so that of two barcodes a mapped
-  // landmark could stand for, the one it was mapped from keeps it.
-  std::vector<size_t> order(observations.size());
-  std::iota(order.begin(), order.end(), 0);
-  if (a.exclusive && observations.size() > 1) {
-    std::vector<double> best(observations.size());
-    for (size_t k = 0; k < observations.size(); ++k) {
-      best[k] = associate(map, prior_mean, prior_cov, observations[k]).distance2;
-    }
-    std::stable_sort(order.begin(), order.end(),
-                     [&best](size_t i, size_t j) { return best[i] < best[j]; });
-  }
-  for (size_t k : order) {
+  std::vector<int> taken;  // exclusive: point landmarks already matched by a feature of the frame
+  for (size_t k : associationOrder(map, prior_mean, prior_cov, observations)) {
     const Observation& o = observations[k];
     const bool sampling = a.sample && rng && o.known_id < 0;
-    const bool exclusive = a.exclusive && o.known_id < 0 && o.type == LandmarkType::kPoint;
+    const bool is_point = o.type == LandmarkType::kPoint;
+    const bool exclusive = a.exclusive && o.known_id < 0 && is_point;
     Match m = associate(map, q.mean, q.cov, o, sampling ? &gated : nullptr,
                         exclusive ? &taken : nullptr);
     if (m.index >= 0 && m.distance2 < a.gate_chi2) {
@@ -366,7 +376,7 @@ FastSlam2::Proposal FastSlam2::refineProposal(const LandmarkMap& map, const Pose
       q.mean.z() = wrapAngle(q.mean.z());
       q.cov = c.covariance;
       q.matched.emplace_back(static_cast<int>(k), m.index);
-      if (exclusive) taken.push_back(m.index);
+      if (a.exclusive && is_point) taken.push_back(m.index);  // known ids take theirs too
     } else if (m.index < 0 || m.distance2 > a.new_landmark_chi2) {
       // Likelihood of a new landmark: as if observed at the new-landmark threshold.
       const double scale = rule_->weightNoiseScale();  // as for a match (1: FastSLAM 2.0)

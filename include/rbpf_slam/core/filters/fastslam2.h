@@ -139,6 +139,13 @@ class FastSlam2 : public SlamFilter {
                        const Observation& observation, const ObservationInMap& seen,
                        const std::vector<int>* candidates,
                        std::vector<Match>* gated = nullptr) const;
+  /// The order in which refineProposal takes the observations: the frame's, except that with
+  /// association.exclusive the point features without a known id swap places among themselves
+  /// into ascending order of their best match's Mahalanobis distance at the prior pose (the
+  /// closest fit takes its landmark first; ties keep the frame's order).
+  std::vector<size_t> associationOrder(const LandmarkMap& map, const Pose2& prior_mean,
+                                       const Eigen::Matrix3d& prior_cov,
+                                       const std::vector<Observation>& observations) const;
   /// log N(z; predicted z, H_pose P H_pose^T + scale (H_lm Sigma H_lm^T + R)) of a match.
   double matchLogLikelihood(const Eigen::Matrix3d& pose_cov, const Observation& observation,
                             const Match& match) const;

@@ -29,8 +29,9 @@ struct AssociationOptions {
   // importance weight) or "max", the most likely one's as without sampling (no gain for copies).
   std::string sample_weight = "sum";
   // One-to-one within a frame: a point landmark matched by one feature of the frame is not a
-  // candidate for the frame's other features (features without a known id). The features take
-  // their landmarks in order of their best match's Mahalanobis distance at the prior pose.
+  // candidate for the frame's other point features without a known id, which take their
+  // landmarks in order of their best match's Mahalanobis distance at the prior pose. Applies to
+  // fastslam2 and hinf_fastslam, and to robust_fastslam2's plain steps (not its robust steps).
   bool exclusive = false;
 };
 
@@ -83,7 +84,7 @@ struct ExistenceOptions {
   // evidence cannot remove it, and with sampled association both keep being matched. Landmarks
   // of features with a known id are never removed as duplicates. Checked after each update that
   // runs the existence bookkeeping (not on robust_fastslam2's ancestor steps). 0: off; the
-  // other two defaults were chosen on MRCLAM dataset 6 (barcodes 0.17 m apart).
+  // other two defaults were chosen on MRCLAM dataset 6 (barcodes 0.18-0.25 m apart).
   double merge_chi2 = 0.0;
   int merge_min_observations = 10;
   double merge_max_distance_m = 0.5;
