@@ -289,16 +289,16 @@ double FastSlam2::matchLogLikelihood(const Eigen::Matrix3d& pose_cov,
 std::vector<size_t> FastSlam2::associationOrder(
     const LandmarkMap& map, const Pose2& prior_mean, const Eigen::Matrix3d& prior_cov,
     const std::vector<Observation>& observations) const {
-  std::vector<size_t> order(observations.size());
-  std::iota(order.begin(), order.end(), 0);
-  if (!options_.association.exclusive) return order;
+  if (!options_.association.exclusive) return {};
   std::vector<size_t> slots;  // the unidentified point features, in frame order
   for (size_t k = 0; k < observations.size(); ++k) {
     if (observations[k].type == LandmarkType::kPoint && observations[k].known_id < 0) {
       slots.push_back(k);
     }
   }
-  if (slots.size() < 2) return order;
+  if (slots.size() < 2) return {};
+  std::vector<size_t> order(observations.size());
+  std::iota(order.begin(), order.end(), 0);
   std::vector<double> best(observations.size(), 0.0);
   for (size_t k : slots) best[k] = associate(map, prior_mean, prior_cov, observations[k]).distance2;
   std::vector<size_t> sorted = slots;
@@ -320,7 +320,9 @@ FastSlam2::Proposal FastSlam2::refineProposal(const LandmarkMap& map, const Pose
   std::vector<Match> gated;
   std::vector<double> likelihoods;
   std::vector<int> taken;  // exclusive: point landmarks already matched by a feature of the frame
-  for (size_t k : associationOrder(map, prior_mean, prior_cov, observations)) {
+  const std::vector<size_t> order = associationOrder(map, prior_mean, prior_cov, observations);
+  for (size_t n = 0; n < observations.size(); ++n) {
+    const size_t k = order.empty() ? n : order[n];
     const Observation& o = observations[k];
     const bool sampling = a.sample && rng && o.known_id < 0;
     const bool is_point = o.type == LandmarkType::kPoint;

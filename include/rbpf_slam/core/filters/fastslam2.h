@@ -142,7 +142,8 @@ class FastSlam2 : public SlamFilter {
   /// The order in which refineProposal takes the observations: the frame's, except that with
   /// association.exclusive the point features without a known id swap places among themselves
   /// into ascending order of their best match's Mahalanobis distance at the prior pose (the
-  /// closest fit takes its landmark first; ties keep the frame's order).
+  /// closest fit takes its landmark first; ties keep the frame's order). Empty when that is
+  /// the frame's order (always without the option: nothing is allocated on the default path).
   std::vector<size_t> associationOrder(const LandmarkMap& map, const Pose2& prior_mean,
                                        const Eigen::Matrix3d& prior_cov,
                                        const std::vector<Observation>& observations) const;
