@@ -61,32 +61,30 @@ for bag in intel aces; do
     echo "bench.sh: $DATA/$bag.bag missing, skipping its laser run" >&2
   fi
 done
+# prepare NAME BAG "CONFIG..." COMMAND...: runs COMMAND (it writes BAG and BAG's .ref.tum) and
+# adds one end-to-end case per config on that bag; a failed command is reported and skipped.
+prepare() {
+  local name=$1 bag=$2 configs=$3
+  shift 3
+  echo "== $name: $(basename "$1")"
+  if ! "$@" >"$OUT/$name.prepare.log" 2>&1; then
+    echo "bench.sh: preparing $name failed (log: $OUT/$name.prepare.log)" >&2
+    return 0
+  fi
+  COMMANDS+=("$*")
+  local config
+  for config in $configs; do CASES+=("$name|$config|$bag|${bag%.bag}.ref.tum"); done
+}
 # Sonar: the 4 Hz ring emulated from the ACES laser log (tools/emulate_sonar_ring.py, ~20 s).
 if [ -f "$DATA/aces.bag" ]; then
-  cmd=(/usr/bin/python3 "$ROOT/tools/emulate_sonar_ring.py" --bag "$DATA/aces.bag"
-       --reference "$DATA/aces.ref.tum" --output "$OUT/aces_sonar4.bag" --rate 4)
-  echo "== emulate_sonar_ring aces 4 Hz"
-  if "${cmd[@]}" >"$OUT/emulate_sonar.log" 2>&1; then
-    COMMANDS+=("${cmd[*]}")
-    for config in sonar_fastslam2 sonar_robust; do
-      CASES+=("aces_sonar4|$config|$OUT/aces_sonar4.bag|$OUT/aces_sonar4.ref.tum")
-    done
-  else
-    echo "bench.sh: emulating the sonar ring failed (log: $OUT/emulate_sonar.log)" >&2
-  fi
+  prepare aces_sonar4 "$OUT/aces_sonar4.bag" "sonar_fastslam2 sonar_robust" \
+    /usr/bin/python3 "$ROOT/tools/emulate_sonar_ring.py" --bag "$DATA/aces.bag" \
+    --reference "$DATA/aces.ref.tum" --output "$OUT/aces_sonar4.bag" --rate 4
 fi
 # Range-bearing landmarks: UTIAS MRCLAM dataset 6, robot 1, unknown association.
 if [ -d "$DATA/mrclam6" ]; then
-  cmd=("$BIN/mrclam_to_bag" "$DATA/mrclam6" 1 "$OUT/mrclam_robot1.bag")
-  echo "== mrclam_to_bag robot 1"
-  if "${cmd[@]}" >"$OUT/mrclam_to_bag.log" 2>&1; then
-    COMMANDS+=("${cmd[*]}")
-    for config in landmarks_fastslam2 landmarks_hinf; do
-      CASES+=("mrclam_robot1|$config|$OUT/mrclam_robot1.bag|$OUT/mrclam_robot1.ref.tum")
-    done
-  else
-    echo "bench.sh: mrclam_to_bag failed (log: $OUT/mrclam_to_bag.log)" >&2
-  fi
+  prepare mrclam_robot1 "$OUT/mrclam_robot1.bag" "landmarks_fastslam2 landmarks_hinf" \
+    "$BIN/mrclam_to_bag" "$DATA/mrclam6" 1 "$OUT/mrclam_robot1.bag"
 fi
 
 for entry in "${CASES[@]}"; do
