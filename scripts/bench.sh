@@ -5,7 +5,7 @@
 # (FastSLAM 2.0 and H-infinity), and writes the figures, the machine and the exact commands to
 # docs/benchmarks.md. Timing only, never pass/fail.
 #
-#   ./scripts/bench.sh                      # about 3 minutes after the build, on 2 cores
+#   ./scripts/bench.sh                      # about 4 minutes after the build, on 2 cores
 #   BENCH_MIN_TIME=1 ./scripts/bench.sh     # steadier figures, slower
 #   BENCH_SKIP_BUILD=1 BUILD_DIR=/tmp/b ./scripts/bench.sh   # use an existing build
 #   BENCH_OFFLINE_ARGS="--set particles=30" ./scripts/bench.sh  # extra offline_slam arguments
@@ -17,7 +17,6 @@ source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 MIN_TIME=${BENCH_MIN_TIME:-0.5}  # seconds per benchmark case (google benchmark min_time)
 REPETITIONS=${BENCH_REPETITIONS:-3}  # runs per case; the report gives their median
 DATA=${BENCH_DATA:-$ROOT/../shared/data}
-CONFIG=$ROOT/config/laser_fastslam2.yaml
 REPORT=${BENCH_REPORT:-$ROOT/docs/benchmarks.md}
 BUILD=${BUILD_DIR:-$BUILD}
 OUT=$BUILD/bench
@@ -66,7 +65,7 @@ done
 prepare() {
   local name=$1 bag=$2 configs=$3
   shift 3
-  echo "== $name: $(basename "$1")"
+  echo "== prepare $name: $*"
   if ! "$@" >"$OUT/$name.prepare.log" 2>&1; then
     echo "bench.sh: preparing $name failed (log: $OUT/$name.prepare.log)" >&2
     return 0

@@ -15,14 +15,14 @@ path would give: the floor of issue 6's "within 0.3 m".
 runs: for an OUT directory of benchmarks/run_mrclam (results.json, bags/, runs/CONFIG/), per
 robot, medians over the seeds of:
   - the mapped point landmarks' radial offset and |tangential| offset, after the runner's
-    alignment (trajectory, then a rigid fit to the nearest surveyed landmarks); landmarks seen
-    at least 30 times, matched within 0.5 m;
+    alignment (trajectory, then a rigid fit of all point landmarks to the nearest surveyed
+    ones); landmarks seen at least 30 times, matched within 0.5 m;
   - the best particle's pose error at the update stamps in the true robot frame (along the
     heading, lateral) and its heading error (RMS), after the trajectory's alignment;
   - with runs made with --known-ids (the landmark of every sighting known): each landmark
-    mapped again from the filter's own best path (aligned as above) and the measurements
-    (median of the projected sightings), against the filter's own landmark: if the two agree,
-    the map's error is the path's error, not the landmark filter's.
+    mapped again from the filter's own best path (trajectory alignment) and the measurements
+    (Gauss-Newton as `vicon`), against the filter's own landmark: where the two agree, the map's
+    error is the path's error, not the landmark filter's.
 
 Used for docs/results.md, "Session 23" (dataset 6):
   tools/mrclam_map_error.py vicon ../shared/data/mrclam6
@@ -39,7 +39,6 @@ import sys
 from pathlib import Path
 
 import numpy as np
-import yaml
 
 ROOT = Path(__file__).resolve().parent.parent
 DEFAULT_DATA = ROOT.parent / "shared" / "data" / "mrclam6"
@@ -120,6 +119,9 @@ def vicon(args):
                                 np.interp(t, gt[:, 0], heading), m[:, 2], m[:, 3])
             errors.append(np.linalg.norm(lm - surveyed[subject]))
             radial.append(radial_offset(lm, surveyed[subject], centre)[0])
+        if not errors:
+            print("| %d | 0 | n/a | n/a | n/a |" % robot)
+            continue
         print("| %d | %d | %.3f | %.3f | %+.3f |" % (robot, len(errors), max(errors),
                                                     np.mean(errors), np.mean(radial)))
 
@@ -129,13 +131,16 @@ def yaw(tum):
 
 
 def one_run(rm, out, config, record, barcodes, surveyed, data):
+    import yaml  # only here: `vicon` needs no PyYAML
     suffix = ("_known" if record.get("known_ids") else "") + (
         "_delay%g" % record["command_delay_s"] if record.get("command_delay_s") else "")
     prefix = out / "bags" / ("robot%d%s" % (record["robot"], suffix))
     run = out / "runs" / config / ("robot%d_seed%d%s" % (record["robot"], record["seed"], suffix))
     ref = load(str(prefix) + ".ref.tum")
+    odom = load(str(prefix) + ".odom.tum")
     est = load(run / "trajectory.tum")
-    est = est[(est[:, 0] >= ref[0, 0]) & (est[:, 0] <= ref[-1, 0])]
+    # The runner's window: stamps covered by both the reference and the odometry.
+    est = est[(est[:, 0] >= max(ref[0, 0], odom[0, 0])) & (est[:, 0] <= min(ref[-1, 0], odom[-1, 0]))]
     truth = rm.interpolate(est[:, 0], ref[:, 0], ref[:, 1:3])
     _, rot, shift = rm.ate(est[:, 1:3], truth)
     angle = math.atan2(rot[1, 0], rot[0, 0])
@@ -147,18 +152,20 @@ def one_run(rm, out, config, record, barcodes, surveyed, data):
     lateral = -e[:, 0] * np.sin(true_heading) + e[:, 1] * np.cos(true_heading)
     heading_error = np.angle(np.exp(1j * (path_heading - true_heading)))
 
-    # The mapped landmarks, aligned as the runner does (trajectory, then nearest surveyed).
+    # The mapped landmarks, aligned as the runner does (trajectory, then a rigid fit of all point
+    # landmarks to their nearest surveyed ones); offsets of those seen >= MIN_SEEN times.
     listed = yaml.safe_load(open(str(prefix) + ".landmarks.yaml"))["landmarks"]
-    ids = [l["id"] for l in listed]
     sv = np.array([[l["x_m"], l["y_m"]] for l in listed])
     centre = sv.mean(0)
     points = [p for p in (yaml.safe_load(open(run / "landmarks.yaml")).get("landmarks") or [])
-              if p["type"] == "point" and p["observations"] >= MIN_SEEN]
+              if p["type"] == "point"]
     offsets = []
-    if len(points) >= 3:
+    if points:
         xy = np.array([[p["x"], p["y"]] for p in points])
         aligned = xy @ rot.T + shift
         for _ in range(10):
+            if len(xy) < 3:
+                break
             d = np.linalg.norm(aligned[:, None] - sv[None], axis=2)
             near, ok = d.argmin(1), d.min(1) < 0.5
             if ok.sum() < 3:
@@ -167,7 +174,8 @@ def one_run(rm, out, config, record, barcodes, surveyed, data):
             aligned = xy @ r2.T + t2
         d = np.linalg.norm(aligned[:, None] - sv[None], axis=2)
         for i in np.where(d.min(1) < 0.5)[0]:
-            offsets.append(radial_offset(aligned[i], sv[d[i].argmin()], centre))
+            if points[i]["observations"] >= MIN_SEEN:
+                offsets.append(radial_offset(aligned[i], sv[d[i].argmin()], centre))
 
     # Known ids: each landmark mapped again from the filter's own path (trajectory alignment only).
     remapped = []
@@ -179,11 +187,9 @@ def one_run(rm, out, config, record, barcodes, surveyed, data):
             if len(m) < 10:
                 continue
             t = m[:, 0]
-            hx = np.interp(t, est[:, 0], path[:, 0])
-            hy = np.interp(t, est[:, 0], path[:, 1])
-            hh = np.interp(t, est[:, 0], path_heading)
-            proj = np.array([np.median(hx + m[:, 2] * np.cos(hh + m[:, 3])),
-                             np.median(hy + m[:, 2] * np.sin(hh + m[:, 3]))])
+            proj = map_from_poses(np.interp(t, est[:, 0], path[:, 0]),
+                                  np.interp(t, est[:, 0], path[:, 1]),
+                                  np.interp(t, est[:, 0], path_heading), m[:, 2], m[:, 3])
             own = np.array([p["x"], p["y"]]) @ rot.T + shift
             remapped.append((np.linalg.norm(proj - surveyed[p["id"]]),
                              np.linalg.norm(own - surveyed[p["id"]]), np.linalg.norm(proj - own)))
@@ -204,13 +210,18 @@ def runs(args):
     if not results.is_file():
         sys.exit("mrclam_map_error: missing %s (an OUT of benchmarks/run_mrclam)" % results)
     rm = run_mrclam()
-    barcodes, surveyed = dataset(args.data)
+    stored = json.load(open(results))
+    data = args.data
+    if data is None:  # the dataset the runs were made from (run_mrclam --data), else the default
+        words = stored.get("command", "").split()
+        data = words[words.index("--data") + 1] if "--data" in words[:-1] else str(DEFAULT_DATA)
+    barcodes, surveyed = dataset(data)
     per = {}
-    for record in json.load(open(results))["runs"]:
+    for record in stored["runs"]:
         if record["config"] != args.config:
             continue
         per.setdefault(record["robot"], []).append(
-            one_run(rm, out, args.config, record, barcodes, surveyed, args.data))
+            one_run(rm, out, args.config, record, barcodes, surveyed, data))
     if not per:
         sys.exit("mrclam_map_error: no run of config %s in %s" % (args.config, results))
     keys = ["radial", "tangential", "along", "lateral", "heading_rms_deg", "remapped_max",
@@ -239,7 +250,9 @@ def main(argv):
     r = sub.add_parser("runs", help="offsets of a run_mrclam output")
     r.add_argument("out")
     r.add_argument("--config", default="landmarks_hinf")
-    r.add_argument("--data", default=str(DEFAULT_DATA))
+    r.add_argument("--data", default=None,
+                   help="dataset the runs were made from (default: run_mrclam's --data, read "
+                        "from OUT/results.json, else ../shared/data/mrclam6)")
     args = parser.parse_args(argv)
     if args.command == "vicon":
         vicon(args)

@@ -74,7 +74,10 @@ fi
 # tools/mrclam_map_error.py vicon (docs/results.md session 23): robot 1's landmarks mapped from
 # the Vicon poses fall within 0.3 m of the survey (0.13 m), every one of the 15 is mapped, and a
 # missing dataset is named. A wrong sign in the bearing or a unit slip puts them metres off.
-vicon=$(/usr/bin/python3 "$root/tools/mrclam_map_error.py" vicon "$data" --robots 1)
+vicon=$(/usr/bin/python3 "$root/tools/mrclam_map_error.py" vicon "$data" --robots 1 2>&1) || {
+  echo "FAIL: mrclam_map_error.py vicon failed: $vicon"
+  status=1
+}
 row=$(printf '%s\n' "$vicon" | awk -F'|' '$2 + 0 == 1 { print $3 + 0, $4 + 0 }')
 if ! printf '%s\n' "${row:-x}" | awk '{ exit !($1 == 15 && $2 > 0 && $2 < 0.3) }'; then
   echo "FAIL: robot 1 mapped from Vicon: landmarks, max err = ${row:-missing}, expected 15 and < 0.3 m"
