@@ -82,6 +82,7 @@ void readMeasurement(YamlSection section, core::MeasurementOptions* o) {
   section.read("sigma_rho_m", &o->sigma_rho_m);
   section.read("sigma_theta_rad", &o->sigma_theta_rad);
   section.read("covariance_inflation", &o->covariance_inflation);
+  section.read("landmark_iterations", &o->landmark_iterations);
   section.finish();
 }
 

@@ -335,8 +335,10 @@ class ProposalFastSlam2 : public FastSlam2 {
   using FastSlam2::FastSlam2;
   ProposalFastSlam2(const FilterOptions& options, std::unique_ptr<EstimatorRule> rule)
       : FastSlam2(options, std::move(rule)) {}
+  using FastSlam2::Match;
   using FastSlam2::Proposal;
   using FastSlam2::refineProposal;
+  using FastSlam2::updateLandmark;
 };
 
 namespace {
@@ -454,6 +456,62 @@ TEST(FastSlam2, SampledAssociationDrawsByLikelihoodAndWeighsByTheirSum) {
   ASSERT_EQ(q.matched.size(), 1u);
   EXPECT_EQ(q.matched[0].second, 1);
   EXPECT_TRUE(fresh == fresh_copy);
+}
+
+// measurement.landmark_iterations: a point landmark's update relinearised at the updated mean is
+// Gauss-Newton on the prior plus the sighting, so it reaches the MAP estimate, which the one-step
+// EKF misses when the range is weak against the bearing; one iteration is the EKF step itself.
+TEST(FastSlam2, IteratedLandmarkUpdateReachesTheMapEstimate) {
+  const Eigen::Vector2d x0(4.0, 0.0);
+  const Eigen::Matrix2d p = 0.09 * Eigen::Matrix2d::Identity();  // 0.3 m each way
+  Observation o;
+  o.z << 3.5, 0.12;  // shorter and 0.12 rad to the left of the prior mean
+  o.noise = Eigen::Vector2d(0.3 * 0.3, 0.005 * 0.005).asDiagonal();
+  // The MAP cost: J(x) = (x - x0)^T P^-1 (x - x0) + r(x)^T R^-1 r(x), r = z - h(0, x).
+  const auto cost = [&](const Eigen::Vector2d& x) {
+    const Eigen::Vector2d r(o.z.x() - x.norm(), wrapAngle(o.z.y() - std::atan2(x.y(), x.x())));
+    return (x - x0).dot(p.inverse() * (x - x0)) + r.dot(o.noise.inverse() * r);
+  };
+  const auto update = [&](int iterations) {
+    FilterOptions options;
+    options.particles = 1;
+    options.measurement.landmark_iterations = iterations;
+    ProposalFastSlam2 filter(options);
+    LandmarkMap map;
+    Landmark lm;
+    lm.mean = x0;
+    lm.covariance = p;
+    map.add(lm);
+    ProposalFastSlam2::Match match;
+    match.index = 0;
+    double ll = 0.0;
+    filter.updateLandmark(&map, match, Pose2::Zero(), o, &ll);
+    return map[0];
+  };
+  // One iteration: the EKF step by hand, H the point Jacobian at x0 = (4, 0).
+  Eigen::Matrix2d h;
+  h << 1.0, 0.0, 0.0, 0.25;
+  const Eigen::Matrix2d k = p * h.transpose() * (h * p * h.transpose() + o.noise).inverse();
+  const Eigen::Vector2d ekf = x0 + k * (o.z - Eigen::Vector2d(4.0, 0.0));
+  const Landmark one = update(1);
+  EXPECT_NEAR((one.mean - ekf).norm(), 0.0, 1e-12);
+  EXPECT_NEAR((one.covariance - (Eigen::Matrix2d::Identity() - k * h) * p).norm(), 0.0, 1e-12);
+  // Ten iterations: a stationary point of J (central differences), and below the EKF's cost.
+  const Landmark ten = update(10);
+  const double step = 1e-6;
+  for (int axis = 0; axis < 2; ++axis) {
+    const Eigen::Vector2d e = step * Eigen::Vector2d::Unit(axis);
+    const double gradient = (cost(ten.mean + e) - cost(ten.mean - e)) / (2.0 * step);
+    EXPECT_NEAR(gradient, 0.0, 1e-3) << "axis " << axis;
+  }
+  EXPECT_LT(cost(ten.mean), cost(one.mean) - 0.1);
+  // The EKF step lands off the sighting's bearing line; the iterated one on it (the bearing is
+  // 60x stronger than the prior across the line of sight).
+  EXPECT_GT(std::fabs(std::atan2(one.mean.y(), one.mean.x()) - o.z.y()), 0.005);
+  EXPECT_LT(std::fabs(std::atan2(ten.mean.y(), ten.mean.x()) - o.z.y()), 0.002);
+  FilterOptions bad;
+  bad.measurement.landmark_iterations = 0;
+  EXPECT_THROW(validate(bad), std::invalid_argument);
 }
 
 // association.exclusive: two features of one frame that both fall in the gate of one mapped

@@ -139,7 +139,10 @@ TEST(SlamConfig, OverridesApplyDottedKeys) {
   applyOverride(&root, "association.gate_chi2=4.5");
   applyOverride(&root, "particles=7");
   applyOverride(&root, "association.exclusive=true");
+  applyOverride(&root, "measurement.landmark_iterations=3");
   const SlamConfig c = parseSlamConfig(root, "t");
+  EXPECT_EQ(c.filter.measurement.landmark_iterations, 3);
+  EXPECT_EQ(core::MeasurementOptions().landmark_iterations, 1);
   EXPECT_EQ(c.filter.particles, 7);
   EXPECT_DOUBLE_EQ(c.filter.association.gate_chi2, 4.5);
   EXPECT_TRUE(c.filter.association.exclusive);
@@ -218,6 +221,7 @@ TEST(SlamConfig, MrclamConfigsShareTheExistenceAndAssociationSettings) {
     EXPECT_EQ(c.filter.existence.sighting_count, 2) << name;
     EXPECT_EQ(c.filter.existence.merge_chi2, 9.21) << name;
     EXPECT_FALSE(c.filter.association.exclusive) << name;  // session 22: tried, not shipped
+    EXPECT_EQ(c.filter.measurement.landmark_iterations, 1) << name;  // session 23: not shipped
   }
   EXPECT_EQ(core::ExistenceOptions().sighting_count, 1);
   EXPECT_EQ(core::ExistenceOptions().visible_range_m, 0.0);

@@ -250,11 +250,21 @@ bool FastSlam2::updateLandmark(LandmarkMap* map, const Match& match, const Pose2
   const Eigen::Vector2d v = innovation(observation.z, p.z);
   const double ll = logGaussian2(v, s, &s_inv);
   if (!std::isfinite(ll)) return true;
-  // EKF (Montemerlo 2003) or H-infinity (Havangi eqs. 28-34) landmark update.
-  const Correction<2> c = rule_->correctLandmark(lm.covariance, p.h_landmark, observation.noise);
+  // EKF (Montemerlo 2003) or H-infinity (Havangi eqs. 28-34) landmark update; for points
+  // optionally iterated: relinearised at the updated mean, x = x0 + K (z - h(x) - H (x0 - x)).
+  Correction<2> c = rule_->correctLandmark(lm.covariance, p.h_landmark, observation.noise);
   if (!c.ok) return true;
+  Eigen::Vector2d mean = lm.mean + c.gain * v;
+  for (int i = 1; i < options_.measurement.landmark_iterations && !is_line; ++i) {
+    const Prediction pi = predictPoint(pose, mean);
+    const Correction<2> ci = rule_->correctLandmark(lm.covariance, pi.h_landmark, observation.noise);
+    if (!ci.ok || !pi.z.allFinite()) break;
+    const Eigen::Vector2d vi = innovation(observation.z, pi.z) - pi.h_landmark * (lm.mean - mean);
+    mean = lm.mean + ci.gain * vi;
+    c = ci;
+  }
   if (log_likelihood) *log_likelihood += ll;
-  lm.mean += c.gain * v;
+  lm.mean = mean;
   lm.covariance = c.covariance;
   if (is_line) {
     lm.mean.y() = wrapAngle(lm.mean.y());

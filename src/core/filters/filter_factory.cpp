@@ -53,6 +53,7 @@ void validate(const FilterOptions& o) {
   requireRange("measurement.sigma_rho_m", o.measurement.sigma_rho_m, 1e-6, 100.0);
   requireRange("measurement.sigma_theta_rad", o.measurement.sigma_theta_rad, 1e-6, M_PI);
   requireRange("measurement.covariance_inflation", o.measurement.covariance_inflation, 1e-3, 1e3);
+  requireRange("measurement.landmark_iterations", o.measurement.landmark_iterations, 1, 100);
   if (!o.use_points && !o.use_lines) {
     throw std::invalid_argument("use_points and use_lines are both false: nothing to map");
   }

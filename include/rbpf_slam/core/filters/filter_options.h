@@ -43,6 +43,10 @@ struct MeasurementOptions {
   double sigma_rho_m = 0.05;
   double sigma_theta_rad = 0.03;
   double covariance_inflation = 1.0;  // multiplies every feature covariance
+  // Point landmark updates of the FastSLAM variants: 1 is the EKF (or H-infinity) step
+  // linearised at the landmark's prior mean; n > 1 relinearises n - 1 times at the updated mean
+  // (iterated EKF), which is less biased when the range is weak against the bearing.
+  int landmark_iterations = 1;
 };
 
 /// Robust RBPF-SLAM (Lee, Kim and Chung 2010): sampling from K ancestor sets on a new landmark.
