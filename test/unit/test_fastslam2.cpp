@@ -505,8 +505,14 @@ TEST(FastSlam2, IteratedLandmarkUpdateReachesTheMapEstimate) {
     EXPECT_NEAR(gradient, 0.0, 1e-3) << "axis " << axis;
   }
   EXPECT_LT(cost(ten.mean), cost(one.mean) - 0.1);
-  // The EKF step lands off the sighting's bearing line; the iterated one on it (the bearing is
-  // 60x stronger than the prior across the line of sight).
+  // The covariance is the last iteration's: (I - K H) P with H at the final linearisation point.
+  const double q = ten.mean.squaredNorm(), d = std::sqrt(q);
+  Eigen::Matrix2d h10;
+  h10 << ten.mean.x() / d, ten.mean.y() / d, -ten.mean.y() / q, ten.mean.x() / q;
+  const Eigen::Matrix2d k10 = p * h10.transpose() * (h10 * p * h10.transpose() + o.noise).inverse();
+  EXPECT_NEAR((ten.covariance - (Eigen::Matrix2d::Identity() - k10 * h10) * p).norm(), 0.0, 1e-9);
+  // The EKF step lands off the sighting's bearing line; the iterated one on it (across the line
+  // of sight the bearing, 0.005 rad x 3.5 m, is about 17x tighter than the prior's 0.3 m).
   EXPECT_GT(std::fabs(std::atan2(one.mean.y(), one.mean.x()) - o.z.y()), 0.005);
   EXPECT_LT(std::fabs(std::atan2(ten.mean.y(), ten.mean.x()) - o.z.y()), 0.002);
   FilterOptions bad;

@@ -255,6 +255,7 @@ bool FastSlam2::updateLandmark(LandmarkMap* map, const Match& match, const Pose2
   Correction<2> c = rule_->correctLandmark(lm.covariance, p.h_landmark, observation.noise);
   if (!c.ok) return true;
   Eigen::Vector2d mean = lm.mean + c.gain * v;
+  bool fell_back = c.fallback;  // any iteration's H-infinity step fell back to the EKF
   for (int i = 1; i < options_.measurement.landmark_iterations && !is_line; ++i) {
     const Prediction pi = predictPoint(pose, mean);
     const Correction<2> ci = rule_->correctLandmark(lm.covariance, pi.h_landmark, observation.noise);
@@ -262,6 +263,7 @@ bool FastSlam2::updateLandmark(LandmarkMap* map, const Match& match, const Pose2
     const Eigen::Vector2d vi = innovation(observation.z, pi.z) - pi.h_landmark * (lm.mean - mean);
     mean = lm.mean + ci.gain * vi;
     c = ci;
+    fell_back = fell_back || ci.fallback;
   }
   if (log_likelihood) *log_likelihood += ll;
   lm.mean = mean;
@@ -282,7 +284,7 @@ bool FastSlam2::updateLandmark(LandmarkMap* map, const Match& match, const Pose2
   lm.identified = lm.identified || observation.known_id >= 0;  // e.g. a landmark of a loaded map
   lm.last_seen_step = step_;
   if (lm.mean.allFinite() && lm.covariance.allFinite()) map->set(match.index, lm);
-  return !c.fallback;
+  return !fell_back;
 }
 
 double FastSlam2::matchLogLikelihood(const Eigen::Matrix3d& pose_cov,

@@ -43,9 +43,11 @@ struct MeasurementOptions {
   double sigma_rho_m = 0.05;
   double sigma_theta_rad = 0.03;
   double covariance_inflation = 1.0;  // multiplies every feature covariance
-  // Point landmark updates of the FastSLAM variants: 1 is the EKF (or H-infinity) step
-  // linearised at the landmark's prior mean; n > 1 relinearises n - 1 times at the updated mean
-  // (iterated EKF), which is less biased when the range is weak against the bearing.
+  // Point landmark updates of the FastSLAM variants (fastslam2, hinf_fastslam, and
+  // robust_fastslam2's updates and replays; not ekf_slam or the dpf): 1 is the EKF (or
+  // H-infinity) step linearised at the landmark's prior mean; n > 1 relinearises n - 1 times at
+  // the updated mean (iterated EKF: Gauss-Newton on prior plus sighting with the EKF rule), which
+  // is less biased when the range is weak against the bearing. No convergence test or damping.
   int landmark_iterations = 1;
 };
 
