@@ -162,16 +162,7 @@ def one_run(rm, out, config, record, barcodes, surveyed, data):
     offsets = []
     if points:
         xy = np.array([[p["x"], p["y"]] for p in points])
-        aligned = xy @ rot.T + shift
-        for _ in range(10):
-            if len(xy) < 3:
-                break
-            d = np.linalg.norm(aligned[:, None] - sv[None], axis=2)
-            near, ok = d.argmin(1), d.min(1) < 0.5
-            if ok.sum() < 3:
-                break
-            r2, t2 = rm.align(xy[ok], sv[near[ok]])
-            aligned = xy @ r2.T + t2
+        aligned = rm.align_landmarks(xy, rot, shift, sv, 0.5)
         d = np.linalg.norm(aligned[:, None] - sv[None], axis=2)
         for i in np.where(d.min(1) < 0.5)[0]:
             if points[i]["observations"] >= MIN_SEEN:
