@@ -365,6 +365,15 @@ SlamConfig parseSlamConfigTree(const YAML::Node& root, const std::string& source
   top.read("gap_noise_inflation", &s.gap_noise_inflation);
   top.read("reset_on_time_jump_back", &s.reset_on_time_jump_back_s);
   top.read("reset_after_frames_back", &s.reset_after_frames_back);
+  YamlSection smoothing = top.section("smoothing");
+  smoothing.read("enabled", &config.smoothing.enabled);
+  smoothing.read("rounds", &config.smoothing.rounds);
+  smoothing.read("max_iterations", &config.smoothing.max_iterations);
+  smoothing.read("gate_chi2", &config.smoothing.gate_chi2);
+  smoothing.read("huber_k", &config.smoothing.huber_k);
+  smoothing.read("min_sightings", &config.smoothing.min_sightings);
+  smoothing.finish();
+  s.keep_frames = config.smoothing.enabled;
   top.read("map_file", &config.map_file);
   top.read("localization_only", &config.localization_only);
   readRos(top, &config.ros);
@@ -383,6 +392,7 @@ SlamConfig parseSlamConfigTree(const YAML::Node& root, const std::string& source
   validateAs(config.laser, source);
   validateAs(config.scan_matching, source);
   validateAs(config.sonar, source);
+  validateAs(config.smoothing, source);
   return config;
 }
 

@@ -678,6 +678,24 @@ OfflineSummary OfflineRunner::writeOutputs(const OfflineSummary& in) const {
     path.push_back(estimate.back().pose);
   }
   summary.trajectory_source = use_best_path ? "best_particle_path" : "online_estimate";
+  std::vector<core::LandmarkEstimate> landmarks = pipeline_.session().filter().landmarks();
+  if (config_.smoothing.enabled) {
+    // The filter's own path and map stay beside the smoothed ones.
+    io::writeTum(dir + "/trajectory_filter.tum", estimate);
+    io::writeLandmarksYaml(dir + "/landmarks_filter.yaml", landmarks);
+    const core::SmoothingResult smoothed =
+        core::smoothSession(pipeline_.session(), config_.filter, config_.smoothing);
+    summary.smoothing = smoothed.message;
+    summary.smoothed = smoothed.ok;
+    if (smoothed.ok) {
+      for (size_t i = 0; i < estimate.size(); ++i) estimate[i].pose = path[i] = smoothed.path[i];
+      landmarks = smoothed.landmarks;
+      summary.trajectory_source = "smoothed_" + summary.trajectory_source;
+    } else {
+      std::fprintf(stderr, "offline_slam: not smoothed (the filter's path and map are written): "
+                           "%s\n", smoothed.message.c_str());
+    }
+  }
   io::writeTum(dir + "/trajectory.tum", estimate);
   io::writeTum(dir + "/trajectory_online.tum", online);
 
@@ -701,7 +719,6 @@ OfflineSummary OfflineRunner::writeOutputs(const OfflineSummary& in) const {
     }
   }
 
-  const std::vector<core::LandmarkEstimate> landmarks = pipeline_.session().filter().landmarks();
   io::writeLandmarksYaml(dir + "/landmarks.yaml", landmarks);
 
   std::ofstream json(dir + "/summary.json");
@@ -774,6 +791,10 @@ OfflineSummary OfflineRunner::writeOutputs(const OfflineSummary& in) const {
          << ",\n  \"final_position_error_m\": " << summary.final_position_error_m;
   }
   json << ",\n  \"trajectory_source\": \"" << summary.trajectory_source << "\"";
+  if (config_.smoothing.enabled) {
+    json << ",\n  \"smoothed\": " << (summary.smoothed ? "true" : "false")
+         << ",\n  \"smoothing\": \"" << summary.smoothing << "\"";
+  }
   json << "\n}\n";
   if (has_grid) {
     io::drawGridRunMap(dir + "/map.png", grid, path, reference_path);

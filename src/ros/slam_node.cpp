@@ -505,7 +505,15 @@ bool SlamNode::resumeService(std_srvs::Empty::Request&, std_srvs::Empty::Respons
 bool SlamNode::saveMapService(MapFile::Request& request, MapFile::Response& response) {
   const std::string prefix = request.path.empty() ? config_.ros.map_save_prefix : request.path;
   try {
-    const std::vector<core::LandmarkEstimate> landmarks = pipeline_.session().filter().landmarks();
+    std::vector<core::LandmarkEstimate> landmarks = pipeline_.session().filter().landmarks();
+    std::string smoothing;
+    if (config_.smoothing.enabled) {
+      // The saved map is smoothed over every frame so far; the filter itself is left as it is.
+      const core::SmoothingResult smoothed =
+          core::smoothSession(pipeline_.session(), config_.filter, config_.smoothing);
+      if (smoothed.ok) landmarks = smoothed.landmarks;
+      smoothing = (smoothed.ok ? " (smoothed: " : " (not smoothed: ") + smoothed.message + ")";
+    }
     io::writeLandmarksYaml(prefix + ".landmarks.yaml", landmarks);
     core::GridMapData occupancy;  // grid variants save their own grid, not the landmarks'
     const std::vector<std::string> grid =
@@ -514,7 +522,8 @@ bool SlamNode::saveMapService(MapFile::Request& request, MapFile::Response& resp
             : io::writeLandmarkGrid(prefix, landmarks);
     response.success = true;
     response.message = "wrote " + std::to_string(landmarks.size()) + " landmarks to " + prefix +
-                       ".landmarks.yaml and the picture to " + grid[0] + " + " + grid[1];
+                       ".landmarks.yaml and the picture to " + grid[0] + " + " + grid[1] +
+                       smoothing;
     ROS_INFO_STREAM("rbpf_slam_node: save_map: " << response.message);
   } catch (const std::exception& e) {
     response.success = false;

@@ -9,6 +9,7 @@
 
 #include "rbpf_slam/core/features/laser_line_extractor.h"
 #include "rbpf_slam/core/filters/filter_options.h"
+#include "rbpf_slam/core/slam/map_smoother.h"
 #include "rbpf_slam/core/slam/slam_pipeline.h"
 #include "rbpf_slam/io/yaml_section.h"
 
@@ -45,6 +46,7 @@ struct SlamConfig {
   core::LaserExtractorOptions laser;
   core::ScanMatcherOptions scan_matching;
   core::SonarExtractorOptions sonar;
+  core::SmoothingOptions smoothing;  // after the run (session.keep_frames follows enabled)
   RosOptions ros;
   std::string map_file;            // landmarks YAML to start from ("" = empty map)
   bool localization_only = false;  // true: track the robot on map_file, add no landmarks

@@ -57,7 +57,9 @@ struct OfflineSummary {
   double ate_rmse_m = 0.0;
   double final_position_error_m = 0.0;
   double ate_online_rmse_m = 0.0;  // of trajectory_online.tum (the per-update estimates)
-  std::string trajectory_source;   // best_particle_path | online_estimate
+  std::string trajectory_source;   // [smoothed_]best_particle_path | [smoothed_]online_estimate
+  bool smoothed = false;           // smoothing.enabled and the smoother succeeded
+  std::string smoothing;           // the smoother's account (or why it did not smooth)
 };
 
 /// What a finished run should tell its user, one line each: the first failed tf lookup and

@@ -63,6 +63,7 @@ void SlamSession::restart() {
   last_stamp_ = 0.0;
   map_to_odom_ = Pose2::Zero();
   trajectory_.clear();
+  frames_.clear();
   frames_back_ = 0;
   ++resets_;
 }
@@ -108,6 +109,9 @@ FrameResult SlamSession::process(double stamp, const Pose2& odom_pose,
     const Pose2 first = filter_->estimate().mean;
     if (first.allFinite()) map_to_odom_ = compose(first, inverse(odom_pose));
     trajectory_.push_back({stamp, filter_->estimate().mean});
+    MotionInput none;
+    none.stamp = stamp;
+    keepFrame(none, features);
     return restarted ? FrameResult::kReset : FrameResult::kFirstFrame;
   }
   const Pose2 delta = between(last_odom_, odom_pose);
@@ -163,8 +167,19 @@ FrameResult SlamSession::process(double stamp, const Pose2& odom_pose,
   if (map_pose.allFinite()) {
     map_to_odom_ = compose(map_pose, inverse(odom_pose));
     trajectory_.push_back({stamp, map_pose});
+    keepFrame(motion, features);
   }
   return FrameResult::kUpdated;
+}
+
+void SlamSession::keepFrame(const MotionInput& motion, const FeatureSet& features) {
+  if (!options_.keep_frames) return;
+  SessionFrame frame;
+  frame.motion = motion;
+  frame.features.stamp = features.stamp;
+  frame.features.points = features.points;
+  frame.features.lines = features.lines;
+  frames_.push_back(std::move(frame));
 }
 
 }  // namespace core

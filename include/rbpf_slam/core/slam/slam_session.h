@@ -28,6 +28,9 @@ struct SessionOptions {
   double reset_on_time_jump_back_s = 1.0;  // stamps going back more than this ...
   int reset_after_frames_back = 3;  // ... in this many frames in a row: reset (a looping bag);
                                     // fewer are stale messages, rejected
+  // Keep every updated frame's motion and features (points and lines, not raw scans) for the
+  // smoother that runs after the run (map_smoother.h). Memory grows with the run's length.
+  bool keep_frames = false;
 };
 
 void validate(const SessionOptions& options);
@@ -53,6 +56,12 @@ enum class FrameResult {
 struct TrajectoryPoint {
   double stamp = 0.0;
   Pose2 pose = Pose2::Zero();  // base in map
+};
+
+/// A frame the filter was updated with, kept for smoothing (SessionOptions::keep_frames).
+struct SessionFrame {
+  MotionInput motion;    // the increment from the previous kept frame (zero for the first)
+  FeatureSet features;   // points and lines only
 };
 
 class SlamSession {
@@ -87,6 +96,8 @@ class SlamSession {
   /// map -> odom so that map -> base equals the filter's estimate at the last update.
   Pose2 mapToOdom() const { return map_to_odom_; }
   const std::vector<TrajectoryPoint>& trajectory() const { return trajectory_; }
+  /// One per trajectory point when keep_frames, else empty.
+  const std::vector<SessionFrame>& frames() const { return frames_; }
   const UpdateStats& lastStats() const { return last_stats_; }
   const SlamFilter& filter() const { return *filter_; }
   SlamFilter& filter() { return *filter_; }
@@ -107,6 +118,8 @@ class SlamSession {
   Pose2 last_odom_ = Pose2::Zero();
   Pose2 map_to_odom_ = Pose2::Zero();
   std::vector<TrajectoryPoint> trajectory_;
+  std::vector<SessionFrame> frames_;
+  void keepFrame(const MotionInput& motion, const FeatureSet& features);
   UpdateStats last_stats_;
   long resets_ = 0;
   int frames_back_ = 0;

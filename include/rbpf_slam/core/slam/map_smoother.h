@@ -1,0 +1,71 @@
+#pragma once
+// Smoothing of a finished run: the best particle's path and its point landmarks re-estimated
+// together by nonlinear least squares over every odometry increment and every sighting (a
+// batch "full SLAM" pass after the filter, off by default). A particle's path is a sample,
+// jittered by the proposal's noise at every step; its map inherits that jitter. The smoother
+// keeps the filter's data association (re-derived at the filter's path against its final map)
+// and removes the jitter.
+
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+#include "rbpf_slam/core/filters/filter_options.h"
+#include "rbpf_slam/core/filters/observation.h"
+#include "rbpf_slam/core/filters/slam_filter.h"
+#include "rbpf_slam/core/geometry.h"
+#include "rbpf_slam/core/slam/slam_session.h"
+
+namespace rbpf_slam {
+namespace core {
+
+struct SmoothingOptions {
+  bool enabled = false;       // smooth the path and map after the run (offline_slam, ~save_map)
+  int rounds = 2;             // association then solution, repeated (2: associate again at
+                              // the smoothed path, which reaches sightings the sample missed)
+  int max_iterations = 30;    // Levenberg-Marquardt iterations per round at most
+  double gate_chi2 = 9.21;    // a sighting joins the nearest point landmark within this
+                              // Mahalanobis^2 at the filter's pose (else it is left out)
+  double huber_k = 2.0;       // robust kernel on each sighting's normalised residual (0: none)
+  int min_sightings = 2;      // landmarks with fewer associated sightings keep the filter's value
+};
+
+/// Throws std::invalid_argument naming the first out-of-range field.
+void validate(const SmoothingOptions& options);
+
+/// One filter update as the smoother needs it.
+struct SmoothingFrame {
+  Pose2 motion = Pose2::Zero();  // odometry increment from the previous frame (its base frame)
+  Eigen::Matrix3d motion_covariance = Eigen::Matrix3d::Identity();  // of that increment
+  std::vector<Observation> observations;  // point observations are used; lines are not
+};
+
+struct SmoothingResult {
+  bool ok = false;
+  std::string message;         // why not, or a one-line account
+  std::vector<Pose2> path;     // the smoothed path (the input one when !ok)
+  std::vector<LandmarkEstimate> landmarks;  // points re-estimated; lines and the rest as given
+  int sightings_used = 0;      // point observations associated with a landmark
+  int sightings_left_out = 0;  // point observations outside every landmark's gate
+  int landmarks_smoothed = 0;
+  int iterations = 0;
+  double initial_cost = 0.0;   // sum of squared (robust-weighted) normalised residuals
+  double final_cost = 0.0;
+};
+
+/// Smooths path (one pose per frame, in the map frame) and the point landmarks. frames[0]'s
+/// motion is ignored: the first pose is held (it anchors the map frame). Non-finite input or
+/// sizes that disagree give ok = false with the input unchanged.
+SmoothingResult smoothPathAndMap(const std::vector<Pose2>& path,
+                                 const std::vector<SmoothingFrame>& frames,
+                                 const std::vector<LandmarkEstimate>& landmarks,
+                                 const SmoothingOptions& options);
+
+/// The same for a session that kept its frames (SessionOptions::keep_frames): the filter's
+/// best path (or the trajectory, for variants without paths), its landmarks, and each frame's
+/// odometry noise from options.motion and observation noise from options.measurement.
+SmoothingResult smoothSession(const SlamSession& session, const FilterOptions& options,
+                              const SmoothingOptions& smoothing);
+
+}  // namespace core
+}  // namespace rbpf_slam

@@ -1,0 +1,399 @@
+#include "rbpf_slam/core/slam/map_smoother.h"
+
+#include <Eigen/Cholesky>
+#include <Eigen/SparseCholesky>
+#include <Eigen/SparseCore>
+#include <array>
+#include <cmath>
+#include <memory>
+#include <limits>
+#include <sstream>
+
+#include "rbpf_slam/core/filters/measurement_models.h"
+#include "rbpf_slam/core/motion/motion_model.h"
+#include "rbpf_slam/core/require_range.h"
+
+namespace rbpf_slam {
+namespace core {
+
+void validate(const SmoothingOptions& o) {
+  requireRange("smoothing.rounds", o.rounds, 1, 100);
+  requireRange("smoothing.max_iterations", o.max_iterations, 1, 1000);
+  requireRange("smoothing.gate_chi2", o.gate_chi2, 0.1, 1000.0);
+  requireRange("smoothing.huber_k", o.huber_k, 0.0, 100.0);
+  requireRange("smoothing.min_sightings", o.min_sightings, 1, 1000000);
+}
+
+namespace {
+
+using Triplets = std::vector<Eigen::Triplet<double>>;
+
+/// A sighting tied to a pose and to a smoothed landmark (its index among the variables).
+struct Sighting {
+  int pose = 0;
+  int landmark = 0;
+  Eigen::Vector2d z = Eigen::Vector2d::Zero();
+  Eigen::Matrix2d information = Eigen::Matrix2d::Identity();
+};
+
+struct Odometry {
+  Pose2 delta = Pose2::Zero();
+  Eigen::Matrix3d information = Eigen::Matrix3d::Identity();
+};
+
+/// The least-squares problem: poses then smoothed landmarks in one state vector.
+class Problem {
+ public:
+  Problem(int poses, int landmarks, double huber_k) : poses_(poses), landmarks_(landmarks),
+                                                      huber_k_(huber_k) {}
+  std::vector<Odometry> odometry;  // odometry[i] links pose i and i + 1
+  std::vector<Sighting> sightings;
+  Pose2 anchor = Pose2::Zero();    // pose 0 is held here
+
+  int size() const { return 3 * poses_ + 2 * landmarks_; }
+  Pose2 pose(const Eigen::VectorXd& x, int i) const { return x.segment<3>(3 * i); }
+  Eigen::Vector2d landmark(const Eigen::VectorXd& x, int k) const {
+    return x.segment<2>(3 * poses_ + 2 * k);
+  }
+
+  /// Huber weight of a squared normalised residual.
+  double weight(double d2) const {
+    if (huber_k_ <= 0.0 || d2 <= huber_k_ * huber_k_) return 1.0;
+    return huber_k_ / std::sqrt(d2);
+  }
+  double robustCost(double d2) const {
+    if (huber_k_ <= 0.0 || d2 <= huber_k_ * huber_k_) return d2;
+    return 2.0 * huber_k_ * std::sqrt(d2) - huber_k_ * huber_k_;
+  }
+
+  double cost(const Eigen::VectorXd& x) const {
+    double total = anchorResidual(x).squaredNorm() * kAnchorInformation;
+    for (size_t i = 0; i < odometry.size(); ++i) {
+      const Pose2 r = odometryResidual(x, static_cast<int>(i));
+      total += r.dot(odometry[i].information * r);
+    }
+    for (const Sighting& s : sightings) {
+      const Eigen::Vector2d r = innovation(s.z, predictPoint(pose(x, s.pose),
+                                                             landmark(x, s.landmark)).z);
+      total += robustCost(r.dot(s.information * r));
+    }
+    return total;
+  }
+
+  /// Gauss-Newton normal equations at x: h (upper and lower) and the gradient g = J^T W r.
+  void linearise(const Eigen::VectorXd& x, Eigen::SparseMatrix<double>* h,
+                 Eigen::VectorXd* g) const {
+    Triplets t;
+    t.reserve(9 + odometry.size() * 36 + sightings.size() * 25);
+    g->setZero(size());
+    const Pose2 r0 = anchorResidual(x);
+    for (int k = 0; k < 3; ++k) {
+      t.emplace_back(k, k, kAnchorInformation);
+      (*g)(k) += kAnchorInformation * r0(k);
+    }
+    for (size_t i = 0; i < odometry.size(); ++i) {
+      const int a = static_cast<int>(i), b = a + 1;
+      const Pose2 pa = pose(x, a), pb = pose(x, b);
+      const double c = std::cos(pa.z()), s = std::sin(pa.z());
+      const Eigen::Vector2d d = pb.head<2>() - pa.head<2>();
+      Eigen::Matrix<double, 3, 6> j = Eigen::Matrix<double, 3, 6>::Zero();
+      j.block<2, 2>(0, 0) << -c, -s, s, -c;
+      j.block<2, 1>(0, 2) << -s * d.x() + c * d.y(), -c * d.x() - s * d.y();
+      j.block<2, 2>(0, 3) << c, s, -s, c;
+      j(2, 2) = -1.0;
+      j(2, 5) = 1.0;
+      const Pose2 r = odometryResidual(x, a);
+      add(&t, g, {3 * a, 3 * b}, {3, 3}, j, odometry[i].information, r);
+    }
+    for (const Sighting& s : sightings) {
+      const Prediction p = predictPoint(pose(x, s.pose), landmark(x, s.landmark));
+      // Residual z - h: its Jacobian is -dh; the sign cancels in J^T W J and flips g.
+      const Eigen::Vector2d r = -innovation(s.z, p.z);
+      Eigen::Matrix<double, 2, 5> j;
+      j << p.h_pose, p.h_landmark;
+      const Eigen::Matrix2d w = weight(r.dot(s.information * r)) * s.information;
+      add(&t, g, {3 * s.pose, 3 * poses_ + 2 * s.landmark}, {3, 2}, j, w, r);
+    }
+    h->resize(size(), size());
+    h->setFromTriplets(t.begin(), t.end());
+  }
+
+ private:
+  static constexpr double kAnchorInformation = 1e8;
+  int poses_;
+  int landmarks_;
+  double huber_k_;
+
+  Pose2 anchorResidual(const Eigen::VectorXd& x) const {
+    Pose2 r = pose(x, 0) - anchor;
+    r.z() = wrapAngle(r.z());
+    return r;
+  }
+  /// between(x_i, x_{i+1}) - delta, with h(x) - measured as the residual's sign.
+  Pose2 odometryResidual(const Eigen::VectorXd& x, int i) const {
+    const Pose2 b = between(pose(x, i), pose(x, i + 1));
+    Pose2 r = b - odometry[i].delta;
+    r.z() = wrapAngle(r.z());
+    return r;
+  }
+
+  /// Adds J^T W J and J^T W r of a factor on two variable blocks (start, size) to t and g.
+  template <int Rows, int Cols>
+  static void add(Triplets* t, Eigen::VectorXd* g, std::array<int, 2> start,
+                  std::array<int, 2> size, const Eigen::Matrix<double, Rows, Cols>& j,
+                  const Eigen::Matrix<double, Rows, Rows>& w,
+                  const Eigen::Matrix<double, Rows, 1>& r) {
+    const Eigen::Matrix<double, Cols, Cols> jtwj = j.transpose() * w * j;
+    const Eigen::Matrix<double, Cols, 1> jtwr = j.transpose() * w * r;
+    int offset[2] = {0, size[0]};
+    for (int u = 0; u < 2; ++u) {
+      for (int a = 0; a < size[u]; ++a) {
+        (*g)(start[u] + a) += jtwr(offset[u] + a);
+        for (int v = 0; v < 2; ++v) {
+          for (int b = 0; b < size[v]; ++b) {
+            t->emplace_back(start[u] + a, start[v] + b, jtwj(offset[u] + a, offset[v] + b));
+          }
+        }
+      }
+    }
+  }
+};
+
+/// Every point observation to the nearest landmark (Mahalanobis, landmark covariance plus the
+/// observation noise) at the filter's pose; -1 when none is within the gate.
+std::vector<std::vector<int>> associate(const std::vector<Pose2>& path,
+                                        const std::vector<SmoothingFrame>& frames,
+                                        const std::vector<LandmarkEstimate>& landmarks,
+                                        double gate_chi2) {
+  std::vector<std::vector<int>> match(frames.size());
+  for (size_t i = 0; i < frames.size(); ++i) {
+    for (const Observation& o : frames[i].observations) {
+      int best = -1;
+      double best_d2 = gate_chi2;
+      if (o.type == LandmarkType::kPoint) {
+        for (size_t k = 0; k < landmarks.size(); ++k) {
+          if (landmarks[k].type != LandmarkType::kPoint) continue;
+          const Prediction p = predictPoint(path[i], landmarks[k].mean);
+          const Eigen::Matrix2d s =
+              p.h_landmark * landmarks[k].covariance * p.h_landmark.transpose() + o.noise;
+          const Eigen::Vector2d v = innovation(o.z, p.z);
+          const double d2 = v.dot(s.ldlt().solve(v));
+          if (std::isfinite(d2) && d2 < best_d2) {
+            best_d2 = d2;
+            best = static_cast<int>(k);
+          }
+        }
+      }
+      match[i].push_back(best);
+    }
+  }
+  return match;
+}
+
+bool finiteInput(const std::vector<Pose2>& path, const std::vector<SmoothingFrame>& frames,
+                 const std::vector<LandmarkEstimate>& landmarks, std::string* why) {
+  for (size_t i = 0; i < path.size(); ++i) {
+    if (!path[i].allFinite()) return *why = "pose " + std::to_string(i) + " is not finite", false;
+    if (!frames[i].motion.allFinite() || !frames[i].motion_covariance.allFinite()) {
+      return *why = "the motion of frame " + std::to_string(i) + " is not finite", false;
+    }
+  }
+  for (const LandmarkEstimate& l : landmarks) {
+    if (!l.mean.allFinite() || !l.covariance.allFinite()) {
+      return *why = "landmark " + std::to_string(l.id) + " is not finite", false;
+    }
+  }
+  return true;
+}
+
+/// One round: associate at path, then solve. Input checked by the caller.
+SmoothingResult solve(const std::vector<Pose2>& path, const std::vector<SmoothingFrame>& frames,
+                      const std::vector<LandmarkEstimate>& landmarks,
+                      const SmoothingOptions& options) {
+  SmoothingResult result;
+  result.path = path;
+  result.landmarks = landmarks;
+  // Sightings per landmark; landmarks seen often enough become variables.
+  const std::vector<std::vector<int>> match =
+      associate(path, frames, landmarks, options.gate_chi2);
+  std::vector<int> seen(landmarks.size(), 0);
+  for (const auto& frame : match) {
+    for (int k : frame) {
+      if (k >= 0) ++seen[k];
+    }
+  }
+  std::vector<int> variable(landmarks.size(), -1);
+  int smoothed = 0;
+  for (size_t k = 0; k < landmarks.size(); ++k) {
+    if (seen[k] >= options.min_sightings) variable[k] = smoothed++;
+  }
+  const int poses = static_cast<int>(path.size());
+  Problem problem(poses, smoothed, options.huber_k);
+  problem.anchor = path[0];
+  for (int i = 1; i < poses; ++i) {
+    Eigen::LDLT<Eigen::Matrix3d> ldlt(frames[i].motion_covariance);
+    if (ldlt.info() != Eigen::Success || ldlt.vectorD().minCoeff() <= 0.0) {
+      result.message = "the motion covariance of frame " + std::to_string(i) +
+                       " is not positive definite";
+      return result;
+    }
+    problem.odometry.push_back({frames[i].motion, ldlt.solve(Eigen::Matrix3d::Identity())});
+  }
+  for (int i = 0; i < poses; ++i) {
+    for (size_t o = 0; o < match[i].size(); ++o) {
+      const int k = match[i][o];
+      if (k < 0) {
+        if (frames[i].observations[o].type == LandmarkType::kPoint) ++result.sightings_left_out;
+        continue;
+      }
+      if (variable[k] < 0) continue;
+      const Observation& obs = frames[i].observations[o];
+      problem.sightings.push_back(
+          {i, variable[k], obs.z, obs.noise.ldlt().solve(Eigen::Matrix2d::Identity())});
+    }
+  }
+  result.sightings_used = static_cast<int>(problem.sightings.size());
+  result.landmarks_smoothed = smoothed;
+
+  Eigen::VectorXd x(problem.size());
+  for (int i = 0; i < poses; ++i) x.segment<3>(3 * i) = path[i];
+  for (size_t k = 0; k < landmarks.size(); ++k) {
+    if (variable[k] >= 0) x.segment<2>(3 * poses + 2 * variable[k]) = landmarks[k].mean;
+  }
+
+  // Levenberg-Marquardt on the sparse normal equations.
+  double cost = problem.cost(x);
+  result.initial_cost = cost;
+  double lambda = 1e-6;
+  Eigen::SparseMatrix<double> h;
+  Eigen::VectorXd g;
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver;
+  bool analysed = false;
+  for (int it = 0; it < options.max_iterations; ++it) {
+    problem.linearise(x, &h, &g);
+    if (!analysed) {
+      solver.analyzePattern(h);
+      analysed = true;
+    }
+    bool improved = false;
+    while (lambda < 1e10) {
+      Eigen::SparseMatrix<double> damped = h;
+      for (int d = 0; d < damped.rows(); ++d) damped.coeffRef(d, d) *= 1.0 + lambda;
+      solver.factorize(damped);
+      if (solver.info() != Eigen::Success) {
+        lambda *= 10.0;
+        continue;
+      }
+      const Eigen::VectorXd step = solver.solve(-g);
+      Eigen::VectorXd trial = x + step;
+      for (int i = 0; i < poses; ++i) trial(3 * i + 2) = wrapAngle(trial(3 * i + 2));
+      const double trial_cost = problem.cost(trial);
+      if (std::isfinite(trial_cost) && trial_cost <= cost) {
+        const double decrease = cost - trial_cost;
+        x = trial;
+        cost = trial_cost;
+        lambda = std::max(lambda / 10.0, 1e-9);
+        improved = decrease > 1e-9 * std::max(1.0, cost);
+        break;
+      }
+      lambda *= 10.0;
+    }
+    result.iterations = it + 1;
+    if (!improved) break;
+  }
+  result.final_cost = cost;
+
+  // Landmark covariances given the smoothed path (as FastSLAM's are given a particle's path):
+  // the inverse of each landmark's own information block. The marginals would add the
+  // uncertainty of the whole map's placement relative to the first pose.
+  problem.linearise(x, &h, &g);
+  for (int i = 0; i < poses; ++i) result.path[i] = problem.pose(x, i);
+  for (size_t k = 0; k < landmarks.size(); ++k) {
+    if (variable[k] < 0) continue;
+    LandmarkEstimate& l = result.landmarks[k];
+    const int at = 3 * poses + 2 * variable[k];
+    l.mean = problem.landmark(x, variable[k]);
+    l.observations = seen[k];
+    const Eigen::Matrix2d information = Eigen::Matrix2d(h.block(at, at, 2, 2));
+    Eigen::LDLT<Eigen::Matrix2d> ldlt(information);
+    if (ldlt.info() == Eigen::Success && ldlt.vectorD().minCoeff() > 0.0) {
+      const Eigen::Matrix2d c = ldlt.solve(Eigen::Matrix2d::Identity());
+      l.covariance = 0.5 * (c + c.transpose());
+    }
+  }
+  result.ok = x.allFinite();
+  if (!result.ok) {
+    result.path = path;
+    result.landmarks = landmarks;
+    result.message = "the solution is not finite; the filter's path and map are kept";
+    return result;
+  }
+  std::ostringstream text;
+  text << smoothed << " landmarks and " << poses << " poses from " << result.sightings_used
+       << " sightings (" << result.sightings_left_out << " outside every gate), cost "
+       << result.initial_cost << " -> " << result.final_cost << " in " << result.iterations
+       << " iterations";
+  result.message = text.str();
+  return result;
+}
+
+}  // namespace
+
+SmoothingResult smoothPathAndMap(const std::vector<Pose2>& path,
+                                 const std::vector<SmoothingFrame>& frames,
+                                 const std::vector<LandmarkEstimate>& landmarks,
+                                 const SmoothingOptions& options) {
+  validate(options);
+  SmoothingResult result;
+  result.path = path;
+  result.landmarks = landmarks;
+  if (path.size() != frames.size()) {
+    result.message = "path and frames differ in length (" + std::to_string(path.size()) +
+                     " against " + std::to_string(frames.size()) + ")";
+    return result;
+  }
+  if (path.size() < 2) {
+    result.message = "fewer than two poses";
+    return result;
+  }
+  if (!finiteInput(path, frames, landmarks, &result.message)) return result;
+  // Each further round associates again at the path and map of the one before.
+  for (int round = 0; round < options.rounds; ++round) {
+    SmoothingResult next = solve(result.path, frames, result.landmarks, options);
+    if (!next.ok) return round == 0 ? next : result;
+    if (round > 0) next.initial_cost = result.initial_cost;
+    result = next;
+  }
+  return result;
+}
+
+SmoothingResult smoothSession(const SlamSession& session, const FilterOptions& options,
+                              const SmoothingOptions& smoothing) {
+  const std::vector<TrajectoryPoint>& trajectory = session.trajectory();
+  const std::vector<SessionFrame>& kept = session.frames();
+  std::vector<Pose2> path = session.filter().bestPath();
+  if (path.size() != trajectory.size()) {
+    path.clear();
+    for (const TrajectoryPoint& p : trajectory) path.push_back(p.pose);
+  }
+  if (kept.size() != path.size()) {
+    SmoothingResult result;
+    result.path = path;
+    result.landmarks = session.filter().landmarks();
+    result.message = kept.empty() ? "the session kept no frames (keep_frames is off)"
+                                  : "the session's frames and path differ in length";
+    return result;
+  }
+  const std::unique_ptr<MotionModel> model = createMotionModel(options.motion);
+  std::vector<SmoothingFrame> frames(kept.size());
+  for (size_t i = 0; i < kept.size(); ++i) {
+    frames[i].motion = kept[i].motion.delta;
+    frames[i].motion_covariance = model->covariance(Pose2::Zero(), kept[i].motion);
+    int rejected = 0;
+    frames[i].observations = prepareObservations(kept[i].features, options, &rejected);
+  }
+  return smoothPathAndMap(path, frames, session.filter().landmarks(), smoothing);
+}
+
+}  // namespace core
+}  // namespace rbpf_slam

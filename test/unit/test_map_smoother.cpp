@@ -1,0 +1,243 @@
+// The smoother of a finished run (map_smoother.h): from a jittered path and a displaced map
+// with exact odometry and sightings it recovers the true ones; it keeps the association of the
+// filter's map, leaves out sightings outside every gate, refuses bad input by name, and works
+// on a session that kept its frames.
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+#include <Eigen/LU>
+
+#include <cmath>
+#include <random>
+#include <vector>
+
+#include "rbpf_slam/core/filters/measurement_models.h"
+#include "rbpf_slam/core/slam/map_smoother.h"
+
+namespace rbpf_slam {
+namespace {
+
+using core::Pose2;
+
+/// A robot driving a circle of radius 3 m around four landmarks, seeing each one in range.
+struct Scene {
+  std::vector<Pose2> truth;
+  std::vector<Eigen::Vector2d> points{{0.5, 0.5}, {-1.0, 1.0}, {-0.5, -1.5}, {2.0, -0.5}};
+  std::vector<core::SmoothingFrame> frames;
+};
+
+core::Observation sighting(const Pose2& pose, const Eigen::Vector2d& point) {
+  core::Observation o;
+  o.z = core::predictPoint(pose, point).z;
+  o.noise = Eigen::Vector2d(0.05 * 0.05, 0.02 * 0.02).asDiagonal();
+  return o;
+}
+
+Scene circle(int steps) {
+  Scene scene;
+  for (int i = 0; i < steps; ++i) {
+    const double a = 2.0 * M_PI * i / steps;
+    scene.truth.emplace_back(3.0 * std::cos(a), 3.0 * std::sin(a), core::wrapAngle(a + M_PI / 2));
+  }
+  for (int i = 0; i < steps; ++i) {
+    core::SmoothingFrame f;
+    if (i > 0) f.motion = core::between(scene.truth[i - 1], scene.truth[i]);
+    f.motion_covariance = Eigen::Vector3d(0.02 * 0.02, 0.02 * 0.02, 0.02 * 0.02).asDiagonal();
+    for (const Eigen::Vector2d& p : scene.points) f.observations.push_back(sighting(scene.truth[i], p));
+    scene.frames.push_back(f);
+  }
+  return scene;
+}
+
+std::vector<core::LandmarkEstimate> mapOf(const std::vector<Eigen::Vector2d>& points) {
+  std::vector<core::LandmarkEstimate> map;
+  for (size_t k = 0; k < points.size(); ++k) {
+    core::LandmarkEstimate l;
+    l.id = static_cast<int>(k) + 10;
+    l.mean = points[k];
+    l.covariance = 0.01 * Eigen::Matrix2d::Identity();
+    map.push_back(l);
+  }
+  return map;
+}
+
+/// RMS position error of path against truth after the best rigid 2D alignment (the solution
+/// is defined up to the noise in the anchor's relation to the rest, like any SLAM estimate).
+double alignedRms(const std::vector<Pose2>& path, const std::vector<Pose2>& truth) {
+  Eigen::Vector2d mp = Eigen::Vector2d::Zero(), mt = Eigen::Vector2d::Zero();
+  for (size_t i = 0; i < path.size(); ++i) {
+    mp += path[i].head<2>() / path.size();
+    mt += truth[i].head<2>() / truth.size();
+  }
+  double sxx = 0.0, sxy = 0.0;
+  for (size_t i = 0; i < path.size(); ++i) {
+    const Eigen::Vector2d a = path[i].head<2>() - mp, b = truth[i].head<2>() - mt;
+    sxx += a.dot(b);
+    sxy += a.x() * b.y() - a.y() * b.x();
+  }
+  const double th = std::atan2(sxy, sxx);
+  const Eigen::Matrix2d rot = Eigen::Rotation2Dd(th).toRotationMatrix();
+  double sum = 0.0;
+  for (size_t i = 0; i < path.size(); ++i) {
+    sum += (rot * (path[i].head<2>() - mp) - (truth[i].head<2>() - mt)).squaredNorm();
+  }
+  return std::sqrt(sum / path.size());
+}
+
+TEST(MapSmoother, RecoversTheTruePathAndMapFromAJitteredSample) {
+  const Scene scene = circle(40);
+  std::mt19937_64 rng(7);
+  std::normal_distribution<double> xy(0.0, 0.05), heading(0.0, 0.015);
+  std::vector<Pose2> path = scene.truth;
+  for (size_t i = 1; i < path.size(); ++i) path[i] += Pose2(xy(rng), xy(rng), heading(rng));
+  std::vector<Eigen::Vector2d> displaced = scene.points;
+  for (Eigen::Vector2d& p : displaced) p += Eigen::Vector2d(0.08, -0.06);
+  core::SmoothingOptions options;
+  options.enabled = true;
+  const core::SmoothingResult r =
+      core::smoothPathAndMap(path, scene.frames, mapOf(displaced), options);
+  ASSERT_TRUE(r.ok) << r.message;
+  EXPECT_EQ(r.sightings_used, 160);
+  EXPECT_EQ(r.sightings_left_out, 0);
+  EXPECT_EQ(r.landmarks_smoothed, 4);
+  EXPECT_LT(r.final_cost, 1e-6 * r.initial_cost);
+  double before = 0.0, after = 0.0;
+  for (size_t i = 0; i < path.size(); ++i) {
+    before = std::max(before, (path[i] - scene.truth[i]).head<2>().norm());
+    after = std::max(after, (r.path[i] - scene.truth[i]).head<2>().norm());
+    EXPECT_NEAR(core::wrapAngle(r.path[i].z() - scene.truth[i].z()), 0.0, 1e-5) << i;
+  }
+  EXPECT_GT(before, 0.05);
+  EXPECT_LT(after, 1e-5);
+  for (size_t k = 0; k < scene.points.size(); ++k) {
+    EXPECT_LT((r.landmarks[k].mean - scene.points[k]).norm(), 1e-5) << k;
+    EXPECT_EQ(r.landmarks[k].id, static_cast<int>(k) + 10);  // ids kept
+    EXPECT_EQ(r.landmarks[k].observations, 40);
+    // The covariance given the path: 40 sightings of sigma 0.05 m (range) and 0.02 rad at
+    // 1.5-5 m make it tight, positive definite, and far below the map's 0.01 m^2 each way.
+    EXPECT_GT(r.landmarks[k].covariance.determinant(), 0.0);
+    EXPECT_LT(r.landmarks[k].covariance.trace(), 1e-3);
+  }
+}
+
+// With noisy odometry and sightings the smoothed path is closer to the truth than a jittered
+// sample of it (the filter's best particle), and the first pose is held where it was.
+TEST(MapSmoother, NoisyDataSmoothedPathBeatsTheSample) {
+  Scene scene = circle(60);
+  std::mt19937_64 rng(3);
+  std::normal_distribution<double> unit(0.0, 1.0);
+  for (size_t i = 0; i < scene.frames.size(); ++i) {
+    if (i > 0) scene.frames[i].motion += Pose2(0.02 * unit(rng), 0.02 * unit(rng), 0.02 * unit(rng));
+    for (core::Observation& o : scene.frames[i].observations) {
+      o.z += Eigen::Vector2d(0.05 * unit(rng), 0.02 * unit(rng));
+    }
+  }
+  std::vector<Pose2> path = scene.truth;
+  for (size_t i = 1; i < path.size(); ++i) {
+    path[i] += Pose2(0.1 * unit(rng), 0.1 * unit(rng), 0.05 * unit(rng));
+  }
+  core::SmoothingOptions options;
+  const core::SmoothingResult r = core::smoothPathAndMap(path, scene.frames,
+                                                         mapOf(scene.points), options);
+  ASSERT_TRUE(r.ok) << r.message;
+  const double before = alignedRms(path, scene.truth), after = alignedRms(r.path, scene.truth);
+  EXPECT_GT(before, 0.1);
+  EXPECT_LT(after, 0.3 * before);
+  EXPECT_LT((r.path[0] - path[0]).norm(), 1e-6);
+}
+
+TEST(MapSmoother, SightingsOutsideEveryGateAreLeftOut) {
+  Scene scene = circle(20);
+  // A sighting of something 1.5 m from every mapped landmark, in every frame.
+  for (size_t i = 0; i < scene.frames.size(); ++i) {
+    scene.frames[i].observations.push_back(sighting(scene.truth[i], Eigen::Vector2d(6.0, 6.0)));
+  }
+  core::SmoothingOptions options;
+  options.min_sightings = 25;  // more than any landmark has: none is smoothed
+  const core::SmoothingResult none =
+      core::smoothPathAndMap(scene.truth, scene.frames, mapOf(scene.points), options);
+  ASSERT_TRUE(none.ok) << none.message;
+  EXPECT_EQ(none.landmarks_smoothed, 0);
+  EXPECT_EQ(none.sightings_used, 0);
+  options.min_sightings = 2;
+  const core::SmoothingResult r =
+      core::smoothPathAndMap(scene.truth, scene.frames, mapOf(scene.points), options);
+  ASSERT_TRUE(r.ok) << r.message;
+  EXPECT_EQ(r.sightings_left_out, 20);
+  EXPECT_EQ(r.sightings_used, 80);
+}
+
+TEST(MapSmoother, BadInputIsRefusedByName) {
+  const Scene scene = circle(10);
+  core::SmoothingOptions options;
+  std::vector<Pose2> path = scene.truth;
+  path.pop_back();
+  core::SmoothingResult r = core::smoothPathAndMap(path, scene.frames, mapOf(scene.points),
+                                                   options);
+  EXPECT_FALSE(r.ok);
+  EXPECT_NE(r.message.find("differ in length"), std::string::npos) << r.message;
+  EXPECT_EQ(r.path, path);  // the input is handed back
+  path = scene.truth;
+  path[4].x() = std::nan("");
+  r = core::smoothPathAndMap(path, scene.frames, mapOf(scene.points), options);
+  EXPECT_FALSE(r.ok);
+  EXPECT_NE(r.message.find("pose 4"), std::string::npos) << r.message;
+  std::vector<core::SmoothingFrame> frames = scene.frames;
+  frames[3].motion_covariance.setZero();
+  r = core::smoothPathAndMap(scene.truth, frames, mapOf(scene.points), options);
+  EXPECT_FALSE(r.ok);
+  EXPECT_NE(r.message.find("frame 3"), std::string::npos) << r.message;
+  options.gate_chi2 = -1.0;
+  EXPECT_THROW(core::smoothPathAndMap(scene.truth, scene.frames, mapOf(scene.points), options),
+               std::invalid_argument);
+}
+
+// A session keeps one frame per trajectory point only when asked to, and smoothSession then
+// smooths the filter's best path; without kept frames it says why and changes nothing.
+TEST(MapSmoother, SmoothsASessionThatKeptItsFrames) {
+  const Scene scene = circle(30);
+  core::FilterOptions filter;
+  filter.particles = 20;
+  filter.use_lines = false;
+  filter.measurement.sigma_range_m = 0.05;
+  filter.measurement.sigma_bearing_rad = 0.02;
+  for (bool keep : {false, true}) {
+    core::SessionOptions options;
+    options.keep_frames = keep;
+    core::SlamSession session(core::createFilter(filter), options);
+    for (size_t i = 0; i < scene.truth.size(); ++i) {
+      core::FeatureSet features;
+      features.stamp = 1.0 + i;
+      for (const Eigen::Vector2d& p : scene.points) {
+        const core::Observation o = sighting(scene.truth[i], p);
+        core::PointFeature f;
+        f.range = o.z.x();
+        f.bearing = o.z.y();
+        f.covariance = o.noise;
+        features.points.push_back(f);
+      }
+      session.process(features.stamp, scene.truth[i], features);
+    }
+    ASSERT_EQ(session.trajectory().size(), scene.truth.size());
+    EXPECT_EQ(session.frames().size(), keep ? scene.truth.size() : 0u);
+    core::SmoothingOptions smoothing;
+    smoothing.enabled = true;
+    const core::SmoothingResult r = core::smoothSession(session, filter, smoothing);
+    EXPECT_EQ(r.ok, keep) << r.message;
+    if (!keep) {
+      EXPECT_NE(r.message.find("keep_frames"), std::string::npos) << r.message;
+      continue;
+    }
+    EXPECT_EQ(r.landmarks_smoothed, 4);
+    // The map frame is the first odometry pose: the smoothed map is the true one.
+    for (const core::LandmarkEstimate& l : r.landmarks) {
+      double nearest = 1e9;
+      for (const Eigen::Vector2d& p : scene.points) nearest = std::min(nearest, (l.mean - p).norm());
+      EXPECT_LT(nearest, 0.02);
+    }
+  }
+}
+
+}  // namespace
+}  // namespace rbpf_slam
