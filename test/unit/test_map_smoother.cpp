@@ -168,6 +168,26 @@ TEST(MapSmoother, SightingsOutsideEveryGateAreLeftOut) {
   EXPECT_EQ(r.sightings_used, 80);
 }
 
+// A sighting with a known id joins the landmark of that id wherever it is, or none.
+TEST(MapSmoother, SightingsWithAKnownIdJoinThatLandmark) {
+  Scene scene = circle(20);
+  for (core::SmoothingFrame& f : scene.frames) {
+    f.observations[0].known_id = 13;  // the first point, labelled as the fourth
+    f.observations[1].known_id = 99;  // an id not in the map
+  }
+  core::SmoothingOptions options;
+  options.min_sightings = 1;
+  const core::SmoothingResult r =
+      core::smoothPathAndMap(scene.truth, scene.frames, mapOf(scene.points), options);
+  ASSERT_TRUE(r.ok) << r.message;
+  EXPECT_EQ(r.sightings_used, 60);
+  EXPECT_EQ(r.sightings_left_out, 20);
+  EXPECT_EQ(r.landmarks[0].observations, 0);  // no sighting: left as given
+  EXPECT_EQ(r.landmarks[3].observations, 40);     // its own sightings and those labelled 13
+  // Pulled towards the first point (the Huber kernel limits how far).
+  EXPECT_GT((r.landmarks[3].mean - scene.points[3]).norm(), 0.05);
+}
+
 TEST(MapSmoother, BadInputIsRefusedByName) {
   const Scene scene = circle(10);
   core::SmoothingOptions options;

@@ -160,7 +160,7 @@ class Problem {
 };
 
 /// Every point observation to the nearest landmark (Mahalanobis, landmark covariance plus the
-/// observation noise) at the filter's pose; -1 when none is within the gate.
+/// observation noise) at path, or to the landmark of its known id; -1 when there is none.
 std::vector<std::vector<int>> associate(const std::vector<Pose2>& path,
                                         const std::vector<SmoothingFrame>& frames,
                                         const std::vector<LandmarkEstimate>& landmarks,
@@ -170,7 +170,13 @@ std::vector<std::vector<int>> associate(const std::vector<Pose2>& path,
     for (const Observation& o : frames[i].observations) {
       int best = -1;
       double best_d2 = gate_chi2;
-      if (o.type == LandmarkType::kPoint) {
+      if (o.type == LandmarkType::kPoint && o.known_id >= 0) {
+        for (size_t k = 0; k < landmarks.size() && best < 0; ++k) {
+          if (landmarks[k].type == LandmarkType::kPoint && landmarks[k].id == o.known_id) {
+            best = static_cast<int>(k);
+          }
+        }
+      } else if (o.type == LandmarkType::kPoint) {
         for (size_t k = 0; k < landmarks.size(); ++k) {
           if (landmarks[k].type != LandmarkType::kPoint) continue;
           const Prediction p = predictPoint(path[i], landmarks[k].mean);

@@ -3,8 +3,9 @@
 // together by nonlinear least squares over every odometry increment and every sighting (a
 // batch "full SLAM" pass after the filter, off by default). A particle's path is a sample,
 // jittered by the proposal's noise at every step; its map inherits that jitter. The smoother
-// keeps the filter's data association (re-derived at the filter's path against its final map)
-// and removes the jitter.
+// re-derives the data association at the filter's path against its final map (the particle's
+// own record would hold the draws of association sampling, which fared worse on MRCLAM) and
+// removes the jitter.
 
 #include <Eigen/Core>
 #include <string>
@@ -21,11 +22,12 @@ namespace core {
 
 struct SmoothingOptions {
   bool enabled = false;       // smooth the path and map after the run (offline_slam, ~save_map)
-  int rounds = 2;             // association then solution, repeated (2: associate again at
-                              // the smoothed path, which reaches sightings the sample missed)
+  int rounds = 1;             // association then solution, repeated (2: associate again at
+                              // the smoothed path; not better on MRCLAM)
   int max_iterations = 30;    // Levenberg-Marquardt iterations per round at most
   double gate_chi2 = 9.21;    // a sighting joins the nearest point landmark within this
-                              // Mahalanobis^2 at the filter's pose (else it is left out)
+                              // Mahalanobis^2 at the round's path (else it is left out); one
+                              // with a known id joins the landmark of that id
   double huber_k = 2.0;       // robust kernel on each sighting's normalised residual (0: none)
   int min_sightings = 2;      // landmarks with fewer associated sightings keep the filter's value
 };
