@@ -683,8 +683,11 @@ OfflineSummary OfflineRunner::writeOutputs(const OfflineSummary& in) const {
     // The filter's own path and map stay beside the smoothed ones.
     io::writeTum(dir + "/trajectory_filter.tum", estimate);
     io::writeLandmarksYaml(dir + "/landmarks_filter.yaml", landmarks);
+    const auto start = std::chrono::steady_clock::now();
     const core::SmoothingResult smoothed =
         core::smoothSession(pipeline_.session(), config_.filter, config_.smoothing);
+    summary.smoothing_s =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     summary.smoothing = smoothed.message;
     summary.smoothed = smoothed.ok;
     if (smoothed.ok) {
@@ -793,6 +796,7 @@ OfflineSummary OfflineRunner::writeOutputs(const OfflineSummary& in) const {
   json << ",\n  \"trajectory_source\": \"" << summary.trajectory_source << "\"";
   if (config_.smoothing.enabled) {
     json << ",\n  \"smoothed\": " << (summary.smoothed ? "true" : "false")
+         << ",\n  \"smoothing_s\": " << summary.smoothing_s
          << ",\n  \"smoothing\": \"" << summary.smoothing << "\"";
   }
   json << "\n}\n";

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Smoke test of the MRCLAM path: converts the first 120 s of Robot1 of the shared UTIAS MRCLAM
 # dataset 6, runs FastSLAM 2.0 (config/landmarks_fastslam2.yaml, unknown association) over it
-# and fails unless the filter updated, mapped landmarks and wrote a trajectory without NaN.
+# and fails unless the filter updated, mapped landmarks, wrote a trajectory without NaN and
+# smoothed it (keeping the filter's own path and map beside it).
 # Prints SKIP and exits 77 (scripts/test.sh: skipped) when the dataset is not there.
 set -euo pipefail
 
@@ -53,6 +54,20 @@ if ! awk -v n="${landmarks:-0}" 'BEGIN { exit !(n > 0) }'; then
 fi
 if grep -qiE 'nan|inf' "$trajectory"; then
   echo "FAIL: the trajectory holds non-finite values"
+  status=1
+fi
+# The config smooths the path and map after the run (session 24): the smoother ran, and the
+# filter's own path (one pose per update, like the smoothed one) and map are kept beside them.
+if ! grep -q '"smoothed": true' "$summary"; then
+  echo "FAIL: the run was not smoothed: $(grep '"smoothing"' "$summary")"
+  status=1
+fi
+for f in trajectory_filter.tum landmarks_filter.yaml; do
+  [ -s "$work/out/$f" ] || { echo "FAIL: no $f beside the smoothed outputs"; status=1; }
+done
+if [ -s "$work/out/trajectory_filter.tum" ] &&
+   [ "$(wc -l < "$work/out/trajectory_filter.tum")" != "$(wc -l < "$trajectory")" ]; then
+  echo "FAIL: trajectory_filter.tum and trajectory.tum differ in length"
   status=1
 fi
 # tools/mrclam_detection_rates.py (the camera's detection rates, docs/results.md session 21):

@@ -140,7 +140,12 @@ TEST(SlamConfig, OverridesApplyDottedKeys) {
   applyOverride(&root, "particles=7");
   applyOverride(&root, "association.exclusive=true");
   applyOverride(&root, "measurement.landmark_iterations=3");
+  applyOverride(&root, "smoothing.enabled=true");
+  applyOverride(&root, "smoothing.huber_k=0");
   const SlamConfig c = parseSlamConfig(root, "t");
+  EXPECT_TRUE(c.smoothing.enabled);
+  EXPECT_TRUE(c.session.keep_frames);  // follows smoothing.enabled
+  EXPECT_EQ(c.smoothing.huber_k, 0.0);
   EXPECT_EQ(c.filter.measurement.landmark_iterations, 3);
   EXPECT_EQ(core::MeasurementOptions().landmark_iterations, 1);
   EXPECT_EQ(c.filter.particles, 7);
@@ -222,7 +227,13 @@ TEST(SlamConfig, MrclamConfigsShareTheExistenceAndAssociationSettings) {
     EXPECT_EQ(c.filter.existence.merge_chi2, 9.21) << name;
     EXPECT_FALSE(c.filter.association.exclusive) << name;  // session 22: tried, not shipped
     EXPECT_EQ(c.filter.measurement.landmark_iterations, 1) << name;  // session 23: not shipped
+    // Session 24: the path and map smoothed after the run, the frames kept for it.
+    EXPECT_TRUE(c.smoothing.enabled) << name;
+    EXPECT_TRUE(c.session.keep_frames) << name;
+    EXPECT_EQ(c.smoothing.rounds, 1) << name;
   }
+  EXPECT_FALSE(core::SmoothingOptions().enabled);
+  EXPECT_FALSE(core::SessionOptions().keep_frames);
   EXPECT_EQ(core::ExistenceOptions().sighting_count, 1);
   EXPECT_EQ(core::ExistenceOptions().visible_range_m, 0.0);
 }
@@ -233,6 +244,10 @@ TEST(SlamConfig, HinfAndExistenceErrorsNameTheKey) {
   EXPECT_NE(gamma.find("hinf.gamma_heading = 0 is out of range"), std::string::npos) << gamma;
   EXPECT_NE(errorOf("hinf: {gain: kalman}").find("not one of: posterior"), std::string::npos);
   EXPECT_NE(errorOf("existence: {max_count: 0}").find("existence.max_count"), std::string::npos);
+  EXPECT_NE(errorOf("smoothing: {huber_k: -1}").find("smoothing.huber_k = -1 is out of range"),
+            std::string::npos);
+  EXPECT_NE(errorOf("smoothing: {rounds: 0}").find("smoothing.rounds"), std::string::npos);
+  EXPECT_NE(errorOf("smoothing: {enable: true}").find("in smoothing: enable"), std::string::npos);
   EXPECT_NE(errorOf("existence: {sighting_count: 0}").find("existence.sighting_count"),
             std::string::npos);
   EXPECT_NE(errorOf("existence: {merge_chi2: -1}").find("existence.merge_chi2"),

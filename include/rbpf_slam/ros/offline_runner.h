@@ -60,6 +60,7 @@ struct OfflineSummary {
   std::string trajectory_source;   // [smoothed_]best_particle_path | [smoothed_]online_estimate
   bool smoothed = false;           // smoothing.enabled and the smoother succeeded
   std::string smoothing;           // the smoother's account (or why it did not smooth)
+  double smoothing_s = 0.0;        // wall time of the smoothing (not in wall_s)
 };
 
 /// What a finished run should tell its user, one line each: the first failed tf lookup and

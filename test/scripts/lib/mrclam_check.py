@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """Checks benchmarks/run_mrclam's results.json against issue-6 style limits.
 
-usage: mrclam_check.py RESULTS.json --runs N [--min-halved N] [--max-mean-ratio X]
+usage: mrclam_check.py RESULTS.json --runs N [--filter] [--min-halved N] [--max-mean-ratio X]
                        [--min-clean N] [--max-spurious X] [--min-within N] [--min-all-three N]
                        [--max-copy-pairs N] [--max-close-pairs N] [--hint TEXT ...]
 
@@ -10,7 +10,8 @@ ATE, runs with at most 2 spurious landmarks ("clean"), spurious landmarks per ru
 every matched landmark within 0.3 m ("within"), runs meeting those three targets at once, the
 pairs of copies of one landmark in the final maps (run_mrclam's copy_pairs: within chi2 9.21 of
 each other, both seen at least 10 times; summed) and every pair within chi2 9.21 of each other,
-young ones included (close_pairs, summed).
+young ones included (close_pairs, summed). With --filter the figures are those of each run's
+"filter" record: the filter's own path and map when the config smooths them after the run.
 Prints them with their limits, then PASS, or each figure outside its limit, the hints (what
 such a failure has meant before) and exits 1.
 """
@@ -25,6 +26,8 @@ def main(argv):
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("results")
     parser.add_argument("--runs", type=int, required=True, help="runs expected")
+    parser.add_argument("--filter", action="store_true",
+                        help="check the filter's own path and map (smoothing.enabled runs)")
     parser.add_argument("--min-halved", type=int)
     parser.add_argument("--max-mean-ratio", type=float)
     parser.add_argument("--min-clean", type=int)
@@ -38,6 +41,12 @@ def main(argv):
     a = parser.parse_args(argv)
     runs = json.load(open(a.results))
     runs = runs["runs"] if isinstance(runs, dict) else runs
+    if a.filter:
+        if not all("filter" in r for r in runs):
+            print("FAIL: --filter, but some runs have no filter record (smoothing.enabled off?)")
+            return 1
+        runs = [r["filter"] for r in runs]
+        print("the filter's own path and map (before smoothing):")
     ratios = [r["ate_ratio"] for r in runs]
     if len(ratios) != a.runs or not all(math.isfinite(r) for r in ratios):
         print("FAIL: expected %d runs with a finite ATE ratio, got %d: %s"
