@@ -382,6 +382,11 @@ SlamConfig parseSlamConfigTree(const YAML::Node& root, const std::string& source
     throw ConfigError(source + ": localization_only = true needs map_file (a landmarks YAML "
                                "written by ~save_map or offline_slam)");
   }
+  if (config.smoothing.enabled && config.filter.use_lines) {
+    throw ConfigError(source + ": smoothing.enabled re-estimates point landmarks only: it needs "
+                               "use_lines: false (a line map would no longer fit the smoothed "
+                               "path)");
+  }
   if (config.filter.variant == "grid_pf" && config.frontend == "features") {
     throw ConfigError(source +
                       ": variant grid_pf maps raw laser or sonar readings: frontend "

@@ -29,8 +29,9 @@
 # Those limits apply to the filter's own path and map (run_mrclam's "filter" record); the config
 # smooths both after the run (session 24), and the smoothed ones must meet tighter limits: at
 # least 34 runs halved, mean ratio at most 0.33, at least 31 clean, at most 2.7 spurious per run,
-# at least 31 within, at least 27 all three, at most 3 copy pairs and 10 close pairs. Measured:
-# 37, 0.28, 35, 2.2, 35, 31, 0 and 2. Without smoothing (--set smoothing.enabled=false) the
+# at least 31 within, at least 27 all three, at most 3 copy pairs and 15 close pairs (as above:
+# the smoothed covariances, given the path, are tighter, so close pairs are fewer by
+# construction). Measured: 37, 0.28, 35, 2.2, 35, 31, 0 and 2. Without smoothing (--set smoothing.enabled=false) the
 # second check fails on the mean ratio, the spurious landmarks per run and all three (the
 # filter's own figures above; and the first finds no "filter" record).
 # Extra arguments go to run_mrclam (e.g. --set particles=100 or --set motion.alpha1=0.2 to see
@@ -54,7 +55,7 @@ status=0
   --hint "spurious / within: copies stay in the maps (no negative evidence: 6.8 per run, 19 within)" || status=1
 /usr/bin/python3 "$here/lib/mrclam_check.py" "$work/results.json" --runs 45 --min-halved 34 \
   --max-mean-ratio 0.33 --min-clean 31 --max-spurious 2.7 --min-within 31 --min-all-three 27 \
-  --max-copy-pairs 3 --max-close-pairs 10 \
+  --max-copy-pairs 3 --max-close-pairs 15 \
   --hint "smoothed figures at the filter's own level: the smoothing did not run or undid nothing" \
   || status=1
 exit "$status"

@@ -57,6 +57,7 @@ std::vector<core::LandmarkEstimate> mapOf(const std::vector<Eigen::Vector2d>& po
     l.id = static_cast<int>(k) + 10;
     l.mean = points[k];
     l.covariance = 0.01 * Eigen::Matrix2d::Identity();
+    l.observations = 7;  // the filter's count, kept as it is
     map.push_back(l);
   }
   return map;
@@ -113,11 +114,16 @@ TEST(MapSmoother, RecoversTheTruePathAndMapFromAJitteredSample) {
   for (size_t k = 0; k < scene.points.size(); ++k) {
     EXPECT_LT((r.landmarks[k].mean - scene.points[k]).norm(), 1e-5) << k;
     EXPECT_EQ(r.landmarks[k].id, static_cast<int>(k) + 10);  // ids kept
-    EXPECT_EQ(r.landmarks[k].observations, 40);
-    // The covariance given the path: 40 sightings of sigma 0.05 m (range) and 0.02 rad at
-    // 1.5-5 m make it tight, positive definite, and far below the map's 0.01 m^2 each way.
-    EXPECT_GT(r.landmarks[k].covariance.determinant(), 0.0);
-    EXPECT_LT(r.landmarks[k].covariance.trace(), 1e-3);
+    EXPECT_EQ(r.landmarks[k].observations, 7);
+    // The covariance given the path: (sum over the sightings of H^T R^-1 H)^-1 at the truth.
+    Eigen::Matrix2d information = Eigen::Matrix2d::Zero();
+    for (size_t i = 0; i < scene.truth.size(); ++i) {
+      const core::Prediction p = core::predictPoint(scene.truth[i], scene.points[k]);
+      information += p.h_landmark.transpose() *
+                     scene.frames[i].observations[k].noise.inverse() * p.h_landmark;
+    }
+    const Eigen::Matrix2d expected = information.inverse();
+    EXPECT_LT((r.landmarks[k].covariance - expected).norm(), 1e-6 * expected.norm()) << k;
   }
 }
 
@@ -149,17 +155,11 @@ TEST(MapSmoother, NoisyDataSmoothedPathBeatsTheSample) {
 
 TEST(MapSmoother, SightingsOutsideEveryGateAreLeftOut) {
   Scene scene = circle(20);
-  // A sighting of something 1.5 m from every mapped landmark, in every frame.
+  // A sighting of something at (6, 6), 3.5 m or more from every mapped landmark, in every frame.
   for (size_t i = 0; i < scene.frames.size(); ++i) {
     scene.frames[i].observations.push_back(sighting(scene.truth[i], Eigen::Vector2d(6.0, 6.0)));
   }
   core::SmoothingOptions options;
-  options.min_sightings = 25;  // more than any landmark has: none is smoothed
-  const core::SmoothingResult none =
-      core::smoothPathAndMap(scene.truth, scene.frames, mapOf(scene.points), options);
-  ASSERT_TRUE(none.ok) << none.message;
-  EXPECT_EQ(none.landmarks_smoothed, 0);
-  EXPECT_EQ(none.sightings_used, 0);
   options.min_sightings = 2;
   const core::SmoothingResult r =
       core::smoothPathAndMap(scene.truth, scene.frames, mapOf(scene.points), options);
@@ -182,10 +182,42 @@ TEST(MapSmoother, SightingsWithAKnownIdJoinThatLandmark) {
   ASSERT_TRUE(r.ok) << r.message;
   EXPECT_EQ(r.sightings_used, 60);
   EXPECT_EQ(r.sightings_left_out, 20);
-  EXPECT_EQ(r.landmarks[0].observations, 0);  // no sighting: left as given
-  EXPECT_EQ(r.landmarks[3].observations, 40);     // its own sightings and those labelled 13
+  // The first landmark has no sighting left: it is not smoothed, and stays exactly as given.
+  EXPECT_EQ(r.landmarks_smoothed, 2);
+  EXPECT_EQ(r.landmarks[0].mean, scene.points[0]);
+  EXPECT_EQ(r.landmarks[0].covariance, 0.01 * Eigen::Matrix2d::Identity());
   // Pulled towards the first point (the Huber kernel limits how far).
   EXPECT_GT((r.landmarks[3].mean - scene.points[3]).norm(), 0.05);
+}
+
+// Sightings 2.6 sigma off (inside the gate) in a third of the frames: the Huber kernel lets
+// them pull the landmark less than plain least squares does.
+TEST(MapSmoother, TheHuberKernelResistsSightingsFarOff) {
+  Scene scene = circle(30);
+  for (size_t i = 0; i < scene.frames.size(); i += 3) scene.frames[i].observations[0].z.x() += 0.13;
+  core::SmoothingOptions options;
+  double error[2];
+  for (int robust = 0; robust < 2; ++robust) {
+    options.huber_k = robust ? 2.0 : 0.0;
+    const core::SmoothingResult r =
+        core::smoothPathAndMap(scene.truth, scene.frames, mapOf(scene.points), options);
+    ASSERT_TRUE(r.ok) << r.message;
+    EXPECT_EQ(r.sightings_used, 120);
+    error[robust] = (r.landmarks[0].mean - scene.points[0]).norm();
+  }
+  EXPECT_GT(error[0], 0.01);
+  EXPECT_LT(error[1], 0.9 * error[0]);
+}
+
+// Nothing to smooth (no landmark seen often enough) is a refusal, not a dead-reckoned path.
+TEST(MapSmoother, NoSightingIsARefusal) {
+  const Scene scene = circle(10);
+  core::SmoothingOptions options;
+  options.min_sightings = 11;
+  const core::SmoothingResult r =
+      core::smoothPathAndMap(scene.truth, scene.frames, mapOf(scene.points), options);
+  EXPECT_FALSE(r.ok);
+  EXPECT_NE(r.message.find("nothing to smooth"), std::string::npos) << r.message;
 }
 
 TEST(MapSmoother, BadInputIsRefusedByName) {
@@ -208,6 +240,11 @@ TEST(MapSmoother, BadInputIsRefusedByName) {
   r = core::smoothPathAndMap(scene.truth, frames, mapOf(scene.points), options);
   EXPECT_FALSE(r.ok);
   EXPECT_NE(r.message.find("frame 3"), std::string::npos) << r.message;
+  frames = scene.frames;
+  frames[6].observations[1].z.y() = std::nan("");
+  r = core::smoothPathAndMap(scene.truth, frames, mapOf(scene.points), options);
+  EXPECT_FALSE(r.ok);
+  EXPECT_NE(r.message.find("observation of frame 6"), std::string::npos) << r.message;
   options.gate_chi2 = -1.0;
   EXPECT_THROW(core::smoothPathAndMap(scene.truth, scene.frames, mapOf(scene.points), options),
                std::invalid_argument);
@@ -256,6 +293,26 @@ TEST(MapSmoother, SmoothsASessionThatKeptItsFrames) {
       for (const Eigen::Vector2d& p : scene.points) nearest = std::min(nearest, (l.mean - p).norm());
       EXPECT_LT(nearest, 0.02);
     }
+    // The smoothed path is the one the runner reports: one pose per trajectory point.
+    EXPECT_EQ(r.path.size(), session.estimatedPath().size());
+    // A pose reset during the run breaks the path: the frames are dropped until a reset, and
+    // smoothing says why instead of smoothing across the jump.
+    ASSERT_TRUE(session.setPose(core::Pose2(1.0, 1.0, 0.5), 1e-4 * Eigen::Matrix3d::Identity()));
+    EXPECT_TRUE(session.frames().empty());
+    core::FeatureSet later;
+    later.stamp = 100.0;
+    session.process(later.stamp, scene.truth[0], later);
+    EXPECT_TRUE(session.frames().empty());
+    const core::SmoothingResult broken = core::smoothSession(session, filter, smoothing);
+    EXPECT_FALSE(broken.ok);
+    EXPECT_NE(broken.message.find("pose was reset"), std::string::npos) << broken.message;
+    session.reset();
+    session.process(200.0, scene.truth[0], later);
+    EXPECT_EQ(session.frames().size(), 1u);  // kept again after the reset
+    // On a prior map the map frame is the map's: nothing is smoothed.
+    ASSERT_TRUE(session.setPriorMap(mapOf(scene.points)));
+    EXPECT_NE(core::smoothSession(session, filter, smoothing).message.find("prior map"),
+              std::string::npos);
   }
 }
 

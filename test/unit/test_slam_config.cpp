@@ -141,6 +141,7 @@ TEST(SlamConfig, OverridesApplyDottedKeys) {
   applyOverride(&root, "association.exclusive=true");
   applyOverride(&root, "measurement.landmark_iterations=3");
   applyOverride(&root, "smoothing.enabled=true");
+  applyOverride(&root, "use_lines=false");
   applyOverride(&root, "smoothing.huber_k=0");
   const SlamConfig c = parseSlamConfig(root, "t");
   EXPECT_TRUE(c.smoothing.enabled);
@@ -248,6 +249,8 @@ TEST(SlamConfig, HinfAndExistenceErrorsNameTheKey) {
             std::string::npos);
   EXPECT_NE(errorOf("smoothing: {rounds: 0}").find("smoothing.rounds"), std::string::npos);
   EXPECT_NE(errorOf("smoothing: {enable: true}").find("in smoothing: enable"), std::string::npos);
+  EXPECT_NE(errorOf("smoothing: {enabled: true}").find("needs use_lines: false"),
+            std::string::npos);
   EXPECT_NE(errorOf("existence: {sighting_count: 0}").find("existence.sighting_count"),
             std::string::npos);
   EXPECT_NE(errorOf("existence: {merge_chi2: -1}").find("existence.merge_chi2"),

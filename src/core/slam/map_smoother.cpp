@@ -169,16 +169,14 @@ std::vector<std::vector<int>> associate(const std::vector<Pose2>& path,
   for (size_t i = 0; i < frames.size(); ++i) {
     for (const Observation& o : frames[i].observations) {
       int best = -1;
-      double best_d2 = gate_chi2;
-      if (o.type == LandmarkType::kPoint && o.known_id >= 0) {
-        for (size_t k = 0; k < landmarks.size() && best < 0; ++k) {
-          if (landmarks[k].type == LandmarkType::kPoint && landmarks[k].id == o.known_id) {
-            best = static_cast<int>(k);
-          }
-        }
-      } else if (o.type == LandmarkType::kPoint) {
+      // A known id: the nearest landmark of that id, however far (the filter keeps copies of
+      // an id apart only when they are far apart); else the nearest within the gate.
+      const bool known = o.known_id >= 0;
+      double best_d2 = known ? std::numeric_limits<double>::infinity() : gate_chi2;
+      if (o.type == LandmarkType::kPoint) {
         for (size_t k = 0; k < landmarks.size(); ++k) {
           if (landmarks[k].type != LandmarkType::kPoint) continue;
+          if (known && landmarks[k].id != o.known_id) continue;
           const Prediction p = predictPoint(path[i], landmarks[k].mean);
           const Eigen::Matrix2d s =
               p.h_landmark * landmarks[k].covariance * p.h_landmark.transpose() + o.noise;
@@ -199,9 +197,16 @@ std::vector<std::vector<int>> associate(const std::vector<Pose2>& path,
 bool finiteInput(const std::vector<Pose2>& path, const std::vector<SmoothingFrame>& frames,
                  const std::vector<LandmarkEstimate>& landmarks, std::string* why) {
   for (size_t i = 0; i < path.size(); ++i) {
-    if (!path[i].allFinite()) return *why = "pose " + std::to_string(i) + " is not finite", false;
+    const std::string frame = std::to_string(i);
+    if (!path[i].allFinite()) return *why = "pose " + frame + " is not finite", false;
     if (!frames[i].motion.allFinite() || !frames[i].motion_covariance.allFinite()) {
-      return *why = "the motion of frame " + std::to_string(i) + " is not finite", false;
+      return *why = "the motion of frame " + frame + " is not finite", false;
+    }
+    for (const Observation& o : frames[i].observations) {
+      if (!o.z.allFinite() || !finitePositiveDefinite(o.noise)) {
+        return *why = "an observation of frame " + frame +
+                      " is not finite or its noise not positive definite", false;
+      }
     }
   }
   for (const LandmarkEstimate& l : landmarks) {
@@ -259,6 +264,12 @@ SmoothingResult solve(const std::vector<Pose2>& path, const std::vector<Smoothin
     }
   }
   result.sightings_used = static_cast<int>(problem.sightings.size());
+  if (result.sightings_used == 0) {
+    // Odometry alone would only pull the path back to dead reckoning.
+    result.message = "no sighting of a landmark seen at least " +
+                     std::to_string(options.min_sightings) + " times; nothing to smooth";
+    return result;
+  }
   result.landmarks_smoothed = smoothed;
 
   Eigen::VectorXd x(problem.size());
@@ -270,6 +281,10 @@ SmoothingResult solve(const std::vector<Pose2>& path, const std::vector<Smoothin
   // Levenberg-Marquardt on the sparse normal equations.
   double cost = problem.cost(x);
   result.initial_cost = cost;
+  if (!std::isfinite(cost)) {
+    result.message = "the cost at the filter's path and map is not finite";
+    return result;
+  }
   double lambda = 1e-6;
   Eigen::SparseMatrix<double> h;
   Eigen::VectorXd g;
@@ -319,7 +334,6 @@ SmoothingResult solve(const std::vector<Pose2>& path, const std::vector<Smoothin
     LandmarkEstimate& l = result.landmarks[k];
     const int at = 3 * poses + 2 * variable[k];
     l.mean = problem.landmark(x, variable[k]);
-    l.observations = seen[k];
     const Eigen::Matrix2d information = Eigen::Matrix2d(h.block(at, at, 2, 2));
     Eigen::LDLT<Eigen::Matrix2d> ldlt(information);
     if (ldlt.info() == Eigen::Success && ldlt.vectorD().minCoeff() > 0.0) {
@@ -367,7 +381,10 @@ SmoothingResult smoothPathAndMap(const std::vector<Pose2>& path,
   for (int round = 0; round < options.rounds; ++round) {
     SmoothingResult next = solve(result.path, frames, result.landmarks, options);
     if (!next.ok) return round == 0 ? next : result;
-    if (round > 0) next.initial_cost = result.initial_cost;
+    if (round > 0) {
+      next.initial_cost = result.initial_cost;
+      next.iterations += result.iterations;
+    }
     result = next;
   }
   return result;
@@ -375,30 +392,30 @@ SmoothingResult smoothPathAndMap(const std::vector<Pose2>& path,
 
 SmoothingResult smoothSession(const SlamSession& session, const FilterOptions& options,
                               const SmoothingOptions& smoothing) {
-  const std::vector<TrajectoryPoint>& trajectory = session.trajectory();
   const std::vector<SessionFrame>& kept = session.frames();
-  std::vector<Pose2> path = session.filter().bestPath();
-  if (path.size() != trajectory.size()) {
-    path.clear();
-    for (const TrajectoryPoint& p : trajectory) path.push_back(p.pose);
+  SmoothingResult refused;
+  refused.path = session.estimatedPath();
+  refused.landmarks = session.filter().landmarks();
+  if (session.hasPriorMap() || !session.mapping()) {
+    // The map frame is the loaded map's, not the first pose's: holding pose 0 would not hold it.
+    refused.message = "a prior map was loaded or mapping is off; nothing to smooth";
+    return refused;
   }
-  if (kept.size() != path.size()) {
-    SmoothingResult result;
-    result.path = path;
-    result.landmarks = session.filter().landmarks();
-    result.message = kept.empty() ? "the session kept no frames (keep_frames is off)"
-                                  : "the session's frames and path differ in length";
-    return result;
+  if (kept.size() != refused.path.size()) {
+    refused.message = kept.empty() ? "the session kept no frames (keep_frames off, or the pose "
+                                     "was reset during the run)"
+                                   : "the session's frames and path differ in length";
+    return refused;
   }
   const std::unique_ptr<MotionModel> model = createMotionModel(options.motion);
   std::vector<SmoothingFrame> frames(kept.size());
   for (size_t i = 0; i < kept.size(); ++i) {
     frames[i].motion = kept[i].motion.delta;
     frames[i].motion_covariance = model->covariance(Pose2::Zero(), kept[i].motion);
-    int rejected = 0;
-    frames[i].observations = prepareObservations(kept[i].features, options, &rejected);
+    int unusable = 0;  // the filter skipped them too (and counted them)
+    frames[i].observations = prepareObservations(kept[i].features, options, &unusable);
   }
-  return smoothPathAndMap(path, frames, session.filter().landmarks(), smoothing);
+  return smoothPathAndMap(refused.path, frames, refused.landmarks, smoothing);
 }
 
 }  // namespace core

@@ -46,6 +46,8 @@ bool SlamSession::setPose(const Pose2& pose, const Eigen::Matrix3d& covariance) 
   }
   if (!filter_->resetPose(pose, covariance)) return false;
   map_to_odom_ = compose(pose, inverse(last_odom_));
+  frames_.clear();
+  frames_broken_ = true;
   return true;
 }
 
@@ -64,6 +66,7 @@ void SlamSession::restart() {
   map_to_odom_ = Pose2::Zero();
   trajectory_.clear();
   frames_.clear();
+  frames_broken_ = false;
   frames_back_ = 0;
   ++resets_;
 }
@@ -172,8 +175,16 @@ FrameResult SlamSession::process(double stamp, const Pose2& odom_pose,
   return FrameResult::kUpdated;
 }
 
+std::vector<Pose2> SlamSession::estimatedPath() const {
+  std::vector<Pose2> path = filter_->bestPath();
+  if (path.size() == trajectory_.size()) return path;
+  path.clear();
+  for (const TrajectoryPoint& p : trajectory_) path.push_back(p.pose);
+  return path;
+}
+
 void SlamSession::keepFrame(const MotionInput& motion, const FeatureSet& features) {
-  if (!options_.keep_frames) return;
+  if (!options_.keep_frames || frames_broken_) return;
   SessionFrame frame;
   frame.motion = motion;
   frame.features.stamp = features.stamp;

@@ -50,22 +50,25 @@ struct SmoothingResult {
   int sightings_used = 0;      // point observations associated with a landmark
   int sightings_left_out = 0;  // point observations outside every landmark's gate
   int landmarks_smoothed = 0;
-  int iterations = 0;
+  int iterations = 0;          // over every round
   double initial_cost = 0.0;   // sum of squared (robust-weighted) normalised residuals
   double final_cost = 0.0;
 };
 
-/// Smooths path (one pose per frame, in the map frame) and the point landmarks. frames[0]'s
-/// motion is ignored: the first pose is held (it anchors the map frame). Non-finite input or
-/// sizes that disagree give ok = false with the input unchanged.
+/// Smooths path (one pose per frame, in the map frame) and the point landmarks (whatever
+/// options.enabled says: that switch is for the callers). frames[0]'s motion is ignored: the
+/// first pose is held (it anchors the map frame). A landmark keeps its id and its observation
+/// count (the filter's); the covariance is the one given the smoothed path. Non-finite input,
+/// sizes that disagree or no usable sighting give ok = false with the input unchanged.
 SmoothingResult smoothPathAndMap(const std::vector<Pose2>& path,
                                  const std::vector<SmoothingFrame>& frames,
                                  const std::vector<LandmarkEstimate>& landmarks,
                                  const SmoothingOptions& options);
 
-/// The same for a session that kept its frames (SessionOptions::keep_frames): the filter's
-/// best path (or the trajectory, for variants without paths), its landmarks, and each frame's
-/// odometry noise from options.motion and observation noise from options.measurement.
+/// The same for a session that kept its frames (SessionOptions::keep_frames): its estimated
+/// path, the filter's landmarks, and each frame's odometry noise from options.motion and
+/// observation noise from options.measurement. Refused (ok = false) on a prior map or with
+/// mapping off, and after a pose reset during the run.
 SmoothingResult smoothSession(const SlamSession& session, const FilterOptions& options,
                               const SmoothingOptions& smoothing);
 
