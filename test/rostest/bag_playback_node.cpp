@@ -20,8 +20,10 @@
 #include <string>
 #include <vector>
 
+#include "rbpf_slam/MapFile.h"
 #include "rbpf_slam/core/geometry.h"
 #include "rbpf_slam/io/evaluation.h"
+#include "rbpf_slam/io/landmark_file.h"
 #include "rbpf_slam/ros/conversions.h"
 
 namespace rbpf_slam {
@@ -394,6 +396,28 @@ TEST_F(BagPlaybackTest, TrajectoryAteWithinTolerance) {
         << odometry_missing << " trajectory stamps without odom -> base in tf";
     EXPECT_LE(result.ate_rmse_m, ate_odometry_ratio_ * odometry_result.ate_rmse_m)
         << "the trajectory is not clearly better than odometry alone";
+  }
+}
+
+// ~save_map_prefix set (a config with smoothing.enabled): ~save_map at the end of the bag
+// writes the map smoothed over every frame, says so, and the file loads back, finite.
+TEST_F(BagPlaybackTest, SaveMapSmoothsTheMap) {
+  std::string prefix;
+  ros::NodeHandle("~").param<std::string>("save_map_prefix", prefix, "");
+  if (prefix.empty()) GTEST_SKIP() << "no ~save_map_prefix";
+  const std::string service = "/" + observer_->slamNode() + "/save_map";
+  ASSERT_TRUE(ros::service::waitForService(service, ros::Duration(10.0))) << service;
+  MapFile call;
+  call.request.path = prefix;
+  ASSERT_TRUE(ros::service::call(service, call));
+  EXPECT_TRUE(call.response.success) << call.response.message;
+  EXPECT_NE(call.response.message.find("(smoothed: "), std::string::npos)
+      << call.response.message;
+  const std::vector<core::LandmarkEstimate> landmarks =
+      io::loadLandmarksYaml(prefix + ".landmarks.yaml");
+  EXPECT_GT(landmarks.size(), 3u);
+  for (const core::LandmarkEstimate& l : landmarks) {
+    EXPECT_TRUE(l.mean.allFinite() && l.covariance.allFinite()) << "landmark " << l.id;
   }
 }
 
