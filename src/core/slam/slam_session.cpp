@@ -171,6 +171,10 @@ FrameResult SlamSession::process(double stamp, const Pose2& odom_pose,
     map_to_odom_ = compose(map_pose, inverse(odom_pose));
     trajectory_.push_back({stamp, map_pose});
     keepFrame(motion, features);
+  } else {
+    // No trajectory point for this update: the kept frames would skip its motion.
+    frames_.clear();
+    frames_broken_ = true;
   }
   return FrameResult::kUpdated;
 }

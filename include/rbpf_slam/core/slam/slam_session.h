@@ -97,7 +97,8 @@ class SlamSession {
   Pose2 mapToOdom() const { return map_to_odom_; }
   const std::vector<TrajectoryPoint>& trajectory() const { return trajectory_; }
   /// One per trajectory point when keep_frames, else empty; emptied (until the next reset) when
-  /// the pose is reset during a run, which breaks the path the frames would tie together.
+  /// the pose is reset during a run or an update gives no finite estimate, either of which
+  /// breaks the path the frames would tie together.
   const std::vector<SessionFrame>& frames() const { return frames_; }
   /// The path to report: the filter's best path where it has one per trajectory point
   /// (FastSLAM variants), else the trajectory's poses.
@@ -124,7 +125,7 @@ class SlamSession {
   Pose2 map_to_odom_ = Pose2::Zero();
   std::vector<TrajectoryPoint> trajectory_;
   std::vector<SessionFrame> frames_;
-  bool frames_broken_ = false;  // a pose reset during this run: no frames are kept
+  bool frames_broken_ = false;  // the path broke during this run: no frames are kept
   void keepFrame(const MotionInput& motion, const FeatureSet& features);
   UpdateStats last_stats_;
   long resets_ = 0;
