@@ -29,7 +29,8 @@ run() {  # run NAME [offline_slam arguments...]
 # Odometry alone: one particle, no motion noise, no landmarks.
 run odometry --set particles=1 --set motion.alpha1=0 --set motion.alpha2=0 \
   --set motion.alpha3=0 --set motion.alpha4=0 --set motion.min_sigma_xy_m=0 \
-  --set motion.min_sigma_theta_rad=0 --set use_points=false --set use_lines=true
+  --set motion.min_sigma_theta_rad=0 --set use_points=false --set use_lines=true \
+  --set smoothing.enabled=false
 for seed in 1 2 3 4 5 6 7 8 9 10; do
   run "seed$seed" --seed "$seed" "$@"
 done
