@@ -671,9 +671,8 @@ OfflineSummary OfflineRunner::writeOutputs(const OfflineSummary& in) const {
   std::vector<io::StampedPose> estimate, online;
   std::vector<core::Pose2> path;
   for (const auto& p : pipeline_.session().trajectory()) online.push_back({p.stamp, p.pose});
-  path = pipeline_.session().estimatedPath();
-  const bool use_best_path = pipeline_.session().filter().bestPath().size() == online.size() &&
-                             !online.empty();
+  bool use_best_path = false;
+  path = pipeline_.session().estimatedPath(&use_best_path);
   for (size_t i = 0; i < online.size(); ++i) estimate.push_back({online[i].stamp, path[i]});
   summary.trajectory_source = use_best_path ? "best_particle_path" : "online_estimate";
   std::vector<core::LandmarkEstimate> landmarks = pipeline_.session().filter().landmarks();

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "rbpf_slam/core/filters/slam_filter.h"
 #include "rbpf_slam/core/slam/slam_session.h"
@@ -51,6 +52,33 @@ TEST(SlamSession, OneStaleFrameIsRejectedAndTheMapKept) {
 
 // A frame at the last frame's stamp (another input of the same instant, or a repeat) is
 // skipped, not used twice, not an error, and does not break or extend a run of late frames.
+// The reported path is the best particle's where the filter keeps one per update (FastSLAM),
+// else the pose estimated at each update; estimatedPath says which it returned.
+TEST(SlamSession, EstimatedPathSaysWhereItCameFrom) {
+  core::SlamSession fastslam = makeSession(3);
+  bool best = true;
+  EXPECT_TRUE(fastslam.estimatedPath(&best).empty());
+  EXPECT_FALSE(best);  // nothing yet: no best path to report
+  for (int i = 1; i <= 5; ++i) frame(&fastslam, i);
+  const std::vector<core::Pose2> path = fastslam.estimatedPath(&best);
+  EXPECT_TRUE(best);
+  ASSERT_EQ(path.size(), 5u);
+  const std::vector<core::Pose2> kept = fastslam.filter().bestPath();
+  for (size_t i = 0; i < path.size(); ++i) EXPECT_TRUE(path[i].isApprox(kept[i]));
+
+  core::FilterOptions ekf;
+  ekf.variant = "ekf_slam";
+  core::SlamSession other(core::createFilter(ekf), core::SessionOptions());
+  for (int i = 1; i <= 5; ++i) frame(&other, i);
+  ASSERT_TRUE(other.filter().bestPath().empty());
+  const std::vector<core::Pose2> online = other.estimatedPath(&best);
+  EXPECT_FALSE(best);
+  ASSERT_EQ(online.size(), 5u);
+  for (size_t i = 0; i < online.size(); ++i) {
+    EXPECT_TRUE(online[i].isApprox(other.trajectory()[i].pose));
+  }
+}
+
 TEST(SlamSession, AFrameAtTheLastStampIsSkipped) {
   core::SlamSession session = makeSession(3);
   for (int i = 1; i <= 10; ++i) frame(&session, i);

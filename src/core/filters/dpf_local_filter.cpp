@@ -239,9 +239,8 @@ DpfLocalEstimate DpfLocalFilter::step(const DpfStepInput& input, const Pose2& in
       auto it = p.map->find(observations[o].id);
       if (it == p.map->end()) continue;
       const Prediction pred = predictPoint(mu, it->second.mean);
-      const Eigen::Matrix2d q = symmetric(pred.h_landmark * it->second.covariance *
-                                              pred.h_landmark.transpose() +
-                                          observations[o].noise);
+      const Eigen::Matrix2d q = symmetric(
+          landmarkInnovationCovariance(pred, it->second.covariance, observations[o].noise));
       const Eigen::Matrix2d q_inv = q.inverse();
       v[o][j] = innovation(observations[o].z, pred.z);
       model_cov[o][j] = symmetric(q + pred.h_pose * sigma * pred.h_pose.transpose());
@@ -271,7 +270,7 @@ DpfLocalEstimate DpfLocalFilter::step(const DpfStepInput& input, const Pose2& in
       Landmark& lm = it->second;
       const Prediction pred = predictPoint(p.pose, lm.mean);
       const Eigen::Matrix2d s =
-          symmetric(pred.h_landmark * lm.covariance * pred.h_landmark.transpose() + obs.noise);
+          symmetric(landmarkInnovationCovariance(pred, lm.covariance, obs.noise));
       const Eigen::Matrix2d gain = lm.covariance * pred.h_landmark.transpose() * s.inverse();
       lm.mean += gain * innovation(obs.z, pred.z);
       lm.covariance = symmetric((Eigen::Matrix2d::Identity() - gain * pred.h_landmark) *

@@ -197,8 +197,7 @@ FastSlam2::Match FastSlam2::associateAmong(const LandmarkMap& map, const Pose2& 
     }
     const Prediction p = is_line ? predictLine(pose, lm.mean, observation.z.y())
                                  : predictPoint(pose, lm.mean);
-    const Eigen::Matrix2d z_cov =
-        p.h_landmark * lm.covariance * p.h_landmark.transpose() + observation.noise;
+    const Eigen::Matrix2d z_cov = landmarkInnovationCovariance(p, lm.covariance, observation.noise);
     const Eigen::Matrix2d s = z_cov + p.h_pose * pose_cov * p.h_pose.transpose();
     const Eigen::Vector2d v = innovation(observation.z, p.z);
     const double d2 = v.dot(s.inverse() * v);
@@ -244,8 +243,7 @@ bool FastSlam2::updateLandmark(LandmarkMap* map, const Match& match, const Pose2
   const bool is_line = lm.type == LandmarkType::kLine;
   const Prediction p = is_line ? predictLine(pose, lm.mean, observation.z.y())
                                : predictPoint(pose, lm.mean);
-  const Eigen::Matrix2d s =
-      p.h_landmark * lm.covariance * p.h_landmark.transpose() + observation.noise;
+  const Eigen::Matrix2d s = landmarkInnovationCovariance(p, lm.covariance, observation.noise);
   Eigen::Matrix2d s_inv;
   const Eigen::Vector2d v = innovation(observation.z, p.z);
   const double ll = logGaussian2(v, s, &s_inv);
@@ -480,7 +478,7 @@ FastSlam2::ParticleUpdate FastSlam2::updateParticle(Particle* particle,
         Eigen::Matrix2d s_inv;
         const double ll = logGaussian2(
             innovation(observations[k].z, p.z),
-            p.h_landmark * lm.covariance * p.h_landmark.transpose() + observations[k].noise,
+            landmarkInnovationCovariance(p, lm.covariance, observations[k].noise),
             &s_inv);
         if (std::isfinite(ll)) particle->log_weight += ll;
       }

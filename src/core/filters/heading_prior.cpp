@@ -190,20 +190,31 @@ double HeadingPrior::inlierProbability(double offset_rad, double s, double* log_
   return std::exp(log_in - *log_likelihood);
 }
 
+namespace {
+
+/// A scalar measurement of the state's last component (the heading) with innovation -offset and
+/// innovation variance s: the Kalman step weighted by the probability that the measurement is
+/// right, and the mixture's spread (moment matching; exactly the Kalman step when inlier is 1).
+template <int N>
+void weightedHeadingStep(double offset_rad, double s, double inlier,
+                         Eigen::Matrix<double, N, 1>* mean, Eigen::Matrix<double, N, N>* cov) {
+  const Eigen::Matrix<double, N, 1> gain = cov->col(N - 1) / s;
+  const Eigen::Matrix<double, N, 1> shift = gain * offset_rad;
+  *mean -= inlier * shift;
+  const Eigen::Matrix<double, N, N> updated =
+      *cov - inlier * gain * cov->row(N - 1) + inlier * (1.0 - inlier) * shift * shift.transpose();
+  *cov = 0.5 * (updated + updated.transpose());
+}
+
+}  // namespace
+
 double HeadingPrior::condition(double offset_rad, Pose2* mean, Eigen::Matrix3d* cov) const {
   // h(x) = heading, z = mean.z() - offset: the innovation is -offset.
   const double s = (*cov)(2, 2) + options_.sigma_rad * options_.sigma_rad;
   double log_likelihood = 0.0;
   const double inlier = inlierProbability(offset_rad, s, &log_likelihood);
-  // The Kalman step weighted by the probability that the measurement is right, and the mixture's
-  // spread (moment matching; exactly the Kalman step when outlier_ratio is 0).
-  const Eigen::Vector3d gain = cov->col(2) / s;
-  const Eigen::Vector3d shift = gain * offset_rad;
-  *mean -= inlier * shift;
+  weightedHeadingStep<3>(offset_rad, s, inlier, mean, cov);
   mean->z() = wrapAngle(mean->z());
-  const Eigen::Matrix3d updated =
-      *cov - inlier * gain * cov->row(2) + inlier * (1.0 - inlier) * shift * shift.transpose();
-  *cov = 0.5 * (updated + updated.transpose());
   return log_likelihood;
 }
 
@@ -217,15 +228,15 @@ double HeadingPrior::correctDrift(const std::vector<Observation>& observations,
                                   double reference_rad) {
   double offset = 0.0;
   if (!residual(observations, reference_rad, reference_rad, &offset)) return 0.0;
-  // h = heading, z = reference - offset: the innovation is -offset. As condition(), weighted by
-  // the probability that the measurement is right.
+  // The drift is the state (mean 0 before the step); the innovation is -offset, as condition().
   const double s = drift_variance_ + options_.sigma_rad * options_.sigma_rad;
   double unused = 0.0;
   const double inlier = inlierProbability(offset, s, &unused);
-  const double shift = drift_variance_ / s * offset;
-  drift_variance_ +=
-      -inlier * drift_variance_ * drift_variance_ / s + inlier * (1.0 - inlier) * shift * shift;
-  return -inlier * shift;
+  Eigen::Matrix<double, 1, 1> correction = Eigen::Matrix<double, 1, 1>::Zero();
+  Eigen::Matrix<double, 1, 1> variance = Eigen::Matrix<double, 1, 1>::Constant(drift_variance_);
+  weightedHeadingStep<1>(offset, s, inlier, &correction, &variance);
+  drift_variance_ = variance(0, 0);
+  return correction(0);
 }
 
 }  // namespace core

@@ -38,6 +38,9 @@ void removeDuplicates(const ExistenceOptions& o, const LandmarkMap& map, int ste
     for (int j : near) {
       const Landmark& b = map[j];
       if (j == i || (*removed)[j] || !mature(o, b)) continue;
+      // A pair seen together was tested from its lower index already; whatever came of it then
+      // (a removal, a failed test, a loser that had won) still holds.
+      if (j < i && b.last_seen_step == step) continue;
       const Eigen::Vector2d d = b.mean - a.mean;
       if (!(d.norm() < o.merge_max_distance_m)) continue;
       const Eigen::LLT<Eigen::Matrix2d> llt(a.covariance + b.covariance);

@@ -179,7 +179,7 @@ std::vector<std::vector<int>> associate(const std::vector<Pose2>& path,
           if (known && landmarks[k].id != o.known_id) continue;
           const Prediction p = predictPoint(path[i], landmarks[k].mean);
           const Eigen::Matrix2d s =
-              p.h_landmark * landmarks[k].covariance * p.h_landmark.transpose() + o.noise;
+              landmarkInnovationCovariance(p, landmarks[k].covariance, o.noise);
           const Eigen::Vector2d v = innovation(o.z, p.z);
           const double d2 = v.dot(s.ldlt().solve(v));
           if (std::isfinite(d2) && d2 < best_d2) {

@@ -179,9 +179,11 @@ FrameResult SlamSession::process(double stamp, const Pose2& odom_pose,
   return FrameResult::kUpdated;
 }
 
-std::vector<Pose2> SlamSession::estimatedPath() const {
+std::vector<Pose2> SlamSession::estimatedPath(bool* best_particle) const {
   std::vector<Pose2> path = filter_->bestPath();
-  if (path.size() == trajectory_.size()) return path;
+  const bool best = path.size() == trajectory_.size() && !trajectory_.empty();
+  if (best_particle) *best_particle = best;
+  if (best) return path;
   path.clear();
   for (const TrajectoryPoint& p : trajectory_) path.push_back(p.pose);
   return path;

@@ -29,6 +29,14 @@ inline Eigen::Vector2d innovation(const Eigen::Vector2d& z, const Eigen::Vector2
   return Eigen::Vector2d(z.x() - z_hat.x(), wrapAngle(z.y() - z_hat.y()));
 }
 
+/// Covariance of the innovation z - z_hat from the landmark's uncertainty and the observation
+/// noise, H_l P_l H_l^T + R (the pose taken as known).
+inline Eigen::Matrix2d landmarkInnovationCovariance(const Prediction& p,
+                                                    const Eigen::Matrix2d& landmark_cov,
+                                                    const Eigen::Matrix2d& noise) {
+  return p.h_landmark * landmark_cov * p.h_landmark.transpose() + noise;
+}
+
 /// Inverse models: a new landmark from an observation at pose, with d m / d z.
 Eigen::Vector2d pointFromObservation(const Pose2& pose, const Eigen::Vector2d& range_bearing,
                                      Eigen::Matrix2d* jacobian_z);

@@ -101,8 +101,8 @@ class SlamSession {
   /// breaks the path the frames would tie together.
   const std::vector<SessionFrame>& frames() const { return frames_; }
   /// The path to report: the filter's best path where it has one per trajectory point
-  /// (FastSLAM variants), else the trajectory's poses.
-  std::vector<Pose2> estimatedPath() const;
+  /// (FastSLAM variants), else the trajectory's poses; *best_particle (when given) says which.
+  std::vector<Pose2> estimatedPath(bool* best_particle = nullptr) const;
   bool hasPriorMap() const { return prior_map_.has_value(); }
   const UpdateStats& lastStats() const { return last_stats_; }
   const SlamFilter& filter() const { return *filter_; }
