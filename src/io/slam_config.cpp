@@ -353,6 +353,9 @@ SlamConfig parseSlamConfigTree(const YAML::Node& root, const std::string& source
   readGrid(top.section("grid"), &f.grid);
   readDpf(top.section("dpf"), &f.dpf);
   readFault(top.section("fault"), &f.dpf.fault);
+  YamlSection ensemble = top.section("ensemble");
+  ensemble.read("members", &f.ensemble.members);
+  ensemble.finish();
   readLaser(top.section("laser_features"), &config.laser);
   readScanMatching(top.section("scan_matching"), &config.scan_matching);
   readSonar(top.section("sonar_features"), &config.sonar);

@@ -659,6 +659,8 @@ OfflineSummary OfflineRunner::run() {
   summary.relocalizations = pipeline_.session().filter().stats().relocalizations;
   summary.heading_measurements = pipeline_.session().filter().stats().heading_measurements;
   summary.robust_steps = pipeline_.session().filter().stats().robust_steps;
+  summary.ensemble_members = pipeline_.session().filter().members();
+  summary.ensemble_leader = pipeline_.session().filter().leader();
   return writeOutputs(summary);
 }
 
@@ -751,6 +753,8 @@ OfflineSummary OfflineRunner::writeOutputs(const OfflineSummary& in) const {
        << "  \"relocalizations\": " << summary.relocalizations << ",\n"
        << "  \"heading_measurements\": " << summary.heading_measurements << ",\n"
        << "  \"robust_steps\": " << summary.robust_steps << ",\n"
+       << "  \"ensemble_members\": " << summary.ensemble_members << ",\n"
+       << "  \"ensemble_leader\": " << summary.ensemble_leader << ",\n"
        << "  \"update_ms_mean\": " << summary.update_ms_mean << ",\n"
        << "  \"update_ms_p99\": " << summary.update_ms_p99 << ",\n"
        << "  \"update_ms_max\": " << summary.update_ms_max << ",\n"

@@ -143,7 +143,10 @@ TEST(SlamConfig, OverridesApplyDottedKeys) {
   applyOverride(&root, "smoothing.enabled=true");
   applyOverride(&root, "use_lines=false");
   applyOverride(&root, "smoothing.huber_k=0");
+  applyOverride(&root, "ensemble.members=3");
   const SlamConfig c = parseSlamConfig(root, "t");
+  EXPECT_EQ(c.filter.ensemble.members, 3);
+  EXPECT_EQ(core::EnsembleOptions().members, 1);  // one filter unless asked
   EXPECT_TRUE(c.smoothing.enabled);
   EXPECT_TRUE(c.session.keep_frames);  // follows smoothing.enabled
   EXPECT_EQ(c.smoothing.huber_k, 0.0);
@@ -248,6 +251,9 @@ TEST(SlamConfig, HinfAndExistenceErrorsNameTheKey) {
   EXPECT_NE(errorOf("smoothing: {huber_k: -1}").find("smoothing.huber_k = -1 is out of range"),
             std::string::npos);
   EXPECT_NE(errorOf("smoothing: {rounds: 0}").find("smoothing.rounds"), std::string::npos);
+  EXPECT_NE(errorOf("ensemble: {members: 0}").find("ensemble.members = 0 is out of range"),
+            std::string::npos);
+  EXPECT_NE(errorOf("ensemble: {size: 2}").find("in ensemble: size"), std::string::npos);
   EXPECT_NE(errorOf("smoothing: {enable: true}").find("in smoothing: enable"), std::string::npos);
   EXPECT_NE(errorOf("smoothing: {enabled: true}").find("needs use_lines: false"),
             std::string::npos);

@@ -545,6 +545,9 @@ UpdateStats FastSlam2::update(const FeatureSet& features) {
   const HeadingStep heading = headingStep(observations, motion);
   const double drift_turn = heading.drift_turn;
   const HeadingPrior::LineSelection& heading_lines = heading.lines;
+  std::vector<double> log_weights(particles_.size());
+  for (size_t i = 0; i < particles_.size(); ++i) log_weights[i] = particles_[i].log_weight;
+  const double log_mass_before = logSumExp(log_weights);
   for (size_t i = 0; i < particles_.size(); ++i) {
     Particle& p = particles_[i];
     if (observations.empty()) {
@@ -568,6 +571,10 @@ UpdateStats FastSlam2::update(const FeatureSet& features) {
     rule_->observeInnovations(std::move(nis));
   }
   stats_.attenuation = rule_->theta();
+  // log p(z_t | z_1:t-1), estimated by the weights' total mass after this step's likelihoods
+  // over their mass before (the filter's marginal likelihood, summed by an ensemble).
+  for (size_t i = 0; i < particles_.size(); ++i) log_weights[i] = particles_[i].log_weight;
+  stats.log_evidence = logSumExp(log_weights) - log_mass_before;
   for (auto& p : particles_) p.path = std::make_shared<PathNode>(p.pose, std::move(p.path));
   stats_.fallbacks += stats.fallbacks;
   // Report the association of the most probable particle of this step, found before

@@ -3,6 +3,7 @@
 #include <string>
 
 #include "rbpf_slam/core/filters/ekf_slam.h"
+#include "rbpf_slam/core/filters/ensemble_filter.h"
 #include "rbpf_slam/core/filters/distributed_filter.h"
 #include "rbpf_slam/core/filters/fastslam2.h"
 #include "rbpf_slam/core/filters/fault_injector.h"
@@ -41,6 +42,16 @@ void validate(const FilterOptions& o) {
                                 o.variant + "' (fastslam2, hinf_fastslam, robust_fastslam2 only)");
   }
   requireRange("particles", o.particles, 1, 100000);
+  requireRange("ensemble.members", o.ensemble.members, 1, 64);
+  if (o.ensemble.members > 1 && o.variant != "fastslam2" && o.variant != "hinf_fastslam") {
+    throw std::invalid_argument("ensemble.members > 1 is not implemented for variant '" +
+                                o.variant + "' (fastslam2, hinf_fastslam only: the members are "
+                                "ranked by the marginal likelihood these estimate)");
+  }
+  if (o.ensemble.members > 1 && o.dpf.fault.enabled) {
+    throw std::invalid_argument("ensemble.members > 1 with fault.enabled is not implemented "
+                                "(each member would draw its own fault)");
+  }
   requireRange("resample_threshold", o.resample_threshold, 0.0, 1.0);
   requireRange("proposal_sample_scale", o.proposal_sample_scale, 1e-3, 1.0);
   requireRange("association.gate_chi2", o.association.gate_chi2, 0.1, 1000.0);
@@ -73,6 +84,7 @@ void validate(const FilterOptions& o) {
 
 std::unique_ptr<SlamFilter> createFilter(const FilterOptions& options) {
   validate(options);
+  if (options.ensemble.members > 1) return createEnsembleFilter(options);
   if (options.dpf.fault.enabled && options.variant != "dpf") return createFaultInjectedFilter(options);
   if (options.variant == "dpf") return std::make_unique<DistributedFilter>(options);
   if (options.variant == "fastslam2") return std::make_unique<FastSlam2>(options);

@@ -415,7 +415,24 @@ SmoothingResult smoothSession(const SlamSession& session, const FilterOptions& o
     int unusable = 0;  // the filter skipped them too (and counted them)
     frames[i].observations = prepareObservations(kept[i].features, options, &unusable);
   }
-  return smoothPathAndMap(refused.path, frames, refused.landmarks, smoothing);
+  const SlamFilter& filter = session.filter();
+  if (filter.members() <= 1) return smoothPathAndMap(refused.path, frames, refused.landmarks, smoothing);
+  SmoothingResult best;
+  for (int k = 0; k < filter.members(); ++k) {
+    const std::vector<Pose2> path = filter.member(k).bestPath();
+    if (path.size() != frames.size()) continue;  // not a path per frame: not comparable
+    SmoothingResult r = smoothPathAndMap(path, frames, filter.member(k).landmarks(), smoothing);
+    r.member = k;
+    const bool better = !best.ok || r.sightings_left_out < best.sightings_left_out ||
+                        (r.sightings_left_out == best.sightings_left_out &&
+                         r.final_cost < best.final_cost);
+    if (r.ok && better) best = std::move(r);
+  }
+  if (!best.ok) return smoothPathAndMap(refused.path, frames, refused.landmarks, smoothing);
+  best.message = "member " + std::to_string(best.member) + " of " +
+                 std::to_string(filter.members()) + " (the filter's leader " +
+                 std::to_string(filter.leader()) + "): " + best.message;
+  return best;
 }
 
 }  // namespace core

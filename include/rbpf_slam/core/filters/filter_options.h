@@ -96,6 +96,12 @@ struct ExistenceOptions {
   double merge_max_distance_m = 0.5;
 };
 
+/// Independent filters run side by side on the same input (ensemble_filter.h): each with its
+/// own seed, the one with the largest estimated marginal likelihood reported. 1 = one filter.
+struct EnsembleOptions {
+  int members = 1;
+};
+
 struct FilterOptions {
   std::string variant = "fastslam2";
   int particles = 100;
@@ -121,6 +127,7 @@ struct FilterOptions {
   EkfSlamOptions ekf;                      // variant ekf_slam
   GridOptions grid;                // variant grid_pf
   DpfOptions dpf;                  // variant dpf (and the fault injector of any variant)
+  EnsembleOptions ensemble;        // variants fastslam2 and hinf_fastslam
 };
 
 /// Throws std::invalid_argument naming the first out-of-range field and its allowed range.

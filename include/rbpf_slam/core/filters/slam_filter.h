@@ -51,6 +51,10 @@ struct UpdateStats {
   int weight_resets = 0;         // all-zero or NaN weights reset to uniform
   int fallbacks = 0;             // variant-specific numeric fallbacks (e.g. H-inf -> EKF)
   int relocalized = 0;           // particles whose proposal started from a searched correction
+  // log p(z_t | z_1:t-1) as the filter estimates it (FastSLAM 2.0 and H-infinity FastSLAM: the
+  // log of the weights' mass after this update over their mass before; 0 without observations;
+  // -inf when every weight vanished). 0 for the variants that do not estimate it.
+  double log_evidence = 0.0;
 };
 
 /// Running totals since construction or reset.
@@ -104,6 +108,12 @@ class SlamFilter {
   /// update() since the last reset, oldest first, which after a loop closure is the path
   /// consistent with its map, unlike the sequence of estimate()s. Default: empty (none).
   virtual std::vector<Pose2> bestPath() const { return {}; }
+  /// Ensembles of independent filters (ensemble.members > 1): how many there are, member k
+  /// (0 <= k < members()), and the one whose estimate, map and path this filter reports. A
+  /// single filter is an ensemble of one, itself.
+  virtual int members() const { return 1; }
+  virtual const SlamFilter& member(int /*k*/) const { return *this; }
+  virtual int leader() const { return 0; }
   /// False for variants that map raw readings only (grid_pf): drivers then leave the
   /// `features` topic alone instead of feeding it frames that only move the robot.
   virtual bool usesLandmarkFeatures() const { return true; }

@@ -53,6 +53,7 @@ struct SmoothingResult {
   int iterations = 0;          // over every round
   double initial_cost = 0.0;   // sum of squared (robust-weighted) normalised residuals
   double final_cost = 0.0;
+  int member = 0;              // smoothSession on an ensemble: the member smoothed
 };
 
 /// Smooths path (one pose per frame, in the map frame) and the point landmarks (whatever
@@ -68,7 +69,11 @@ SmoothingResult smoothPathAndMap(const std::vector<Pose2>& path,
 /// The same for a session that kept its frames (SessionOptions::keep_frames): its estimated
 /// path, the filter's landmarks, and each frame's odometry noise from options.motion and
 /// observation noise from options.measurement. Refused (ok = false) on a prior map or with
-/// mapping off, and after a pose reset during the run.
+/// mapping off, and after a pose reset during the run. On an ensemble (filter().members() > 1)
+/// every member's path and map are smoothed and the one that leaves the fewest sightings outside
+/// every gate of its map is returned (then the lowest final cost): a member that lost its way
+/// mapped copies its own path explains, but the sightings of the stretches before or after do
+/// not fit them.
 SmoothingResult smoothSession(const SlamSession& session, const FilterOptions& options,
                               const SmoothingOptions& smoothing);
 

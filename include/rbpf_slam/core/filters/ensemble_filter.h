@@ -1,0 +1,28 @@
+#pragma once
+// An ensemble of independent filters run side by side on the same input (ensemble.members > 1).
+//
+// A particle filter that settles on a wrong hypothesis (a heading off by tens of degrees while
+// no landmark is in view, then a map built under it) cannot recover once the right particles
+// are resampled away; which runs do so depends on the random draws. Independent filters with
+// their own seeds fail independently, and the data tell them apart: each FastSLAM filter
+// estimates its marginal likelihood p(z_1:t) from its weights (UpdateStats::log_evidence), and
+// the ensemble reports the member with the largest (its estimate, map, particles and path).
+// After a run the smoother can rank the members again on the whole run (map_smoother.h).
+// Costs members x one filter's time and memory.
+
+#include <memory>
+
+#include "rbpf_slam/core/filters/slam_filter.h"
+
+namespace rbpf_slam {
+namespace core {
+
+/// The seed of member k: options.seed for member 0 (an ensemble of one is the plain filter),
+/// well-mixed distinct seeds for the others (so that neighbouring run seeds share no member).
+unsigned long ensembleMemberSeed(unsigned long seed, int k);
+
+/// options.ensemble.members filters of options.variant (validated by createFilter).
+std::unique_ptr<SlamFilter> createEnsembleFilter(const FilterOptions& options);
+
+}  // namespace core
+}  // namespace rbpf_slam

@@ -1,0 +1,102 @@
+#include "rbpf_slam/core/filters/ensemble_filter.h"
+
+#include <cmath>
+#include <cstdint>
+#include <utility>
+#include <vector>
+
+namespace rbpf_slam {
+namespace core {
+namespace {
+
+class EnsembleFilter : public SlamFilter {
+ public:
+  explicit EnsembleFilter(const FilterOptions& options) {
+    FilterOptions one = options;
+    one.ensemble.members = 1;
+    for (int k = 0; k < options.ensemble.members; ++k) {
+      one.seed = ensembleMemberSeed(options.seed, k);
+      members_.push_back(createFilter(one));
+    }
+    log_evidence_.assign(members_.size(), 0.0);
+  }
+
+  std::string variant() const override { return members_[0]->variant(); }
+  void reset(const Pose2& initial_pose) override {
+    for (auto& m : members_) m->reset(initial_pose);
+    log_evidence_.assign(members_.size(), 0.0);
+    leader_ = 0;
+  }
+  void predict(const MotionInput& motion) override {
+    for (auto& m : members_) m->predict(motion);
+  }
+  UpdateStats update(const FeatureSet& features) override {
+    std::vector<UpdateStats> stats;
+    stats.reserve(members_.size());
+    for (size_t k = 0; k < members_.size(); ++k) {
+      stats.push_back(members_[k]->update(features));
+      // NaN counts as a lost member (-inf): it never leads again.
+      const double e = stats.back().log_evidence;
+      log_evidence_[k] += std::isnan(e) ? -INFINITY : e;
+    }
+    // The first member with the largest total (a member at -inf leads only if all are).
+    int best = 0;
+    for (int k = 1; k < static_cast<int>(members_.size()); ++k) {
+      if (log_evidence_[k] > log_evidence_[best]) best = k;
+    }
+    leader_ = best;
+    return stats[leader_];
+  }
+  PoseEstimate estimate() const override { return members_[leader_]->estimate(); }
+  std::vector<LandmarkEstimate> landmarks() const override {
+    return members_[leader_]->landmarks();
+  }
+  std::vector<WeightedPose> particles() const override { return members_[leader_]->particles(); }
+  FilterStats stats() const override { return members_[leader_]->stats(); }
+  bool resetPose(const Pose2& pose, const Eigen::Matrix3d& covariance) override {
+    bool ok = true;
+    for (auto& m : members_) ok = m->resetPose(pose, covariance) && ok;
+    return ok;
+  }
+  bool loadMap(const std::vector<LandmarkEstimate>& landmarks) override {
+    bool ok = true;
+    for (auto& m : members_) ok = m->loadMap(landmarks) && ok;
+    return ok;
+  }
+  bool setMapping(bool enabled) override {
+    bool ok = true;
+    for (auto& m : members_) ok = m->setMapping(enabled) && ok;
+    return ok;
+  }
+  bool occupancyGrid(GridMapData& out) const override {
+    return members_[leader_]->occupancyGrid(out);
+  }
+  std::vector<Pose2> bestPath() const override { return members_[leader_]->bestPath(); }
+  bool usesLandmarkFeatures() const override { return members_[0]->usesLandmarkFeatures(); }
+  int members() const override { return static_cast<int>(members_.size()); }
+  const SlamFilter& member(int k) const override { return *members_.at(k); }
+  int leader() const override { return leader_; }
+
+ private:
+  std::vector<std::unique_ptr<SlamFilter>> members_;
+  std::vector<double> log_evidence_;  // summed UpdateStats::log_evidence per member
+  int leader_ = 0;
+};
+
+}  // namespace
+
+unsigned long ensembleMemberSeed(unsigned long seed, int k) {
+  if (k == 0) return seed;
+  // splitmix64 of (seed, k).
+  std::uint64_t z = static_cast<std::uint64_t>(seed) + 0x9E3779B97F4A7C15ULL * static_cast<std::uint64_t>(k);
+  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
+  z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
+  return static_cast<unsigned long>(z ^ (z >> 31));
+}
+
+std::unique_ptr<SlamFilter> createEnsembleFilter(const FilterOptions& options) {
+  return std::make_unique<EnsembleFilter>(options);
+}
+
+}  // namespace core
+}  // namespace rbpf_slam

@@ -1,0 +1,294 @@
+// An ensemble of independent filters (ensemble_filter.h): each member is exactly the filter of
+// its seed, the reported one has the largest summed log evidence, the evidence favours the
+// sighting that fits the map, commands reach every member, bad options are named, and the
+// smoother picks the member whose map leaves the fewest sightings out.
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+
+#include <cmath>
+#include <set>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "rbpf_slam/core/filters/ensemble_filter.h"
+#include "rbpf_slam/core/filters/measurement_models.h"
+#include "rbpf_slam/core/filters/slam_filter.h"
+#include "rbpf_slam/core/random.h"
+#include "rbpf_slam/core/slam/map_smoother.h"
+#include "rbpf_slam/core/slam/slam_session.h"
+
+namespace rbpf_slam {
+namespace {
+
+using core::Pose2;
+
+const std::vector<Eigen::Vector2d> kPosts{{0.5, 0.5}, {-1.0, 1.0}, {-0.5, -1.5}, {2.0, -0.5}};
+
+Pose2 onCircle(int i, int steps) {
+  const double a = 2.0 * M_PI * i / steps;
+  return Pose2(3.0 * std::cos(a), 3.0 * std::sin(a), core::wrapAngle(a + M_PI / 2));
+}
+
+core::FeatureSet sightings(const Pose2& pose, double stamp) {
+  core::FeatureSet set;
+  set.stamp = stamp;
+  for (const Eigen::Vector2d& p : kPosts) {
+    core::PointFeature f;
+    const Eigen::Vector2d z = core::predictPoint(pose, p).z;
+    f.range = z.x();
+    f.bearing = z.y();
+    f.covariance = Eigen::Vector2d(0.05 * 0.05, 0.02 * 0.02).asDiagonal();
+    set.points.push_back(f);
+  }
+  return set;
+}
+
+core::FilterOptions pointOptions(int members) {
+  core::FilterOptions o;
+  o.particles = 20;
+  o.use_lines = false;
+  o.seed = 7;
+  o.ensemble.members = members;
+  return o;
+}
+
+/// Drives a circle with noisy odometry (a fixed draw) through every filter given.
+void drive(const std::vector<core::SlamFilter*>& filters,
+           std::vector<std::vector<double>>* evidence) {
+  core::Rng rng(3);
+  const int steps = 40;
+  evidence->assign(filters.size(), {});
+  for (int i = 1; i < steps; ++i) {
+    core::MotionInput m;
+    m.stamp = i;
+    m.dt = 1.0;
+    m.delta = core::between(onCircle(i - 1, steps), onCircle(i, steps));
+    m.delta += Pose2(core::sampleGaussian(rng, 0.05), core::sampleGaussian(rng, 0.05),
+                     core::sampleGaussian(rng, 0.05));
+    const core::FeatureSet seen = sightings(onCircle(i, steps), i);
+    for (size_t k = 0; k < filters.size(); ++k) {
+      filters[k]->predict(m);
+      (*evidence)[k].push_back(filters[k]->update(seen).log_evidence);
+    }
+  }
+}
+
+TEST(EnsembleFilter, AnEnsembleOfOneIsThePlainFilter) {
+  const auto filter = core::createFilter(pointOptions(1));
+  EXPECT_EQ(filter->members(), 1);
+  EXPECT_EQ(filter->leader(), 0);
+  EXPECT_EQ(&filter->member(0), filter.get());
+  EXPECT_EQ(core::ensembleMemberSeed(7, 0), 7u);
+}
+
+TEST(EnsembleFilter, MemberSeedsDifferAcrossMembersAndNeighbouringRunSeeds) {
+  std::set<unsigned long> seen;
+  for (unsigned long seed = 1; seed <= 50; ++seed) {
+    for (int k = 0; k < 8; ++k) seen.insert(core::ensembleMemberSeed(seed, k));
+  }
+  EXPECT_EQ(seen.size(), 50u * 8u);  // seed s, member 1 is not seed s + 1, member 0
+}
+
+TEST(EnsembleFilter, EachMemberIsTheFilterOfItsSeedAndTheLeaderHasTheLargestEvidence) {
+  const int members = 3;
+  const auto ensemble = core::createFilter(pointOptions(members));
+  ASSERT_EQ(ensemble->members(), members);
+  std::vector<std::unique_ptr<core::SlamFilter>> alone;
+  std::vector<core::SlamFilter*> all{ensemble.get()};
+  for (int k = 0; k < members; ++k) {
+    core::FilterOptions o = pointOptions(1);
+    o.seed = core::ensembleMemberSeed(7, k);
+    alone.push_back(core::createFilter(o));
+    all.push_back(alone.back().get());
+  }
+  std::vector<std::vector<double>> evidence;
+  drive(all, &evidence);
+  std::vector<double> total(members, 0.0);
+  for (int k = 0; k < members; ++k) {
+    for (double e : evidence[k + 1]) {
+      ASSERT_TRUE(std::isfinite(e));
+      total[k] += e;
+    }
+    // Member k is the filter of its seed, draw for draw.
+    const std::vector<Pose2> mine = ensemble->member(k).bestPath(), its = alone[k]->bestPath();
+    ASSERT_EQ(mine.size(), its.size());
+    for (size_t i = 0; i < mine.size(); ++i) ASSERT_EQ(mine[i], its[i]) << "member " << k;
+  }
+  // The draws differ, so do the evidences (else this test could not tell the leader).
+  EXPECT_NE(total[0], total[1]);
+  EXPECT_NE(total[1], total[2]);
+  int best = 0;
+  for (int k = 1; k < members; ++k) {
+    if (total[k] > total[best]) best = k;
+  }
+  EXPECT_EQ(ensemble->leader(), best);
+  EXPECT_EQ(ensemble->estimate().mean, alone[best]->estimate().mean);
+  EXPECT_EQ(ensemble->bestPath(), alone[best]->bestPath());
+  EXPECT_EQ(ensemble->landmarks().size(), alone[best]->landmarks().size());
+  EXPECT_EQ(evidence[0].back(), evidence[best + 1].back());  // the leader's UpdateStats
+}
+
+TEST(EnsembleFilter, TheEvidenceFavoursASightingThatFitsTheMap) {
+  double fits = 0.0, new_landmark = 0.0;
+  for (bool consistent : {true, false}) {
+    const auto filter = core::createFilter(pointOptions(1));
+    core::FeatureSet first;
+    core::PointFeature f;
+    f.range = 3.0;
+    f.covariance = Eigen::Vector2d(0.05 * 0.05, 0.02 * 0.02).asDiagonal();
+    first.points.push_back(f);
+    EXPECT_EQ(filter->update(core::FeatureSet()).log_evidence, 0.0);  // nothing seen: no evidence
+    filter->update(first);
+    core::FeatureSet second = first;
+    if (!consistent) second.points[0].bearing = 1.5;  // where the map has nothing
+    const double e = filter->update(second).log_evidence;
+    ASSERT_TRUE(std::isfinite(e));
+    (consistent ? fits : new_landmark) = e;
+  }
+  EXPECT_GT(fits, new_landmark + 1.0);
+}
+
+TEST(EnsembleFilter, ResetsAndLocalizationReachEveryMember) {
+  const auto ensemble = core::createFilter(pointOptions(3));
+  std::vector<std::vector<double>> evidence;
+  drive({ensemble.get()}, &evidence);
+  std::vector<size_t> mapped;
+  for (int k = 0; k < 3; ++k) mapped.push_back(ensemble->member(k).landmarks().size());
+  ASSERT_TRUE(ensemble->setMapping(false));
+  core::FeatureSet far;
+  core::PointFeature f;
+  f.range = 4.0;
+  f.bearing = 2.5;
+  f.covariance = Eigen::Vector2d(0.05 * 0.05, 0.02 * 0.02).asDiagonal();
+  far.points.push_back(f);
+  ensemble->update(far);
+  for (int k = 0; k < 3; ++k) EXPECT_EQ(ensemble->member(k).landmarks().size(), mapped[k]);
+  ASSERT_TRUE(ensemble->resetPose(Pose2(1.0, 2.0, 0.5), 1e-6 * Eigen::Matrix3d::Identity()));
+  for (int k = 0; k < 3; ++k) {
+    EXPECT_NEAR((ensemble->member(k).estimate().mean - Pose2(1.0, 2.0, 0.5)).norm(), 0.0, 0.01);
+  }
+  ensemble->reset(Pose2::Zero());
+  EXPECT_EQ(ensemble->leader(), 0);
+  for (int k = 0; k < 3; ++k) {
+    EXPECT_TRUE(ensemble->member(k).landmarks().empty());
+    EXPECT_TRUE(ensemble->member(k).bestPath().empty());
+  }
+}
+
+TEST(EnsembleFilter, BadOptionsAreNamed) {
+  auto message = [](const core::FilterOptions& o) {
+    try {
+      core::createFilter(o);
+    } catch (const std::invalid_argument& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  core::FilterOptions o = pointOptions(0);
+  EXPECT_NE(message(o).find("ensemble.members"), std::string::npos) << message(o);
+  o = pointOptions(65);
+  EXPECT_NE(message(o).find("ensemble.members"), std::string::npos) << message(o);
+  o = pointOptions(2);
+  o.variant = "ekf_slam";
+  EXPECT_NE(message(o).find("ensemble.members > 1 is not implemented for variant 'ekf_slam'"),
+            std::string::npos) << message(o);
+  o = pointOptions(2);
+  o.dpf.fault.enabled = true;
+  EXPECT_NE(message(o).find("fault.enabled"), std::string::npos) << message(o);
+  o = pointOptions(2);
+  o.variant = "hinf_fastslam";
+  EXPECT_EQ(message(o), "accepted");
+}
+
+/// Two fixed members for the smoother: given paths and maps, no filtering.
+class FixedEnsemble : public core::SlamFilter {
+ public:
+  struct Member : core::SlamFilter {
+    std::vector<Pose2> path;
+    std::vector<core::LandmarkEstimate> map;
+    std::string variant() const override { return "fixed"; }
+    void reset(const Pose2&) override {}
+    void predict(const core::MotionInput&) override {}
+    core::UpdateStats update(const core::FeatureSet&) override { return {}; }
+    core::PoseEstimate estimate() const override {
+      core::PoseEstimate e;
+      e.mean = path.empty() ? Pose2::Zero() : path.back();
+      return e;
+    }
+    std::vector<core::LandmarkEstimate> landmarks() const override { return map; }
+    std::vector<core::WeightedPose> particles() const override { return {}; }
+    core::FilterStats stats() const override { return {}; }
+    std::vector<Pose2> bestPath() const override { return path; }
+  };
+  Member members_[2];
+  int leader_ = 0;
+  // Updates grow both members' paths along the truth; the test then bends member 0's.
+  std::string variant() const override { return "fixed"; }
+  void reset(const Pose2&) override {}
+  void predict(const core::MotionInput&) override {}
+  core::UpdateStats update(const core::FeatureSet&) override { return {}; }
+  core::PoseEstimate estimate() const override { return members_[leader_].estimate(); }
+  std::vector<core::LandmarkEstimate> landmarks() const override { return members_[leader_].map; }
+  std::vector<core::WeightedPose> particles() const override { return {}; }
+  core::FilterStats stats() const override { return {}; }
+  std::vector<Pose2> bestPath() const override { return members_[leader_].path; }
+  int members() const override { return 2; }
+  const core::SlamFilter& member(int k) const override { return members_[k]; }
+  int leader() const override { return leader_; }
+};
+
+TEST(EnsembleFilter, TheSmootherTakesTheMemberWhoseMapLeavesFewestSightingsOut) {
+  const int steps = 30;
+  auto owned = std::make_unique<FixedEnsemble>();
+  FixedEnsemble* fixed = owned.get();
+  core::SessionOptions options;
+  options.keep_frames = true;
+  core::SlamSession session(std::move(owned), options);
+  std::vector<Pose2> truth;
+  for (int i = 0; i < steps; ++i) {
+    truth.push_back(onCircle(i, steps));
+    session.process(1.0 + i, truth.back(), sightings(truth.back(), 1.0 + i));
+  }
+  ASSERT_EQ(session.frames().size(), static_cast<size_t>(steps));
+  std::vector<core::LandmarkEstimate> map;
+  for (size_t k = 0; k < kPosts.size(); ++k) {
+    core::LandmarkEstimate l;
+    l.id = static_cast<int>(k);
+    l.mean = kPosts[k];
+    l.covariance = 1e-4 * Eigen::Matrix2d::Identity();
+    map.push_back(l);
+  }
+  // Member 0 (the leader) lost its heading half way round: its second half is turned by
+  // 40 degrees about the pose there, so the sightings of that half miss the posts' gates.
+  fixed->members_[0].path = truth;
+  fixed->members_[0].map = map;
+  const Pose2 pivot = truth[steps / 2];
+  for (int i = steps / 2; i < steps; ++i) {
+    const double a = 0.7;
+    const Eigen::Vector2d d = truth[i].head<2>() - pivot.head<2>();
+    fixed->members_[0].path[i] << pivot.head<2>() + Eigen::Rotation2Dd(a) * d,
+        core::wrapAngle(truth[i].z() + a);
+  }
+  fixed->members_[1].path = truth;
+  fixed->members_[1].map = map;
+  fixed->leader_ = 0;
+  core::FilterOptions filter = pointOptions(1);
+  core::SmoothingOptions smoothing;
+  smoothing.enabled = true;
+  const core::SmoothingResult r = core::smoothSession(session, filter, smoothing);
+  ASSERT_TRUE(r.ok) << r.message;
+  EXPECT_EQ(r.member, 1) << r.message;
+  EXPECT_EQ(r.sightings_left_out, 0) << r.message;
+  EXPECT_NE(r.message.find("member 1 of 2 (the filter's leader 0)"), std::string::npos)
+      << r.message;
+  // Member 0 alone leaves sightings out: the choice was not a tie.
+  fixed->members_[1].path = fixed->members_[0].path;
+  const core::SmoothingResult lost = core::smoothSession(session, filter, smoothing);
+  EXPECT_GT(lost.sightings_left_out, 10) << lost.message;
+}
+
+}  // namespace
+}  // namespace rbpf_slam
