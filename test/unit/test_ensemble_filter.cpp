@@ -55,23 +55,24 @@ core::FilterOptions pointOptions(int members) {
   return o;
 }
 
-/// Drives a circle with noisy odometry (a fixed draw) through every filter given.
+/// Drives a circle with noisy odometry (a fixed draw, sigma per step in m and rad) through
+/// every filter given.
 void drive(const std::vector<core::SlamFilter*>& filters,
-           std::vector<std::vector<double>>* evidence) {
+           std::vector<std::vector<core::UpdateStats>>* stats, double sigma = 0.05) {
   core::Rng rng(3);
   const int steps = 40;
-  evidence->assign(filters.size(), {});
+  stats->assign(filters.size(), {});
   for (int i = 1; i < steps; ++i) {
     core::MotionInput m;
     m.stamp = i;
     m.dt = 1.0;
     m.delta = core::between(onCircle(i - 1, steps), onCircle(i, steps));
-    m.delta += Pose2(core::sampleGaussian(rng, 0.05), core::sampleGaussian(rng, 0.05),
-                     core::sampleGaussian(rng, 0.05));
+    m.delta += Pose2(core::sampleGaussian(rng, sigma), core::sampleGaussian(rng, sigma),
+                     core::sampleGaussian(rng, sigma));
     const core::FeatureSet seen = sightings(onCircle(i, steps), i);
     for (size_t k = 0; k < filters.size(); ++k) {
       filters[k]->predict(m);
-      (*evidence)[k].push_back(filters[k]->update(seen).log_evidence);
+      (*stats)[k].push_back(filters[k]->update(seen));
     }
   }
 }
@@ -92,43 +93,62 @@ TEST(EnsembleFilter, MemberSeedsDifferAcrossMembersAndNeighbouringRunSeeds) {
   EXPECT_EQ(seen.size(), 50u * 8u);  // seed s, member 1 is not seed s + 1, member 0
 }
 
-TEST(EnsembleFilter, EachMemberIsTheFilterOfItsSeedAndTheLeaderHasTheLargestEvidence) {
-  const int members = 3;
-  const auto ensemble = core::createFilter(pointOptions(members));
-  ASSERT_EQ(ensemble->members(), members);
-  std::vector<std::unique_ptr<core::SlamFilter>> alone;
-  std::vector<core::SlamFilter*> all{ensemble.get()};
-  for (int k = 0; k < members; ++k) {
-    core::FilterOptions o = pointOptions(1);
-    o.seed = core::ensembleMemberSeed(7, k);
-    alone.push_back(core::createFilter(o));
-    all.push_back(alone.back().get());
-  }
-  std::vector<std::vector<double>> evidence;
-  drive(all, &evidence);
-  std::vector<double> total(members, 0.0);
-  for (int k = 0; k < members; ++k) {
-    for (double e : evidence[k + 1]) {
-      ASSERT_TRUE(std::isfinite(e));
-      total[k] += e;
+TEST(EnsembleFilter, EachMemberIsTheFilterOfItsSeedAndTheLeaderRanksFirst) {
+  const int members = 4;
+  for (const std::string rank_by : {"evidence", "new_landmarks"}) {
+    core::FilterOptions options = pointOptions(members);
+    options.ensemble.rank_by = rank_by;
+    options.particles = 5;  // few particles: members that differ in what they create
+    options.motion.alpha1 = options.motion.alpha3 = 0.3;
+    const auto ensemble = core::createFilter(options);
+    ASSERT_EQ(ensemble->members(), members);
+    std::vector<std::unique_ptr<core::SlamFilter>> alone;
+    std::vector<core::SlamFilter*> all{ensemble.get()};
+    for (int k = 0; k < members; ++k) {
+      core::FilterOptions o = options;
+      o.ensemble.members = 1;
+      o.seed = core::ensembleMemberSeed(options.seed, k);
+      alone.push_back(core::createFilter(o));
+      all.push_back(alone.back().get());
     }
-    // Member k is the filter of its seed, draw for draw.
-    const std::vector<Pose2> mine = ensemble->member(k).bestPath(), its = alone[k]->bestPath();
-    ASSERT_EQ(mine.size(), its.size());
-    for (size_t i = 0; i < mine.size(); ++i) ASSERT_EQ(mine[i], its[i]) << "member " << k;
+    std::vector<std::vector<core::UpdateStats>> stats;
+    drive(all, &stats, 0.25);  // odometry bad enough for some members to map copies
+    std::vector<double> evidence(members, 0.0);
+    std::vector<int> created(members, 0);
+    for (int k = 0; k < members; ++k) {
+      for (const core::UpdateStats& u : stats[k + 1]) {
+        ASSERT_TRUE(std::isfinite(u.log_evidence));
+        evidence[k] += u.log_evidence;
+        created[k] += u.new_landmarks;
+      }
+      // Member k is the filter of its seed, draw for draw.
+      const std::vector<Pose2> mine = ensemble->member(k).bestPath(), its = alone[k]->bestPath();
+      ASSERT_EQ(mine.size(), its.size());
+      for (size_t i = 0; i < mine.size(); ++i) ASSERT_EQ(mine[i], its[i]) << "member " << k;
+    }
+    // The draws differ, so do the evidences (else this test could not tell the leader).
+    EXPECT_NE(evidence[0], evidence[1]);
+    EXPECT_NE(evidence[1], evidence[2]);
+    int best = 0;
+    for (int k = 1; k < members; ++k) {
+      const bool more = evidence[k] > evidence[best];
+      if (rank_by == "evidence" ? more
+                                : created[k] < created[best] || (created[k] == created[best] && more)) {
+        best = k;
+      }
+    }
+    SCOPED_TRACE(rank_by + ": created " + std::to_string(created[0]) + " " +
+                 std::to_string(created[1]) + " " + std::to_string(created[2]) + " " +
+                 std::to_string(created[3]));
+    // The counts differ too, so that ranking by them is not ranking by the evidence.
+    EXPECT_FALSE(created[0] == created[1] && created[1] == created[2] && created[2] == created[3]);
+    EXPECT_EQ(ensemble->leader(), best);
+    EXPECT_EQ(ensemble->estimate().mean, alone[best]->estimate().mean);
+    EXPECT_EQ(ensemble->bestPath(), alone[best]->bestPath());
+    EXPECT_EQ(ensemble->landmarks().size(), alone[best]->landmarks().size());
+    // The leader's UpdateStats.
+    EXPECT_EQ(stats[0].back().log_evidence, stats[best + 1].back().log_evidence);
   }
-  // The draws differ, so do the evidences (else this test could not tell the leader).
-  EXPECT_NE(total[0], total[1]);
-  EXPECT_NE(total[1], total[2]);
-  int best = 0;
-  for (int k = 1; k < members; ++k) {
-    if (total[k] > total[best]) best = k;
-  }
-  EXPECT_EQ(ensemble->leader(), best);
-  EXPECT_EQ(ensemble->estimate().mean, alone[best]->estimate().mean);
-  EXPECT_EQ(ensemble->bestPath(), alone[best]->bestPath());
-  EXPECT_EQ(ensemble->landmarks().size(), alone[best]->landmarks().size());
-  EXPECT_EQ(evidence[0].back(), evidence[best + 1].back());  // the leader's UpdateStats
 }
 
 TEST(EnsembleFilter, TheEvidenceFavoursASightingThatFitsTheMap) {
@@ -153,8 +173,8 @@ TEST(EnsembleFilter, TheEvidenceFavoursASightingThatFitsTheMap) {
 
 TEST(EnsembleFilter, ResetsAndLocalizationReachEveryMember) {
   const auto ensemble = core::createFilter(pointOptions(3));
-  std::vector<std::vector<double>> evidence;
-  drive({ensemble.get()}, &evidence);
+  std::vector<std::vector<core::UpdateStats>> stats;
+  drive({ensemble.get()}, &stats);
   std::vector<size_t> mapped;
   for (int k = 0; k < 3; ++k) mapped.push_back(ensemble->member(k).landmarks().size());
   ASSERT_TRUE(ensemble->setMapping(false));
@@ -191,6 +211,9 @@ TEST(EnsembleFilter, BadOptionsAreNamed) {
   EXPECT_NE(message(o).find("ensemble.members"), std::string::npos) << message(o);
   o = pointOptions(65);
   EXPECT_NE(message(o).find("ensemble.members"), std::string::npos) << message(o);
+  o = pointOptions(2);
+  o.ensemble.rank_by = "weight";
+  EXPECT_NE(message(o).find("ensemble.rank_by"), std::string::npos) << message(o);
   o = pointOptions(2);
   o.variant = "ekf_slam";
   EXPECT_NE(message(o).find("ensemble.members > 1 is not implemented for variant 'ekf_slam'"),

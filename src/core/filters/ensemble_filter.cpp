@@ -11,7 +11,8 @@ namespace {
 
 class EnsembleFilter : public SlamFilter {
  public:
-  explicit EnsembleFilter(const FilterOptions& options) {
+  explicit EnsembleFilter(const FilterOptions& options)
+      : by_new_landmarks_(options.ensemble.rank_by == "new_landmarks") {
     FilterOptions one = options;
     one.ensemble.members = 1;
     for (int k = 0; k < options.ensemble.members; ++k) {
@@ -19,12 +20,14 @@ class EnsembleFilter : public SlamFilter {
       members_.push_back(createFilter(one));
     }
     log_evidence_.assign(members_.size(), 0.0);
+    created_.assign(members_.size(), 0);
   }
 
   std::string variant() const override { return members_[0]->variant(); }
   void reset(const Pose2& initial_pose) override {
     for (auto& m : members_) m->reset(initial_pose);
     log_evidence_.assign(members_.size(), 0.0);
+    created_.assign(members_.size(), 0);
     leader_ = 0;
   }
   void predict(const MotionInput& motion) override {
@@ -38,11 +41,17 @@ class EnsembleFilter : public SlamFilter {
       // NaN counts as a lost member (-inf): it never leads again.
       const double e = stats.back().log_evidence;
       log_evidence_[k] += std::isnan(e) ? -INFINITY : e;
+      created_[k] += stats.back().new_landmarks;
     }
-    // The first member with the largest total (a member at -inf leads only if all are).
+    // The first best member (a member at -inf evidence leads only if all are).
     int best = 0;
     for (int k = 1; k < static_cast<int>(members_.size()); ++k) {
-      if (log_evidence_[k] > log_evidence_[best]) best = k;
+      const bool more_evidence = log_evidence_[k] > log_evidence_[best];
+      if (!by_new_landmarks_ ? more_evidence
+                             : created_[k] < created_[best] ||
+                                   (created_[k] == created_[best] && more_evidence)) {
+        best = k;
+      }
     }
     leader_ = best;
     return stats[leader_];
@@ -79,7 +88,9 @@ class EnsembleFilter : public SlamFilter {
 
  private:
   std::vector<std::unique_ptr<SlamFilter>> members_;
+  const bool by_new_landmarks_;       // EnsembleOptions::rank_by
   std::vector<double> log_evidence_;  // summed UpdateStats::log_evidence per member
+  std::vector<long> created_;         // summed UpdateStats::new_landmarks per member
   int leader_ = 0;
 };
 

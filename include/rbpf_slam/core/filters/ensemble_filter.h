@@ -4,10 +4,11 @@
 // A particle filter that settles on a wrong hypothesis (a heading off by tens of degrees while
 // no landmark is in view, then a map built under it) cannot recover once the right particles
 // are resampled away; which runs do so depends on the random draws. Independent filters with
-// their own seeds fail independently, and the data tell them apart: each FastSLAM filter
-// estimates its marginal likelihood p(z_1:t) from its weights (UpdateStats::log_evidence), and
-// the ensemble reports the member with the largest (its estimate, map, particles and path).
-// After a run the smoother can rank the members again on the whole run (map_smoother.h).
+// their own seeds fail independently, and the data tell them apart. The ensemble reports one
+// member (its estimate, map, particles and path), by ensemble.rank_by: the largest marginal
+// likelihood p(z_1:t) each FastSLAM filter estimates from its weights (UpdateStats::
+// log_evidence), or the fewest landmarks created (sightings the member's map did not explain).
+// After a run the smoother ranks the members again on the whole run (map_smoother.h).
 // Costs members x one filter's time and memory.
 
 #include <memory>

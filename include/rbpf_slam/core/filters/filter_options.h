@@ -96,10 +96,14 @@ struct ExistenceOptions {
   double merge_max_distance_m = 0.5;
 };
 
-/// Independent filters run side by side on the same input (ensemble_filter.h): each with its
-/// own seed, the one with the largest estimated marginal likelihood reported. 1 = one filter.
+/// Independent filters run side by side on the same input (ensemble_filter.h), each with its
+/// own seed; one of them is reported. 1 = one filter.
 struct EnsembleOptions {
   int members = 1;
+  // Which member is reported: "evidence", the largest estimated marginal likelihood (summed
+  // UpdateStats::log_evidence); "new_landmarks", the fewest landmarks created by its best
+  // particle so far (sightings its map could not explain; ties: the larger evidence).
+  std::string rank_by = "evidence";
 };
 
 struct FilterOptions {
