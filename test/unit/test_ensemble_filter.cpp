@@ -95,8 +95,10 @@ TEST(EnsembleFilter, MemberSeedsDifferAcrossMembersAndNeighbouringRunSeeds) {
 
 TEST(EnsembleFilter, EachMemberIsTheFilterOfItsSeedAndTheLeaderRanksFirst) {
   const int members = 4;
+  std::vector<int> leaders;
   for (const std::string rank_by : {"evidence", "new_landmarks"}) {
     core::FilterOptions options = pointOptions(members);
+    options.seed = 5;  // a seed where the two rankings lead with different members, neither 0
     options.ensemble.rank_by = rank_by;
     options.particles = 5;  // few particles: members that differ in what they create
     options.motion.alpha1 = options.motion.alpha3 = 0.3;
@@ -143,12 +145,16 @@ TEST(EnsembleFilter, EachMemberIsTheFilterOfItsSeedAndTheLeaderRanksFirst) {
     // The counts differ too, so that ranking by them is not ranking by the evidence.
     EXPECT_FALSE(created[0] == created[1] && created[1] == created[2] && created[2] == created[3]);
     EXPECT_EQ(ensemble->leader(), best);
+    leaders.push_back(best);
     EXPECT_EQ(ensemble->estimate().mean, alone[best]->estimate().mean);
     EXPECT_EQ(ensemble->bestPath(), alone[best]->bestPath());
     EXPECT_EQ(ensemble->landmarks().size(), alone[best]->landmarks().size());
     // The leader's UpdateStats.
     EXPECT_EQ(stats[0].back().log_evidence, stats[best + 1].back().log_evidence);
   }
+  // Neither ranking is "always member 0", and they differ here: each was tested.
+  EXPECT_TRUE(leaders[0] != 0 || leaders[1] != 0);
+  EXPECT_NE(leaders[0], leaders[1]);
 }
 
 TEST(EnsembleFilter, TheEvidenceFavoursASightingThatFitsTheMap) {
@@ -190,6 +196,12 @@ TEST(EnsembleFilter, ResetsAndLocalizationReachEveryMember) {
   for (int k = 0; k < 3; ++k) {
     EXPECT_NEAR((ensemble->member(k).estimate().mean - Pose2(1.0, 2.0, 0.5)).norm(), 0.0, 0.01);
   }
+  // A loaded map reaches every member.
+  std::vector<core::LandmarkEstimate> map(1);
+  map[0].mean = Eigen::Vector2d(5.0, 5.0);
+  map[0].covariance = 1e-4 * Eigen::Matrix2d::Identity();
+  ASSERT_TRUE(ensemble->loadMap(map));
+  for (int k = 0; k < 3; ++k) ASSERT_EQ(ensemble->member(k).landmarks().size(), 1u);
   ensemble->reset(Pose2::Zero());
   EXPECT_EQ(ensemble->leader(), 0);
   for (int k = 0; k < 3; ++k) {
@@ -218,6 +230,11 @@ TEST(EnsembleFilter, BadOptionsAreNamed) {
   o.variant = "ekf_slam";
   EXPECT_NE(message(o).find("ensemble.members > 1 is not implemented for variant 'ekf_slam'"),
             std::string::npos) << message(o);
+  o = pointOptions(2);
+  o.variant = "robust_fastslam2";
+  EXPECT_NE(message(o).find("not implemented for variant 'robust_fastslam2'"), std::string::npos)
+      << message(o);
+  EXPECT_THROW(core::createEnsembleFilter(pointOptions(0)), std::invalid_argument);
   o = pointOptions(2);
   o.dpf.fault.enabled = true;
   EXPECT_NE(message(o).find("fault.enabled"), std::string::npos) << message(o);

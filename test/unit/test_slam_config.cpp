@@ -144,8 +144,10 @@ TEST(SlamConfig, OverridesApplyDottedKeys) {
   applyOverride(&root, "use_lines=false");
   applyOverride(&root, "smoothing.huber_k=0");
   applyOverride(&root, "ensemble.members=3");
+  applyOverride(&root, "ensemble.rank_by=new_landmarks");
   const SlamConfig c = parseSlamConfig(root, "t");
   EXPECT_EQ(c.filter.ensemble.members, 3);
+  EXPECT_EQ(c.filter.ensemble.rank_by, "new_landmarks");
   EXPECT_EQ(core::EnsembleOptions().members, 1);  // one filter unless asked
   EXPECT_TRUE(c.smoothing.enabled);
   EXPECT_TRUE(c.session.keep_frames);  // follows smoothing.enabled

@@ -50,8 +50,6 @@ TEST(SlamSession, OneStaleFrameIsRejectedAndTheMapKept) {
   EXPECT_EQ(session.resets(), 0);
 }
 
-// A frame at the last frame's stamp (another input of the same instant, or a repeat) is
-// skipped, not used twice, not an error, and does not break or extend a run of late frames.
 // The reported path is the best particle's where the filter keeps one per update (FastSLAM),
 // else the pose estimated at each update; estimatedPath says which it returned.
 TEST(SlamSession, EstimatedPathSaysWhereItCameFrom) {
@@ -79,6 +77,8 @@ TEST(SlamSession, EstimatedPathSaysWhereItCameFrom) {
   }
 }
 
+// A frame at the last frame's stamp (another input of the same instant, or a repeat) is
+// skipped, not used twice, not an error, and does not break or extend a run of late frames.
 TEST(SlamSession, AFrameAtTheLastStampIsSkipped) {
   core::SlamSession session = makeSession(3);
   for (int i = 1; i <= 10; ++i) frame(&session, i);

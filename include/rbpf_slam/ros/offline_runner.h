@@ -51,7 +51,7 @@ struct OfflineSummary {
   long heading_measurements = 0;  // particle proposals conditioned on the heading prior
   long robust_steps = 0;          // robust_fastslam2: steps sampled from several ancestor sets
   int ensemble_members = 1;       // ensemble.members
-  int ensemble_leader = 0;        // the member reported at the end (largest marginal likelihood)
+  int ensemble_leader = 0;        // the member reported at the end (by ensemble.rank_by)
   double update_ms_mean = 0.0;
   double update_ms_p99 = 0.0;
   double update_ms_max = 0.0;

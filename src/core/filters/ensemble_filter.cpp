@@ -70,6 +70,10 @@ class EnsembleFilter : public SlamFilter {
   bool loadMap(const std::vector<LandmarkEstimate>& landmarks) override {
     bool ok = true;
     for (auto& m : members_) ok = m->loadMap(landmarks) && ok;
+    // The totals ranked the maps just replaced.
+    log_evidence_.assign(members_.size(), 0.0);
+    created_.assign(members_.size(), 0);
+    leader_ = 0;
     return ok;
   }
   bool setMapping(bool enabled) override {
@@ -106,6 +110,7 @@ unsigned long ensembleMemberSeed(unsigned long seed, int k) {
 }
 
 std::unique_ptr<SlamFilter> createEnsembleFilter(const FilterOptions& options) {
+  validate(options);
   return std::make_unique<EnsembleFilter>(options);
 }
 

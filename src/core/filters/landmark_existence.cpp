@@ -39,7 +39,9 @@ void removeDuplicates(const ExistenceOptions& o, const LandmarkMap& map, int ste
       const Landmark& b = map[j];
       if (j == i || (*removed)[j] || !mature(o, b)) continue;
       // A pair seen together was tested from its lower index already; whatever came of it then
-      // (a removal, a failed test, a loser that had won) still holds.
+      // (a removal, a failed test, a loser that had won) still holds. (On a full tie, the same
+      // count and creation step, the lower index is thus the one kept; session 24 and before
+      // tested the pair from both ends, and the higher index could win the second test.)
       if (j < i && b.last_seen_step == step) continue;
       const Eigen::Vector2d d = b.mean - a.mean;
       if (!(d.norm() < o.merge_max_distance_m)) continue;

@@ -417,18 +417,23 @@ SmoothingResult smoothSession(const SlamSession& session, const FilterOptions& o
   }
   const SlamFilter& filter = session.filter();
   if (filter.members() <= 1) return smoothPathAndMap(refused.path, frames, refused.landmarks, smoothing);
-  SmoothingResult best;
+  SmoothingResult best, leader = refused;
+  leader.message = "its path is not one pose per frame";
   for (int k = 0; k < filter.members(); ++k) {
     const std::vector<Pose2> path = filter.member(k).bestPath();
     if (path.size() != frames.size()) continue;  // not a path per frame: not comparable
     SmoothingResult r = smoothPathAndMap(path, frames, filter.member(k).landmarks(), smoothing);
     r.member = k;
+    if (k == filter.leader()) leader = r;
     const bool better = !best.ok || r.sightings_left_out < best.sightings_left_out ||
                         (r.sightings_left_out == best.sightings_left_out &&
                          r.final_cost < best.final_cost);
     if (r.ok && better) best = std::move(r);
   }
-  if (!best.ok) return smoothPathAndMap(refused.path, frames, refused.landmarks, smoothing);
+  if (!best.ok) {
+    leader.message = "no member of the ensemble could be smoothed; the leader's: " + leader.message;
+    return leader;
+  }
   best.message = "member " + std::to_string(best.member) + " of " +
                  std::to_string(filter.members()) + " (the filter's leader " +
                  std::to_string(filter.leader()) + "): " + best.message;

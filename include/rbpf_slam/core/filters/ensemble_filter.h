@@ -22,7 +22,8 @@ namespace core {
 /// well-mixed distinct seeds for the others (so that neighbouring run seeds share no member).
 unsigned long ensembleMemberSeed(unsigned long seed, int k);
 
-/// options.ensemble.members filters of options.variant (validated by createFilter).
+/// options.ensemble.members filters of options.variant; throws std::invalid_argument naming the
+/// first bad option (as createFilter, which calls this when members > 1).
 std::unique_ptr<SlamFilter> createEnsembleFilter(const FilterOptions& options);
 
 }  // namespace core

@@ -101,8 +101,10 @@ struct ExistenceOptions {
 struct EnsembleOptions {
   int members = 1;
   // Which member is reported: "evidence", the largest estimated marginal likelihood (summed
-  // UpdateStats::log_evidence); "new_landmarks", the fewest landmarks created by its best
-  // particle so far (sightings its map could not explain; ties: the larger evidence).
+  // UpdateStats::log_evidence; with association.sample_weight sum a map holding copies of a
+  // landmark is not penalised for them); "new_landmarks", the fewest landmarks created so far,
+  // summed over the updates' UpdateStats::new_landmarks (the most probable particle of each
+  // update; sightings its map could not explain; ties: the larger evidence).
   std::string rank_by = "evidence";
 };
 

@@ -53,7 +53,8 @@ struct UpdateStats {
   int relocalized = 0;           // particles whose proposal started from a searched correction
   // log p(z_t | z_1:t-1) as the filter estimates it (FastSLAM 2.0 and H-infinity FastSLAM: the
   // log of the weights' mass after this update over their mass before; 0 without observations;
-  // -inf when every weight vanished). 0 for the variants that do not estimate it.
+  // -inf when every weight vanished; particles with a NaN weight are left out of both masses).
+  // robust_fastslam2 reports it on its FastSLAM 2.0 steps only; the other variants leave it 0.
   double log_evidence = 0.0;
 };
 
