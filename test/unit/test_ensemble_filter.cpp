@@ -134,8 +134,8 @@ TEST(EnsembleFilter, EachMemberIsTheFilterOfItsSeedAndTheLeaderRanksFirst) {
     int best = 0;
     for (int k = 1; k < members; ++k) {
       const bool more = evidence[k] > evidence[best];
-      if (rank_by == "evidence" ? more
-                                : created[k] < created[best] || (created[k] == created[best] && more)) {
+      const bool fewer = created[k] < created[best] || (created[k] == created[best] && more);
+      if (rank_by == "evidence" ? more : fewer) {
         best = k;
       }
     }

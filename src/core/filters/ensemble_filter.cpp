@@ -103,7 +103,8 @@ class EnsembleFilter : public SlamFilter {
 unsigned long ensembleMemberSeed(unsigned long seed, int k) {
   if (k == 0) return seed;
   // splitmix64 of (seed, k).
-  std::uint64_t z = static_cast<std::uint64_t>(seed) + 0x9E3779B97F4A7C15ULL * static_cast<std::uint64_t>(k);
+  std::uint64_t z = static_cast<std::uint64_t>(seed) +
+                    0x9E3779B97F4A7C15ULL * static_cast<std::uint64_t>(k);
   z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
   z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
   return static_cast<unsigned long>(z ^ (z >> 31));

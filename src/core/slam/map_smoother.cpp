@@ -416,7 +416,9 @@ SmoothingResult smoothSession(const SlamSession& session, const FilterOptions& o
     frames[i].observations = prepareObservations(kept[i].features, options, &unusable);
   }
   const SlamFilter& filter = session.filter();
-  if (filter.members() <= 1) return smoothPathAndMap(refused.path, frames, refused.landmarks, smoothing);
+  if (filter.members() <= 1) {
+    return smoothPathAndMap(refused.path, frames, refused.landmarks, smoothing);
+  }
   SmoothingResult best, leader = refused;
   leader.message = "its path is not one pose per frame";
   for (int k = 0; k < filter.members(); ++k) {
