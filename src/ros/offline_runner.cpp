@@ -299,7 +299,8 @@ class ResultBag {
       last = std::max(last, m.getTime());
     }
     if (!session.trajectory().empty() && !last.isZero()) {
-      bag_.write("/rbpf_slam_node/trajectory", last, toPath(session.trajectory(), ros_.map_frame));
+      bag_.write("/rbpf_slam_node/trajectory", last,
+                 toPath(session.estimatedTrajectory(), ros_.map_frame));
     }
     bag_.commit();
   }

@@ -420,7 +420,7 @@ void SlamNode::publishState(const ros::Time& stamp) {
   } else {
     warnThrottled("non-finite estimate", "The filter's estimate is not finite; not published");
   }
-  trajectory_publisher_.publish(toPath(session.trajectory(), config_.ros.map_frame));
+  trajectory_publisher_.publish(toPath(session.estimatedTrajectory(), config_.ros.map_frame));
   publishLandmarks(stamp);
   if (config_.ros.publish_particles && particles_publisher_.getNumSubscribers() > 0) {
     particles_publisher_.publish(toPoseArray(session.filter().particles(), header));
@@ -635,7 +635,8 @@ void SlamNode::resetAll(const std::string& why) {
   map_published_at_update_ = -1;  // the new map's first grid is published like the first one
   stale_drops_in_a_row_ = 0;
   publishLandmarks(ros::Time::now());  // DELETE for every landmark shown
-  trajectory_publisher_.publish(toPath(pipeline_.session().trajectory(), config_.ros.map_frame));
+  trajectory_publisher_.publish(
+      toPath(pipeline_.session().estimatedTrajectory(), config_.ros.map_frame));
 }
 
 }  // namespace rosbridge

@@ -49,6 +49,17 @@ TEST(SlamConfig, PartialConfigTakesDefaults) {
   EXPECT_NO_THROW(parseSlamConfig(YAML::Load("{}"), "t"));
 }
 
+// A seed takes the whole unsigned 64-bit range (an ensemble member's seed run on its own).
+TEST(SlamConfig, SeedTakesTheWholeUnsignedRange) {
+  EXPECT_EQ(parseSlamConfig(YAML::Load("seed: 18446744073709551615"), "t").filter.seed,
+            18446744073709551615UL);
+  EXPECT_EQ(parseSlamConfig(YAML::Load("seed: 7"), "t").filter.seed, 7UL);
+  EXPECT_NE(errorOf("seed: -3").find("seed = -3 must be >= 0"), std::string::npos);
+  EXPECT_NE(errorOf("seed: 1.5").find("is not a non-negative integer"), std::string::npos);
+  EXPECT_NE(errorOf("seed: 18446744073709551616").find("is not a non-negative integer"),
+            std::string::npos);
+}
+
 TEST(SlamConfig, ErrorsNameTheKeyValueAndRange) {
   EXPECT_NE(errorOf("partciles: 10").find("unknown key(s) at the top level: partciles"),
             std::string::npos);

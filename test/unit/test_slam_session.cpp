@@ -63,6 +63,14 @@ TEST(SlamSession, EstimatedPathSaysWhereItCameFrom) {
   ASSERT_EQ(path.size(), 5u);
   const std::vector<core::Pose2> kept = fastslam.filter().bestPath();
   for (size_t i = 0; i < path.size(); ++i) EXPECT_TRUE(path[i].isApprox(kept[i]));
+  // The node's ~trajectory: the same poses at the updates' stamps.
+  const std::vector<core::TrajectoryPoint> stamped = fastslam.estimatedTrajectory(&best);
+  EXPECT_TRUE(best);
+  ASSERT_EQ(stamped.size(), 5u);
+  for (size_t i = 0; i < stamped.size(); ++i) {
+    EXPECT_EQ(stamped[i].stamp, fastslam.trajectory()[i].stamp);
+    EXPECT_TRUE(stamped[i].pose.isApprox(kept[i]));
+  }
 
   core::FilterOptions ekf;
   ekf.variant = "ekf_slam";

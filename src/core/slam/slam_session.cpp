@@ -189,6 +189,13 @@ std::vector<Pose2> SlamSession::estimatedPath(bool* best_particle) const {
   return path;
 }
 
+std::vector<TrajectoryPoint> SlamSession::estimatedTrajectory(bool* best_particle) const {
+  const std::vector<Pose2> path = estimatedPath(best_particle);
+  std::vector<TrajectoryPoint> out(trajectory_.size());
+  for (size_t i = 0; i < out.size(); ++i) out[i] = {trajectory_[i].stamp, path[i]};
+  return out;
+}
+
 void SlamSession::keepFrame(const MotionInput& motion, const FeatureSet& features) {
   if (!options_.keep_frames || frames_broken_) return;
   SessionFrame frame;

@@ -103,6 +103,8 @@ class SlamSession {
   /// The path to report: the filter's best path where it has one per trajectory point
   /// (FastSLAM variants), else the trajectory's poses; *best_particle (when given) says which.
   std::vector<Pose2> estimatedPath(bool* best_particle = nullptr) const;
+  /// estimatedPath() with the trajectory's stamps: what the node publishes on ~trajectory.
+  std::vector<TrajectoryPoint> estimatedTrajectory(bool* best_particle = nullptr) const;
   bool hasPriorMap() const { return prior_map_.has_value(); }
   const UpdateStats& lastStats() const { return last_stats_; }
   const SlamFilter& filter() const { return *filter_; }
