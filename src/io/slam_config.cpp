@@ -356,6 +356,7 @@ SlamConfig parseSlamConfigTree(const YAML::Node& root, const std::string& source
   YamlSection ensemble = top.section("ensemble");
   ensemble.read("members", &f.ensemble.members);
   ensemble.read("rank_by", &f.ensemble.rank_by);
+  ensemble.read("switch_margin", &f.ensemble.switch_margin);
   ensemble.finish();
   readLaser(top.section("laser_features"), &config.laser);
   readScanMatching(top.section("scan_matching"), &config.scan_matching);

@@ -660,6 +660,7 @@ OfflineSummary OfflineRunner::run() {
   summary.relocalizations = pipeline_.session().filter().stats().relocalizations;
   summary.heading_measurements = pipeline_.session().filter().stats().heading_measurements;
   summary.robust_steps = pipeline_.session().filter().stats().robust_steps;
+  summary.ensemble_leader_changes = pipeline_.session().filter().stats().leader_changes;
   summary.ensemble_members = pipeline_.session().filter().members();
   summary.ensemble_leader = pipeline_.session().filter().leader();
   return writeOutputs(summary);
@@ -756,6 +757,7 @@ OfflineSummary OfflineRunner::writeOutputs(const OfflineSummary& in) const {
        << "  \"robust_steps\": " << summary.robust_steps << ",\n"
        << "  \"ensemble_members\": " << summary.ensemble_members << ",\n"
        << "  \"ensemble_leader\": " << summary.ensemble_leader << ",\n"
+       << "  \"ensemble_leader_changes\": " << summary.ensemble_leader_changes << ",\n"
        << "  \"update_ms_mean\": " << summary.update_ms_mean << ",\n"
        << "  \"update_ms_p99\": " << summary.update_ms_p99 << ",\n"
        << "  \"update_ms_max\": " << summary.update_ms_max << ",\n"

@@ -1,7 +1,8 @@
 // An ensemble of independent filters (ensemble_filter.h): each member is exactly the filter of
 // its seed, the reported one has the largest summed log evidence, the evidence favours the
-// sighting that fits the map, commands reach every member, bad options are named, and the
-// smoother picks the member whose map leaves the fewest sightings out.
+// sighting that fits the map, the reported member changes only past ensemble.switch_margin,
+// commands reach every member, bad options are named, and the smoother picks the member whose
+// map leaves the fewest sightings out.
 
 #include <gtest/gtest.h>
 
@@ -56,9 +57,10 @@ core::FilterOptions pointOptions(int members) {
 }
 
 /// Drives a circle with noisy odometry (a fixed draw, sigma per step in m and rad) through
-/// every filter given.
+/// every filter given; *leaders (when given) gets filters[0]'s leader after each update.
 void drive(const std::vector<core::SlamFilter*>& filters,
-           std::vector<std::vector<core::UpdateStats>>* stats, double sigma = 0.05) {
+           std::vector<std::vector<core::UpdateStats>>* stats, double sigma = 0.05,
+           std::vector<int>* leaders = nullptr) {
   core::Rng rng(3);
   const int steps = 40;
   stats->assign(filters.size(), {});
@@ -74,6 +76,7 @@ void drive(const std::vector<core::SlamFilter*>& filters,
       filters[k]->predict(m);
       (*stats)[k].push_back(filters[k]->update(seen));
     }
+    if (leaders) leaders->push_back(filters[0]->leader());
   }
 }
 
@@ -157,6 +160,53 @@ TEST(EnsembleFilter, EachMemberIsTheFilterOfItsSeedAndTheLeaderRanksFirst) {
   EXPECT_NE(leaders[0], leaders[1]);
 }
 
+// With ensemble.switch_margin the reported member changes only when another leads it by more
+// than the margin: fewer changes than without, each one where the running sums say.
+TEST(EnsembleFilter, TheLeaderChangesOnlyWhenAnotherLeadsByTheMargin) {
+  const int members = 4;
+  std::vector<long> changes;
+  for (const double margin : {0.0, 3.0}) {
+    core::FilterOptions options = pointOptions(members);
+    options.seed = 5;
+    options.particles = 5;
+    options.motion.alpha1 = options.motion.alpha3 = 0.3;
+    options.ensemble.switch_margin = margin;
+    const auto ensemble = core::createFilter(options);
+    std::vector<std::unique_ptr<core::SlamFilter>> alone;
+    std::vector<core::SlamFilter*> all{ensemble.get()};
+    for (int k = 0; k < members; ++k) {
+      core::FilterOptions o = options;
+      o.ensemble.members = 1;
+      o.seed = core::ensembleMemberSeed(options.seed, k);
+      alone.push_back(core::createFilter(o));
+      all.push_back(alone.back().get());
+    }
+    std::vector<std::vector<core::UpdateStats>> stats;
+    std::vector<int> leaders;
+    drive(all, &stats, 0.25, &leaders);
+    // The leader each update should have, from the members' own evidences.
+    std::vector<double> sum(members, 0.0);
+    int leader = 0;
+    long changed = 0;
+    for (size_t t = 0; t < leaders.size(); ++t) {
+      int best = 0;
+      for (int k = 0; k < members; ++k) {
+        sum[k] += stats[k + 1][t].log_evidence;
+        if (sum[k] > sum[best]) best = k;
+      }
+      if (sum[best] > sum[leader] + margin) {
+        changed += best != leader;
+        leader = best;
+      }
+      ASSERT_EQ(leaders[t], leader) << "update " << t << ", margin " << margin;
+    }
+    EXPECT_EQ(ensemble->stats().leader_changes, changed);
+    changes.push_back(changed);
+  }
+  EXPECT_GT(changes[0], changes[1]);  // the margin held back at least one change
+  EXPECT_GT(changes[1], 0);           // and let a member that pulled ahead take over
+}
+
 TEST(EnsembleFilter, TheEvidenceFavoursASightingThatFitsTheMap) {
   double fits = 0.0, new_landmark = 0.0;
   for (bool consistent : {true, false}) {
@@ -226,6 +276,11 @@ TEST(EnsembleFilter, BadOptionsAreNamed) {
   o = pointOptions(2);
   o.ensemble.rank_by = "weight";
   EXPECT_NE(message(o).find("ensemble.rank_by"), std::string::npos) << message(o);
+  o = pointOptions(2);
+  o.ensemble.switch_margin = -1.0;
+  EXPECT_NE(message(o).find("ensemble.switch_margin"), std::string::npos) << message(o);
+  o.ensemble.switch_margin = NAN;
+  EXPECT_NE(message(o).find("ensemble.switch_margin"), std::string::npos) << message(o);
   o = pointOptions(2);
   o.variant = "ekf_slam";
   EXPECT_NE(message(o).find("ensemble.members > 1 is not implemented for variant 'ekf_slam'"),

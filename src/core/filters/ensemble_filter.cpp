@@ -12,7 +12,8 @@ namespace {
 class EnsembleFilter : public SlamFilter {
  public:
   explicit EnsembleFilter(const FilterOptions& options)
-      : by_new_landmarks_(options.ensemble.rank_by == "new_landmarks") {
+      : by_new_landmarks_(options.ensemble.rank_by == "new_landmarks"),
+        switch_margin_(options.ensemble.switch_margin) {
     FilterOptions one = options;
     one.ensemble.members = 1;
     for (int k = 0; k < options.ensemble.members; ++k) {
@@ -29,6 +30,7 @@ class EnsembleFilter : public SlamFilter {
     log_evidence_.assign(members_.size(), 0.0);
     created_.assign(members_.size(), 0);
     leader_ = 0;
+    leader_changes_ = 0;
   }
   void predict(const MotionInput& motion) override {
     for (auto& m : members_) m->predict(motion);
@@ -43,17 +45,16 @@ class EnsembleFilter : public SlamFilter {
       log_evidence_[k] += std::isnan(e) ? -INFINITY : e;
       created_[k] += stats.back().new_landmarks;
     }
-    // The first best member (a member at -inf evidence leads only if all are).
+    // The first best member (a member at -inf evidence leads only if all are); it takes over
+    // when it beats the leader by the margin.
     int best = 0;
     for (int k = 1; k < static_cast<int>(members_.size()); ++k) {
-      const bool more_evidence = log_evidence_[k] > log_evidence_[best];
-      if (!by_new_landmarks_ ? more_evidence
-                             : created_[k] < created_[best] ||
-                                   (created_[k] == created_[best] && more_evidence)) {
-        best = k;
-      }
+      if (ranksAbove(k, best, 0.0)) best = k;
     }
-    leader_ = best;
+    if (best != leader_ && ranksAbove(best, leader_, switch_margin_)) {
+      leader_ = best;
+      ++leader_changes_;
+    }
     return stats[leader_];
   }
   PoseEstimate estimate() const override { return members_[leader_]->estimate(); }
@@ -61,7 +62,11 @@ class EnsembleFilter : public SlamFilter {
     return members_[leader_]->landmarks();
   }
   std::vector<WeightedPose> particles() const override { return members_[leader_]->particles(); }
-  FilterStats stats() const override { return members_[leader_]->stats(); }
+  FilterStats stats() const override {
+    FilterStats s = members_[leader_]->stats();
+    s.leader_changes = leader_changes_;
+    return s;
+  }
   bool resetPose(const Pose2& pose, const Eigen::Matrix3d& covariance) override {
     bool ok = true;
     for (auto& m : members_) ok = m->resetPose(pose, covariance) && ok;
@@ -91,11 +96,20 @@ class EnsembleFilter : public SlamFilter {
   int leader() const override { return leader_; }
 
  private:
+  /// Whether member a ranks above member b, with a's evidence ahead by more than margin.
+  bool ranksAbove(int a, int b, double margin) const {
+    const bool more_evidence = log_evidence_[a] > log_evidence_[b] + margin;
+    if (!by_new_landmarks_) return more_evidence;
+    return created_[a] < created_[b] || (created_[a] == created_[b] && more_evidence);
+  }
+
   std::vector<std::unique_ptr<SlamFilter>> members_;
   const bool by_new_landmarks_;       // EnsembleOptions::rank_by
+  const double switch_margin_;        // EnsembleOptions::switch_margin
   std::vector<double> log_evidence_;  // summed UpdateStats::log_evidence per member
   std::vector<long> created_;         // summed UpdateStats::new_landmarks per member
   int leader_ = 0;
+  long leader_changes_ = 0;
 };
 
 }  // namespace

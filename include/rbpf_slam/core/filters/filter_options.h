@@ -106,6 +106,12 @@ struct EnsembleOptions {
   // summed over the updates' UpdateStats::new_landmarks (the most probable particle of each
   // update; sightings its map could not explain; ties: the larger evidence).
   std::string rank_by = "evidence";
+  // The reported member changes only when another leads it by more than this much summed
+  // log-evidence (nats; with new_landmarks, when it created fewer landmarks, or as many and
+  // leads by this much). Without it members of about equal evidence take turns, and the
+  // node's map -> odom, ~pose, ~trajectory and markers jump with each turn. 0: the best
+  // member at every update.
+  double switch_margin = 0.0;
 };
 
 struct FilterOptions {

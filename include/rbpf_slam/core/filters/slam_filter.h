@@ -71,6 +71,7 @@ struct FilterStats {
   double last_neff = 0.0;
   int landmarks = 0;  // in the best particle
   double attenuation = 0.0;  // hinf_fastslam: the theta in use (hinf.mode relative / adaptive)
+  long leader_changes = 0;   // ensemble: updates after which another member was reported
 };
 
 /// A SLAM filter. Not thread-safe; time is always an argument (the core reads no clock).
