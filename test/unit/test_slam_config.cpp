@@ -156,9 +156,11 @@ TEST(SlamConfig, OverridesApplyDottedKeys) {
   applyOverride(&root, "smoothing.huber_k=0");
   applyOverride(&root, "ensemble.members=3");
   applyOverride(&root, "ensemble.rank_by=new_landmarks");
+  applyOverride(&root, "ensemble.switch_margin=12.5");
   const SlamConfig c = parseSlamConfig(root, "t");
   EXPECT_EQ(c.filter.ensemble.members, 3);
   EXPECT_EQ(c.filter.ensemble.rank_by, "new_landmarks");
+  EXPECT_DOUBLE_EQ(c.filter.ensemble.switch_margin, 12.5);
   EXPECT_EQ(core::EnsembleOptions().members, 1);  // one filter unless asked
   EXPECT_TRUE(c.smoothing.enabled);
   EXPECT_TRUE(c.session.keep_frames);  // follows smoothing.enabled
@@ -267,6 +269,8 @@ TEST(SlamConfig, HinfAndExistenceErrorsNameTheKey) {
   EXPECT_NE(errorOf("ensemble: {members: 0}").find("ensemble.members = 0 is out of range"),
             std::string::npos);
   EXPECT_NE(errorOf("ensemble: {size: 2}").find("in ensemble: size"), std::string::npos);
+  EXPECT_NE(errorOf("ensemble: {switch_margin: -2}").find("ensemble.switch_margin = -2"),
+            std::string::npos);
   EXPECT_NE(errorOf("smoothing: {enable: true}").find("in smoothing: enable"), std::string::npos);
   EXPECT_NE(errorOf("smoothing: {enabled: true}").find("needs use_lines: false"),
             std::string::npos);
