@@ -694,6 +694,8 @@ OfflineSummary OfflineRunner::writeOutputs(const OfflineSummary& in) const {
     if (smoothed.ok) {
       for (size_t i = 0; i < estimate.size(); ++i) estimate[i].pose = path[i] = smoothed.path[i];
       landmarks = smoothed.landmarks;
+      // The map written: on an ensemble the smoothed member's, which may not be the leader's.
+      summary.landmarks = static_cast<int>(landmarks.size());
       summary.trajectory_source = "smoothed_" + summary.trajectory_source;
     } else {
       std::fprintf(stderr, "offline_slam: not smoothed (the filter's path and map are written): "

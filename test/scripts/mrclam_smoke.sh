@@ -65,6 +65,12 @@ fi
 for f in trajectory_filter.tum landmarks_filter.yaml; do
   [ -s "$work/out/$f" ] || { echo "FAIL: no $f beside the smoothed outputs"; status=1; }
 done
+# summary.json's landmarks counts the map written (the smoothed member's on an ensemble).
+written=$(grep -c 'type: point\|type: line' "$work/out/landmarks.yaml" || true)
+if [ "${landmarks:-x}" != "$written" ]; then
+  echo "FAIL: summary.json says $landmarks landmarks, landmarks.yaml holds $written"
+  status=1
+fi
 if [ -s "$work/out/trajectory_filter.tum" ] &&
    [ "$(wc -l < "$work/out/trajectory_filter.tum")" != "$(wc -l < "$trajectory")" ]; then
   echo "FAIL: trajectory_filter.tum and trajectory.tum differ in length"

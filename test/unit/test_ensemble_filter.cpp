@@ -2,7 +2,8 @@
 // its seed, the reported one has the largest summed log evidence, the evidence favours the
 // sighting that fits the map, the reported member changes only past ensemble.switch_margin,
 // commands reach every member, bad options are named, and the smoother picks the member whose
-// map leaves the fewest sightings out.
+// map leaves the fewest sightings out, each of its landmarks counted as
+// smoothing.member_landmark_cost sightings left out.
 
 #include <gtest/gtest.h>
 
@@ -335,40 +336,60 @@ class FixedEnsemble : public core::SlamFilter {
   int leader() const override { return leader_; }
 };
 
-TEST(EnsembleFilter, TheSmootherTakesTheMemberWhoseMapLeavesFewestSightingsOut) {
-  const int steps = 30;
-  auto owned = std::make_unique<FixedEnsemble>();
-  FixedEnsemble* fixed = owned.get();
-  core::SessionOptions options;
-  options.keep_frames = true;
-  core::SlamSession session(std::move(owned), options);
+/// A session of a fixed two-member ensemble driven once round the circle (frames kept), the
+/// true path and the posts as a map.
+struct FixedSession {
+  static constexpr int kSteps = 30;
+  static constexpr double kTurn = 0.7;  // rad: how far a member that lost its heading is off
+  FixedEnsemble* fixed = nullptr;
+  std::unique_ptr<core::SlamSession> session;
   std::vector<Pose2> truth;
-  for (int i = 0; i < steps; ++i) {
-    truth.push_back(onCircle(i, steps));
-    session.process(1.0 + i, truth.back(), sightings(truth.back(), 1.0 + i));
-  }
-  ASSERT_EQ(session.frames().size(), static_cast<size_t>(steps));
   std::vector<core::LandmarkEstimate> map;
-  for (size_t k = 0; k < kPosts.size(); ++k) {
-    core::LandmarkEstimate l;
-    l.id = static_cast<int>(k);
-    l.mean = kPosts[k];
-    l.covariance = 1e-4 * Eigen::Matrix2d::Identity();
-    map.push_back(l);
+
+  FixedSession() {
+    auto owned = std::make_unique<FixedEnsemble>();
+    fixed = owned.get();
+    core::SessionOptions options;
+    options.keep_frames = true;
+    session = std::make_unique<core::SlamSession>(std::move(owned), options);
+    for (int i = 0; i < kSteps; ++i) {
+      truth.push_back(onCircle(i, kSteps));
+      session->process(1.0 + i, truth.back(), sightings(truth.back(), 1.0 + i));
+    }
+    for (size_t k = 0; k < kPosts.size(); ++k) {
+      core::LandmarkEstimate l;
+      l.id = static_cast<int>(k);
+      l.mean = kPosts[k];
+      l.covariance = 1e-4 * Eigen::Matrix2d::Identity();
+      map.push_back(l);
+    }
   }
+  Pose2 pivot() const { return truth[kSteps / 2]; }
+  /// p turned by kTurn about the pivot (where a member turned from there sees it).
+  Eigen::Vector2d turned(const Eigen::Vector2d& p) const {
+    return pivot().head<2>() + Eigen::Rotation2Dd(kTurn) * (p - pivot().head<2>());
+  }
+  /// The truth with its second half turned by kTurn about the pivot.
+  std::vector<Pose2> lostPath() const {
+    std::vector<Pose2> path = truth;
+    for (int i = kSteps / 2; i < kSteps; ++i) {
+      path[i] << turned(truth[i].head<2>()), core::wrapAngle(truth[i].z() + kTurn);
+    }
+    return path;
+  }
+};
+
+TEST(EnsembleFilter, TheSmootherTakesTheMemberWhoseMapLeavesFewestSightingsOut) {
+  FixedSession s;
+  ASSERT_EQ(s.session->frames().size(), static_cast<size_t>(FixedSession::kSteps));
+  core::SlamSession& session = *s.session;
+  FixedEnsemble* fixed = s.fixed;
   // Member 0 (the leader) lost its heading half way round: its second half is turned by
   // 40 degrees about the pose there, so the sightings of that half miss the posts' gates.
-  fixed->members_[0].path = truth;
-  fixed->members_[0].map = map;
-  const Pose2 pivot = truth[steps / 2];
-  for (int i = steps / 2; i < steps; ++i) {
-    const double a = 0.7;
-    const Eigen::Vector2d d = truth[i].head<2>() - pivot.head<2>();
-    fixed->members_[0].path[i] << pivot.head<2>() + Eigen::Rotation2Dd(a) * d,
-        core::wrapAngle(truth[i].z() + a);
-  }
-  fixed->members_[1].path = truth;
-  fixed->members_[1].map = map;
+  fixed->members_[0].path = s.lostPath();
+  fixed->members_[0].map = s.map;
+  fixed->members_[1].path = s.truth;
+  fixed->members_[1].map = s.map;
   fixed->leader_ = 0;
   core::FilterOptions filter = pointOptions(1);
   core::SmoothingOptions smoothing;
@@ -377,12 +398,49 @@ TEST(EnsembleFilter, TheSmootherTakesTheMemberWhoseMapLeavesFewestSightingsOut) 
   ASSERT_TRUE(r.ok) << r.message;
   EXPECT_EQ(r.member, 1) << r.message;
   EXPECT_EQ(r.sightings_left_out, 0) << r.message;
-  EXPECT_NE(r.message.find("member 1 of 2 (the filter's leader 0)"), std::string::npos)
+  EXPECT_NE(r.message.find("member 1 of 2 (the filter's leader 0; 0 sightings left out"),
+            std::string::npos)
       << r.message;
   // Member 0 alone leaves sightings out: the choice was not a tie.
   fixed->members_[1].path = fixed->members_[0].path;
   const core::SmoothingResult lost = core::smoothSession(session, filter, smoothing);
   EXPECT_GT(lost.sightings_left_out, 10) << lost.message;
+}
+
+// smoothing.member_landmark_cost: a member that lost its way and mapped copies of the posts
+// where its turned half saw them explains every sighting, with twice the landmarks; the member
+// on the true path missed one post. Without the cost the copies win; with it each landmark
+// counts as that many sightings left out, and the member with the smaller map wins.
+TEST(EnsembleFilter, EachLandmarkCountsAsSightingsLeftOutWhenChoosingAMember) {
+  FixedSession s;
+  FixedEnsemble* fixed = s.fixed;
+  fixed->members_[0].path = s.lostPath();
+  fixed->members_[0].map = s.map;
+  for (const core::LandmarkEstimate& l : s.map) {
+    core::LandmarkEstimate copy = l;
+    copy.id += 100;
+    copy.mean = s.turned(l.mean);
+    fixed->members_[0].map.push_back(copy);
+  }
+  fixed->members_[1].path = s.truth;
+  fixed->members_[1].map.assign(s.map.begin(), s.map.end() - 1);  // the last post never mapped
+  core::FilterOptions filter = pointOptions(1);
+  core::SmoothingOptions smoothing;
+  smoothing.enabled = true;
+  const core::SmoothingResult copies = core::smoothSession(*s.session, filter, smoothing);
+  ASSERT_TRUE(copies.ok) << copies.message;
+  EXPECT_EQ(copies.member, 0) << copies.message;
+  EXPECT_EQ(copies.sightings_left_out, 0) << copies.message;
+  EXPECT_EQ(copies.landmarks_smoothed, 8) << copies.message;
+
+  smoothing.member_landmark_cost = 10.0;  // member 0: 0 + 10 x 8; member 1: 30 + 10 x 3
+  const core::SmoothingResult r = core::smoothSession(*s.session, filter, smoothing);
+  ASSERT_TRUE(r.ok) << r.message;
+  EXPECT_EQ(r.member, 1) << r.message;
+  EXPECT_EQ(r.sightings_left_out, FixedSession::kSteps) << r.message;
+  EXPECT_EQ(r.landmarks_smoothed, 3) << r.message;
+  EXPECT_NE(r.message.find("30 sightings left out + 10 x 3 landmarks"), std::string::npos)
+      << r.message;
 }
 
 }  // namespace

@@ -271,6 +271,9 @@ TEST(SlamConfig, HinfAndExistenceErrorsNameTheKey) {
   EXPECT_NE(errorOf("ensemble: {size: 2}").find("in ensemble: size"), std::string::npos);
   EXPECT_NE(errorOf("ensemble: {switch_margin: -2}").find("ensemble.switch_margin = -2"),
             std::string::npos);
+  EXPECT_NE(errorOf("smoothing: {member_landmark_cost: -1}")
+                .find("smoothing.member_landmark_cost = -1 is out of range"),
+            std::string::npos);
   EXPECT_NE(errorOf("smoothing: {enable: true}").find("in smoothing: enable"), std::string::npos);
   EXPECT_NE(errorOf("smoothing: {enabled: true}").find("needs use_lines: false"),
             std::string::npos);

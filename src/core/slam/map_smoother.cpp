@@ -22,6 +22,7 @@ void validate(const SmoothingOptions& o) {
   requireRange("smoothing.gate_chi2", o.gate_chi2, 0.1, 1000.0);
   requireRange("smoothing.huber_k", o.huber_k, 0.0, 100.0);
   requireRange("smoothing.min_sightings", o.min_sightings, 1, 1000000);
+  requireRange("smoothing.member_landmark_cost", o.member_landmark_cost, 0.0, 1e9);
 }
 
 namespace {
@@ -421,24 +422,29 @@ SmoothingResult smoothSession(const SlamSession& session, const FilterOptions& o
   }
   SmoothingResult best, leader = refused;
   leader.message = "its path is not one pose per frame";
+  const auto score = [&smoothing](const SmoothingResult& r) {
+    return r.sightings_left_out + smoothing.member_landmark_cost * r.landmarks_smoothed;
+  };
   for (int k = 0; k < filter.members(); ++k) {
     const std::vector<Pose2> path = filter.member(k).bestPath();
     if (path.size() != frames.size()) continue;  // not a path per frame: not comparable
     SmoothingResult r = smoothPathAndMap(path, frames, filter.member(k).landmarks(), smoothing);
     r.member = k;
     if (k == filter.leader()) leader = r;
-    const bool better = !best.ok || r.sightings_left_out < best.sightings_left_out ||
-                        (r.sightings_left_out == best.sightings_left_out &&
-                         r.final_cost < best.final_cost);
+    const bool better = !best.ok || score(r) < score(best) ||
+                        (score(r) == score(best) && r.final_cost < best.final_cost);
     if (r.ok && better) best = std::move(r);
   }
   if (!best.ok) {
     leader.message = "no member of the ensemble could be smoothed; the leader's: " + leader.message;
     return leader;
   }
-  best.message = "member " + std::to_string(best.member) + " of " +
-                 std::to_string(filter.members()) + " (the filter's leader " +
-                 std::to_string(filter.leader()) + "): " + best.message;
+  std::ostringstream why;
+  why << "member " << best.member << " of " << filter.members() << " (the filter's leader "
+      << filter.leader() << "; " << best.sightings_left_out << " sightings left out + "
+      << smoothing.member_landmark_cost << " x " << best.landmarks_smoothed
+      << " landmarks): " << best.message;
+  best.message = why.str();
   return best;
 }
 

@@ -30,6 +30,10 @@ struct SmoothingOptions {
                               // with a known id joins the landmark of that id
   double huber_k = 2.0;       // robust kernel on each sighting's normalised residual (0: none)
   int min_sightings = 2;      // landmarks with fewer associated sightings keep the filter's value
+  // Choosing among ensemble members (smoothSession): each landmark a member's map adds to the
+  // smoothing counts as this many sightings left out. A member that lost its way can explain
+  // its sightings by mapping copies of the landmarks; 0 counts the sightings left out alone.
+  double member_landmark_cost = 0.0;
 };
 
 /// Throws std::invalid_argument naming the first out-of-range field.
@@ -70,10 +74,10 @@ SmoothingResult smoothPathAndMap(const std::vector<Pose2>& path,
 /// path, the filter's landmarks, and each frame's odometry noise from options.motion and
 /// observation noise from options.measurement. Refused (ok = false) on a prior map or with
 /// mapping off, and after a pose reset during the run. On an ensemble (filter().members() > 1)
-/// every member's path and map are smoothed and the one that leaves the fewest sightings outside
-/// every gate of its map is returned (then the lowest final cost): a member that lost its way
-/// mapped copies its own path explains, but the sightings of the stretches before or after do
-/// not fit them.
+/// every member's path and map are smoothed and the one with the fewest sightings outside every
+/// gate of its map plus member_landmark_cost per landmark smoothed is returned (then the lowest
+/// final cost): a member that lost its way mapped copies its own path explains, but the
+/// sightings of the stretches before or after do not fit them, or it mapped more copies.
 SmoothingResult smoothSession(const SlamSession& session, const FilterOptions& options,
                               const SmoothingOptions& smoothing);
 
