@@ -81,6 +81,21 @@ void drive(const std::vector<core::SlamFilter*>& filters,
   }
 }
 
+/// The ensemble followed by each of its members' filters run alone (made into *alone).
+std::vector<core::SlamFilter*> withMembersAlone(
+    const core::FilterOptions& options, core::SlamFilter* ensemble,
+    std::vector<std::unique_ptr<core::SlamFilter>>* alone) {
+  std::vector<core::SlamFilter*> all{ensemble};
+  for (int k = 0; k < options.ensemble.members; ++k) {
+    core::FilterOptions o = options;
+    o.ensemble.members = 1;
+    o.seed = core::ensembleMemberSeed(options.seed, k);
+    alone->push_back(core::createFilter(o));
+    all.push_back(alone->back().get());
+  }
+  return all;
+}
+
 TEST(EnsembleFilter, AnEnsembleOfOneIsThePlainFilter) {
   const auto filter = core::createFilter(pointOptions(1));
   EXPECT_EQ(filter->members(), 1);
@@ -109,14 +124,7 @@ TEST(EnsembleFilter, EachMemberIsTheFilterOfItsSeedAndTheLeaderRanksFirst) {
     const auto ensemble = core::createFilter(options);
     ASSERT_EQ(ensemble->members(), members);
     std::vector<std::unique_ptr<core::SlamFilter>> alone;
-    std::vector<core::SlamFilter*> all{ensemble.get()};
-    for (int k = 0; k < members; ++k) {
-      core::FilterOptions o = options;
-      o.ensemble.members = 1;
-      o.seed = core::ensembleMemberSeed(options.seed, k);
-      alone.push_back(core::createFilter(o));
-      all.push_back(alone.back().get());
-    }
+    const std::vector<core::SlamFilter*> all = withMembersAlone(options, ensemble.get(), &alone);
     std::vector<std::vector<core::UpdateStats>> stats;
     drive(all, &stats, 0.25);  // odometry bad enough for some members to map copies
     std::vector<double> evidence(members, 0.0);
@@ -174,14 +182,7 @@ TEST(EnsembleFilter, TheLeaderChangesOnlyWhenAnotherLeadsByTheMargin) {
     options.ensemble.switch_margin = margin;
     const auto ensemble = core::createFilter(options);
     std::vector<std::unique_ptr<core::SlamFilter>> alone;
-    std::vector<core::SlamFilter*> all{ensemble.get()};
-    for (int k = 0; k < members; ++k) {
-      core::FilterOptions o = options;
-      o.ensemble.members = 1;
-      o.seed = core::ensembleMemberSeed(options.seed, k);
-      alone.push_back(core::createFilter(o));
-      all.push_back(alone.back().get());
-    }
+    const std::vector<core::SlamFilter*> all = withMembersAlone(options, ensemble.get(), &alone);
     std::vector<std::vector<core::UpdateStats>> stats;
     std::vector<int> leaders;
     drive(all, &stats, 0.25, &leaders);
