@@ -204,6 +204,8 @@ TEST(EnsembleFilter, TheLeaderChangesOnlyWhenAnotherLeadsByTheMargin) {
     }
     EXPECT_EQ(ensemble->stats().leader_changes, changed);
     changes.push_back(changed);
+    ensemble->reset(Pose2::Zero());  // a new map: its own count
+    EXPECT_EQ(ensemble->stats().leader_changes, 0);
   }
   EXPECT_GT(changes[0], changes[1]);  // the margin held back at least one change
   EXPECT_GT(changes[1], 0);           // and let a member that pulled ahead take over

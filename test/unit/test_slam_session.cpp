@@ -83,6 +83,13 @@ TEST(SlamSession, EstimatedPathSaysWhereItCameFrom) {
   for (size_t i = 0; i < online.size(); ++i) {
     EXPECT_TRUE(online[i].isApprox(other.trajectory()[i].pose));
   }
+  const std::vector<core::TrajectoryPoint> stamped_online = other.estimatedTrajectory(&best);
+  EXPECT_FALSE(best);
+  ASSERT_EQ(stamped_online.size(), 5u);
+  for (size_t i = 0; i < stamped_online.size(); ++i) {
+    EXPECT_EQ(stamped_online[i].stamp, other.trajectory()[i].stamp);
+    EXPECT_TRUE(stamped_online[i].pose.isApprox(other.trajectory()[i].pose));
+  }
 }
 
 // A frame at the last frame's stamp (another input of the same instant, or a repeat) is

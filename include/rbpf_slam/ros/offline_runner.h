@@ -50,9 +50,9 @@ struct OfflineSummary {
   long relocalizations = 0;  // particle proposals started from a searched pose correction
   long heading_measurements = 0;  // particle proposals conditioned on the heading prior
   long robust_steps = 0;          // robust_fastslam2: steps sampled from several ancestor sets
-  long ensemble_leader_changes = 0;  // ensemble: updates after which another member was reported
   int ensemble_members = 1;       // ensemble.members
   int ensemble_leader = 0;        // the member reported at the end (by ensemble.rank_by)
+  long ensemble_leader_changes = 0;  // updates after which another member was reported
   double update_ms_mean = 0.0;
   double update_ms_p99 = 0.0;
   double update_ms_max = 0.0;

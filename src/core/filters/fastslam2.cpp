@@ -632,6 +632,7 @@ std::vector<Pose2> FastSlam2::bestPath() const {
   std::vector<Pose2> path;
   const int best = bestParticle();
   if (best < 0) return path;
+  path.reserve(static_cast<size_t>(stats_.updates) + 1);  // one pose per update, usually
   for (const PathNode* n = particles_[best].path.get(); n != nullptr; n = n->parent.get()) {
     path.push_back(n->pose);
   }

@@ -110,7 +110,8 @@ struct EnsembleOptions {
   // log-evidence (nats; with new_landmarks, when it created fewer landmarks, or as many and
   // leads by this much). Without it members of about equal evidence take turns, and the
   // node's map -> odom, ~pose, ~trajectory and markers jump with each turn. 0: the best
-  // member at every update.
+  // member at every update (on an exact tie the leader stays). With new_landmarks the margin
+  // only matters between members that created as many landmarks.
   double switch_margin = 0.0;
 };
 
