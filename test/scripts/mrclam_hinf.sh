@@ -17,14 +17,17 @@
 # existence.visible_range_m=0): 37, 0.30, 25, 4.4, 18, 13 and 0 pairs, and it fails on four.
 # The draw (hinf.proposal_covariance) hardly shows here; hinf_car.sh checks it.
 # The config runs an ensemble of four filters (session 25): "the filter's own" is then the
-# member reported while running (the largest marginal likelihood), and those limits apply to its
-# path and map (run_mrclam's "filter" record). Measured: 40, 0.26, 35, 2.3, 28, 26, 0 and 9
-# close pairs. The config smooths after the run (session 24), each member, keeping the one whose
-# map leaves the fewest sightings outside every gate; the smoothed path and map must meet: at
+# member reported while running (the largest marginal likelihood, changed only past a margin of
+# 20 nats since session 26), and those limits apply to its path and map (run_mrclam's "filter"
+# record). Measured: 40, 0.26, 35, 2.3, 28, 26, 0 and 9 close pairs (the same without the
+# margin). The config smooths after the run (session 24), each member, keeping the one whose
+# map leaves the fewest sightings outside every gate plus 150 per landmark (session 26); the
+# smoothed path and map must meet: at
 # least 37 runs halved, mean ratio at most 0.30, at least 35 clean, at most 2.1 spurious per run,
 # at least 36 within, at least 34 all three, at most 3 copy pairs and 18 close pairs (the
 # smoothed covariances, given the path, are tighter, so close pairs are fewer by construction).
-# Measured: 40, 0.25, 38, 1.7, 39, 37, 0 and 0. One filter smoothed (--set ensemble.members=1,
+# Measured: 44, 0.16, 44, 0.31, 41, 41, 0 and 0 (without the landmark cost, session 25: 40,
+# 0.25, 38, 1.7, 39, 37). One filter smoothed (--set ensemble.members=1,
 # session 24's figures: 39, 0.25, 36, 1.5, 38, 31, 0 and 0) fails on all three; without
 # smoothing (--set smoothing.enabled=false) the second check fails on four (and the first finds
 # no "filter" record).
