@@ -82,20 +82,18 @@ void YamlSection::read(const std::string& key, int* value, int min, int max) {
 void YamlSection::read(const std::string& key, unsigned long* value) {
   const YAML::Node n = child(key);
   if (!n) return;
+  // The whole unsigned range (an ensemble member's seed, which needs all 64 bits, can be given
+  // back as a config seed); a negative number is named as such.
+  const bool negative = n.IsScalar() && !n.Scalar().empty() && n.Scalar()[0] == '-';
   try {
-    // The whole unsigned range (an ensemble member's seed, which needs all 64 bits, can be
-    // given back as a config seed); a negative number is named as such.
-    const long long parsed = n.as<long long>();
-    if (parsed < 0) throw ConfigError(where(key) + " = " + describe(n) + " must be >= 0");
-    *value = static_cast<unsigned long>(parsed);
-  } catch (const YAML::Exception&) {
-    try {
-      if (n.IsScalar() && !n.Scalar().empty() && n.Scalar()[0] != '-') {
-        *value = static_cast<unsigned long>(n.as<unsigned long long>());
-        return;
-      }
-    } catch (const YAML::Exception&) {
+    if (negative) {
+      const long long parsed = n.as<long long>();
+      if (parsed < 0) throw ConfigError(where(key) + " = " + describe(n) + " must be >= 0");
+      *value = static_cast<unsigned long>(parsed);  // -0
+      return;
     }
+    *value = static_cast<unsigned long>(n.as<unsigned long long>());
+  } catch (const YAML::Exception&) {
     throw ConfigError(where(key) + " = " + describe(n) + " is not a non-negative integer");
   }
 }

@@ -676,8 +676,10 @@ OfflineSummary OfflineRunner::writeOutputs(const OfflineSummary& in) const {
   std::vector<core::Pose2> path;
   for (const auto& p : pipeline_.session().trajectory()) online.push_back({p.stamp, p.pose});
   bool use_best_path = false;
-  path = pipeline_.session().estimatedPath(&use_best_path);
-  for (size_t i = 0; i < online.size(); ++i) estimate.push_back({online[i].stamp, path[i]});
+  for (const core::TrajectoryPoint& p : pipeline_.session().estimatedTrajectory(&use_best_path)) {
+    estimate.push_back({p.stamp, p.pose});
+    path.push_back(p.pose);
+  }
   summary.trajectory_source = use_best_path ? "best_particle_path" : "online_estimate";
   std::vector<core::LandmarkEstimate> landmarks = pipeline_.session().filter().landmarks();
   if (config_.smoothing.enabled) {
