@@ -303,6 +303,7 @@ void readRos(YamlSection& top, RosOptions* o) {
   top.read("sonar_cloud_max_range", &o->sonar_cloud_max_range, 0.1, 100.0);
   top.read("transform_publish_period", &o->transform_publish_period, 0.0, 10.0);
   top.read("transform_tolerance", &o->transform_tolerance, 0.0, 10.0);
+  top.read("trajectory_publish_period", &o->trajectory_publish_period, 0.0, 3600.0);
   top.read("queue_size", &o->queue_size, 1, 10000);
   top.read("publish_particles", &o->publish_particles);
   top.read("map_save_prefix", &o->map_save_prefix);

@@ -81,6 +81,10 @@ SlamNode::SlamNode(ros::NodeHandle nh, ros::NodeHandle private_nh,
 
   pose_publisher_ = private_nh_.advertise<geometry_msgs::PoseWithCovarianceStamped>("pose", 10);
   trajectory_publisher_ = private_nh_.advertise<nav_msgs::Path>("trajectory", 1, true);
+  if (ros_options.trajectory_publish_period > 0.0) {
+    trajectory_timer_ = nh_.createWallTimer(ros::WallDuration(ros_options.trajectory_publish_period),
+                                            &SlamNode::flushTrajectory, this);
+  }
   landmarks_publisher_ =
       private_nh_.advertise<visualization_msgs::MarkerArray>("landmarks", 1, true);
   particles_publisher_ = private_nh_.advertise<geometry_msgs::PoseArray>("particles", 1);
@@ -420,7 +424,7 @@ void SlamNode::publishState(const ros::Time& stamp) {
   } else {
     warnThrottled("non-finite estimate", "The filter's estimate is not finite; not published");
   }
-  trajectory_publisher_.publish(toPath(session.estimatedTrajectory(), config_.ros.map_frame));
+  publishTrajectory(false);
   publishLandmarks(stamp);
   if (config_.ros.publish_particles && particles_publisher_.getNumSubscribers() > 0) {
     particles_publisher_.publish(toPoseArray(session.filter().particles(), header));
@@ -635,8 +639,31 @@ void SlamNode::resetAll(const std::string& why) {
   map_published_at_update_ = -1;  // the new map's first grid is published like the first one
   stale_drops_in_a_row_ = 0;
   publishLandmarks(ros::Time::now());  // DELETE for every landmark shown
+  publishTrajectory(true);             // the empty path
+}
+
+void SlamNode::publishTrajectory(bool now) {
+  const double period = config_.ros.trajectory_publish_period;
+  const ros::WallTime wall = ros::WallTime::now();
+  if (!now && period > 0.0) {
+    // Nobody listening: nothing is built; the flush timer sends the path once someone is (a
+    // latecomer first gets the latched older path).
+    if (trajectory_publisher_.getNumSubscribers() == 0 ||
+        (wall - trajectory_published_at_).toSec() < period) {
+      trajectory_pending_ = true;
+      return;
+    }
+  }
   trajectory_publisher_.publish(
       toPath(pipeline_.session().estimatedTrajectory(), config_.ros.map_frame));
+  trajectory_published_at_ = wall;
+  trajectory_pending_ = false;
+}
+
+void SlamNode::flushTrajectory(const ros::WallTimerEvent&) {
+  if (trajectory_pending_ && trajectory_publisher_.getNumSubscribers() > 0) {
+    publishTrajectory(true);
+  }
 }
 
 }  // namespace rosbridge

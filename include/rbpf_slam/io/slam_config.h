@@ -31,6 +31,9 @@ struct RosOptions {
   double sonar_cloud_max_range = 5.0;             // cloud: the transducers' maximum range, m
   double transform_publish_period = 0.05;  // s; 0 disables tf publishing
   double transform_tolerance = 0.1;        // s, how far map -> odom is post-dated
+  // Wall s between ~trajectory publications (0: every update). The whole path is rebuilt and
+  // sent each time, so on long runs publishing it at every update dominates the node's time.
+  double trajectory_publish_period = 0.5;
   int queue_size = 20;
   bool publish_particles = true;
   std::string map_save_prefix = "rbpf_slam_map";  // ~save_map with no path: PREFIX.{yaml,pgm}

@@ -80,6 +80,10 @@ class SlamNode {
   void publishDiagnostics(const ros::WallTimerEvent& event);
   void publishState(const ros::Time& stamp);
   void publishLandmarks(const ros::Time& stamp);
+  /// ~trajectory: at once with `now` (or trajectory_publish_period 0), else at most once per
+  /// period while someone subscribes; a path not sent yet is sent by the flush timer.
+  void publishTrajectory(bool now);
+  void flushTrajectory(const ros::WallTimerEvent& event);
   void publishTransform(const ros::TimerEvent& event);
   bool resetService(std_srvs::Empty::Request& request, std_srvs::Empty::Response& response);
   bool pauseService(std_srvs::Empty::Request& request, std_srvs::Empty::Response& response);
@@ -120,6 +124,9 @@ class SlamNode {
 
   ros::Publisher pose_publisher_;
   ros::Publisher trajectory_publisher_;
+  ros::WallTimer trajectory_timer_;
+  ros::WallTime trajectory_published_at_;
+  bool trajectory_pending_ = false;  // updates since the last ~trajectory sent
   ros::Publisher landmarks_publisher_;
   ros::Publisher particles_publisher_;
   ros::ServiceServer reset_server_, pause_server_, resume_server_, save_map_server_,
