@@ -75,6 +75,9 @@ diagnostic_msgs::DiagnosticArray SlamDiagnostics::report(const ros::Time& stamp,
     if (stats.attenuation > 0.0) {
       status.values.push_back(keyValue("H-infinity theta", text(stats.attenuation)));
     }
+    if (stats.leader_changes > 0) {  // an ensemble whose reported member has changed
+      status.values.push_back(keyValue("ensemble leader changes", text(stats.leader_changes)));
+    }
   }
   status.values.push_back(keyValue("resets", text(resets_total_)));
   if (odometry_gaps_ >= 0) status.values.push_back(keyValue("odometry gaps", text(odometry_gaps_)));

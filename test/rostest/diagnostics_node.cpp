@@ -39,6 +39,19 @@ TEST(Diagnostics, OkWhileMappingWithTheFigures) {
   EXPECT_EQ(value(s, "Neff"), "80");
 }
 
+TEST(Diagnostics, EnsembleLeaderChangesAreShownOnceThereAreAny) {
+  rosbridge::SlamDiagnostics diagnostics("rbpf_slam_node");
+  diagnostics.recordUpdate(1.0);
+  core::FilterStats stats = healthy();
+  EXPECT_EQ(value(diagnostics.report(ros::Time(1.0), stats, 100).status[0],
+                  "ensemble leader changes"),
+            "<missing ensemble leader changes>");
+  stats.leader_changes = 3;
+  EXPECT_EQ(value(diagnostics.report(ros::Time(2.0), stats, 100).status[0],
+                  "ensemble leader changes"),
+            "3");
+}
+
 TEST(Diagnostics, DropsWarnForOnePeriodAndAreCountedByCause) {
   rosbridge::SlamDiagnostics diagnostics("rbpf_slam_node");
   diagnostics.recordUpdate(1.0);
