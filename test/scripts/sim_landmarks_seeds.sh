@@ -10,7 +10,8 @@
 # 100 particles (`--set particles=100` as an argument), mean 0.063 m (0.70 x), 7 of 10, and it
 # fails (0.062 m, 0.69 x, 7 of 10 with the most likely match). Since session 25 the config runs
 # an ensemble of four filters and the online pose is the leader's: 0.050 m (0.55 x), 9 of 10
-# (one filter, `--set ensemble.members=1`: the figures above).
+# (one filter, `--set ensemble.members=1`: the figures above); since session 27 eight:
+# 0.050 m (0.55 x), 10 of 10.
 # Extra arguments go to each filter run's offline_slam (e.g. --set particles=100 to see it fail).
 set -euo pipefail
 
