@@ -60,7 +60,7 @@ core::FilterOptions configOptions(const std::string& config, int particles) {
       io::loadSlamConfig(std::string(RBPF_SOURCE_DIR) + "/config/" + config + ".yaml").filter;
   options.particles = particles;
   options.seed = 3;
-  options.ensemble.members = 1;  // one filter against one (landmarks_fastslam2.yaml runs four)
+  options.ensemble.members = 1;  // one filter against one (landmarks_fastslam2.yaml runs eight)
   return options;
 }
 

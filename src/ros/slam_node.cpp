@@ -406,10 +406,11 @@ void SlamNode::handleResult(core::FrameResult result, const ros::Time& stamp, do
                            "rbpf_slam_node: " << updates_ << " updates, " << stats.landmarks
                                               << " landmarks, Neff " << stats.last_neff << ", "
                                               << stats.resamples << " resamples");
-  publishState(stamp);
+  // After a reset the old map's path must not stay up for a period.
+  publishState(stamp, result == core::FrameResult::kReset);
 }
 
-void SlamNode::publishState(const ros::Time& stamp) {
+void SlamNode::publishState(const ros::Time& stamp, bool trajectory_now) {
   const core::SlamSession& session = pipeline_.session();
   const core::PoseEstimate estimate = session.filter().estimate();
   std_msgs::Header header;
@@ -424,7 +425,7 @@ void SlamNode::publishState(const ros::Time& stamp) {
   } else {
     warnThrottled("non-finite estimate", "The filter's estimate is not finite; not published");
   }
-  publishTrajectory(false);
+  publishTrajectory(trajectory_now);
   publishLandmarks(stamp);
   if (config_.ros.publish_particles && particles_publisher_.getNumSubscribers() > 0) {
     particles_publisher_.publish(toPoseArray(session.filter().particles(), header));
@@ -590,7 +591,7 @@ void SlamNode::initialPoseCallback(const geometry_msgs::PoseWithCovarianceStampe
   ROS_INFO_STREAM("rbpf_slam_node: pose set to (" << pose.x() << ", " << pose.y() << ", "
                                                   << pose.z() << " rad) from initialpose");
   const ros::Time now = ros::Time::now();
-  publishState(now.isZero() ? msg->header.stamp : now);
+  publishState(now.isZero() ? msg->header.stamp : now, true);  // ~trajectory's source changed
 }
 
 bool SlamNode::readyForFrame() {
@@ -647,9 +648,10 @@ void SlamNode::publishTrajectory(bool now) {
   const ros::WallTime wall = ros::WallTime::now();
   if (!now && period > 0.0) {
     // Nobody listening: nothing is built; the flush timer sends the path once someone is (a
-    // latecomer first gets the latched older path).
+    // latecomer first gets the latched older path). The timer ticks every period, so a pending
+    // path waits at most about two periods.
     if (trajectory_publisher_.getNumSubscribers() == 0 ||
-        (wall - trajectory_published_at_).toSec() < period) {
+        (wall - trajectory_published_at_).toSec() < 0.999 * period) {
       trajectory_pending_ = true;
       return;
     }
@@ -661,9 +663,7 @@ void SlamNode::publishTrajectory(bool now) {
 }
 
 void SlamNode::flushTrajectory(const ros::WallTimerEvent&) {
-  if (trajectory_pending_ && trajectory_publisher_.getNumSubscribers() > 0) {
-    publishTrajectory(true);
-  }
+  if (trajectory_pending_) publishTrajectory(false);  // still at most once per period
 }
 
 }  // namespace rosbridge

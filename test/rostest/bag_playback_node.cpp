@@ -73,7 +73,8 @@ class PlaybackObserver {
   }
 
   /// Waits until the clock has passed end_stamp and the node published a pose at or after
-  /// last_update_stamp (or settle_s wall seconds went by); false after timeout_s.
+  /// last_update_stamp and a path reaching it (or settle_s wall seconds went by); false after
+  /// timeout_s.
   bool waitForEnd(double end_stamp, double last_update_stamp, double settle_s, double timeout_s) {
     const ros::WallTime start = ros::WallTime::now();
     ros::WallTime clock_passed_end;
@@ -95,7 +96,12 @@ class PlaybackObserver {
       if (now >= end_stamp) {
         if (clock_passed_end.isZero()) clock_passed_end = ros::WallTime::now();
         std::lock_guard<std::mutex> lock(mutex_);
-        if (last_pose_stamp_ >= last_update_stamp - 1e-3 ||
+        // ~trajectory trails ~pose by up to the node's trajectory_publish_period: wait for the
+        // path to reach the last pose too.
+        const bool path_caught_up =
+            !last_path_.poses.empty() &&
+            last_path_.poses.back().header.stamp.toSec() >= last_pose_stamp_ - 1e-3;
+        if ((last_pose_stamp_ >= last_update_stamp - 1e-3 && path_caught_up) ||
             (ros::WallTime::now() - clock_passed_end).toSec() > settle_s) {
           return true;
         }

@@ -113,9 +113,9 @@ std::string ServicesTest::workdir_;
 TEST_F(ServicesTest, PauseStopsUpdatesAndResumeRestartsThem) {
   ASSERT_TRUE(observer_->waitForTrajectory(20, 120.0)) << "the node never mapped 20 frames";
   ASSERT_TRUE(call("pause"));
-  // An update in flight may still land, and ~trajectory follows the updates by up to the
-  // node's trajectory_publish_period (0.5 s).
-  ros::WallDuration(1.5).sleep();
+  // An update in flight may still land, and ~trajectory follows the updates by up to about
+  // two of the node's trajectory_publish_period (0.5 s).
+  ros::WallDuration(2.0).sleep();
   const size_t paused_at = observer_->trajectorySize();
   ros::WallDuration(2.0).sleep();  // 8 s of bag at rate 4: about 40 scans offered
   EXPECT_EQ(observer_->trajectorySize(), paused_at) << "updates went on while paused";

@@ -260,7 +260,12 @@ TEST(SlamConfig, MrclamConfigsShareTheExistenceAndAssociationSettings) {
     EXPECT_TRUE(c.smoothing.enabled) << name;
     EXPECT_TRUE(c.session.keep_frames) << name;
     EXPECT_EQ(c.smoothing.rounds, 1) << name;
+    EXPECT_EQ(c.smoothing.member_landmark_cost, 150.0) << name;  // session 26
   }
+  // Session 27: eight members for FastSLAM 2.0; H-infinity keeps four (eight not evaluated).
+  const std::string dir = std::string(RBPF_SOURCE_DIR) + "/config/";
+  EXPECT_EQ(loadSlamConfig(dir + "landmarks_fastslam2.yaml").filter.ensemble.members, 8);
+  EXPECT_EQ(loadSlamConfig(dir + "landmarks_hinf.yaml").filter.ensemble.members, 4);
   EXPECT_FALSE(core::SmoothingOptions().enabled);
   EXPECT_FALSE(core::SessionOptions().keep_frames);
   EXPECT_EQ(core::ExistenceOptions().sighting_count, 1);

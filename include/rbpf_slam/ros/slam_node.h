@@ -78,10 +78,12 @@ class SlamNode {
                    SensorMount* frame_mount);
   void handleResult(core::FrameResult result, const ros::Time& stamp, double update_ms);
   void publishDiagnostics(const ros::WallTimerEvent& event);
-  void publishState(const ros::Time& stamp);
+  /// ~pose, ~trajectory (at once with trajectory_now, else throttled), ~landmarks, ~particles.
+  void publishState(const ros::Time& stamp, bool trajectory_now = false);
   void publishLandmarks(const ros::Time& stamp);
   /// ~trajectory: at once with `now` (or trajectory_publish_period 0), else at most once per
-  /// period while someone subscribes; a path not sent yet is sent by the flush timer.
+  /// period while someone subscribes; a path not sent yet is sent by the flush timer (resets
+  /// and initialpose send at once).
   void publishTrajectory(bool now);
   void flushTrajectory(const ros::WallTimerEvent& event);
   void publishTransform(const ros::TimerEvent& event);
