@@ -82,8 +82,8 @@ SlamNode::SlamNode(ros::NodeHandle nh, ros::NodeHandle private_nh,
   pose_publisher_ = private_nh_.advertise<geometry_msgs::PoseWithCovarianceStamped>("pose", 10);
   trajectory_publisher_ = private_nh_.advertise<nav_msgs::Path>("trajectory", 1, true);
   if (ros_options.trajectory_publish_period > 0.0) {
-    trajectory_timer_ = nh_.createWallTimer(ros::WallDuration(ros_options.trajectory_publish_period),
-                                            &SlamNode::flushTrajectory, this);
+    trajectory_timer_ = nh_.createWallTimer(
+        ros::WallDuration(ros_options.trajectory_publish_period), &SlamNode::flushTrajectory, this);
   }
   landmarks_publisher_ =
       private_nh_.advertise<visualization_msgs::MarkerArray>("landmarks", 1, true);

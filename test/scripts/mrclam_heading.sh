@@ -26,7 +26,7 @@
 # negative evidence and no sampling; 0.47 and 31 with 100 particles and the noise before (alpha1
 # 0.2).
 # The means are the sturdier checks; the counts have a margin of 3-5.
-# The config runs an ensemble (four filters since session 25, eight since 27): "the filter's own" is then the
+# The config runs an ensemble of eight filters (session 27): "the filter's own" is then the
 # member reported while running (the largest marginal likelihood, changed only past a margin of
 # 20 nats since session 26), and those limits apply to its path and map (run_mrclam's "filter"
 # record). Measured: 43, 0.25, 37, 1.82, 30, 25, 0 and 12 (41, 0.29, 35, 2.1, 30, 23 without the

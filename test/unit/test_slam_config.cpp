@@ -63,9 +63,8 @@ TEST(SlamConfig, SeedTakesTheWholeUnsignedRange) {
 // ~trajectory is throttled by default (the whole path is sent each time); 0 is every update.
 TEST(SlamConfig, TrajectoryPublishPeriod) {
   EXPECT_DOUBLE_EQ(parseSlamConfig(YAML::Load("{}"), "t").ros.trajectory_publish_period, 0.5);
-  EXPECT_DOUBLE_EQ(
-      parseSlamConfig(YAML::Load("trajectory_publish_period: 0"), "t").ros.trajectory_publish_period,
-      0.0);
+  const SlamConfig every = parseSlamConfig(YAML::Load("trajectory_publish_period: 0"), "t");
+  EXPECT_DOUBLE_EQ(every.ros.trajectory_publish_period, 0.0);
   EXPECT_NE(errorOf("trajectory_publish_period: -1").find("trajectory_publish_period = -1"),
             std::string::npos);
 }
