@@ -128,34 +128,6 @@ std::vector<PosePair> associate(const std::vector<StampedPose>& estimate,
   return pairs;
 }
 
-core::Pose2 alignRigid2D(const std::vector<Eigen::Vector2d>& source,
-                         const std::vector<Eigen::Vector2d>& target) {
-  if (source.size() != target.size() || source.empty()) {
-    throw std::invalid_argument("alignRigid2D needs two equally long, non-empty point sets");
-  }
-  Eigen::Vector2d source_mean = Eigen::Vector2d::Zero();
-  Eigen::Vector2d target_mean = Eigen::Vector2d::Zero();
-  for (size_t i = 0; i < source.size(); ++i) {
-    source_mean += source[i];
-    target_mean += target[i];
-  }
-  source_mean /= static_cast<double>(source.size());
-  target_mean /= static_cast<double>(target.size());
-  // In the plane the optimal rotation maximises sum (c * dot + s * cross) over centred pairs,
-  // so theta = atan2(sum cross, sum dot): the 2D case of the SVD solution.
-  double dot = 0.0, cross = 0.0;
-  for (size_t i = 0; i < source.size(); ++i) {
-    const Eigen::Vector2d p = source[i] - source_mean;
-    const Eigen::Vector2d q = target[i] - target_mean;
-    dot += p.dot(q);
-    cross += p.x() * q.y() - p.y() * q.x();
-  }
-  const double theta = (dot == 0.0 && cross == 0.0) ? 0.0 : std::atan2(cross, dot);
-  const Eigen::Vector2d translation =
-      target_mean - core::transformPoint(core::Pose2(0.0, 0.0, theta), source_mean);
-  return core::Pose2(translation.x(), translation.y(), theta);
-}
-
 EvaluationResult evaluatePairs(const std::vector<PosePair>& pairs, bool align) {
   if (pairs.empty()) throw std::runtime_error("no matched poses to evaluate");
   EvaluationResult result;

@@ -379,6 +379,7 @@ SlamConfig parseSlamConfigTree(const YAML::Node& root, const std::string& source
   smoothing.read("huber_k", &config.smoothing.huber_k);
   smoothing.read("min_sightings", &config.smoothing.min_sightings);
   smoothing.read("member_landmark_cost", &config.smoothing.member_landmark_cost);
+  smoothing.read("member_consensus_margin", &config.smoothing.member_consensus_margin);
   smoothing.finish();
   s.keep_frames = config.smoothing.enabled;
   top.read("map_file", &config.map_file);

@@ -3,7 +3,8 @@
 // sighting that fits the map, the reported member changes only past ensemble.switch_margin,
 // commands reach every member, bad options are named, and the smoother picks the member whose
 // map leaves the fewest sightings out, each of its landmarks counted as
-// smoothing.member_landmark_cost sightings left out.
+// smoothing.member_landmark_cost sightings left out, or with smoothing.member_consensus_margin
+// the one among those scoring near the best whose path agrees with the other members'.
 
 #include <gtest/gtest.h>
 
@@ -15,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "rbpf_slam/core/alignment.h"
 #include "rbpf_slam/core/filters/ensemble_filter.h"
 #include "rbpf_slam/core/filters/measurement_models.h"
 #include "rbpf_slam/core/filters/slam_filter.h"
@@ -302,7 +304,7 @@ TEST(EnsembleFilter, BadOptionsAreNamed) {
   EXPECT_EQ(message(o), "accepted");
 }
 
-/// Two fixed members for the smoother: given paths and maps, no filtering.
+/// Two (or three) fixed members for the smoother: given paths and maps, no filtering.
 class FixedEnsemble : public core::SlamFilter {
  public:
   struct Member : core::SlamFilter {
@@ -322,7 +324,8 @@ class FixedEnsemble : public core::SlamFilter {
     core::FilterStats stats() const override { return {}; }
     std::vector<Pose2> bestPath() const override { return path; }
   };
-  Member members_[2];
+  Member members_[3];
+  int count_ = 2;
   int leader_ = 0;
   // Updates grow both members' paths along the truth; the test then bends member 0's.
   std::string variant() const override { return "fixed"; }
@@ -334,7 +337,7 @@ class FixedEnsemble : public core::SlamFilter {
   std::vector<core::WeightedPose> particles() const override { return {}; }
   core::FilterStats stats() const override { return {}; }
   std::vector<Pose2> bestPath() const override { return members_[leader_].path; }
-  int members() const override { return 2; }
+  int members() const override { return count_; }
   const core::SlamFilter& member(int k) const override { return members_[k]; }
   int leader() const override { return leader_; }
 };
@@ -444,6 +447,89 @@ TEST(EnsembleFilter, EachLandmarkCountsAsSightingsLeftOutWhenChoosingAMember) {
   EXPECT_EQ(r.landmarks_smoothed, 3) << r.message;
   EXPECT_NE(r.message.find("30 sightings left out + 10 x 3 landmarks"), std::string::npos)
       << r.message;
+}
+
+// smoothing.member_consensus_margin in smoothSession: the lost member of the test above, with its
+// copies, scores best when a landmark costs little; two members on the true path score a little
+// worse. A margin too narrow for them keeps the best score; two members take no consensus.
+TEST(EnsembleFilter, TheSmootherAsksForAConsensusOnlyWithinTheMarginAndFromThreeMembers) {
+  FixedSession s;
+  FixedEnsemble* fixed = s.fixed;
+  fixed->count_ = 3;
+  fixed->members_[0].path = s.lostPath();
+  fixed->members_[0].map = s.map;
+  for (const core::LandmarkEstimate& l : s.map) {
+    core::LandmarkEstimate copy = l;
+    copy.id += 100;
+    copy.mean = s.turned(l.mean);
+    fixed->members_[0].map.push_back(copy);
+  }
+  for (int k : {1, 2}) {
+    fixed->members_[k].path = s.truth;
+    fixed->members_[k].map.assign(s.map.begin(), s.map.end() - 1);  // the last post never mapped
+  }
+  core::FilterOptions filter = pointOptions(1);
+  core::SmoothingOptions smoothing;
+  smoothing.enabled = true;
+  smoothing.member_landmark_cost = 3.0;  // member 0: 0 + 3 x 8 = 24; members 1, 2: 30 + 3 x 3 = 39
+  const core::SmoothingResult by_score = core::smoothSession(*s.session, filter, smoothing);
+  ASSERT_TRUE(by_score.ok) << by_score.message;
+  EXPECT_EQ(by_score.member, 0) << by_score.message;
+
+  smoothing.member_consensus_margin = 10.0;  // 39 is not within 24 + 10: member 0 alone
+  const core::SmoothingResult narrow = core::smoothSession(*s.session, filter, smoothing);
+  ASSERT_TRUE(narrow.ok) << narrow.message;
+  EXPECT_EQ(narrow.member, 0) << narrow.message;
+  EXPECT_NE(narrow.message.find("of the 1 scoring within 10 of the best"), std::string::npos)
+      << narrow.message;
+
+  // (With a wider margin all three are candidates, but the smoother mends the lost path here:
+  // the odometry is exact, the copies move onto the posts. The rule itself is tested below.)
+  smoothing.member_consensus_margin = 20.0;
+  // Two members: no consensus to take, the score rules whatever the margin.
+  fixed->count_ = 2;
+  const core::SmoothingResult pair = core::smoothSession(*s.session, filter, smoothing);
+  ASSERT_TRUE(pair.ok) << pair.message;
+  EXPECT_EQ(pair.member, 0) << pair.message;
+  EXPECT_EQ(pair.message.find("scoring within"), std::string::npos) << pair.message;
+}
+
+/// A smoothing result of a three-pose straight path whose middle pose is bent sideways by bend:
+/// two such paths are |bend_a - bend_b| x sqrt(2) / 3 apart after alignment.
+core::SmoothingResult bentResult(int member, double bend, int left_out) {
+  core::SmoothingResult r;
+  r.ok = true;
+  r.member = member;
+  r.path = {Pose2(0.0, 0.0, 0.0), Pose2(1.0, bend, 0.0), Pose2(2.0, 0.0, 0.0)};
+  r.sightings_left_out = left_out;
+  return r;
+}
+
+// The rule on its own: member 0 lost its way (bent 3 m) but scores best; member 1 (bent 0.1 m)
+// is 10 behind, member 3 (0.2 m) 5 behind, member 2 (straight) 90 behind. The medians of the
+// distances to the others, in units of sqrt(2) / 3 m: 2.9, 0.1, 0.2, 0.2.
+TEST(EnsembleFilter, TheConsensusKeepsTheCandidateWithTheSmallestMedianDistance) {
+  const std::vector<core::SmoothingResult> results{bentResult(0, 3.0, 10), bentResult(1, 0.1, 20),
+                                                   bentResult(2, 0.0, 100),
+                                                   bentResult(3, 0.2, 15)};
+  core::SmoothingOptions options;
+  std::string note = "stale";
+  EXPECT_EQ(core::chooseMember(results, options, &note), 0u);  // no margin: the best score
+  EXPECT_EQ(note, "");
+  options.member_consensus_margin = 6.0;  // members 0 and 3
+  EXPECT_EQ(core::chooseMember(results, options, &note), 3u);
+  EXPECT_NE(note.find("of the 2 scoring within 6 of the best"), std::string::npos) << note;
+  options.member_consensus_margin = 12.0;  // members 0, 3 and 1
+  EXPECT_EQ(core::chooseMember(results, options, &note), 1u);
+  EXPECT_NE(note.find("median 0.0471"), std::string::npos) << note;  // 0.1 x sqrt(2) / 3
+  options.member_consensus_margin = 1000.0;  // every member: member 1 still
+  EXPECT_EQ(core::chooseMember(results, options, &note), 1u);
+  EXPECT_NE(note.find("of the 4 scoring within 1000 of the best"), std::string::npos) << note;
+  // Without member 1, of three the one between the others: 0.0 has (3.0 + 0.2) / 2 = 1.6, 0.2
+  // has (2.8 + 0.2) / 2 = 1.5 (an even count of others: the mean of the middle two).
+  const std::vector<core::SmoothingResult> three{results[0], results[2], results[3]};
+  EXPECT_EQ(core::chooseMember(three, options), 2u);
+  EXPECT_THROW(core::chooseMember({}, options), std::invalid_argument);
 }
 
 }  // namespace

@@ -50,6 +50,24 @@ TEST(AlignRigid2D, RejectsMismatchedSizes) {
   EXPECT_THROW(alignRigid2D({}, {}), std::invalid_argument);
 }
 
+TEST(AlignedRmsDistance, IsZeroForAMovedCopyAndTheSpreadLeftAfterAlignment) {
+  const std::vector<StampedPose> reference = makeTrajectory(30);
+  const core::Pose2 offset(1.5, -3.0, 2.2);
+  std::vector<core::Pose2> a, b;
+  for (const StampedPose& pose : reference) {
+    b.push_back(pose.pose);
+    a.push_back(core::compose(offset, pose.pose));
+  }
+  EXPECT_NEAR(core::alignedRmsDistance(a, b), 0.0, 1e-9);
+  // Two poses 1 m apart against 3 m apart: centred and aligned, each is 1 m off.
+  const std::vector<core::Pose2> short_pair{{0.0, 0.0, 0.0}, {1.0, 0.0, 0.0}};
+  const std::vector<core::Pose2> long_pair{{5.0, 5.0, 1.0}, {5.0, 8.0, 1.0}};
+  EXPECT_NEAR(core::alignedRmsDistance(short_pair, long_pair), 1.0, 1e-9);
+  EXPECT_NEAR(core::alignedRmsDistance(long_pair, short_pair), 1.0, 1e-9);
+  EXPECT_THROW(core::alignedRmsDistance(short_pair, {}), std::invalid_argument);
+  EXPECT_THROW(core::alignedRmsDistance({}, {}), std::invalid_argument);
+}
+
 TEST(Evaluate, AlignedTransformedCopyHasZeroError) {
   const std::vector<StampedPose> reference = makeTrajectory(30);
   const core::Pose2 offset(-4.0, 2.5, -2.0);  // a different map frame

@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "rbpf_slam/core/alignment.h"
 #include "rbpf_slam/core/geometry.h"
 #include "rbpf_slam/io/trajectory.h"
 
@@ -77,11 +78,8 @@ std::vector<PosePair> associate(const std::vector<StampedPose>& estimate,
                                 const std::vector<StampedPose>& reference,
                                 const EvaluationOptions& options);
 
-/// The rigid transform T = (x, y, theta) minimising sum_i |T(source_i) - target_i|^2 (Umeyama
-/// 1991 / Horn 1987 without scale, in closed form for the plane). Throws std::invalid_argument
-/// when the sizes differ or both are empty.
-core::Pose2 alignRigid2D(const std::vector<Eigen::Vector2d>& source,
-                         const std::vector<Eigen::Vector2d>& target);
+/// The rigid alignment of two point sets (core/alignment.h), used here for the ATE.
+using core::alignRigid2D;
 
 /// Error figures of already associated pairs. Throws std::runtime_error when pairs is empty.
 EvaluationResult evaluatePairs(const std::vector<PosePair>& pairs, bool align);

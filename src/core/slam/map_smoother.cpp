@@ -3,12 +3,16 @@
 #include <Eigen/Cholesky>
 #include <Eigen/SparseCholesky>
 #include <Eigen/SparseCore>
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <memory>
 #include <limits>
 #include <sstream>
+#include <stdexcept>
+#include <string>
 
+#include "rbpf_slam/core/alignment.h"
 #include "rbpf_slam/core/filters/measurement_models.h"
 #include "rbpf_slam/core/motion/motion_model.h"
 #include "rbpf_slam/core/require_range.h"
@@ -23,6 +27,7 @@ void validate(const SmoothingOptions& o) {
   requireRange("smoothing.huber_k", o.huber_k, 0.0, 100.0);
   requireRange("smoothing.min_sightings", o.min_sightings, 1, 1000000);
   requireRange("smoothing.member_landmark_cost", o.member_landmark_cost, 0.0, 1e9);
+  requireRange("smoothing.member_consensus_margin", o.member_consensus_margin, 0.0, 1e9);
 }
 
 namespace {
@@ -391,6 +396,51 @@ SmoothingResult smoothPathAndMap(const std::vector<Pose2>& path,
   return result;
 }
 
+size_t chooseMember(const std::vector<SmoothingResult>& smoothed, const SmoothingOptions& options,
+                    std::string* consensus) {
+  if (consensus) consensus->clear();
+  if (smoothed.empty()) throw std::invalid_argument("chooseMember needs at least one result");
+  const auto score = [&options](const SmoothingResult& r) {
+    return r.sightings_left_out + options.member_landmark_cost * r.landmarks_smoothed;
+  };
+  const auto ranks_before = [&score](const SmoothingResult& a, const SmoothingResult& b) {
+    return score(a) < score(b) || (score(a) == score(b) && a.final_cost < b.final_cost);
+  };
+  size_t chosen = 0;
+  for (size_t i = 1; i < smoothed.size(); ++i) {
+    if (ranks_before(smoothed[i], smoothed[chosen])) chosen = i;
+  }
+  if (options.member_consensus_margin <= 0.0 || smoothed.size() < 3) return chosen;
+  // Among the candidates, the path with the smallest median distance to the other members'.
+  const double limit = score(smoothed[chosen]) + options.member_consensus_margin;
+  double chosen_median = std::numeric_limits<double>::infinity();
+  int candidates = 0;
+  for (size_t i = 0; i < smoothed.size(); ++i) {
+    if (score(smoothed[i]) > limit) continue;
+    ++candidates;
+    std::vector<double> d;
+    for (size_t j = 0; j < smoothed.size(); ++j) {
+      if (j != i) d.push_back(alignedRmsDistance(smoothed[i].path, smoothed[j].path));
+    }
+    std::sort(d.begin(), d.end());
+    const size_t n = d.size();
+    const double median = n % 2 ? d[n / 2] : 0.5 * (d[n / 2 - 1] + d[n / 2]);
+    if (median < chosen_median ||
+        (median == chosen_median && ranks_before(smoothed[i], smoothed[chosen]))) {
+      chosen_median = median;
+      chosen = i;
+    }
+  }
+  if (consensus) {
+    std::ostringstream note;
+    note << "the path closest to the others' (median " << chosen_median << " m) of the "
+         << candidates << " scoring within " << options.member_consensus_margin
+         << " of the best; ";
+    *consensus = note.str();
+  }
+  return chosen;
+}
+
 SmoothingResult smoothSession(const SlamSession& session, const FilterOptions& options,
                               const SmoothingOptions& smoothing) {
   const std::vector<SessionFrame>& kept = session.frames();
@@ -420,30 +470,28 @@ SmoothingResult smoothSession(const SlamSession& session, const FilterOptions& o
   if (filter.members() <= 1) {
     return smoothPathAndMap(refused.path, frames, refused.landmarks, smoothing);
   }
-  SmoothingResult best, leader = refused;
+  SmoothingResult leader = refused;
   leader.message = "its path is not one pose per frame";
-  const auto score = [&smoothing](const SmoothingResult& r) {
-    return r.sightings_left_out + smoothing.member_landmark_cost * r.landmarks_smoothed;
-  };
+  std::vector<SmoothingResult> smoothed;  // every member that could be smoothed
   for (int k = 0; k < filter.members(); ++k) {
     const std::vector<Pose2> path = filter.member(k).bestPath();
     if (path.size() != frames.size()) continue;  // not a path per frame: not comparable
     SmoothingResult r = smoothPathAndMap(path, frames, filter.member(k).landmarks(), smoothing);
     r.member = k;
     if (k == filter.leader()) leader = r;
-    const bool better = !best.ok || score(r) < score(best) ||
-                        (score(r) == score(best) && r.final_cost < best.final_cost);
-    if (r.ok && better) best = std::move(r);
+    if (r.ok) smoothed.push_back(std::move(r));
   }
-  if (!best.ok) {
+  if (smoothed.empty()) {
     leader.message = "no member of the ensemble could be smoothed; the leader's: " + leader.message;
     return leader;
   }
+  std::string consensus;
+  SmoothingResult& best = smoothed[chooseMember(smoothed, smoothing, &consensus)];
   std::ostringstream why;
   why << "member " << best.member << " of " << filter.members() << " (the filter's leader "
-      << filter.leader() << "; " << best.sightings_left_out << " sightings left out + "
-      << smoothing.member_landmark_cost << " x " << best.landmarks_smoothed
-      << " landmarks): " << best.message;
+      << filter.leader() << "; " << consensus << best.sightings_left_out
+      << " sightings left out + " << smoothing.member_landmark_cost << " x "
+      << best.landmarks_smoothed << " landmarks): " << best.message;
   best.message = why.str();
   return best;
 }

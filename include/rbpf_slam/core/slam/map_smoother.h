@@ -34,6 +34,12 @@ struct SmoothingOptions {
   // smoothing counts as this many sightings left out. A member that lost its way can explain
   // its sightings by mapping copies of the landmarks; 0 counts the sightings left out alone.
   double member_landmark_cost = 0.0;
+  // With > 0, every member whose score (above) is within this many sightings of the best one
+  // is a candidate, and the candidate whose smoothed path lies closest to the other members'
+  // (the median over them of the RMS distance after rigid alignment) is kept: members that
+  // found the same path agree, each one that lost its way is lost differently. 0: the best
+  // score alone. Needs three members or more to mean anything.
+  double member_consensus_margin = 0.0;
 };
 
 /// Throws std::invalid_argument naming the first out-of-range field.
@@ -70,6 +76,16 @@ SmoothingResult smoothPathAndMap(const std::vector<Pose2>& path,
                                  const std::vector<LandmarkEstimate>& landmarks,
                                  const SmoothingOptions& options);
 
+/// Which of the ensemble members' smoothing results (all ok, paths of equal length) to keep:
+/// the fewest sightings left out plus member_landmark_cost per landmark smoothed (then the
+/// lowest final cost); with member_consensus_margin > 0 and three results or more, of those
+/// scoring within the margin of that best, the one whose path has the smallest median
+/// alignedRmsDistance to the other results' paths (ties by the score). When the consensus
+/// decided, *consensus (if given) says so in words for the message, else it is left empty.
+/// Throws std::invalid_argument on no results or paths of different lengths.
+size_t chooseMember(const std::vector<SmoothingResult>& smoothed, const SmoothingOptions& options,
+                    std::string* consensus = nullptr);
+
 /// The same for a session that kept its frames (SessionOptions::keep_frames): its estimated
 /// path, the filter's landmarks, and each frame's odometry noise from options.motion and
 /// observation noise from options.measurement. Refused (ok = false) on a prior map or with
@@ -77,7 +93,9 @@ SmoothingResult smoothPathAndMap(const std::vector<Pose2>& path,
 /// every member's path and map are smoothed and the one with the fewest sightings outside every
 /// gate of its map plus member_landmark_cost per landmark smoothed is returned (then the lowest
 /// final cost): a member that lost its way mapped copies its own path explains, but the
-/// sightings of the stretches before or after do not fit them, or it mapped more copies.
+/// sightings of the stretches before or after do not fit them, or it mapped more copies. With
+/// member_consensus_margin > 0 and three members or more, the member returned is the one among
+/// those within the margin of the best score whose smoothed path is closest to the others'.
 SmoothingResult smoothSession(const SlamSession& session, const FilterOptions& options,
                               const SmoothingOptions& smoothing);
 

@@ -1,0 +1,25 @@
+#pragma once
+// Rigid alignment of planar point sets and paths: used by the evaluation (ATE after alignment)
+// and by the smoother's choice among ensemble members (how far apart two members' paths are).
+
+#include <Eigen/Core>
+#include <vector>
+
+#include "rbpf_slam/core/geometry.h"
+
+namespace rbpf_slam {
+namespace core {
+
+/// The rigid transform T = (x, y, theta) minimising sum_i |T(source_i) - target_i|^2 (Umeyama
+/// 1991 / Horn 1987 without scale, in closed form for the plane). Throws std::invalid_argument
+/// when the sizes differ or both are empty.
+Pose2 alignRigid2D(const std::vector<Eigen::Vector2d>& source,
+                   const std::vector<Eigen::Vector2d>& target);
+
+/// Root mean square distance between the positions of two paths of equal length, pose i with
+/// pose i, after a is rigidly aligned onto b (the ATE of a against b as the reference). Throws
+/// std::invalid_argument when the lengths differ or both are empty.
+double alignedRmsDistance(const std::vector<Pose2>& a, const std::vector<Pose2>& b);
+
+}  // namespace core
+}  // namespace rbpf_slam

@@ -1,0 +1,55 @@
+#include "rbpf_slam/core/alignment.h"
+
+#include <cmath>
+#include <stdexcept>
+
+namespace rbpf_slam {
+namespace core {
+
+Pose2 alignRigid2D(const std::vector<Eigen::Vector2d>& source,
+                   const std::vector<Eigen::Vector2d>& target) {
+  if (source.size() != target.size() || source.empty()) {
+    throw std::invalid_argument("alignRigid2D needs two equally long, non-empty point sets");
+  }
+  Eigen::Vector2d source_mean = Eigen::Vector2d::Zero();
+  Eigen::Vector2d target_mean = Eigen::Vector2d::Zero();
+  for (size_t i = 0; i < source.size(); ++i) {
+    source_mean += source[i];
+    target_mean += target[i];
+  }
+  source_mean /= static_cast<double>(source.size());
+  target_mean /= static_cast<double>(target.size());
+  // In the plane the optimal rotation maximises sum (c * dot + s * cross) over centred pairs,
+  // so theta = atan2(sum cross, sum dot): the 2D case of the SVD solution.
+  double dot = 0.0, cross = 0.0;
+  for (size_t i = 0; i < source.size(); ++i) {
+    const Eigen::Vector2d p = source[i] - source_mean;
+    const Eigen::Vector2d q = target[i] - target_mean;
+    dot += p.dot(q);
+    cross += p.x() * q.y() - p.y() * q.x();
+  }
+  const double theta = (dot == 0.0 && cross == 0.0) ? 0.0 : std::atan2(cross, dot);
+  const Eigen::Vector2d translation =
+      target_mean - transformPoint(Pose2(0.0, 0.0, theta), source_mean);
+  return Pose2(translation.x(), translation.y(), theta);
+}
+
+double alignedRmsDistance(const std::vector<Pose2>& a, const std::vector<Pose2>& b) {
+  if (a.size() != b.size() || a.empty()) {
+    throw std::invalid_argument("alignedRmsDistance needs two equally long, non-empty paths");
+  }
+  std::vector<Eigen::Vector2d> source(a.size()), target(b.size());
+  for (size_t i = 0; i < a.size(); ++i) {
+    source[i] = a[i].head<2>();
+    target[i] = b[i].head<2>();
+  }
+  const Pose2 t = alignRigid2D(source, target);
+  double sum = 0.0;
+  for (size_t i = 0; i < a.size(); ++i) {
+    sum += (transformPoint(t, source[i]) - target[i]).squaredNorm();
+  }
+  return std::sqrt(sum / static_cast<double>(a.size()));
+}
+
+}  // namespace core
+}  // namespace rbpf_slam
