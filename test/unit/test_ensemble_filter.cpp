@@ -529,6 +529,23 @@ TEST(EnsembleFilter, TheConsensusKeepsTheCandidateWithTheSmallestMedianDistance)
   // has (2.8 + 0.2) / 2 = 1.5 (an even count of others: the mean of the middle two).
   const std::vector<core::SmoothingResult> three{results[0], results[2], results[3]};
   EXPECT_EQ(core::chooseMember(three, options), 2u);
+  // Five members, four others each: the median is the mean of the middle two. Bends 3.0, 0.1,
+  // 0.0, 0.3, 1.0, member 2 not a candidate: member 1 has others 0.1, 0.2, 0.9, 2.9 -> 0.55,
+  // member 3 has 0.2, 0.3, 0.7, 2.7 -> 0.5 (the lower middle value alone: 0.2 against 0.3).
+  const std::vector<core::SmoothingResult> five{
+      bentResult(0, 3.0, 10), bentResult(1, 0.1, 10), bentResult(2, 0.0, 500),
+      bentResult(3, 0.3, 10), bentResult(4, 1.0, 10)};
+  options.member_consensus_margin = 100.0;
+  EXPECT_EQ(core::chooseMember(five, options, &note), 3u);
+  EXPECT_NE(note.find("median 0.2357"), std::string::npos) << note;  // 0.5 x sqrt(2) / 3
+  // Bends 0.0, 0.1, 0.2, 0.5, 0.9, members 0 and 3 candidates: member 0 has 0.1, 0.2, 0.5, 0.9
+  // -> 0.35, member 3 has 0.3, 0.4, 0.4, 0.5 -> 0.4 (the upper middle value alone: 0.5 against
+  // 0.4).
+  const std::vector<core::SmoothingResult> spread{
+      bentResult(0, 0.0, 10), bentResult(1, 0.1, 500), bentResult(2, 0.2, 500),
+      bentResult(3, 0.5, 10), bentResult(4, 0.9, 500)};
+  EXPECT_EQ(core::chooseMember(spread, options, &note), 0u);
+  EXPECT_NE(note.find("median 0.16499"), std::string::npos) << note;  // 0.35 x sqrt(2) / 3
   EXPECT_THROW(core::chooseMember({}, options), std::invalid_argument);
 }
 

@@ -12,6 +12,7 @@
 #include <random>
 #include <vector>
 
+#include "rbpf_slam/core/alignment.h"
 #include "rbpf_slam/core/filters/measurement_models.h"
 #include "rbpf_slam/core/slam/map_smoother.h"
 
@@ -61,29 +62,6 @@ std::vector<core::LandmarkEstimate> mapOf(const std::vector<Eigen::Vector2d>& po
     map.push_back(l);
   }
   return map;
-}
-
-/// RMS position error of path against truth after the best rigid 2D alignment (the solution
-/// is defined up to the noise in the anchor's relation to the rest, like any SLAM estimate).
-double alignedRms(const std::vector<Pose2>& path, const std::vector<Pose2>& truth) {
-  Eigen::Vector2d mp = Eigen::Vector2d::Zero(), mt = Eigen::Vector2d::Zero();
-  for (size_t i = 0; i < path.size(); ++i) {
-    mp += path[i].head<2>() / path.size();
-    mt += truth[i].head<2>() / truth.size();
-  }
-  double sxx = 0.0, sxy = 0.0;
-  for (size_t i = 0; i < path.size(); ++i) {
-    const Eigen::Vector2d a = path[i].head<2>() - mp, b = truth[i].head<2>() - mt;
-    sxx += a.dot(b);
-    sxy += a.x() * b.y() - a.y() * b.x();
-  }
-  const double th = std::atan2(sxy, sxx);
-  const Eigen::Matrix2d rot = Eigen::Rotation2Dd(th).toRotationMatrix();
-  double sum = 0.0;
-  for (size_t i = 0; i < path.size(); ++i) {
-    sum += (rot * (path[i].head<2>() - mp) - (truth[i].head<2>() - mt)).squaredNorm();
-  }
-  return std::sqrt(sum / path.size());
 }
 
 TEST(MapSmoother, RecoversTheTruePathAndMapFromAJitteredSample) {
@@ -147,7 +125,8 @@ TEST(MapSmoother, NoisyDataSmoothedPathBeatsTheSample) {
   const core::SmoothingResult r = core::smoothPathAndMap(path, scene.frames,
                                                          mapOf(scene.points), options);
   ASSERT_TRUE(r.ok) << r.message;
-  const double before = alignedRms(path, scene.truth), after = alignedRms(r.path, scene.truth);
+  const double before = core::alignedRmsDistance(path, scene.truth);
+  const double after = core::alignedRmsDistance(r.path, scene.truth);
   EXPECT_GT(before, 0.1);
   EXPECT_LT(after, 0.3 * before);
   EXPECT_LT((r.path[0] - path[0]).norm(), 1e-6);

@@ -410,7 +410,7 @@ size_t chooseMember(const std::vector<SmoothingResult>& smoothed, const Smoothin
   for (size_t i = 1; i < smoothed.size(); ++i) {
     if (ranks_before(smoothed[i], smoothed[chosen])) chosen = i;
   }
-  if (options.member_consensus_margin <= 0.0 || smoothed.size() < 3) return chosen;
+  if (!(options.member_consensus_margin > 0.0) || smoothed.size() < 3) return chosen;
   // Among the candidates, the path with the smallest median distance to the other members'.
   const double limit = score(smoothed[chosen]) + options.member_consensus_margin;
   double chosen_median = std::numeric_limits<double>::infinity();

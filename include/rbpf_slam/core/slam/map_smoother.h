@@ -38,7 +38,7 @@ struct SmoothingOptions {
   // is a candidate, and the candidate whose smoothed path lies closest to the other members'
   // (the median over them of the RMS distance after rigid alignment) is kept: members that
   // found the same path agree, each one that lost its way is lost differently. 0: the best
-  // score alone. Needs three members or more to mean anything.
+  // score alone. Needs three smoothed members or more (else the score alone).
   double member_consensus_margin = 0.0;
 };
 
@@ -80,9 +80,10 @@ SmoothingResult smoothPathAndMap(const std::vector<Pose2>& path,
 /// the fewest sightings left out plus member_landmark_cost per landmark smoothed (then the
 /// lowest final cost); with member_consensus_margin > 0 and three results or more, of those
 /// scoring within the margin of that best, the one whose path has the smallest median
-/// alignedRmsDistance to the other results' paths (ties by the score). When the consensus
-/// decided, *consensus (if given) says so in words for the message, else it is left empty.
-/// Throws std::invalid_argument on no results or paths of different lengths.
+/// alignedRmsDistance to the other results' paths (ties by the score). When that rule ran (even
+/// with one candidate), *consensus (if given) says so in words for the message, else it is left
+/// empty. The results' paths must be finite (smoothPathAndMap's ok results are). Throws
+/// std::invalid_argument on no results or paths of different lengths.
 size_t chooseMember(const std::vector<SmoothingResult>& smoothed, const SmoothingOptions& options,
                     std::string* consensus = nullptr);
 
@@ -94,8 +95,9 @@ size_t chooseMember(const std::vector<SmoothingResult>& smoothed, const Smoothin
 /// gate of its map plus member_landmark_cost per landmark smoothed is returned (then the lowest
 /// final cost): a member that lost its way mapped copies its own path explains, but the
 /// sightings of the stretches before or after do not fit them, or it mapped more copies. With
-/// member_consensus_margin > 0 and three members or more, the member returned is the one among
-/// those within the margin of the best score whose smoothed path is closest to the others'.
+/// member_consensus_margin > 0 and three smoothed members or more, the member returned is the
+/// one among those within the margin of the best score whose smoothed path is closest to the
+/// others' (chooseMember).
 SmoothingResult smoothSession(const SlamSession& session, const FilterOptions& options,
                               const SmoothingOptions& smoothing);
 
