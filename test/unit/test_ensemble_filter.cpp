@@ -546,6 +546,12 @@ TEST(EnsembleFilter, TheConsensusKeepsTheCandidateWithTheSmallestMedianDistance)
       bentResult(3, 0.5, 10), bentResult(4, 0.9, 500)};
   EXPECT_EQ(core::chooseMember(spread, options, &note), 0u);
   EXPECT_NE(note.find("median 0.16499"), std::string::npos) << note;  // 0.35 x sqrt(2) / 3
+  // Members that found the same path (bends under a millimetre apart): the score decides, not
+  // the rounding of the medians.
+  const std::vector<core::SmoothingResult> same{bentResult(0, 0.0004, 30), bentResult(1, 0.0, 20),
+                                                bentResult(2, 0.0009, 10),
+                                                bentResult(3, 0.0002, 40)};
+  EXPECT_EQ(core::chooseMember(same, options, &note), 2u) << note;
   EXPECT_THROW(core::chooseMember({}, options), std::invalid_argument);
 }
 

@@ -11,6 +11,7 @@
 #include <sstream>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 #include "rbpf_slam/core/alignment.h"
 #include "rbpf_slam/core/filters/measurement_models.h"
@@ -411,26 +412,35 @@ size_t chooseMember(const std::vector<SmoothingResult>& smoothed, const Smoothin
     if (ranks_before(smoothed[i], smoothed[chosen])) chosen = i;
   }
   if (!(options.member_consensus_margin > 0.0) || smoothed.size() < 3) return chosen;
-  // Among the candidates, the path with the smallest median distance to the other members'.
+  // Among the candidates, the path with the smallest median distance to the other members';
+  // medians within kSamePath of the smallest count as equal, and the score decides between them
+  // (members that found the same path differ by rounding, not by how well they found it).
+  constexpr double kSamePath = 1e-3;  // m
   const double limit = score(smoothed[chosen]) + options.member_consensus_margin;
-  double chosen_median = std::numeric_limits<double>::infinity();
-  int candidates = 0;
+  std::vector<std::pair<size_t, double>> medians;  // candidate, its median distance
   for (size_t i = 0; i < smoothed.size(); ++i) {
     if (score(smoothed[i]) > limit) continue;
-    ++candidates;
     std::vector<double> d;
     for (size_t j = 0; j < smoothed.size(); ++j) {
       if (j != i) d.push_back(alignedRmsDistance(smoothed[i].path, smoothed[j].path));
     }
     std::sort(d.begin(), d.end());
     const size_t n = d.size();
-    const double median = n % 2 ? d[n / 2] : 0.5 * (d[n / 2 - 1] + d[n / 2]);
-    if (median < chosen_median ||
-        (median == chosen_median && ranks_before(smoothed[i], smoothed[chosen]))) {
-      chosen_median = median;
-      chosen = i;
+    medians.emplace_back(i, n % 2 ? d[n / 2] : 0.5 * (d[n / 2 - 1] + d[n / 2]));
+  }
+  double smallest = std::numeric_limits<double>::infinity();
+  for (const auto& m : medians) smallest = std::min(smallest, m.second);
+  double chosen_median = smallest;
+  bool first = true;
+  for (const auto& m : medians) {
+    if (m.second > smallest + kSamePath) continue;
+    if (first || ranks_before(smoothed[m.first], smoothed[chosen])) {
+      chosen = m.first;
+      chosen_median = m.second;
+      first = false;
     }
   }
+  const size_t candidates = medians.size();
   if (consensus) {
     std::ostringstream note;
     note << "the path closest to the others' (median " << chosen_median << " m) of the "

@@ -80,9 +80,10 @@ SmoothingResult smoothPathAndMap(const std::vector<Pose2>& path,
 /// the fewest sightings left out plus member_landmark_cost per landmark smoothed (then the
 /// lowest final cost); with member_consensus_margin > 0 and three results or more, of those
 /// scoring within the margin of that best, the one whose path has the smallest median
-/// alignedRmsDistance to the other results' paths (ties by the score). When that rule ran (even
-/// with one candidate), *consensus (if given) says so in words for the message, else it is left
-/// empty. The results' paths must be finite (smoothPathAndMap's ok results are). Throws
+/// alignedRmsDistance to the other results' paths (medians within 1 mm of the smallest count
+/// as equal, and of those the best score is kept). When that rule ran (even with one
+/// candidate), *consensus (if given) says so in words for the message, else it is left empty.
+/// The results' paths must be finite (smoothPathAndMap's ok results are). Throws
 /// std::invalid_argument on no results or paths of different lengths.
 size_t chooseMember(const std::vector<SmoothingResult>& smoothed, const SmoothingOptions& options,
                     std::string* consensus = nullptr);
