@@ -375,6 +375,19 @@ struct FixedSession {
   Eigen::Vector2d turned(const Eigen::Vector2d& p) const {
     return pivot().head<2>() + Eigen::Rotation2Dd(kTurn) * (p - pivot().head<2>());
   }
+  /// Member k lost its heading half way round (lostPath) and mapped copies of the posts where
+  /// its turned half saw them.
+  void loseWithCopies(int k) {
+    FixedEnsemble::Member& member = fixed->members_[k];
+    member.path = lostPath();
+    member.map = map;
+    for (const core::LandmarkEstimate& l : map) {
+      core::LandmarkEstimate copy = l;
+      copy.id += 100;
+      copy.mean = turned(l.mean);
+      member.map.push_back(copy);
+    }
+  }
   /// The truth with its second half turned by kTurn about the pivot.
   std::vector<Pose2> lostPath() const {
     std::vector<Pose2> path = truth;
@@ -420,14 +433,7 @@ TEST(EnsembleFilter, TheSmootherTakesTheMemberWhoseMapLeavesFewestSightingsOut) 
 TEST(EnsembleFilter, EachLandmarkCountsAsSightingsLeftOutWhenChoosingAMember) {
   FixedSession s;
   FixedEnsemble* fixed = s.fixed;
-  fixed->members_[0].path = s.lostPath();
-  fixed->members_[0].map = s.map;
-  for (const core::LandmarkEstimate& l : s.map) {
-    core::LandmarkEstimate copy = l;
-    copy.id += 100;
-    copy.mean = s.turned(l.mean);
-    fixed->members_[0].map.push_back(copy);
-  }
+  s.loseWithCopies(0);
   fixed->members_[1].path = s.truth;
   fixed->members_[1].map.assign(s.map.begin(), s.map.end() - 1);  // the last post never mapped
   core::FilterOptions filter = pointOptions(1);
@@ -456,14 +462,7 @@ TEST(EnsembleFilter, TheSmootherAsksForAConsensusOnlyWithinTheMarginAndFromThree
   FixedSession s;
   FixedEnsemble* fixed = s.fixed;
   fixed->count_ = 3;
-  fixed->members_[0].path = s.lostPath();
-  fixed->members_[0].map = s.map;
-  for (const core::LandmarkEstimate& l : s.map) {
-    core::LandmarkEstimate copy = l;
-    copy.id += 100;
-    copy.mean = s.turned(l.mean);
-    fixed->members_[0].map.push_back(copy);
-  }
+  s.loseWithCopies(0);
   for (int k : {1, 2}) {
     fixed->members_[k].path = s.truth;
     fixed->members_[k].map.assign(s.map.begin(), s.map.end() - 1);  // the last post never mapped
