@@ -2,9 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <sstream>
 #include <stdexcept>
+
+#include "rbpf_slam/io/json_writer.h"
 
 namespace rbpf_slam {
 namespace io {
@@ -196,43 +197,32 @@ EvaluationResult evaluateTrajectory(const std::vector<StampedPose>& estimate,
 }
 
 std::string toJson(const EvaluationResult& result) {
-  std::ostringstream json;
-  bool first = true;
-  const auto number = [](double value) {
-    if (!std::isfinite(value)) return std::string("null");
-    char buffer[64];
-    std::snprintf(buffer, sizeof(buffer), "%.9g", value);
-    return std::string(buffer);
-  };
-  const auto field = [&](const std::string& key, const std::string& value) {
-    json << (first ? "" : ",\n") << "  \"" << key << "\": " << value;
-    first = false;
-  };
-  json << "{\n";
-  field("estimate_poses", std::to_string(result.estimate_poses));
-  field("reference_poses", std::to_string(result.reference_poses));
-  field("matched_poses", std::to_string(result.matched_poses));
-  field("aligned", result.aligned ? "true" : "false");
-  field("alignment", "{\"x_m\": " + number(result.alignment.x()) +
-                         ", \"y_m\": " + number(result.alignment.y()) +
-                         ", \"theta_deg\": " + number(result.alignment.z() * kRadToDeg) + "}");
-  field("duration_s", number(result.duration_s));
-  field("reference_length_m", number(result.reference_length_m));
-  field("ate_rmse_m", number(result.ate_rmse_m));
-  field("ate_mean_m", number(result.ate_mean_m));
-  field("ate_median_m", number(result.ate_median_m));
-  field("ate_max_m", number(result.ate_max_m));
-  field("rotation_rmse_deg", number(result.rotation_rmse_deg));
-  field("rotation_mean_deg", number(result.rotation_mean_deg));
-  field("rotation_max_deg", number(result.rotation_max_deg));
-  field("rpe_pairs", std::to_string(result.rpe_pairs));
-  field("rpe_translation_mean_m", number(result.rpe_translation_mean_m));
-  field("rpe_translation_rmse_m", number(result.rpe_translation_rmse_m));
-  field("rpe_rotation_mean_deg", number(result.rpe_rotation_mean_deg));
-  field("rpe_rotation_rmse_deg", number(result.rpe_rotation_rmse_deg));
-  field("final_position_error_m", number(result.final_position_error_m));
-  field("final_heading_error_deg", number(result.final_heading_error_deg));
-  json << "\n}\n";
+  const std::string alignment = "{\"x_m\": " + jsonNumber(result.alignment.x()) +
+                                ", \"y_m\": " + jsonNumber(result.alignment.y()) +
+                                ", \"theta_deg\": " +
+                                jsonNumber(result.alignment.z() * kRadToDeg) + "}";
+  JsonObjectWriter json;
+  json.integer("estimate_poses", result.estimate_poses)
+      .integer("reference_poses", result.reference_poses)
+      .integer("matched_poses", result.matched_poses)
+      .boolean("aligned", result.aligned)
+      .raw("alignment", alignment)
+      .number("duration_s", result.duration_s)
+      .number("reference_length_m", result.reference_length_m)
+      .number("ate_rmse_m", result.ate_rmse_m)
+      .number("ate_mean_m", result.ate_mean_m)
+      .number("ate_median_m", result.ate_median_m)
+      .number("ate_max_m", result.ate_max_m)
+      .number("rotation_rmse_deg", result.rotation_rmse_deg)
+      .number("rotation_mean_deg", result.rotation_mean_deg)
+      .number("rotation_max_deg", result.rotation_max_deg)
+      .integer("rpe_pairs", result.rpe_pairs)
+      .number("rpe_translation_mean_m", result.rpe_translation_mean_m)
+      .number("rpe_translation_rmse_m", result.rpe_translation_rmse_m)
+      .number("rpe_rotation_mean_deg", result.rpe_rotation_mean_deg)
+      .number("rpe_rotation_rmse_deg", result.rpe_rotation_rmse_deg)
+      .number("final_position_error_m", result.final_position_error_m)
+      .number("final_heading_error_deg", result.final_heading_error_deg);
   return json.str();
 }
 

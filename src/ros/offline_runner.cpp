@@ -15,7 +15,6 @@
 #include <ctime>
 #include <filesystem>
 #include <fstream>
-#include <iomanip>
 #include <limits>
 #include <map>
 #include <memory>
@@ -25,6 +24,7 @@
 #include "rbpf_slam/core/grid/grid_map_data.h"
 #include "rbpf_slam/io/evaluation.h"
 #include "rbpf_slam/io/grid_map_file.h"
+#include "rbpf_slam/io/json_writer.h"
 #include "rbpf_slam/io/landmark_file.h"
 #include "rbpf_slam/io/map_image.h"
 #include "rbpf_slam/io/trajectory.h"
@@ -729,55 +729,54 @@ OfflineSummary OfflineRunner::writeOutputs(const OfflineSummary& in) const {
 
   io::writeLandmarksYaml(dir + "/landmarks.yaml", landmarks);
 
-  std::ofstream json(dir + "/summary.json");
-  json << std::setprecision(6) << "{\n"
-       << "  \"variant\": \"" << config_.filter.variant << "\",\n"
-       << "  \"seed\": " << config_.filter.seed << ",\n"
-       << "  \"wall_s\": " << summary.wall_s << ",\n"
-       << "  \"bag_duration_s\": " << summary.bag_duration_s << ",\n"
-       << "  \"realtime_factor\": "
-       << (summary.wall_s > 0.0 ? summary.bag_duration_s / summary.wall_s : 0.0) << ",\n"
-       << "  \"cpu_s\": " << summary.cpu_s << ",\n"
-       << "  \"frames\": " << summary.frames << ",\n"
-       << "  \"updates\": " << summary.updates << ",\n"
-       << "  \"skipped_no_motion\": " << summary.skipped << ",\n"
-       << "  \"rejected\": " << summary.rejected << ",\n"
-       << "  \"same_stamp\": " << summary.same_stamp << ",\n"
-       << "  \"resets\": " << summary.resets << ",\n"
-       << "  \"gaps\": " << summary.gaps << ",\n"
-       << "  \"dropped_no_tf\": " << summary.dropped_no_tf << ",\n"
-       << "  \"dropped_bad_message\": " << summary.dropped_bad_message << ",\n"
-       << "  \"skipped_transforms\": " << summary.skipped_transforms << ",\n"
-       << "  \"tf_segments\": " << summary.tf_segments << ",\n"
-       << "  \"dropped_features\": " << summary.dropped_features << ",\n"
-       << "  \"tilted_frames\": " << summary.tilted_frames << ",\n"
-       << "  \"features_rejected\": " << summary.features_rejected << ",\n"
-       << "  \"landmarks\": " << summary.landmarks << ",\n"
-       << "  \"particles\": " << summary.particles << ",\n"
-       << "  \"fallbacks\": " << summary.fallbacks << ",\n"
-       << "  \"hinf_theta\": " << summary.hinf_theta << ",\n"
-       << "  \"relocalizations\": " << summary.relocalizations << ",\n"
-       << "  \"heading_measurements\": " << summary.heading_measurements << ",\n"
-       << "  \"robust_steps\": " << summary.robust_steps << ",\n"
-       << "  \"ensemble_members\": " << summary.ensemble_members << ",\n"
-       << "  \"ensemble_leader\": " << summary.ensemble_leader << ",\n"
-       << "  \"ensemble_leader_changes\": " << summary.ensemble_leader_changes << ",\n"
-       << "  \"update_ms_mean\": " << summary.update_ms_mean << ",\n"
-       << "  \"update_ms_p99\": " << summary.update_ms_p99 << ",\n"
-       << "  \"update_ms_max\": " << summary.update_ms_max << ",\n"
-       << "  \"scans_matched\": " << pipeline_.scansMatched() << ",\n"
-       << "  \"scans_unmatched\": " << pipeline_.scansUnmatched();
+  io::JsonObjectWriter json;
+  json.string("variant", config_.filter.variant)
+      .integer("seed", static_cast<long long>(config_.filter.seed))
+      .number("wall_s", summary.wall_s)
+      .number("bag_duration_s", summary.bag_duration_s)
+      .number("realtime_factor",
+              summary.wall_s > 0.0 ? summary.bag_duration_s / summary.wall_s : 0.0)
+      .number("cpu_s", summary.cpu_s)
+      .integer("frames", summary.frames)
+      .integer("updates", summary.updates)
+      .integer("skipped_no_motion", summary.skipped)
+      .integer("rejected", summary.rejected)
+      .integer("same_stamp", summary.same_stamp)
+      .integer("resets", summary.resets)
+      .integer("gaps", summary.gaps)
+      .integer("dropped_no_tf", summary.dropped_no_tf)
+      .integer("dropped_bad_message", summary.dropped_bad_message)
+      .integer("skipped_transforms", summary.skipped_transforms)
+      .integer("tf_segments", summary.tf_segments)
+      .integer("dropped_features", summary.dropped_features)
+      .integer("tilted_frames", summary.tilted_frames)
+      .integer("features_rejected", summary.features_rejected)
+      .integer("landmarks", summary.landmarks)
+      .integer("particles", summary.particles)
+      .integer("fallbacks", summary.fallbacks)
+      .number("hinf_theta", summary.hinf_theta)
+      .integer("relocalizations", summary.relocalizations)
+      .integer("heading_measurements", summary.heading_measurements)
+      .integer("robust_steps", summary.robust_steps)
+      .integer("ensemble_members", summary.ensemble_members)
+      .integer("ensemble_leader", summary.ensemble_leader)
+      .integer("ensemble_leader_changes", summary.ensemble_leader_changes)
+      .number("update_ms_mean", summary.update_ms_mean)
+      .number("update_ms_p99", summary.update_ms_p99)
+      .number("update_ms_max", summary.update_ms_max)
+      .integer("scans_matched", pipeline_.scansMatched())
+      .integer("scans_unmatched", pipeline_.scansUnmatched());
   if (config_.frontend == "sonar") {
     const core::SonarExtractorStats& sonar = pipeline_.sonarExtractor().stats();
-    json << ",\n  \"sonar_readings\": " << sonar.readings
-         << ",\n  \"sonar_echoes\": " << sonar.echoes
-         << ",\n  \"sonar_no_echo\": " << sonar.no_echo
-         << ",\n  \"sonar_too_close\": " << sonar.too_close
-         << ",\n  \"sonar_invalid\": " << sonar.invalid
-         << ",\n  \"sonar_extractions\": " << sonar.extractions
-         << ",\n  \"sonar_lines\": " << sonar.lines
-         << ",\n  \"sonar_points\": " << sonar.points
-         << ",\n  \"dropped_cloud_points\": " << summary.dropped_cloud_points;
+    json.integer("sonar_readings", sonar.readings)
+        .integer("sonar_echoes", sonar.echoes)
+        .integer("sonar_no_echo", sonar.no_echo)
+        .integer("sonar_too_close", sonar.too_close)
+        .integer("sonar_invalid", sonar.invalid)
+        .integer("sonar_extractions", sonar.extractions)
+        .integer("sonar_lines", sonar.lines)
+        .integer("sonar_points", sonar.points)
+        .integer("dropped_cloud_points", summary.dropped_cloud_points);
   }
   // The map in map_server conventions: the variant's grid, or its landmarks rasterised.
   core::GridMapData grid;
@@ -791,23 +790,24 @@ OfflineSummary OfflineRunner::writeOutputs(const OfflineSummary& in) const {
   } catch (const std::runtime_error& e) {
     std::fprintf(stderr, "offline_slam: map.pgm not written: %s\n", e.what());
   }
-  json << ",\n  \"map_width\": " << grid.width << ",\n  \"map_height\": " << grid.height
-       << ",\n  \"map_resolution\": " << grid.resolution_m
-       << ",\n  \"map_occupied_cells\": " << grid.count(65, 100)
-       << ",\n  \"map_free_cells\": " << grid.count(0, 19)
-       << ",\n  \"peak_rss_mb\": " << peakResidentMb();
+  json.integer("map_width", grid.width)
+      .integer("map_height", grid.height)
+      .number("map_resolution", grid.resolution_m)
+      .integer("map_occupied_cells", grid.count(65, 100))
+      .integer("map_free_cells", grid.count(0, 19))
+      .number("peak_rss_mb", peakResidentMb());
   if (summary.has_reference) {
-    json << ",\n  \"ate_rmse_m\": " << summary.ate_rmse_m
-         << ",\n  \"ate_online_rmse_m\": " << summary.ate_online_rmse_m
-         << ",\n  \"final_position_error_m\": " << summary.final_position_error_m;
+    json.number("ate_rmse_m", summary.ate_rmse_m)
+        .number("ate_online_rmse_m", summary.ate_online_rmse_m)
+        .number("final_position_error_m", summary.final_position_error_m);
   }
-  json << ",\n  \"trajectory_source\": \"" << summary.trajectory_source << "\"";
+  json.string("trajectory_source", summary.trajectory_source);
   if (config_.smoothing.enabled) {
-    json << ",\n  \"smoothed\": " << (summary.smoothed ? "true" : "false")
-         << ",\n  \"smoothing_s\": " << summary.smoothing_s
-         << ",\n  \"smoothing\": \"" << summary.smoothing << "\"";
+    json.boolean("smoothed", summary.smoothed)
+        .number("smoothing_s", summary.smoothing_s)
+        .string("smoothing", summary.smoothing);
   }
-  json << "\n}\n";
+  std::ofstream(dir + "/summary.json") << json.str();
   if (has_grid) {
     io::drawGridRunMap(dir + "/map.png", grid, path, reference_path);
   } else {

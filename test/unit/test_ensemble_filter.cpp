@@ -11,6 +11,7 @@
 #include <Eigen/Geometry>
 
 #include <cmath>
+#include <limits>
 #include <set>
 #include <stdexcept>
 #include <string>
@@ -211,6 +212,21 @@ TEST(EnsembleFilter, TheLeaderChangesOnlyWhenAnotherLeadsByTheMargin) {
   }
   EXPECT_GT(changes[0], changes[1]);  // the margin held back at least one change
   EXPECT_GT(changes[1], 0);           // and let a member that pulled ahead take over
+}
+
+// A member whose update gives a non-finite evidence is lost for good, whatever follows: the
+// running sum is -inf, never NaN (-inf + inf), so the ranking stays an order.
+TEST(EnsembleFilter, NonFiniteEvidenceLosesTheMemberAndNeverGivesNaN) {
+  const double inf = std::numeric_limits<double>::infinity();
+  EXPECT_EQ(core::addLogEvidence(-2.5, 1.0), -1.5);
+  for (const double bad : {std::nan(""), inf, -inf}) {
+    double total = core::addLogEvidence(-2.5, bad);
+    EXPECT_EQ(total, -inf) << bad;
+    for (const double next : {3.0, inf, -inf, std::nan("")}) {
+      total = core::addLogEvidence(total, next);
+      EXPECT_EQ(total, -inf) << bad << " then " << next;
+    }
+  }
 }
 
 TEST(EnsembleFilter, TheEvidenceFavoursASightingThatFitsTheMap) {

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "rbpf_slam/io/evaluation.h"
+#include "rbpf_slam/io/json_writer.h"
 #include "rbpf_slam/io/trajectory.h"
 
 namespace rbpf_slam {
@@ -344,6 +345,38 @@ TEST(Json, HoldsEveryFigure) {
   EXPECT_NE(json.find("\"rpe_rotation_rmse_deg\""), std::string::npos) << json;
   EXPECT_EQ(json.front(), '{');
   EXPECT_EQ(json[json.size() - 2], '}');
+}
+
+TEST(Json, StringsAreEscaped) {
+  EXPECT_EQ(jsonString("plain"), "\"plain\"");
+  EXPECT_EQ(jsonString("a \"quoted\" C:\\path"), "\"a \\\"quoted\\\" C:\\\\path\"");
+  EXPECT_EQ(jsonString("two\nlines\tand\x01"), "\"two\\nlines\\tand\\u0001\"");
+  EXPECT_EQ(jsonString("1.5 \xc2\xb0"), "\"1.5 \xc2\xb0\"");  // UTF-8 passes through
+}
+
+TEST(Json, NonFiniteNumbersAreNull) {
+  EXPECT_EQ(jsonNumber(0.125), "0.125");
+  EXPECT_EQ(jsonNumber(-3e-12), "-3e-12");
+  EXPECT_EQ(jsonNumber(std::nan("")), "null");
+  EXPECT_EQ(jsonNumber(INFINITY), "null");
+  EXPECT_EQ(jsonNumber(-INFINITY), "null");
+}
+
+TEST(Json, ObjectOneFieldPerLine) {
+  JsonObjectWriter json;
+  json.string("smoothing", "kept member 3 \"best\"\n(of 8)")
+      .integer("frames", 12)
+      .boolean("smoothed", true)
+      .number("hinf_theta", std::nan(""))
+      .raw("alignment", "{\"x_m\": 1}");
+  EXPECT_EQ(json.str(),
+            "{\n"
+            "  \"smoothing\": \"kept member 3 \\\"best\\\"\\n(of 8)\",\n"
+            "  \"frames\": 12,\n"
+            "  \"smoothed\": true,\n"
+            "  \"hinf_theta\": null,\n"
+            "  \"alignment\": {\"x_m\": 1}\n"
+            "}\n");
 }
 
 }  // namespace

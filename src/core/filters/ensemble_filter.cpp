@@ -40,9 +40,7 @@ class EnsembleFilter : public SlamFilter {
     stats.reserve(members_.size());
     for (size_t k = 0; k < members_.size(); ++k) {
       stats.push_back(members_[k]->update(features));
-      // NaN counts as a lost member (-inf): it never leads again.
-      const double e = stats.back().log_evidence;
-      log_evidence_[k] += std::isnan(e) ? -INFINITY : e;
+      log_evidence_[k] = addLogEvidence(log_evidence_[k], stats.back().log_evidence);
       created_[k] += stats.back().new_landmarks;
     }
     // The first best member (a member at -inf evidence leads only if all are); it takes over
@@ -113,6 +111,10 @@ class EnsembleFilter : public SlamFilter {
 };
 
 }  // namespace
+
+double addLogEvidence(double total, double update_log_evidence) {
+  return std::isfinite(update_log_evidence) ? total + update_log_evidence : -INFINITY;
+}
 
 unsigned long ensembleMemberSeed(unsigned long seed, int k) {
   if (k == 0) return seed;

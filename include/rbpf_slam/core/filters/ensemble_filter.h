@@ -22,6 +22,11 @@ namespace core {
 /// well-mixed distinct seeds for the others (so that neighbouring run seeds share no member).
 unsigned long ensembleMemberSeed(unsigned long seed, int k);
 
+/// A member's running log evidence after one more update's: the sum, or -inf (a lost member,
+/// which never leads again) once an update's evidence is not finite (NaN, or +-inf from a
+/// collapsed covariance). Never NaN, so the ranking stays a strict order.
+double addLogEvidence(double total, double update_log_evidence);
+
 /// options.ensemble.members filters of options.variant; throws std::invalid_argument naming the
 /// first bad option (as createFilter, which calls this when members > 1).
 std::unique_ptr<SlamFilter> createEnsembleFilter(const FilterOptions& options);

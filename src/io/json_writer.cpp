@@ -1,0 +1,63 @@
+#include "rbpf_slam/io/json_writer.h"
+
+#include <cmath>
+#include <cstdio>
+
+namespace rbpf_slam {
+namespace io {
+
+std::string jsonNumber(double value) {
+  if (!std::isfinite(value)) return "null";
+  char buffer[32];
+  std::snprintf(buffer, sizeof(buffer), "%.9g", value);
+  return buffer;
+}
+
+std::string jsonString(const std::string& text) {
+  std::string out = "\"";
+  for (const char c : text) {
+    switch (c) {
+      case '"': out += "\\\""; break;
+      case '\\': out += "\\\\"; break;
+      case '\n': out += "\\n"; break;
+      case '\r': out += "\\r"; break;
+      case '\t': out += "\\t"; break;
+      default:
+        if (static_cast<unsigned char>(c) < 0x20) {
+          char buffer[8];
+          std::snprintf(buffer, sizeof(buffer), "\\u%04x", static_cast<unsigned char>(c));
+          out += buffer;
+        } else {
+          out += c;  // UTF-8 bytes pass through
+        }
+    }
+  }
+  return out + "\"";
+}
+
+JsonObjectWriter& JsonObjectWriter::raw(const std::string& key, const std::string& json) {
+  fields_ << (empty_ ? "" : ",\n") << "  " << jsonString(key) << ": " << json;
+  empty_ = false;
+  return *this;
+}
+
+JsonObjectWriter& JsonObjectWriter::number(const std::string& key, double value) {
+  return raw(key, jsonNumber(value));
+}
+
+JsonObjectWriter& JsonObjectWriter::integer(const std::string& key, long long value) {
+  return raw(key, std::to_string(value));
+}
+
+JsonObjectWriter& JsonObjectWriter::boolean(const std::string& key, bool value) {
+  return raw(key, value ? "true" : "false");
+}
+
+JsonObjectWriter& JsonObjectWriter::string(const std::string& key, const std::string& value) {
+  return raw(key, jsonString(value));
+}
+
+std::string JsonObjectWriter::str() const { return "{\n" + fields_.str() + "\n}\n"; }
+
+}  // namespace io
+}  // namespace rbpf_slam
