@@ -1,7 +1,7 @@
 // The smoother of a finished run (map_smoother.h): from a jittered path and a displaced map
 // with exact odometry and sightings it recovers the true ones; it keeps the association of the
-// filter's map, leaves out sightings outside every gate, refuses bad input by name, and works
-// on a session that kept its frames.
+// filter's map, leaves out sightings outside every gate, wraps odometry steps across +-pi,
+// refuses bad input by name, and works on a session that kept its frames.
 
 #include <gtest/gtest.h>
 
@@ -102,6 +102,42 @@ TEST(MapSmoother, RecoversTheTruePathAndMapFromAJitteredSample) {
     }
     const Eigen::Matrix2d expected = information.inverse();
     EXPECT_LT((r.landmarks[k].covariance - expected).norm(), 1e-6 * expected.norm()) << k;
+  }
+}
+
+// Odometry steps of nearly half a turn (pi - 0.01 rad), with the sample's headings off so that
+// its step crosses +-pi (pi + 0.01, i.e. -pi + 0.01 once wrapped): the odometry residual must
+// wrap, or the solver chases a 2 pi error and cannot recover the truth.
+TEST(MapSmoother, HalfTurnStepsAcrossPiAreWrapped) {
+  Scene scene;
+  scene.points = {{1.0, 2.0}, {3.0, -2.0}, {5.0, 2.0}, {2.0, -1.5}};
+  const int steps = 20;
+  for (int i = 0; i < steps; ++i) {
+    scene.truth.emplace_back(0.3 * i, 0.1 * (i % 2), core::wrapAngle(i * (M_PI - 0.01)));
+  }
+  for (int i = 0; i < steps; ++i) {
+    core::SmoothingFrame f;
+    if (i > 0) f.motion = core::between(scene.truth[i - 1], scene.truth[i]);
+    f.motion_covariance = Eigen::Vector3d(0.02 * 0.02, 0.02 * 0.02, 0.02 * 0.02).asDiagonal();
+    for (const Eigen::Vector2d& p : scene.points) f.observations.push_back(sighting(scene.truth[i], p));
+    scene.frames.push_back(f);
+  }
+  ASSERT_NEAR(scene.frames[1].motion.z(), M_PI - 0.01, 1e-9);
+  std::vector<Pose2> path = scene.truth;
+  for (int i = 1; i < steps; i += 2) {
+    path[i] += Pose2(0.04, -0.03, 0.02);
+    path[i].z() = core::wrapAngle(path[i].z());
+  }
+  ASSERT_NEAR(core::between(path[0], path[1]).z(), -M_PI + 0.01, 1e-9);  // across pi
+  core::SmoothingOptions options;
+  const core::SmoothingResult r = core::smoothPathAndMap(path, scene.frames,
+                                                         mapOf(scene.points), options);
+  ASSERT_TRUE(r.ok) << r.message;
+  EXPECT_EQ(r.sightings_left_out, 0);
+  EXPECT_LT(r.final_cost, 1e-6 * r.initial_cost);
+  for (int i = 0; i < steps; ++i) {
+    EXPECT_LT((r.path[i] - scene.truth[i]).head<2>().norm(), 1e-5) << i;
+    EXPECT_NEAR(core::wrapAngle(r.path[i].z() - scene.truth[i].z()), 0.0, 1e-5) << i;
   }
 }
 
