@@ -5,6 +5,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "rbpf_slam/core/statistics.h"
 #include "rbpf_slam/io/json_writer.h"
 
 namespace rbpf_slam {
@@ -61,16 +62,6 @@ double mean(const std::vector<double>& values) {
   double sum = 0.0;
   for (double value : values) sum += value;
   return values.empty() ? 0.0 : sum / values.size();
-}
-
-double median(std::vector<double> values) {
-  if (values.empty()) return 0.0;
-  const size_t middle = values.size() / 2;
-  std::nth_element(values.begin(), values.begin() + middle, values.end());
-  const double upper = values[middle];
-  if (values.size() % 2 == 1) return upper;
-  const double lower = *std::max_element(values.begin(), values.begin() + middle);
-  return 0.5 * (lower + upper);
 }
 
 double maximum(const std::vector<double>& values) {
@@ -154,7 +145,7 @@ EvaluationResult evaluatePairs(const std::vector<PosePair>& pairs, bool align) {
   }
   result.ate_rmse_m = rootMeanSquare(position_errors);
   result.ate_mean_m = mean(position_errors);
-  result.ate_median_m = median(position_errors);
+  result.ate_median_m = core::median(position_errors);
   result.ate_max_m = maximum(position_errors);
   result.rotation_rmse_deg = rootMeanSquare(heading_errors);
   result.rotation_mean_deg = mean(heading_errors);

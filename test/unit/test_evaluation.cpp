@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "rbpf_slam/core/statistics.h"
 #include "rbpf_slam/io/evaluation.h"
 #include "rbpf_slam/io/json_writer.h"
 #include "rbpf_slam/io/trajectory.h"
@@ -345,6 +346,14 @@ TEST(Json, HoldsEveryFigure) {
   EXPECT_NE(json.find("\"rpe_rotation_rmse_deg\""), std::string::npos) << json;
   EXPECT_EQ(json.front(), '{');
   EXPECT_EQ(json[json.size() - 2], '}');
+}
+
+TEST(Median, OddEvenUnsortedAndEmpty) {
+  EXPECT_EQ(core::median({3.0}), 3.0);
+  EXPECT_EQ(core::median({5.0, 1.0, 4.0}), 4.0);
+  EXPECT_EQ(core::median({4.0, 1.0, 9.0, 2.0}), 3.0);  // (2 + 4) / 2
+  EXPECT_EQ(core::median({2.0, 2.0, 7.0, 1.0, 2.0, 8.0}), 2.0);
+  EXPECT_TRUE(std::isnan(core::median({})));
 }
 
 TEST(Json, StringsAreEscaped) {

@@ -17,6 +17,7 @@
 #include "rbpf_slam/core/filters/measurement_models.h"
 #include "rbpf_slam/core/motion/motion_model.h"
 #include "rbpf_slam/core/require_range.h"
+#include "rbpf_slam/core/statistics.h"
 
 namespace rbpf_slam {
 namespace core {
@@ -424,9 +425,7 @@ size_t chooseMember(const std::vector<SmoothingResult>& smoothed, const Smoothin
     for (size_t j = 0; j < smoothed.size(); ++j) {
       if (j != i) d.push_back(alignedRmsDistance(smoothed[i].path, smoothed[j].path));
     }
-    std::sort(d.begin(), d.end());
-    const size_t n = d.size();
-    medians.emplace_back(i, n % 2 ? d[n / 2] : 0.5 * (d[n / 2 - 1] + d[n / 2]));
+    medians.emplace_back(i, median(std::move(d)));
   }
   double smallest = std::numeric_limits<double>::infinity();
   for (const auto& m : medians) smallest = std::min(smallest, m.second);
