@@ -35,19 +35,26 @@ core::Observation sighting(const Pose2& pose, const Eigen::Vector2d& point) {
   return o;
 }
 
+/// One frame per true pose: the exact odometry from the pose before, every point sighted.
+void addExactFrames(Scene* scene) {
+  for (size_t i = 0; i < scene->truth.size(); ++i) {
+    core::SmoothingFrame f;
+    if (i > 0) f.motion = core::between(scene->truth[i - 1], scene->truth[i]);
+    f.motion_covariance = Eigen::Vector3d(0.02 * 0.02, 0.02 * 0.02, 0.02 * 0.02).asDiagonal();
+    for (const Eigen::Vector2d& p : scene->points) {
+      f.observations.push_back(sighting(scene->truth[i], p));
+    }
+    scene->frames.push_back(f);
+  }
+}
+
 Scene circle(int steps) {
   Scene scene;
   for (int i = 0; i < steps; ++i) {
     const double a = 2.0 * M_PI * i / steps;
     scene.truth.emplace_back(3.0 * std::cos(a), 3.0 * std::sin(a), core::wrapAngle(a + M_PI / 2));
   }
-  for (int i = 0; i < steps; ++i) {
-    core::SmoothingFrame f;
-    if (i > 0) f.motion = core::between(scene.truth[i - 1], scene.truth[i]);
-    f.motion_covariance = Eigen::Vector3d(0.02 * 0.02, 0.02 * 0.02, 0.02 * 0.02).asDiagonal();
-    for (const Eigen::Vector2d& p : scene.points) f.observations.push_back(sighting(scene.truth[i], p));
-    scene.frames.push_back(f);
-  }
+  addExactFrames(&scene);
   return scene;
 }
 
@@ -115,13 +122,7 @@ TEST(MapSmoother, HalfTurnStepsAcrossPiAreWrapped) {
   for (int i = 0; i < steps; ++i) {
     scene.truth.emplace_back(0.3 * i, 0.1 * (i % 2), core::wrapAngle(i * (M_PI - 0.01)));
   }
-  for (int i = 0; i < steps; ++i) {
-    core::SmoothingFrame f;
-    if (i > 0) f.motion = core::between(scene.truth[i - 1], scene.truth[i]);
-    f.motion_covariance = Eigen::Vector3d(0.02 * 0.02, 0.02 * 0.02, 0.02 * 0.02).asDiagonal();
-    for (const Eigen::Vector2d& p : scene.points) f.observations.push_back(sighting(scene.truth[i], p));
-    scene.frames.push_back(f);
-  }
+  addExactFrames(&scene);
   ASSERT_NEAR(scene.frames[1].motion.z(), M_PI - 0.01, 1e-9);
   std::vector<Pose2> path = scene.truth;
   for (int i = 1; i < steps; i += 2) {
