@@ -4,7 +4,8 @@
 # "Session 19: data association sampling", "Session 20: copies of a landmark removed" and
 # "Session 21: negative evidence out to 5 m"): FastSLAM 2.0 (config/landmarks_fastslam2.yaml,
 # unknown association) on every robot of the shared UTIAS MRCLAM dataset 6, seeds 1-9 (45 runs,
-# about 16 minutes with the ensemble of eight), through benchmarks/run_mrclam. With the
+# about 8 minutes with the ensemble of eight on two cores, one run per core), through
+# benchmarks/run_mrclam. With the
 # rotation noise sized for the commands' real over-rotation the runs no longer lock onto rotated
 # headings after turns between sightings, 500 particles keep the right heading hypothesis more
 # often, negative evidence in the camera's view (out to 5 m, a sighting worth two misses) removes
