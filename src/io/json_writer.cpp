@@ -1,5 +1,6 @@
 #include "rbpf_slam/io/json_writer.h"
 
+#include <charconv>
 #include <cmath>
 #include <cstdio>
 
@@ -8,9 +9,11 @@ namespace io {
 
 std::string jsonNumber(double value) {
   if (!std::isfinite(value)) return "null";
+  // to_chars ignores the C locale (a "," decimal separator would not be JSON).
   char buffer[32];
-  std::snprintf(buffer, sizeof(buffer), "%.9g", value);
-  return buffer;
+  const std::to_chars_result r =
+      std::to_chars(buffer, buffer + sizeof(buffer), value, std::chars_format::general, 9);
+  return std::string(buffer, r.ptr);
 }
 
 std::string jsonString(const std::string& text) {
@@ -49,6 +52,11 @@ JsonObjectWriter& JsonObjectWriter::integer(const std::string& key, long long va
   return raw(key, std::to_string(value));
 }
 
+JsonObjectWriter& JsonObjectWriter::unsignedInteger(const std::string& key,
+                                                    unsigned long long value) {
+  return raw(key, std::to_string(value));
+}
+
 JsonObjectWriter& JsonObjectWriter::boolean(const std::string& key, bool value) {
   return raw(key, value ? "true" : "false");
 }
@@ -57,7 +65,9 @@ JsonObjectWriter& JsonObjectWriter::string(const std::string& key, const std::st
   return raw(key, jsonString(value));
 }
 
-std::string JsonObjectWriter::str() const { return "{\n" + fields_.str() + "\n}\n"; }
+std::string JsonObjectWriter::str() const {
+  return empty_ ? "{}\n" : "{\n" + fields_.str() + "\n}\n";
+}
 
 }  // namespace io
 }  // namespace rbpf_slam

@@ -731,7 +731,7 @@ OfflineSummary OfflineRunner::writeOutputs(const OfflineSummary& in) const {
 
   io::JsonObjectWriter json;
   json.string("variant", config_.filter.variant)
-      .integer("seed", static_cast<long long>(config_.filter.seed))
+      .unsignedInteger("seed", config_.filter.seed)
       .number("wall_s", summary.wall_s)
       .number("bag_duration_s", summary.bag_duration_s)
       .number("realtime_factor",

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Fuzzing: builds the libFuzzer targets of test/fuzz/ with clang (address and undefined
 # behaviour sanitizers, the code under test compiled in) and runs each for FUZZ_SECONDS
-# (default 60). Fails on any crash, sanitizer report or broken invariant; the input that
+# (default 60), one target per CPU at a time. Fails on any crash, sanitizer report or broken invariant; the input that
 # found it is kept in build/fuzz/. Prints SKIP and exits 77 (scripts/test.sh: skipped) when
 # clang's libFuzzer is missing.
 set -euo pipefail
@@ -49,19 +49,33 @@ clang++ $FUZZ_FLAGS $ros_flags -c "$root/src/ros/conversions.cpp" -o "$out/obj/r
 # shellcheck disable=SC2086
 clang++ $FUZZ_FLAGS $ros_flags -c "$root/test/fuzz/fuzz_conversions.cpp" \
   -o "$out/obj/test_fuzz_fuzz_conversions.cpp.o"
-status=0
-for target in fuzz_laser fuzz_sonar fuzz_config fuzz_landmarks fuzz_conversions; do
+targets="fuzz_laser fuzz_sonar fuzz_config fuzz_landmarks fuzz_conversions"
+for target in $targets; do
   extra=""
   [ "$target" = fuzz_conversions ] && extra="$out/obj/ros_conversions.o -lrostime -lcpp_common -lroscpp_serialization"
   # shellcheck disable=SC2086
   clang++ -fsanitize=fuzzer,address,undefined "$out/obj/test_fuzz_$target.cpp.o" $library \
     $extra -lyaml-cpp -lz -o "$out/$target"
+done
+# Each target fuzzes for $seconds on its own core, one per CPU at a time; the outcome is written
+# to $out/$target.status (0: nothing found) and reported below in the targets' order.
+fuzz() {
+  local target=$1 seeds=()
   mkdir -p "$out/corpus_$target"
-  seeds=()
   [ -d "$root/test/fuzz/seeds_$target" ] && seeds=("$root/test/fuzz/seeds_$target")
-  if (cd "$out" && "./$target" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 \
-        -artifact_prefix="$out/${target}_" "corpus_$target" "${seeds[@]+"${seeds[@]}"}" \
-        >"$out/$target.log" 2>&1); then
+  local result=0
+  (cd "$out" && "./$target" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 \
+      -artifact_prefix="$out/${target}_" "corpus_$target" "${seeds[@]+"${seeds[@]}"}" \
+      >"$out/$target.log" 2>&1) || result=$?
+  echo "$result" >"$out/$target.status"
+}
+export -f fuzz
+export seconds
+rm -f "$out"/*.status
+echo $targets | tr ' ' '\n' | xargs -P "$(nproc)" -I{} bash -c 'fuzz "$1"' _ {}
+status=0
+for target in $targets; do
+  if [ "$(cat "$out/$target.status" 2>/dev/null)" = 0 ]; then
     echo "ok $target: $(grep -E '^#[0-9]+' "$out/$target.log" | tail -1)"
   else
     echo "FAIL $target (log: $out/$target.log)"

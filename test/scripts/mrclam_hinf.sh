@@ -2,7 +2,7 @@
 # Regression test of config/landmarks_hinf.yaml on real data (docs/results.md, "Session 18" to
 # "Session 21"): H-infinity FastSLAM (unknown association, sampled by likelihood, copies of a
 # landmark removed, negative evidence out to 5 m with a sighting worth two misses) on every robot
-# of the shared UTIAS MRCLAM dataset 6, seeds 1-9 (45 runs, about five minutes on two cores
+# of the shared UTIAS MRCLAM dataset 6, seeds 1-9 (45 runs, about seven minutes on two cores
 # with the ensemble of four), through
 # benchmarks/run_mrclam. Fails unless at least 34 runs halve the odometry's ATE, the mean ATE /
 # odometry ATE is at most 0.38, at least 29 runs map at most 2 spurious landmarks, there are at

@@ -360,7 +360,8 @@ TEST(Json, StringsAreEscaped) {
   EXPECT_EQ(jsonString("plain"), "\"plain\"");
   EXPECT_EQ(jsonString("a \"quoted\" C:\\path"), "\"a \\\"quoted\\\" C:\\\\path\"");
   EXPECT_EQ(jsonString("two\nlines\tand\x01"), "\"two\\nlines\\tand\\u0001\"");
-  EXPECT_EQ(jsonString("1.5 \xc2\xb0"), "\"1.5 \xc2\xb0\"");  // UTF-8 passes through
+  EXPECT_EQ(jsonString("\b\f\x1f"), "\"\\u0008\\u000c\\u001f\"");
+  EXPECT_EQ(jsonString("1.5 \xc2\xb0 \x7f"), "\"1.5 \xc2\xb0 \x7f\"");  // UTF-8 and DEL pass
 }
 
 TEST(Json, NonFiniteNumbersAreNull) {
@@ -369,6 +370,8 @@ TEST(Json, NonFiniteNumbersAreNull) {
   EXPECT_EQ(jsonNumber(std::nan("")), "null");
   EXPECT_EQ(jsonNumber(INFINITY), "null");
   EXPECT_EQ(jsonNumber(-INFINITY), "null");
+  EXPECT_EQ(jsonNumber(1.0 / 3.0), "0.333333333");
+  EXPECT_EQ(jsonNumber(123456789012.0), "1.23456789e+11");
 }
 
 TEST(Json, ObjectOneFieldPerLine) {
@@ -377,15 +380,18 @@ TEST(Json, ObjectOneFieldPerLine) {
       .integer("frames", 12)
       .boolean("smoothed", true)
       .number("hinf_theta", std::nan(""))
-      .raw("alignment", "{\"x_m\": 1}");
+      .raw("alignment", "{\"x_m\": 1}")
+      .unsignedInteger("seed", 18446744073709551615ull);
   EXPECT_EQ(json.str(),
             "{\n"
             "  \"smoothing\": \"kept member 3 \\\"best\\\"\\n(of 8)\",\n"
             "  \"frames\": 12,\n"
             "  \"smoothed\": true,\n"
             "  \"hinf_theta\": null,\n"
-            "  \"alignment\": {\"x_m\": 1}\n"
+            "  \"alignment\": {\"x_m\": 1},\n"
+            "  \"seed\": 18446744073709551615\n"
             "}\n");
+  EXPECT_EQ(JsonObjectWriter().str(), "{}\n");
 }
 
 }  // namespace

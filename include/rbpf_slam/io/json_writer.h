@@ -9,7 +9,8 @@
 namespace rbpf_slam {
 namespace io {
 
-/// A JSON number: %.9g, or null for NaN and infinities (JSON has no literal for them).
+/// A JSON number: 9 significant digits (as %.9g, whatever the C locale), or null for NaN and
+/// infinities (JSON has no literal for them).
 std::string jsonNumber(double value);
 
 /// A JSON string literal: quotes, backslashes and control characters escaped.
@@ -20,11 +21,13 @@ class JsonObjectWriter {
  public:
   JsonObjectWriter& number(const std::string& key, double value);
   JsonObjectWriter& integer(const std::string& key, long long value);
+  /// For the full range of unsigned values (a seed).
+  JsonObjectWriter& unsignedInteger(const std::string& key, unsigned long long value);
   JsonObjectWriter& boolean(const std::string& key, bool value);
   JsonObjectWriter& string(const std::string& key, const std::string& value);
   /// A value already in JSON (a nested object or array).
   JsonObjectWriter& raw(const std::string& key, const std::string& json);
-  /// "{\n  \"key\": value,\n ...\n}\n".
+  /// "{\n  \"key\": value,\n ...\n}\n" ("{}\n" without fields).
   std::string str() const;
 
  private:
