@@ -2,6 +2,9 @@
 
 #include <cmath>
 #include <stdexcept>
+#include <utility>
+
+#include "rbpf_slam/core/statistics.h"
 
 namespace rbpf_slam {
 namespace core {
@@ -49,6 +52,22 @@ double alignedRmsDistance(const std::vector<Pose2>& a, const std::vector<Pose2>&
     sum += (transformPoint(t, source[i]) - target[i]).squaredNorm();
   }
   return std::sqrt(sum / static_cast<double>(a.size()));
+}
+
+std::vector<double> medianDistancesToOthers(const std::vector<std::vector<Pose2>>& paths) {
+  const size_t n = paths.size();
+  if (n < 2) throw std::invalid_argument("medianDistancesToOthers needs two paths or more");
+  std::vector<std::vector<double>> to_others(n);
+  for (size_t i = 0; i < n; ++i) {
+    for (size_t j = i + 1; j < n; ++j) {
+      const double d = alignedRmsDistance(paths[i], paths[j]);
+      to_others[i].push_back(d);
+      to_others[j].push_back(d);
+    }
+  }
+  std::vector<double> medians;
+  for (std::vector<double>& d : to_others) medians.push_back(median(std::move(d)));
+  return medians;
 }
 
 }  // namespace core

@@ -10,7 +10,9 @@
 
 #include <Eigen/Geometry>
 
+#include <algorithm>
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <set>
 #include <stdexcept>
@@ -61,10 +63,12 @@ core::FilterOptions pointOptions(int members) {
 }
 
 /// Drives a circle with noisy odometry (a fixed draw, sigma per step in m and rad) through
-/// every filter given; *leaders (when given) gets filters[0]'s leader after each update.
+/// every filter given; *leaders (when given) gets filters[0]'s leader after each update, and
+/// each (when given) is called with the update's number (1, 2, ...) after it.
 void drive(const std::vector<core::SlamFilter*>& filters,
            std::vector<std::vector<core::UpdateStats>>* stats, double sigma = 0.05,
-           std::vector<int>* leaders = nullptr) {
+           std::vector<int>* leaders = nullptr,
+           const std::function<void(int)>& each = nullptr) {
   core::Rng rng(3);
   const int steps = 40;
   stats->assign(filters.size(), {});
@@ -81,6 +85,7 @@ void drive(const std::vector<core::SlamFilter*>& filters,
       (*stats)[k].push_back(filters[k]->update(seen));
     }
     if (leaders) leaders->push_back(filters[0]->leader());
+    if (each) each(i);
   }
 }
 
@@ -229,6 +234,60 @@ TEST(EnsembleFilter, NonFiniteEvidenceLosesTheMemberAndNeverGivesNaN) {
   }
 }
 
+// With rank_by consensus the reported member is chosen every consensus_period updates: the one
+// whose best path is closest to the others' (median RMS distance after rigid alignment), unless
+// the leader's is within consensus_margin_m of it; in between the leader stays.
+TEST(EnsembleFilter, ConsensusReportsTheMemberWhosePathTheOthersAgreeWith) {
+  const int members = 5, period = 3;
+  core::FilterOptions options = pointOptions(members);
+  options.seed = 5;
+  options.particles = 5;
+  options.motion.alpha1 = options.motion.alpha3 = 0.3;
+  options.ensemble.rank_by = "consensus";
+  options.ensemble.consensus_period = period;
+  options.ensemble.consensus_margin_m = 0.01;
+  const auto ensemble = core::createFilter(options);
+  int expected = 0;
+  long changes = 0;
+  const auto check = [&](int update) {
+    if (update % period == 0) {
+      std::vector<std::vector<Pose2>> paths;
+      for (int k = 0; k < members; ++k) paths.push_back(ensemble->member(k).bestPath());
+      const std::vector<double> d = core::medianDistancesToOthers(paths);
+      const int best = static_cast<int>(std::min_element(d.begin(), d.end()) - d.begin());
+      if (d[best] < d[expected] - 0.01) {
+        changes += best != expected;
+        expected = best;
+      }
+    }
+    ASSERT_EQ(ensemble->leader(), expected) << "update " << update;
+    EXPECT_EQ(ensemble->estimate().mean, ensemble->member(expected).estimate().mean);
+  };
+  std::vector<std::vector<core::UpdateStats>> stats;
+  drive({ensemble.get()}, &stats, 0.25, nullptr, check);
+  EXPECT_EQ(ensemble->stats().leader_changes, changes);
+  EXPECT_GT(changes, 0);  // the choice moved off member 0: the test tells it from a fixed leader
+}
+
+// Fewer than three members cannot agree on anything: consensus falls back on the evidence (with
+// a period of 1, the evidence's choice at every update).
+TEST(EnsembleFilter, ConsensusOfTwoMembersFallsBackOnTheEvidence) {
+  std::vector<std::vector<int>> leaders(2);
+  for (int i = 0; i < 2; ++i) {
+    core::FilterOptions options = pointOptions(2);
+    options.seed = 5;
+    options.particles = 5;
+    options.motion.alpha1 = options.motion.alpha3 = 0.3;
+    options.ensemble.rank_by = i == 0 ? "evidence" : "consensus";
+    options.ensemble.consensus_period = 1;
+    const auto ensemble = core::createFilter(options);
+    std::vector<std::vector<core::UpdateStats>> stats;
+    drive({ensemble.get()}, &stats, 0.25, &leaders[i]);
+  }
+  EXPECT_EQ(leaders[0], leaders[1]);
+  EXPECT_NE(std::set<int>(leaders[0].begin(), leaders[0].end()).size(), 1u);  // both led
+}
+
 TEST(EnsembleFilter, TheEvidenceFavoursASightingThatFitsTheMap) {
   double fits = 0.0, new_landmark = 0.0;
   for (bool consistent : {true, false}) {
@@ -298,6 +357,12 @@ TEST(EnsembleFilter, BadOptionsAreNamed) {
   o = pointOptions(2);
   o.ensemble.rank_by = "weight";
   EXPECT_NE(message(o).find("ensemble.rank_by"), std::string::npos) << message(o);
+  o = pointOptions(2);
+  o.ensemble.consensus_period = 0;
+  EXPECT_NE(message(o).find("ensemble.consensus_period"), std::string::npos) << message(o);
+  o = pointOptions(2);
+  o.ensemble.consensus_margin_m = -0.1;
+  EXPECT_NE(message(o).find("ensemble.consensus_margin_m"), std::string::npos) << message(o);
   o = pointOptions(2);
   o.ensemble.switch_margin = -1.0;
   EXPECT_NE(message(o).find("ensemble.switch_margin"), std::string::npos) << message(o);

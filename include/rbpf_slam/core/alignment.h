@@ -1,6 +1,6 @@
 #pragma once
 // Rigid alignment of planar point sets and paths: used by the evaluation (ATE after alignment)
-// and by the smoother's choice among ensemble members (how far apart two members' paths are).
+// and by the choices among ensemble members (how far apart two members' paths are).
 
 #include <Eigen/Core>
 #include <vector>
@@ -20,6 +20,12 @@ Pose2 alignRigid2D(const std::vector<Eigen::Vector2d>& source,
 /// pose i, after a is rigidly aligned onto b (the ATE of a against b as the reference). Throws
 /// std::invalid_argument when the lengths differ or both are empty.
 double alignedRmsDistance(const std::vector<Pose2>& a, const std::vector<Pose2>& b);
+
+/// For each of several paths of equal length, the median of its alignedRmsDistance to each of
+/// the others (each pair aligned once: the distance is symmetric). How far a path is from
+/// where the others agree. Needs at least two paths; throws std::invalid_argument like
+/// alignedRmsDistance.
+std::vector<double> medianDistancesToOthers(const std::vector<std::vector<Pose2>>& paths);
 
 }  // namespace core
 }  // namespace rbpf_slam

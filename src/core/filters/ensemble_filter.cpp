@@ -1,9 +1,12 @@
 #include "rbpf_slam/core/filters/ensemble_filter.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <utility>
 #include <vector>
+
+#include "rbpf_slam/core/alignment.h"
 
 namespace rbpf_slam {
 namespace core {
@@ -13,7 +16,10 @@ class EnsembleFilter : public SlamFilter {
  public:
   explicit EnsembleFilter(const FilterOptions& options)
       : by_new_landmarks_(options.ensemble.rank_by == "new_landmarks"),
-        switch_margin_(options.ensemble.switch_margin) {
+        by_consensus_(options.ensemble.rank_by == "consensus"),
+        switch_margin_(options.ensemble.switch_margin),
+        consensus_period_(options.ensemble.consensus_period),
+        consensus_margin_m_(options.ensemble.consensus_margin_m) {
     FilterOptions one = options;
     one.ensemble.members = 1;
     for (int k = 0; k < options.ensemble.members; ++k) {
@@ -31,6 +37,7 @@ class EnsembleFilter : public SlamFilter {
     created_.assign(members_.size(), 0);
     leader_ = 0;
     leader_changes_ = 0;
+    updates_ = 0;
   }
   void predict(const MotionInput& motion) override {
     for (auto& m : members_) m->predict(motion);
@@ -43,13 +50,14 @@ class EnsembleFilter : public SlamFilter {
       log_evidence_[k] = addLogEvidence(log_evidence_[k], stats.back().log_evidence);
       created_[k] += stats.back().new_landmarks;
     }
-    // The first best member (a member at -inf evidence leads only if all are); it takes over
-    // when it beats the leader by the margin.
-    int best = 0;
-    for (int k = 1; k < static_cast<int>(members_.size()); ++k) {
-      if (ranksAbove(k, best, 0.0)) best = k;
+    ++updates_;
+    int best = leader_;
+    if (!by_consensus_) {
+      best = evidenceLeader();
+    } else if (updates_ % consensus_period_ == 0) {
+      best = consensusLeader();
     }
-    if (best != leader_ && ranksAbove(best, leader_, switch_margin_)) {
+    if (best != leader_) {
       leader_ = best;
       ++leader_changes_;
     }
@@ -94,6 +102,35 @@ class EnsembleFilter : public SlamFilter {
   int leader() const override { return leader_; }
 
  private:
+  /// The first best member by rank_by (a member at -inf evidence leads only if all are), if
+  /// it beats the leader by the margin; else the leader.
+  int evidenceLeader() const {
+    int best = 0;
+    for (int k = 1; k < static_cast<int>(members_.size()); ++k) {
+      if (ranksAbove(k, best, 0.0)) best = k;
+    }
+    return ranksAbove(best, leader_, switch_margin_) ? best : leader_;
+  }
+
+  /// The member whose best path has the smallest median distance to the others', if shorter
+  /// than the leader's by more than consensus_margin_m; the evidence's choice while paths
+  /// cannot be compared (fewer than three members, paths of different lengths or not finite,
+  /// as after a member's reset).
+  int consensusLeader() const {
+    std::vector<std::vector<Pose2>> paths;
+    for (const auto& m : members_) {
+      paths.push_back(m->bestPath());
+      const std::vector<Pose2>& p = paths.back();
+      const bool finite =
+          std::all_of(p.begin(), p.end(), [](const Pose2& x) { return x.allFinite(); });
+      if (p.empty() || p.size() != paths.front().size() || !finite) return evidenceLeader();
+    }
+    if (paths.size() < 3) return evidenceLeader();
+    const std::vector<double> d = medianDistancesToOthers(paths);
+    const int best = static_cast<int>(std::min_element(d.begin(), d.end()) - d.begin());
+    return d[best] < d[leader_] - consensus_margin_m_ ? best : leader_;
+  }
+
   /// Whether member a ranks above member b, with a's evidence ahead by more than margin.
   bool ranksAbove(int a, int b, double margin) const {
     const bool more_evidence = log_evidence_[a] > log_evidence_[b] + margin;
@@ -103,11 +140,15 @@ class EnsembleFilter : public SlamFilter {
 
   std::vector<std::unique_ptr<SlamFilter>> members_;
   const bool by_new_landmarks_;       // EnsembleOptions::rank_by
+  const bool by_consensus_;           // EnsembleOptions::rank_by
   const double switch_margin_;        // EnsembleOptions::switch_margin
+  const long consensus_period_;       // EnsembleOptions::consensus_period
+  const double consensus_margin_m_;   // EnsembleOptions::consensus_margin_m
   std::vector<double> log_evidence_;  // summed UpdateStats::log_evidence per member
   std::vector<long> created_;         // summed UpdateStats::new_landmarks per member
   int leader_ = 0;
   long leader_changes_ = 0;
+  long updates_ = 0;  // since the last reset (consensus_period counts them)
 };
 
 }  // namespace

@@ -43,7 +43,9 @@ void validate(const FilterOptions& o) {
   }
   requireRange("particles", o.particles, 1, 100000);
   requireRange("ensemble.members", o.ensemble.members, 1, 64);
-  requireOneOf("ensemble.rank_by", o.ensemble.rank_by, {"evidence", "new_landmarks"});
+  requireOneOf("ensemble.rank_by", o.ensemble.rank_by, {"evidence", "new_landmarks", "consensus"});
+  requireRange("ensemble.consensus_period", o.ensemble.consensus_period, 1, 1000000);
+  requireRange("ensemble.consensus_margin_m", o.ensemble.consensus_margin_m, 0.0, 1e6);
   requireRange("ensemble.switch_margin", o.ensemble.switch_margin, 0.0, 1e6);
   if (o.ensemble.members > 1 && o.variant != "fastslam2" && o.variant != "hinf_fastslam") {
     throw std::invalid_argument("ensemble.members > 1 is not implemented for variant '" +

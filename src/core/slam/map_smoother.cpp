@@ -17,7 +17,6 @@
 #include "rbpf_slam/core/filters/measurement_models.h"
 #include "rbpf_slam/core/motion/motion_model.h"
 #include "rbpf_slam/core/require_range.h"
-#include "rbpf_slam/core/statistics.h"
 
 namespace rbpf_slam {
 namespace core {
@@ -418,14 +417,12 @@ size_t chooseMember(const std::vector<SmoothingResult>& smoothed, const Smoothin
   // (members that found the same path differ by rounding, not by how well they found it).
   constexpr double kSamePath = 1e-3;  // m
   const double limit = score(smoothed[chosen]) + options.member_consensus_margin;
+  std::vector<std::vector<Pose2>> paths;
+  for (const SmoothingResult& r : smoothed) paths.push_back(r.path);
+  const std::vector<double> to_others = medianDistancesToOthers(paths);
   std::vector<std::pair<size_t, double>> medians;  // candidate, its median distance
   for (size_t i = 0; i < smoothed.size(); ++i) {
-    if (score(smoothed[i]) > limit) continue;
-    std::vector<double> d;
-    for (size_t j = 0; j < smoothed.size(); ++j) {
-      if (j != i) d.push_back(alignedRmsDistance(smoothed[i].path, smoothed[j].path));
-    }
-    medians.emplace_back(i, median(std::move(d)));
+    if (score(smoothed[i]) <= limit) medians.emplace_back(i, to_others[i]);
   }
   double smallest = std::numeric_limits<double>::infinity();
   for (const auto& m : medians) smallest = std::min(smallest, m.second);

@@ -7,7 +7,8 @@
 // their own seeds fail independently, and the data tell them apart. The ensemble reports one
 // member (its estimate, map, particles and path), by ensemble.rank_by: the largest marginal
 // likelihood p(z_1:t) each FastSLAM filter estimates from its weights (UpdateStats::
-// log_evidence), or the fewest landmarks created (sightings the member's map did not explain).
+// log_evidence), the fewest landmarks created (sightings the member's map did not explain), or
+// the best path closest to the other members' (consensus, every consensus_period updates).
 // After a run the smoother ranks the members again on the whole run (map_smoother.h).
 // Costs members x one filter's time and memory.
 

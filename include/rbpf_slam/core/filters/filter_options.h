@@ -104,14 +104,26 @@ struct EnsembleOptions {
   // UpdateStats::log_evidence; with association.sample_weight sum a map holding copies of a
   // landmark is not penalised for them); "new_landmarks", the fewest landmarks created so far,
   // summed over the updates' UpdateStats::new_landmarks (the most probable particle of each
-  // update; sightings its map could not explain; ties: the larger evidence).
+  // update; sightings its map could not explain; ties: the larger evidence); "consensus",
+  // every consensus_period updates the member whose best path is closest to the other
+  // members' (the median RMS distance after rigid alignment, as the smoother's
+  // member_consensus_margin; members that found the same path agree, each one that lost its
+  // way is lost differently; needs three members, else evidence decides).
   std::string rank_by = "evidence";
+  // consensus: updates between two choices (the paths grow with the run: each choice aligns
+  // every pair of members' paths once) ...
+  int consensus_period = 10;
+  // ... and how much shorter (m) another member's median distance must be before it is
+  // reported instead of the leader (members that found the same path differ by rounding, and
+  // each change moves the node's pose, map -> odom, ~trajectory and markers).
+  double consensus_margin_m = 0.05;
   // The reported member changes only when another leads it by more than this much summed
   // log-evidence (nats; with new_landmarks, when it created fewer landmarks, or as many and
   // leads by this much). Without it members of about equal evidence take turns, and the
   // node's map -> odom, ~pose, ~trajectory and markers jump with each turn. 0: the best
   // member at every update (on an exact tie the leader stays). With new_landmarks the margin
-  // only matters between members that created as many landmarks.
+  // only matters between members that created as many landmarks. Unused by consensus
+  // (consensus_margin_m).
   double switch_margin = 0.0;
 };
 
