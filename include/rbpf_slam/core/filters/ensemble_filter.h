@@ -24,7 +24,7 @@ namespace core {
 unsigned long ensembleMemberSeed(unsigned long seed, int k);
 
 /// A member's running log evidence after one more update's: the sum, or -inf (a lost member,
-/// which never leads again) once an update's evidence is not finite (NaN, or +-inf from a
+/// which never leads again by evidence) once an update's evidence is not finite (NaN, or +-inf from a
 /// collapsed covariance). Never NaN, so the ranking stays a strict order.
 double addLogEvidence(double total, double update_log_evidence);
 

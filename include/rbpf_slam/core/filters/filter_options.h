@@ -122,8 +122,8 @@ struct EnsembleOptions {
   // leads by this much). Without it members of about equal evidence take turns, and the
   // node's map -> odom, ~pose, ~trajectory and markers jump with each turn. 0: the best
   // member at every update (on an exact tie the leader stays). With new_landmarks the margin
-  // only matters between members that created as many landmarks. Unused by consensus
-  // (consensus_margin_m).
+  // only matters between members that created as many landmarks. With consensus only its
+  // fallback (fewer than three members, or paths that cannot be compared) uses it.
   double switch_margin = 0.0;
 };
 
