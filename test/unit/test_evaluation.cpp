@@ -70,6 +70,21 @@ TEST(AlignedRmsDistance, IsZeroForAMovedCopyAndTheSpreadLeftAfterAlignment) {
   EXPECT_THROW(core::alignedRmsDistance({}, {}), std::invalid_argument);
 }
 
+// Each path's median distance to the others, by hand: two poses 1 m apart, a moved copy of them
+// (0 m from the first) and two poses 3 m apart (1 m from both): medians 0.5, 0.5 and 1.
+TEST(AlignedRmsDistance, MedianDistancesToOthersByHand) {
+  const std::vector<core::Pose2> short_pair{{0.0, 0.0, 0.0}, {1.0, 0.0, 0.0}};
+  const std::vector<core::Pose2> moved{{2.0, 1.0, 0.5}, {2.0, 2.0, 0.5}};
+  const std::vector<core::Pose2> long_pair{{5.0, 5.0, 1.0}, {5.0, 8.0, 1.0}};
+  const std::vector<double> d = core::medianDistancesToOthers({short_pair, moved, long_pair});
+  ASSERT_EQ(d.size(), 3u);
+  EXPECT_NEAR(d[0], 0.5, 1e-9);
+  EXPECT_NEAR(d[1], 0.5, 1e-9);
+  EXPECT_NEAR(d[2], 1.0, 1e-9);
+  EXPECT_THROW(core::medianDistancesToOthers({short_pair}), std::invalid_argument);
+  EXPECT_THROW(core::medianDistancesToOthers({short_pair, {}}), std::invalid_argument);
+}
+
 TEST(Evaluate, AlignedTransformedCopyHasZeroError) {
   const std::vector<StampedPose> reference = makeTrajectory(30);
   const core::Pose2 offset(-4.0, 2.5, -2.0);  // a different map frame
