@@ -1,7 +1,9 @@
 // Google Benchmark: FastSlam2::update against the number of particles (map of 100 point
 // landmarks) and against the number of landmarks in the map (100 particles, up to 50,000),
-// with the same ten range-bearing observations every step; and resampleLowVariance against
-// the particle count. Not a pass/fail test: ./scripts/bench.sh runs it and writes
+// with the same ten range-bearing observations every step; resampleLowVariance against the
+// particle count; and one consensus choice of an ensemble of eight (ensemble.rank_by:
+// consensus: every pair of members' paths aligned) against the paths' length, whole or cut to
+// ensemble.consensus_max_poses. Not a pass/fail test: ./scripts/bench.sh runs it and writes
 // docs/benchmarks.md.
 
 #include <benchmark/benchmark.h>
@@ -12,6 +14,7 @@
 #include <vector>
 
 #include "bench_support.h"
+#include "rbpf_slam/core/alignment.h"
 #include "rbpf_slam/core/filters/fastslam2.h"
 #include "rbpf_slam/core/filters/measurement_models.h"
 #include "rbpf_slam/core/filters/resampling.h"
@@ -152,6 +155,38 @@ BENCHMARK(BM_ResampleLowVariance)
     ->Arg(1000)
     ->Arg(10000)
     ->Arg(100000)
+    ->Unit(benchmark::kMicrosecond);
+
+/// One consensus choice among eight members whose paths hold range(0) poses (a random walk
+/// each), every path first cut to range(1) evenly spaced poses (0: compared whole), as
+/// EnsembleFilter does every consensus_period updates (without copying the paths out).
+void BM_ConsensusChoice(benchmark::State& state) {
+  const size_t poses = static_cast<size_t>(state.range(0));
+  const size_t max_poses = state.range(1) > 0 ? static_cast<size_t>(state.range(1)) : poses;
+  core::Rng rng(5);
+  std::vector<std::vector<core::Pose2>> paths(8);
+  for (auto& path : paths) {
+    core::Pose2 pose = core::Pose2::Zero();
+    for (size_t i = 0; i < poses; ++i) {
+      pose = core::compose(pose, core::Pose2(0.1, 0.0, core::sampleGaussian(rng, 0.1)));
+      path.push_back(pose);
+    }
+  }
+  for (auto _ : state) {
+    std::vector<std::vector<core::Pose2>> cut;
+    for (const auto& path : paths) cut.push_back(core::evenlySpacedPoses(path, max_poses));
+    std::vector<double> d = core::medianDistancesToOthers(cut);
+    benchmark::DoNotOptimize(d.data());
+  }
+  state.counters["poses"] = static_cast<double>(poses);
+  state.counters["compared"] = static_cast<double>(std::min(poses, max_poses));
+}
+BENCHMARK(BM_ConsensusChoice)
+    ->Args({1000, 0})
+    ->Args({4000, 0})
+    ->Args({16000, 0})
+    ->Args({64000, 0})
+    ->Args({64000, 4000})
     ->Unit(benchmark::kMicrosecond);
 
 }  // namespace

@@ -360,6 +360,7 @@ SlamConfig parseSlamConfigTree(const YAML::Node& root, const std::string& source
   ensemble.read("switch_margin", &f.ensemble.switch_margin);
   ensemble.read("consensus_period", &f.ensemble.consensus_period);
   ensemble.read("consensus_margin_m", &f.ensemble.consensus_margin_m);
+  ensemble.read("consensus_max_poses", &f.ensemble.consensus_max_poses);
   ensemble.finish();
   readLaser(top.section("laser_features"), &config.laser);
   readScanMatching(top.section("scan_matching"), &config.scan_matching);

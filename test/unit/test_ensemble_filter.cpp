@@ -234,52 +234,105 @@ TEST(EnsembleFilter, NonFiniteEvidenceLosesTheMemberAndNeverGivesNaN) {
   }
 }
 
-// With rank_by consensus the reported member is chosen every consensus_period updates: the one
-// whose best path is closest to the others' (median RMS distance after rigid alignment), unless
-// the leader's is within consensus_margin_m of it; in between the leader stays.
-TEST(EnsembleFilter, ConsensusReportsTheMemberWhosePathTheOthersAgreeWith) {
-  const int members = 5, period = 3;
+/// The options of the consensus tests: five members of five particles on noisy odometry.
+core::FilterOptions consensusOptions(int members, int period, double margin) {
   core::FilterOptions options = pointOptions(members);
   options.seed = 5;
   options.particles = 5;
   options.motion.alpha1 = options.motion.alpha3 = 0.3;
   options.ensemble.rank_by = "consensus";
   options.ensemble.consensus_period = period;
-  options.ensemble.consensus_margin_m = 0.01;
-  const auto ensemble = core::createFilter(options);
+  options.ensemble.consensus_margin_m = margin;
+  return options;
+}
+
+/// The consensus rule recomputed from the members' best paths (max_poses of each) after each
+/// update: every period-th update (counted since restart()) the member with the smallest median
+/// distance to the others, unless the expected leader's is within the margin. Asserts that the
+/// ensemble reports that member.
+struct ConsensusCheck {
+  const core::SlamFilter& ensemble;
+  int period;
+  double margin;
+  size_t max_poses = 4000;
   int expected = 0;
   long changes = 0;
-  const auto check = [&](int update) {
-    if (update % period == 0) {
+  long updates = 0;
+
+  void operator()(int /*update*/) {
+    if (++updates % period == 0) {
       std::vector<std::vector<Pose2>> paths;
-      for (int k = 0; k < members; ++k) paths.push_back(ensemble->member(k).bestPath());
+      for (int k = 0; k < ensemble.members(); ++k) {
+        paths.push_back(core::evenlySpacedPoses(ensemble.member(k).bestPath(), max_poses));
+      }
       const std::vector<double> d = core::medianDistancesToOthers(paths);
       const int best = static_cast<int>(std::min_element(d.begin(), d.end()) - d.begin());
-      if (d[best] < d[expected] - 0.01) {
+      if (d[best] < d[expected] - margin) {
         changes += best != expected;
         expected = best;
       }
     }
-    ASSERT_EQ(ensemble->leader(), expected) << "update " << update;
-    EXPECT_EQ(ensemble->estimate().mean, ensemble->member(expected).estimate().mean);
-  };
-  std::vector<std::vector<core::UpdateStats>> stats;
-  drive({ensemble.get()}, &stats, 0.25, nullptr, check);
-  EXPECT_EQ(ensemble->stats().leader_changes, changes);
-  EXPECT_GT(changes, 0);  // the choice moved off member 0: the test tells it from a fixed leader
+    ASSERT_EQ(ensemble.leader(), expected) << "update " << updates;
+    EXPECT_EQ(ensemble.estimate().mean, ensemble.member(expected).estimate().mean);
+  }
+  /// A loaded map: member 0 is reported (a change if another was) and the period starts again.
+  void restart() {
+    changes += expected != 0;
+    expected = 0;
+    updates = 0;
+  }
+};
+
+// With rank_by consensus the reported member is chosen every consensus_period updates: the one
+// whose best path is closest to the others' (median RMS distance after rigid alignment), unless
+// the leader's is within consensus_margin_m of it; in between the leader stays. With
+// consensus_max_poses below the paths' length, only that many evenly spaced poses count.
+TEST(EnsembleFilter, ConsensusReportsTheMemberWhosePathTheOthersAgreeWith) {
+  std::vector<std::vector<int>> leaders;
+  for (const int max_poses : {4000, 10}) {
+    core::FilterOptions options = consensusOptions(5, 3, 0.01);
+    options.ensemble.consensus_max_poses = max_poses;
+    const auto ensemble = core::createFilter(options);
+    ConsensusCheck check{*ensemble, 3, 0.01, static_cast<size_t>(max_poses)};
+    std::vector<std::vector<core::UpdateStats>> stats;
+    leaders.emplace_back();
+    drive({ensemble.get()}, &stats, 0.25, &leaders.back(), std::ref(check));
+    EXPECT_EQ(ensemble->stats().leader_changes, check.changes);
+    EXPECT_GT(check.changes, 0);  // it moved off member 0: the test tells it from a fixed leader
+  }
+  EXPECT_NE(leaders[0], leaders[1]);  // the subsampled paths chose otherwise at least once
 }
 
-// Fewer than three members cannot agree on anything: consensus falls back on the evidence (with
-// a period of 1, the evidence's choice at every update).
+// After resetPose every member's path starts again, equally long, and the consensus goes on
+// over them at the same rhythm. A loaded map is every member's: member 0 is reported (counted
+// as a change when another led) and the next choice comes a full period after the load.
+TEST(EnsembleFilter, ConsensusGoesOnAfterAPoseResetAndRestartsOnALoadedMap) {
+  const int period = 4;  // does not divide drive()'s 39 updates: a lost count shows
+  const auto ensemble = core::createFilter(consensusOptions(5, period, 0.01));
+  ConsensusCheck check{*ensemble, period, 0.01};
+  std::vector<std::vector<core::UpdateStats>> stats;
+  drive({ensemble.get()}, &stats, 0.25, nullptr, std::ref(check));
+  ASSERT_TRUE(ensemble->resetPose(onCircle(0, 40), 1e-4 * Eigen::Matrix3d::Identity()));
+  for (int k = 0; k < 5; ++k) ASSERT_TRUE(ensemble->member(k).bestPath().empty()) << k;
+  drive({ensemble.get()}, &stats, 0.25, nullptr, std::ref(check));
+  ASSERT_GT(check.changes, 0);
+  ASSERT_NE(check.expected, 0);  // so that the load below changes the reported member
+  const long before_load = check.changes;
+  ASSERT_TRUE(ensemble->loadMap(ensemble->member(check.expected).landmarks()));
+  check.restart();
+  EXPECT_EQ(ensemble->leader(), 0);
+  EXPECT_EQ(ensemble->stats().leader_changes, before_load + 1);
+  drive({ensemble.get()}, &stats, 0.25, nullptr, std::ref(check));
+  EXPECT_EQ(ensemble->stats().leader_changes, check.changes);
+}
+
+// Fewer than three members cannot agree on anything: consensus falls back on the evidence, at
+// every update whatever the period.
 TEST(EnsembleFilter, ConsensusOfTwoMembersFallsBackOnTheEvidence) {
   std::vector<std::vector<int>> leaders(2);
   for (int i = 0; i < 2; ++i) {
-    core::FilterOptions options = pointOptions(2);
-    options.seed = 5;
-    options.particles = 5;
-    options.motion.alpha1 = options.motion.alpha3 = 0.3;
-    options.ensemble.rank_by = i == 0 ? "evidence" : "consensus";
-    options.ensemble.consensus_period = 1;
+    core::FilterOptions options = consensusOptions(2, 7, 0.05);
+    if (i == 0) options.ensemble.rank_by = "evidence";
     const auto ensemble = core::createFilter(options);
     std::vector<std::vector<core::UpdateStats>> stats;
     drive({ensemble.get()}, &stats, 0.25, &leaders[i]);
@@ -363,6 +416,9 @@ TEST(EnsembleFilter, BadOptionsAreNamed) {
   o = pointOptions(2);
   o.ensemble.consensus_margin_m = -0.1;
   EXPECT_NE(message(o).find("ensemble.consensus_margin_m"), std::string::npos) << message(o);
+  o = pointOptions(2);
+  o.ensemble.consensus_max_poses = 9;
+  EXPECT_NE(message(o).find("ensemble.consensus_max_poses"), std::string::npos) << message(o);
   o = pointOptions(2);
   o.ensemble.switch_margin = -1.0;
   EXPECT_NE(message(o).find("ensemble.switch_margin"), std::string::npos) << message(o);

@@ -85,6 +85,25 @@ TEST(AlignedRmsDistance, MedianDistancesToOthersByHand) {
   EXPECT_THROW(core::medianDistancesToOthers({short_pair, {}}), std::invalid_argument);
 }
 
+// At most max_poses poses, every k-th counted back from the last one (k = ceil(n / max)).
+TEST(AlignedRmsDistance, EvenlySpacedPosesKeepTheLastAndAtMostTheCount) {
+  std::vector<core::Pose2> path;
+  for (int i = 0; i < 10; ++i) path.emplace_back(i, 0.0, 0.0);
+  const auto xs = [](const std::vector<core::Pose2>& p) {
+    std::vector<double> x;
+    for (const core::Pose2& q : p) x.push_back(q.x());
+    return x;
+  };
+  EXPECT_EQ(xs(core::evenlySpacedPoses(path, 10)), xs(path));
+  EXPECT_EQ(xs(core::evenlySpacedPoses(path, 50)), xs(path));
+  EXPECT_EQ(xs(core::evenlySpacedPoses(path, 5)), (std::vector<double>{1, 3, 5, 7, 9}));
+  EXPECT_EQ(xs(core::evenlySpacedPoses(path, 4)), (std::vector<double>{0, 3, 6, 9}));
+  EXPECT_EQ(xs(core::evenlySpacedPoses(path, 3)), (std::vector<double>{1, 5, 9}));
+  EXPECT_EQ(xs(core::evenlySpacedPoses(path, 1)), (std::vector<double>{9}));
+  EXPECT_TRUE(core::evenlySpacedPoses({}, 3).empty());
+  EXPECT_THROW(core::evenlySpacedPoses(path, 0), std::invalid_argument);
+}
+
 TEST(Evaluate, AlignedTransformedCopyHasZeroError) {
   const std::vector<StampedPose> reference = makeTrajectory(30);
   const core::Pose2 offset(-4.0, 2.5, -2.0);  // a different map frame

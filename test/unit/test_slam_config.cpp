@@ -168,12 +168,14 @@ TEST(SlamConfig, OverridesApplyDottedKeys) {
   applyOverride(&root, "ensemble.switch_margin=12.5");
   applyOverride(&root, "ensemble.consensus_period=4");
   applyOverride(&root, "ensemble.consensus_margin_m=0.2");
+  applyOverride(&root, "ensemble.consensus_max_poses=50");
   const SlamConfig c = parseSlamConfig(root, "t");
   EXPECT_EQ(c.filter.ensemble.members, 3);
   EXPECT_EQ(c.filter.ensemble.rank_by, "new_landmarks");
   EXPECT_DOUBLE_EQ(c.filter.ensemble.switch_margin, 12.5);
   EXPECT_EQ(c.filter.ensemble.consensus_period, 4);
   EXPECT_DOUBLE_EQ(c.filter.ensemble.consensus_margin_m, 0.2);
+  EXPECT_EQ(c.filter.ensemble.consensus_max_poses, 50);
   EXPECT_EQ(core::EnsembleOptions().members, 1);  // one filter unless asked
   EXPECT_TRUE(c.smoothing.enabled);
   EXPECT_TRUE(c.session.keep_frames);  // follows smoothing.enabled
@@ -296,6 +298,8 @@ TEST(SlamConfig, HinfAndExistenceErrorsNameTheKey) {
   EXPECT_NE(errorOf("ensemble: {switch_margin: -2}").find("ensemble.switch_margin = -2"),
             std::string::npos);
   EXPECT_NE(errorOf("ensemble: {consensus_period: 0}").find("ensemble.consensus_period = 0"),
+            std::string::npos);
+  EXPECT_NE(errorOf("ensemble: {consensus_max_poses: 2}").find("ensemble.consensus_max_poses = 2"),
             std::string::npos);
   EXPECT_NE(errorOf("smoothing: {member_landmark_cost: -1}")
                 .find("smoothing.member_landmark_cost = -1 is out of range"),

@@ -19,7 +19,8 @@ class EnsembleFilter : public SlamFilter {
         by_consensus_(options.ensemble.rank_by == "consensus"),
         switch_margin_(options.ensemble.switch_margin),
         consensus_period_(options.ensemble.consensus_period),
-        consensus_margin_m_(options.ensemble.consensus_margin_m) {
+        consensus_margin_m_(options.ensemble.consensus_margin_m),
+        consensus_max_poses_(static_cast<size_t>(options.ensemble.consensus_max_poses)) {
     FilterOptions one = options;
     one.ensemble.members = 1;
     for (int k = 0; k < options.ensemble.members; ++k) {
@@ -52,7 +53,7 @@ class EnsembleFilter : public SlamFilter {
     }
     ++updates_;
     int best = leader_;
-    if (!by_consensus_) {
+    if (!by_consensus_ || members_.size() < 3) {  // two members cannot agree on anything
       best = evidenceLeader();
     } else if (updates_ % consensus_period_ == 0) {
       best = consensusLeader();
@@ -81,10 +82,12 @@ class EnsembleFilter : public SlamFilter {
   bool loadMap(const std::vector<LandmarkEstimate>& landmarks) override {
     bool ok = true;
     for (auto& m : members_) ok = m->loadMap(landmarks) && ok;
-    // The totals ranked the maps just replaced.
+    // The totals ranked the maps just replaced; every member now holds the same map.
     log_evidence_.assign(members_.size(), 0.0);
     created_.assign(members_.size(), 0);
+    if (leader_ != 0) ++leader_changes_;  // the reported member changes like any other time
     leader_ = 0;
+    updates_ = 0;  // the next consensus comes a full period after the load
     return ok;
   }
   bool setMapping(bool enabled) override {
@@ -112,20 +115,19 @@ class EnsembleFilter : public SlamFilter {
     return ranksAbove(best, leader_, switch_margin_) ? best : leader_;
   }
 
-  /// The member whose best path has the smallest median distance to the others', if shorter
-  /// than the leader's by more than consensus_margin_m; the evidence's choice while paths
-  /// cannot be compared (fewer than three members, paths of different lengths or not finite,
-  /// as after a member's reset).
+  /// The member whose best path has the smallest median distance to the others' (at most
+  /// consensus_max_poses evenly spaced poses of each), if shorter than the leader's by more
+  /// than consensus_margin_m; the evidence's choice while paths cannot be compared (paths of
+  /// different lengths or not finite, as after a member's reset). Needs three members.
   int consensusLeader() const {
     std::vector<std::vector<Pose2>> paths;
     for (const auto& m : members_) {
-      paths.push_back(m->bestPath());
+      paths.push_back(evenlySpacedPoses(m->bestPath(), consensus_max_poses_));
       const std::vector<Pose2>& p = paths.back();
       const bool finite =
           std::all_of(p.begin(), p.end(), [](const Pose2& x) { return x.allFinite(); });
       if (p.empty() || p.size() != paths.front().size() || !finite) return evidenceLeader();
     }
-    if (paths.size() < 3) return evidenceLeader();
     const std::vector<double> d = medianDistancesToOthers(paths);
     const int best = static_cast<int>(std::min_element(d.begin(), d.end()) - d.begin());
     return d[best] < d[leader_] - consensus_margin_m_ ? best : leader_;
@@ -144,11 +146,12 @@ class EnsembleFilter : public SlamFilter {
   const double switch_margin_;        // EnsembleOptions::switch_margin
   const long consensus_period_;       // EnsembleOptions::consensus_period
   const double consensus_margin_m_;   // EnsembleOptions::consensus_margin_m
+  const size_t consensus_max_poses_;  // EnsembleOptions::consensus_max_poses
   std::vector<double> log_evidence_;  // summed UpdateStats::log_evidence per member
   std::vector<long> created_;         // summed UpdateStats::new_landmarks per member
   int leader_ = 0;
   long leader_changes_ = 0;
-  long updates_ = 0;  // since the last reset (consensus_period counts them)
+  long updates_ = 0;  // since the last reset or loaded map (consensus_period counts them)
 };
 
 }  // namespace

@@ -46,6 +46,7 @@ void validate(const FilterOptions& o) {
   requireOneOf("ensemble.rank_by", o.ensemble.rank_by, {"evidence", "new_landmarks", "consensus"});
   requireRange("ensemble.consensus_period", o.ensemble.consensus_period, 1, 1000000);
   requireRange("ensemble.consensus_margin_m", o.ensemble.consensus_margin_m, 0.0, 1e6);
+  requireRange("ensemble.consensus_max_poses", o.ensemble.consensus_max_poses, 10, 100000000);
   requireRange("ensemble.switch_margin", o.ensemble.switch_margin, 0.0, 1e6);
   if (o.ensemble.members > 1 && o.variant != "fastslam2" && o.variant != "hinf_fastslam") {
     throw std::invalid_argument("ensemble.members > 1 is not implemented for variant '" +
