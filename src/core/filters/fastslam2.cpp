@@ -198,6 +198,8 @@ FastSlam2::Match FastSlam2::associateAmong(const LandmarkMap& map, const Pose2& 
     const Prediction p = is_line ? predictLine(pose, lm.mean, observation.z.y())
                                  : predictPoint(pose, lm.mean);
     const Eigen::Matrix2d z_cov = landmarkInnovationCovariance(p, lm.covariance, observation.noise);
+    // R as given, also for H-infinity's adaptive attenuation: gating at R x (1 - theta) would
+    // feed back (a tighter gate keeps only close matches, whose smaller innovations raise theta).
     const Eigen::Matrix2d s = z_cov + p.h_pose * pose_cov * p.h_pose.transpose();
     const Eigen::Vector2d v = innovation(observation.z, p.z);
     const double d2 = v.dot(s.inverse() * v);
