@@ -1,6 +1,5 @@
 #include "rbpf_slam/core/alignment.h"
 
-#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <utility>
@@ -74,14 +73,11 @@ std::vector<double> medianDistancesToOthers(const std::vector<std::vector<Pose2>
 std::vector<Pose2> evenlySpacedPoses(const std::vector<Pose2>& path, size_t max_poses) {
   if (max_poses < 1) throw std::invalid_argument("evenlySpacedPoses needs max_poses >= 1");
   if (path.size() <= max_poses) return path;
-  const size_t stride = (path.size() + max_poses - 1) / max_poses;
+  if (max_poses == 1) return {path.back()};
   std::vector<Pose2> out;
   out.reserve(max_poses);
-  // ceil(size / stride) <= max_poses poses, counted back from the last.
-  for (size_t back = 0; back < path.size(); back += stride) {
-    out.push_back(path[path.size() - 1 - back]);
-  }
-  std::reverse(out.begin(), out.end());
+  const size_t last = path.size() - 1;
+  for (size_t i = 0; i < max_poses; ++i) out.push_back(path[i * last / (max_poses - 1)]);
   return out;
 }
 

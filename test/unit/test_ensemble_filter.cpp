@@ -234,7 +234,7 @@ TEST(EnsembleFilter, NonFiniteEvidenceLosesTheMemberAndNeverGivesNaN) {
   }
 }
 
-/// The options of the consensus tests: five members of five particles on noisy odometry.
+/// The options of the consensus tests: members of five particles each, noisy odometry.
 core::FilterOptions consensusOptions(int members, int period, double margin) {
   core::FilterOptions options = pointOptions(members);
   options.seed = 5;
@@ -305,7 +305,8 @@ TEST(EnsembleFilter, ConsensusReportsTheMemberWhosePathTheOthersAgreeWith) {
 
 // After resetPose every member's path starts again, equally long, and the consensus goes on
 // over them at the same rhythm. A loaded map is every member's: member 0 is reported (counted
-// as a change when another led) and the next choice comes a full period after the load.
+// as a change when another led) and the next choice comes a full period after the load; a map
+// refused changes nothing.
 TEST(EnsembleFilter, ConsensusGoesOnAfterAPoseResetAndRestartsOnALoadedMap) {
   const int period = 4;  // does not divide drive()'s 39 updates: a lost count shows
   const auto ensemble = core::createFilter(consensusOptions(5, period, 0.01));
@@ -318,6 +319,12 @@ TEST(EnsembleFilter, ConsensusGoesOnAfterAPoseResetAndRestartsOnALoadedMap) {
   ASSERT_GT(check.changes, 0);
   ASSERT_NE(check.expected, 0);  // so that the load below changes the reported member
   const long before_load = check.changes;
+  std::vector<core::LandmarkEstimate> broken = ensemble->member(check.expected).landmarks();
+  ASSERT_FALSE(broken.empty());
+  broken.back().mean.x() = NAN;
+  EXPECT_FALSE(ensemble->loadMap(broken));  // refused: the reported member stays
+  EXPECT_EQ(ensemble->leader(), check.expected);
+  EXPECT_EQ(ensemble->stats().leader_changes, before_load);
   ASSERT_TRUE(ensemble->loadMap(ensemble->member(check.expected).landmarks()));
   check.restart();
   EXPECT_EQ(ensemble->leader(), 0);

@@ -85,8 +85,9 @@ TEST(AlignedRmsDistance, MedianDistancesToOthersByHand) {
   EXPECT_THROW(core::medianDistancesToOthers({short_pair, {}}), std::invalid_argument);
 }
 
-// At most max_poses poses, every k-th counted back from the last one (k = ceil(n / max)).
-TEST(AlignedRmsDistance, EvenlySpacedPosesKeepTheLastAndAtMostTheCount) {
+// Exactly max_poses poses of a longer path, at floor(i (n - 1) / (max - 1)): the first and the
+// last among them; a path no longer than max_poses whole.
+TEST(AlignedRmsDistance, EvenlySpacedPosesKeepTheEndsAndTheCount) {
   std::vector<core::Pose2> path;
   for (int i = 0; i < 10; ++i) path.emplace_back(i, 0.0, 0.0);
   const auto xs = [](const std::vector<core::Pose2>& p) {
@@ -96,9 +97,11 @@ TEST(AlignedRmsDistance, EvenlySpacedPosesKeepTheLastAndAtMostTheCount) {
   };
   EXPECT_EQ(xs(core::evenlySpacedPoses(path, 10)), xs(path));
   EXPECT_EQ(xs(core::evenlySpacedPoses(path, 50)), xs(path));
-  EXPECT_EQ(xs(core::evenlySpacedPoses(path, 5)), (std::vector<double>{1, 3, 5, 7, 9}));
+  EXPECT_EQ(xs(core::evenlySpacedPoses(path, 9)), (std::vector<double>{0, 1, 2, 3, 4, 5, 6, 7, 9}));
+  EXPECT_EQ(xs(core::evenlySpacedPoses(path, 5)), (std::vector<double>{0, 2, 4, 6, 9}));
   EXPECT_EQ(xs(core::evenlySpacedPoses(path, 4)), (std::vector<double>{0, 3, 6, 9}));
-  EXPECT_EQ(xs(core::evenlySpacedPoses(path, 3)), (std::vector<double>{1, 5, 9}));
+  EXPECT_EQ(xs(core::evenlySpacedPoses(path, 3)), (std::vector<double>{0, 4, 9}));
+  EXPECT_EQ(xs(core::evenlySpacedPoses(path, 2)), (std::vector<double>{0, 9}));
   EXPECT_EQ(xs(core::evenlySpacedPoses(path, 1)), (std::vector<double>{9}));
   EXPECT_TRUE(core::evenlySpacedPoses({}, 3).empty());
   EXPECT_THROW(core::evenlySpacedPoses(path, 0), std::invalid_argument);

@@ -27,11 +27,11 @@ double alignedRmsDistance(const std::vector<Pose2>& a, const std::vector<Pose2>&
 /// alignedRmsDistance.
 std::vector<double> medianDistancesToOthers(const std::vector<std::vector<Pose2>>& paths);
 
-/// At most max_poses poses of path, evenly spaced and always holding its last pose: every
-/// k-th pose counted back from the last, k = ceil(size / max_poses); the path itself when it
-/// is not longer. Equally long paths keep the same indices, so they stay comparable pose by
-/// pose. Bounds the cost of comparing paths that grow with the run. Throws
-/// std::invalid_argument for max_poses < 1.
+/// The path itself when it holds at most max_poses poses, else max_poses of its poses evenly
+/// spaced from the first to the last: indices floor(i (size - 1) / (max_poses - 1)), i = 0 ..
+/// max_poses - 1 (the last pose alone for max_poses 1). Equally long paths keep the same
+/// indices, so they stay comparable pose by pose. Bounds the cost of aligning paths that grow
+/// with the run. Throws std::invalid_argument for max_poses < 1.
 std::vector<Pose2> evenlySpacedPoses(const std::vector<Pose2>& path, size_t max_poses);
 
 }  // namespace core

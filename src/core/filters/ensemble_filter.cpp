@@ -82,13 +82,14 @@ class EnsembleFilter : public SlamFilter {
   bool loadMap(const std::vector<LandmarkEstimate>& landmarks) override {
     bool ok = true;
     for (auto& m : members_) ok = m->loadMap(landmarks) && ok;
+    if (!ok) return false;  // refused (every member had the same input): nothing changed
     // The totals ranked the maps just replaced; every member now holds the same map.
     log_evidence_.assign(members_.size(), 0.0);
     created_.assign(members_.size(), 0);
     if (leader_ != 0) ++leader_changes_;  // the reported member changes like any other time
     leader_ = 0;
     updates_ = 0;  // the next consensus comes a full period after the load
-    return ok;
+    return true;
   }
   bool setMapping(bool enabled) override {
     bool ok = true;
@@ -121,12 +122,17 @@ class EnsembleFilter : public SlamFilter {
   /// different lengths or not finite, as after a member's reset). Needs three members.
   int consensusLeader() const {
     std::vector<std::vector<Pose2>> paths;
+    size_t length = 0;
     for (const auto& m : members_) {
-      paths.push_back(evenlySpacedPoses(m->bestPath(), consensus_max_poses_));
+      const std::vector<Pose2> whole = m->bestPath();
+      if (paths.empty()) length = whole.size();
+      // Compared whole lengths: two cut paths of equal size may come from unequal ones.
+      if (whole.empty() || whole.size() != length) return evidenceLeader();
+      paths.push_back(evenlySpacedPoses(whole, consensus_max_poses_));
       const std::vector<Pose2>& p = paths.back();
-      const bool finite =
-          std::all_of(p.begin(), p.end(), [](const Pose2& x) { return x.allFinite(); });
-      if (p.empty() || p.size() != paths.front().size() || !finite) return evidenceLeader();
+      if (!std::all_of(p.begin(), p.end(), [](const Pose2& x) { return x.allFinite(); })) {
+        return evidenceLeader();
+      }
     }
     const std::vector<double> d = medianDistancesToOthers(paths);
     const int best = static_cast<int>(std::min_element(d.begin(), d.end()) - d.begin());

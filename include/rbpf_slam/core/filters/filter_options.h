@@ -117,9 +117,10 @@ struct EnsembleOptions {
   // reported instead of the leader (members that found the same path differ by rounding, and
   // each change moves the node's pose, map -> odom, ~trajectory and markers).
   double consensus_margin_m = 0.05;
-  // ... and how many poses of each path it compares at most: evenly spaced, ending at the
-  // latest (core::evenlySpacedPoses). Bounds each choice's cost on long runs (one pose per
-  // update: the paths of a 15-minute MRCLAM run, 1000-2300 updates, are compared whole).
+  // ... and how many poses of each path it compares at most: evenly spaced, from the first to the
+  // latest (core::evenlySpacedPoses). Bounds the alignments' cost on long runs (copying the
+  // members' paths stays linear in the run; one pose per update: the paths of a 15-minute
+  // MRCLAM run, 1000-2300 updates, are compared whole).
   int consensus_max_poses = 4000;
   // The reported member changes only when another leads it by more than this much summed
   // log-evidence (nats; with new_landmarks, when it created fewer landmarks, or as many and
