@@ -16,7 +16,8 @@ class EnsembleFilter : public SlamFilter {
  public:
   explicit EnsembleFilter(const FilterOptions& options)
       : by_new_landmarks_(options.ensemble.rank_by == "new_landmarks"),
-        by_consensus_(options.ensemble.rank_by == "consensus"),
+        // Two members cannot agree on anything: with fewer than three the evidence decides.
+        by_consensus_(options.ensemble.rank_by == "consensus" && options.ensemble.members >= 3),
         switch_margin_(options.ensemble.switch_margin),
         consensus_period_(options.ensemble.consensus_period),
         consensus_margin_m_(options.ensemble.consensus_margin_m),
@@ -53,7 +54,7 @@ class EnsembleFilter : public SlamFilter {
     }
     ++updates_;
     int best = leader_;
-    if (!by_consensus_ || members_.size() < 3) {  // two members cannot agree on anything
+    if (!by_consensus_) {
       best = evidenceLeader();
     } else if (updates_ % consensus_period_ == 0) {
       best = consensusLeader();
@@ -148,7 +149,7 @@ class EnsembleFilter : public SlamFilter {
 
   std::vector<std::unique_ptr<SlamFilter>> members_;
   const bool by_new_landmarks_;       // EnsembleOptions::rank_by
-  const bool by_consensus_;           // EnsembleOptions::rank_by
+  const bool by_consensus_;           // EnsembleOptions::rank_by, with three members or more
   const double switch_margin_;        // EnsembleOptions::switch_margin
   const long consensus_period_;       // EnsembleOptions::consensus_period
   const double consensus_margin_m_;   // EnsembleOptions::consensus_margin_m

@@ -24,8 +24,8 @@ namespace core {
 unsigned long ensembleMemberSeed(unsigned long seed, int k);
 
 /// A member's running log evidence after one more update's: the sum, or -inf (a lost member,
-/// which never leads again by evidence) once an update's evidence is not finite (NaN, or +-inf from a
-/// collapsed covariance). Never NaN, so the ranking stays a strict order.
+/// which never leads again by evidence) once an update's evidence is not finite (NaN, or
+/// +-inf from a collapsed covariance). Never NaN, so the ranking stays a strict order.
 double addLogEvidence(double total, double update_log_evidence);
 
 /// options.ensemble.members filters of options.variant; throws std::invalid_argument naming the
