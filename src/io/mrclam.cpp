@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
 
@@ -202,10 +203,28 @@ MrclamRobot readMrclamRobot(const std::string& directory, int robot) {
   return data;
 }
 
-void cropMrclamRobot(double duration_s, MrclamRobot* data) {
-  if (!(duration_s > 0.0) || data->odometry.empty()) return;
-  const double start = data->odometry.front().stamp;
-  const double end = start + duration_s;
+void cropMrclamRobot(double skip_s, double duration_s, MrclamRobot* data) {
+  if (!std::isfinite(skip_s) || skip_s < 0.0) {
+    throw std::invalid_argument("start offset must be finite and >= 0 s, got " +
+                                std::to_string(skip_s));
+  }
+  if (!std::isfinite(duration_s) || duration_s < 0.0) {
+    throw std::invalid_argument("duration must be finite and >= 0 s, got " +
+                                std::to_string(duration_s));
+  }
+  if ((skip_s == 0.0 && duration_s == 0.0) || data->odometry.empty()) return;
+  const double first = data->odometry.front().stamp;
+  double last = first;  // the latest command (the file may hold some out of order)
+  for (const MrclamOdometry& command : data->odometry) last = std::max(last, command.stamp);
+  const double start = first + skip_s;
+  if (start > last) {
+    std::ostringstream why;
+    why << "start offset " << skip_s << " s is beyond the last odometry command ("
+        << (last - first) << " s after the first)";
+    throw std::invalid_argument(why.str());
+  }
+  const double end = duration_s > 0.0 ? start + duration_s
+                                       : std::numeric_limits<double>::infinity();
   const auto outside = [&](double stamp) { return stamp < start || stamp > end; };
   auto& o = data->odometry;
   o.erase(

@@ -1,5 +1,5 @@
-// mrclam_to_bag DATASET_DIR ROBOT OUT.bag [--known-ids] [--duration S] [--sigma-range-m F]
-//               [--sigma-range-per-m F] [--sigma-bearing-rad F]
+// mrclam_to_bag DATASET_DIR ROBOT OUT.bag [--known-ids] [--start S] [--duration S]
+//               [--sigma-range-m F] [--sigma-range-per-m F] [--sigma-bearing-rad F]
 // Converts one robot of a UTIAS MRCLAM dataset into a bag: /tf (odom -> base_link) and /odom
 // dead-reckoned from the velocity commands, /features (rbpf_slam/FeatureArray in base_link,
 // one message per camera frame, landmark sightings only) and /ground_truth (Vicon, frame map).
@@ -40,12 +40,14 @@ namespace core = rbpf_slam::core;
 namespace rosbridge = rbpf_slam::rosbridge;
 
 const char kUsage[] =
-    "usage: mrclam_to_bag DATASET_DIR ROBOT OUT.bag [--known-ids] [--duration S]\n"
+    "usage: mrclam_to_bag DATASET_DIR ROBOT OUT.bag [--known-ids] [--start S] [--duration S]\n"
     "                     [--sigma-range-m F] [--sigma-range-per-m F] [--sigma-bearing-rad F]\n"
     "                     [--max-gap S] [--command-delay S]\n"
     "  ROBOT                  1..5 (RobotN_*.dat in DATASET_DIR)\n"
     "  --known-ids            give every feature its landmark subject as id (default: -1)\n"
-    "  --duration S           keep only the first S seconds after the first odometry command\n"
+    "  --start S              begin S seconds after the first odometry command (a recording\n"
+    "                         that starts later, elsewhere; ground truth and odometry from there)\n"
+    "  --duration S           keep only the first S seconds after the start\n"
     "  --sigma-range-m F      feature range sigma at zero range (default 0.03 m)\n"
     "  --sigma-range-per-m F  ... growing by this per metre of range (default 0.035)\n"
     "  --sigma-bearing-rad F  feature bearing sigma (default 0.02 rad)\n"
@@ -62,6 +64,7 @@ struct Arguments {
   int robot = 0;
   std::string bag_path;
   bool known_ids = false;
+  double start_s = 0.0;     // skipped after the first odometry command
   double duration_s = 0.0;  // 0: everything
   // Feature noise, fitted to the Vicon residuals of dataset 6 (robust sigmas: ~0.065 m at
   // 1.5 m, ~0.17 m at 5 m; bearing ~0.008 rad with heavy tails).
@@ -80,6 +83,8 @@ Arguments parseArguments(int argc, char** argv) {
   while (cursor.next()) {
     if (cursor.arg() == "--known-ids") {
       arguments.known_ids = true;
+    } else if (cursor.arg() == "--start") {
+      arguments.start_s = non_negative();
     } else if (cursor.arg() == "--duration") {
       arguments.duration_s = non_negative();
     } else if (cursor.arg() == "--sigma-range-m") {
@@ -233,9 +238,9 @@ void writeLandmarks(const std::string& path, const Arguments& arguments,
 int run(const Arguments& arguments) {
   ros::Time::init();
   io::MrclamRobot data = io::readMrclamRobot(arguments.dataset_dir, arguments.robot);
-  io::cropMrclamRobot(arguments.duration_s, &data);
+  io::cropMrclamRobot(arguments.start_s, arguments.duration_s, &data);
   io::delayMrclamCommands(arguments.command_delay_s, &data);
-  const std::size_t measurements_read = data.measurements.size();  // within --duration
+  const std::size_t measurements_read = data.measurements.size();  // within --start/--duration
   if (data.ground_truth.empty()) {
     throw std::runtime_error("no ground truth during the odometry's time span");
   }
@@ -268,7 +273,9 @@ int run(const Arguments& arguments) {
             << " /features messages (" << (arguments.known_ids ? "known" : "unknown")
             << " ids; dropped " << robots << " sightings of robots and " << unknown
             << " of unknown barcodes, of " << measurements_read << " sightings"
-            << (arguments.duration_s > 0.0 ? " within --duration" : "") << "), "
+            << (arguments.start_s > 0.0 || arguments.duration_s > 0.0 ? " kept by --start/--duration"
+                                                                      : "")
+            << "), "
             << counts.ground_truth << " ground-truth poses; " << not_integrated
             << " command interval(s) over " << arguments.max_gap_s << " s not integrated\n"
             << "mrclam_to_bag: wrote " << arguments.bag_path << ", " << reference_path << ", "

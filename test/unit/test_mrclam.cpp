@@ -146,14 +146,46 @@ TEST(MrclamRead, ReadsADirectoryAndCrops) {
   EXPECT_DOUBLE_EQ(all.ground_truth[0].stamp, 99.0);  // sorted by time
 
   MrclamRobot cropped = all;
-  cropMrclamRobot(4.5, &cropped);  // [100, 104.5]
+  cropMrclamRobot(0.0, 4.5, &cropped);  // [100, 104.5]
   EXPECT_EQ(cropped.odometry.size(), 2u);
   EXPECT_EQ(cropped.measurements.size(), 2u);
   ASSERT_EQ(cropped.ground_truth.size(), 1u);
   EXPECT_DOUBLE_EQ(cropped.ground_truth[0].stamp, 101.0);
   MrclamRobot uncropped = all;
-  cropMrclamRobot(0.0, &uncropped);
+  cropMrclamRobot(0.0, 0.0, &uncropped);
   EXPECT_EQ(uncropped.odometry.size(), 3u);
+  EXPECT_EQ(uncropped.ground_truth.size(), 2u);
+
+  // A later start: [101, end of the recording], then [101, 104.5] with a duration too.
+  MrclamRobot late = all;
+  cropMrclamRobot(1.0, 0.0, &late);
+  ASSERT_EQ(late.odometry.size(), 2u);
+  EXPECT_DOUBLE_EQ(late.odometry[0].stamp, 101.0);
+  ASSERT_EQ(late.measurements.size(), 2u);
+  EXPECT_DOUBLE_EQ(late.measurements[0].stamp, 104.0);
+  EXPECT_DOUBLE_EQ(late.measurements[1].stamp, 106.0);
+  ASSERT_EQ(late.ground_truth.size(), 1u);
+  EXPECT_DOUBLE_EQ(late.ground_truth[0].stamp, 101.0);
+  MrclamRobot slice = all;
+  cropMrclamRobot(1.0, 3.5, &slice);
+  EXPECT_EQ(slice.odometry.size(), 1u);
+  EXPECT_EQ(slice.measurements.size(), 1u);
+  // Beyond the last command, negative or non-finite: refused, nothing changed.
+  MrclamRobot refused = all;
+  try {
+    cropMrclamRobot(5.5, 0.0, &refused);
+    FAIL() << "no exception";
+  } catch (const std::invalid_argument& error) {
+    EXPECT_NE(std::string(error.what()).find("beyond the last odometry command (5 s"),
+              std::string::npos)
+        << error.what();
+  }
+  EXPECT_THROW(cropMrclamRobot(-1.0, 0.0, &refused), std::invalid_argument);
+  EXPECT_THROW(cropMrclamRobot(std::nan(""), 0.0, &refused), std::invalid_argument);
+  EXPECT_THROW(cropMrclamRobot(0.0, -2.0, &refused), std::invalid_argument);
+  EXPECT_THROW(cropMrclamRobot(0.0, HUGE_VAL, &refused), std::invalid_argument);
+  EXPECT_EQ(refused.odometry.size(), 3u);
+  EXPECT_EQ(refused.measurements.size(), 3u);
 
   // The commands move later by the delay; measurements and ground truth keep their stamps.
   MrclamRobot delayed = all;

@@ -88,8 +88,11 @@ void resolveSubjects(const std::map<int, int>& subject_of_barcode,
 MrclamRobot readMrclamRobot(const std::string& directory, int robot);
 
 /// Keeps only what lies in [start, start + duration_s] for odometry, measurements and ground
-/// truth, where start is the first odometry stamp; duration_s <= 0 keeps everything.
-void cropMrclamRobot(double duration_s, MrclamRobot* data);
+/// truth, where start is the first odometry stamp plus skip_s (a recording that begins later,
+/// somewhere else); duration_s <= 0 keeps everything from start on. Throws
+/// std::invalid_argument, changing nothing, for a negative or non-finite skip_s or duration_s,
+/// or when no odometry command would remain (skip_s beyond the recording).
+void cropMrclamRobot(double skip_s, double duration_s, MrclamRobot* data);
 
 /// Moves every odometry command `delay_s` later: the logged velocity commands lead the robot's
 /// motion (dataset 6, fitted against Vicon: 0.15-0.2 s on all five robots), so a command is
