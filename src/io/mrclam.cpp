@@ -6,6 +6,7 @@
 #include <cstdlib>
 #include <fstream>
 #include <limits>
+#include <set>
 #include <sstream>
 #include <stdexcept>
 
@@ -34,34 +35,48 @@ bool parseDouble(const std::string& token, double* value) {
   return end == token.c_str() + token.size() && errno != ERANGE && std::isfinite(*value);
 }
 
-// Every data line of a file as exactly `columns` finite numbers; `format` names them in errors.
+// One line's text as exactly `columns` finite numbers appended to rows (blank and '#' lines
+// are skipped); `format` names them in errors.
+void readRow(const std::string& text, std::size_t line, const std::string& source,
+             std::size_t columns, const std::string& format, std::vector<Row>* rows) {
+  const std::size_t first = text.find_first_not_of(" \t");
+  if (first == std::string::npos || text[first] == '#') return;
+  std::istringstream fields(text);
+  std::string token;
+  Row row;
+  row.line = line;
+  while (fields >> token) {
+    double value = 0.0;
+    if (!parseDouble(token, &value)) {
+      throw lineError(source, line,
+                      "not a finite number: '" + token + "' (expected " + format + ")");
+    }
+    row.values.push_back(value);
+  }
+  if (row.values.size() != columns) {
+    throw lineError(source, line,
+                    "expected " + std::to_string(columns) + " numbers (" + format + "), got " +
+                        std::to_string(row.values.size()));
+  }
+  rows->push_back(std::move(row));
+}
+
+// Every data line of a file, by readRow. Lines end at LF, CRLF or a lone CR (old Mac files);
+// a UTF-8 byte-order mark at the start is skipped.
 std::vector<Row> readRows(std::istream& in, const std::string& source, std::size_t columns,
                           const std::string& format) {
   std::vector<Row> rows;
-  std::string text;
   std::size_t line = 0;
-  while (std::getline(in, text)) {
-    ++line;
-    const std::size_t first = text.find_first_not_of(" \t\r");
-    if (first == std::string::npos || text[first] == '#') continue;
-    std::istringstream fields(text);
-    std::string token;
-    Row row;
-    row.line = line;
-    while (fields >> token) {
-      double value = 0.0;
-      if (!parseDouble(token, &value)) {
-        throw lineError(source, line,
-                        "not a finite number: '" + token + "' (expected " + format + ")");
-      }
-      row.values.push_back(value);
+  std::string raw;
+  while (std::getline(in, raw)) {
+    if (line == 0 && raw.compare(0, 3, "\xEF\xBB\xBF") == 0) raw.erase(0, 3);
+    for (std::size_t begin = 0;;) {
+      const std::size_t cr = raw.find('\r', begin);
+      const std::size_t end = cr == std::string::npos ? raw.size() : cr;
+      readRow(raw.substr(begin, end - begin), ++line, source, columns, format, &rows);
+      if (cr == std::string::npos || cr + 1 == raw.size()) break;  // a CRLF's CR ends the line
+      begin = cr + 1;
     }
-    if (row.values.size() != columns) {
-      throw lineError(source, line,
-                      "expected " + std::to_string(columns) + " numbers (" + format + "), got " +
-                          std::to_string(row.values.size()));
-    }
-    rows.push_back(std::move(row));
   }
   if (in.bad()) throw std::runtime_error(source + ": read error");
   return rows;
@@ -77,7 +92,22 @@ void requireWithin(const std::string& source, std::size_t line, const char* what
 }
 
 void requireStamp(const std::string& source, std::size_t line, double stamp) {
+  if (!(stamp > 0.0)) {  // ros::Time starts after 0; the dataset's stamps are Unix times
+    std::ostringstream message;
+    message << "t = " << stamp << " is not a positive Unix time (stamps counted from 0?)";
+    throw lineError(source, line, message.str());
+  }
   requireWithin(source, line, "t", stamp, 0.0, kMaxRosStampS);
+}
+
+void requireUnique(std::map<int, std::size_t>* line_of, int key, const char* what,
+                   const std::string& source, std::size_t line) {
+  const auto inserted = line_of->emplace(key, line);
+  if (!inserted.second) {
+    throw lineError(source, line,
+                    std::string(what) + " " + std::to_string(key) + " listed twice (first at line " +
+                        std::to_string(inserted.first->second) + ")");
+  }
 }
 
 int toInteger(double value, const std::string& source, std::size_t line, const char* what) {
@@ -125,6 +155,7 @@ std::vector<MrclamMeasurement> parseMrclamMeasurements(std::istream& in,
     if (m.range_m < 0.0) throw lineError(source, row.line, "negative range");
     requireStamp(source, row.line, m.stamp);
     requireWithin(source, row.line, "range", m.range_m, 0.0, kMaxPlausibleRangeM);
+    requireWithin(source, row.line, "bearing", m.bearing_rad, -2.0 * M_PI, 2.0 * M_PI);
     measurements.push_back(m);
   }
   return measurements;
@@ -132,12 +163,17 @@ std::vector<MrclamMeasurement> parseMrclamMeasurements(std::istream& in,
 
 std::map<int, int> parseMrclamBarcodes(std::istream& in, const std::string& source) {
   std::map<int, int> subject_of_barcode;
+  std::map<int, std::size_t> line_of_subject, line_of_barcode;
   for (const Row& row : readRows(in, source, 2, "subject barcode")) {
     const int subject = toInteger(row.values[0], source, row.line, "subject");
     const int barcode = toInteger(row.values[1], source, row.line, "barcode");
-    if (!subject_of_barcode.emplace(barcode, subject).second) {
-      throw lineError(source, row.line, "barcode " + std::to_string(barcode) + " listed twice");
+    if (subject < 1) {
+      throw lineError(source, row.line, "subject " + std::to_string(subject) +
+                                            " is not a robot (1..5) or landmark (6..) number");
     }
+    requireUnique(&line_of_barcode, barcode, "barcode", source, row.line);
+    requireUnique(&line_of_subject, subject, "subject", source, row.line);
+    subject_of_barcode.emplace(barcode, subject);
   }
   return subject_of_barcode;
 }
@@ -150,6 +186,8 @@ std::vector<StampedPose> parseMrclamGroundTruth(std::istream& in, const std::str
                   kMaxPlausibleCoordinateM);
     requireWithin(source, row.line, "y", row.values[2], -kMaxPlausibleCoordinateM,
                   kMaxPlausibleCoordinateM);
+    requireWithin(source, row.line, "theta", row.values[3], -kMaxPlausibleAngleRad,
+                  kMaxPlausibleAngleRad);
     StampedPose pose;
     pose.stamp = row.values[0];
     pose.pose = core::Pose2(row.values[1], row.values[2], core::wrapAngle(row.values[3]));
@@ -160,9 +198,23 @@ std::vector<StampedPose> parseMrclamGroundTruth(std::istream& in, const std::str
 
 std::vector<MrclamLandmark> parseMrclamLandmarks(std::istream& in, const std::string& source) {
   std::vector<MrclamLandmark> landmarks;
+  std::map<int, std::size_t> line_of_subject;
   for (const Row& row : readRows(in, source, 5, "subject x y sd_x sd_y")) {
     MrclamLandmark landmark;
     landmark.subject = toInteger(row.values[0], source, row.line, "subject");
+    if (landmark.subject < 1) {
+      throw lineError(source, row.line,
+                      "subject " + std::to_string(landmark.subject) + " is not a landmark number");
+    }
+    requireUnique(&line_of_subject, landmark.subject, "subject", source, row.line);
+    for (int k : {1, 2}) {
+      requireWithin(source, row.line, k == 1 ? "x" : "y", row.values[k],
+                    -kMaxPlausibleCoordinateM, kMaxPlausibleCoordinateM);
+    }
+    for (int k : {3, 4}) {
+      requireWithin(source, row.line, k == 3 ? "sd_x" : "sd_y", row.values[k], 0.0,
+                    kMaxPlausibleCoordinateM);
+    }
     landmark.x_m = row.values[1];
     landmark.y_m = row.values[2];
     landmark.sd_x_m = row.values[3];
@@ -180,6 +232,54 @@ void resolveSubjects(const std::map<int, int>& subject_of_barcode,
   }
 }
 
+namespace {
+
+// Sorts the commands by time (stable), and says how many were out of order or share a stamp.
+void reportAndSortOdometry(const std::string& source, MrclamRobot* data) {
+  std::vector<MrclamOdometry>& o = data->odometry;
+  std::size_t earlier = 0, first_earlier_line = 0;
+  for (std::size_t i = 1; i < o.size(); ++i) {
+    if (o[i].stamp < o[i - 1].stamp && earlier++ == 0) first_earlier_line = o[i].line;
+  }
+  if (earlier > 0) {
+    std::stable_sort(o.begin(), o.end(), [](const MrclamOdometry& a, const MrclamOdometry& b) {
+      return a.stamp < b.stamp;
+    });
+    data->warnings.push_back(source + ": " + std::to_string(earlier) +
+                             " command(s) stamped before the line above them (first at line " +
+                             std::to_string(first_earlier_line) + "); sorted by time");
+  }
+  std::size_t shared = 0, first_shared_line = 0;
+  for (std::size_t i = 1; i < o.size(); ++i) {
+    if (o[i].stamp == o[i - 1].stamp && shared++ == 0) first_shared_line = o[i].line;
+  }
+  if (shared > 0) {
+    data->warnings.push_back(source + ": " + std::to_string(shared) +
+                             " command(s) share the stamp of the one before (first at line " +
+                             std::to_string(first_shared_line) +
+                             "); the first command at a stamp is the one integrated");
+  }
+}
+
+// Names the landmark subjects sighted that Landmark_Groundtruth.dat has no position for.
+void reportUnsurveyedSubjects(MrclamRobot* data) {
+  std::set<int> surveyed, unsurveyed;
+  for (const MrclamLandmark& l : data->landmarks) surveyed.insert(l.subject);
+  for (const MrclamMeasurement& m : data->measurements) {
+    if (m.subject >= kMrclamFirstLandmarkSubject && surveyed.count(m.subject) == 0) {
+      unsurveyed.insert(m.subject);
+    }
+  }
+  if (unsurveyed.empty()) return;
+  std::ostringstream message;
+  message << "Landmark_Groundtruth.dat has no position for sighted landmark subject(s)";
+  for (int subject : unsurveyed) message << " " << subject;
+  message << ": their estimates will count as spurious";
+  data->warnings.push_back(message.str());
+}
+
+}  // namespace
+
 MrclamRobot readMrclamRobot(const std::string& directory, int robot) {
   if (robot < 1 || robot > 5) {
     throw std::invalid_argument("robot must be 1..5, got " + std::to_string(robot));
@@ -193,8 +293,16 @@ MrclamRobot readMrclamRobot(const std::string& directory, int robot) {
   data.measurements = parseFile(prefix + "Measurement.dat", parseMrclamMeasurements);
   data.ground_truth = parseFile(prefix + "Groundtruth.dat", parseMrclamGroundTruth);
   resolveSubjects(data.subject_of_barcode, &data.measurements);
+  if (data.subject_of_barcode.empty()) {
+    throw std::runtime_error(directory + "/Barcodes.dat: no data line");
+  }
+  if (data.landmarks.empty()) {
+    throw std::runtime_error(directory + "/Landmark_Groundtruth.dat: no data line");
+  }
   if (data.odometry.empty()) throw std::runtime_error(prefix + "Odometry.dat: no data line");
   if (data.ground_truth.empty()) throw std::runtime_error(prefix + "Groundtruth.dat: no data line");
+  reportAndSortOdometry(prefix + "Odometry.dat", &data);
+  reportUnsurveyedSubjects(&data);
   std::stable_sort(data.ground_truth.begin(), data.ground_truth.end(),
                    [](const StampedPose& a, const StampedPose& b) { return a.stamp < b.stamp; });
   std::stable_sort(

@@ -17,16 +17,18 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <iomanip>
 #include <iostream>
 #include <optional>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "rbpf_slam/core/geometry.h"
+#include "rbpf_slam/io/json_writer.h"
 #include "rbpf_slam/io/mrclam.h"
 #include "rbpf_slam/io/tool_arguments.h"
 #include "rbpf_slam/io/trajectory.h"
@@ -179,11 +181,14 @@ Counts writeBag(const Arguments& arguments, const io::MrclamRobot& data,
     return a.stamp != b.stamp ? a.stamp < b.stamp : a.kind < b.kind;
   });
 
-  // The command in force at each integrated pose, for the twist of /odom.
+  // The command in force at each integrated pose, for the twist of /odom: the first of the
+  // commands at its stamp, as integrateMrclamOdometry integrates.
   std::vector<const io::MrclamOdometry*> command_at(odometry.size(), nullptr);
   for (std::size_t i = 0, j = 0; i < odometry.size(); ++i) {
     while (j + 1 < data.odometry.size() && data.odometry[j + 1].stamp <= odometry[i].stamp) ++j;
-    command_at[i] = &data.odometry[j];
+    std::size_t first = j;
+    while (first > 0 && data.odometry[first - 1].stamp == data.odometry[first].stamp) --first;
+    command_at[i] = &data.odometry[first];
   }
 
   Counts counts;
@@ -220,19 +225,21 @@ void writeLandmarks(const std::string& path, const Arguments& arguments,
   std::ofstream out(path);
   out << "# Surveyed landmarks of the UTIAS MRCLAM dataset (Landmark_Groundtruth.dat), frame map\n"
       << "# (the Vicon frame of /ground_truth and OUT.ref.tum), written by mrclam_to_bag.\n"
-      << "dataset: \"" << arguments.dataset_dir << "\"\n"
+      << "dataset: " << io::jsonString(arguments.dataset_dir) << "\n"  // valid YAML too
       << "robot: " << arguments.robot << "\n"
       << "frame: map\n"
-      << "landmarks:\n";
-  char line[256];
+      << "landmarks:\n"
+      << std::fixed << std::setprecision(8);
   for (const io::MrclamLandmark& l : data.landmarks) {
-    std::snprintf(line, sizeof(line),
-                  "  - {id: %d, x_m: %.8f, y_m: %.8f, sd_x_m: %.8f, sd_y_m: %.8f}\n", l.subject,
-                  l.x_m, l.y_m, l.sd_x_m, l.sd_y_m);
-    out << line;
+    out << "  - {id: " << l.subject << ", x_m: " << l.x_m << ", y_m: " << l.y_m
+        << ", sd_x_m: " << l.sd_x_m << ", sd_y_m: " << l.sd_y_m << "}\n";
   }
   if (!out) throw std::runtime_error(path + ": cannot be written");
 }
+
+/// Ground truth may begin this much after the first command without a warning (Vicon's period
+/// is 0.01 s; a crop by --start/--duration cuts it at the first kept command).
+constexpr double kGroundTruthLateS = 0.5;
 
 /// The work once the arguments are understood; the exit status.
 int run(const Arguments& arguments) {
@@ -241,31 +248,67 @@ int run(const Arguments& arguments) {
   io::cropMrclamRobot(arguments.start_s, arguments.duration_s, &data);
   io::delayMrclamCommands(arguments.command_delay_s, &data);
   const std::size_t measurements_read = data.measurements.size();  // within --start/--duration
-  if (data.ground_truth.empty()) {
-    throw std::runtime_error("no ground truth during the odometry's time span");
+  const std::string robot_files = arguments.dataset_dir + "/Robot" +
+                                  std::to_string(arguments.robot) + "_";
+  if (data.odometry.size() < 2) {
+    throw std::runtime_error(robot_files + "Odometry.dat: " +
+                             std::to_string(data.odometry.size()) +
+                             " command(s) kept by --start/--duration; at least 2 are needed");
   }
-  const core::Pose2 start = io::interpolatePose(data.ground_truth, data.odometry.front().stamp);
+  const double first_command = data.odometry.front().stamp;
+  const double last_command = data.odometry.back().stamp;
+  if (data.ground_truth.empty() || data.ground_truth.back().stamp < first_command ||
+      data.ground_truth.front().stamp > last_command) {
+    std::ostringstream why;
+    why << std::fixed << std::setprecision(3) << robot_files
+        << "Groundtruth.dat: no ground-truth pose while the commands run (" << first_command
+        << " to " << last_command << " s)";
+    throw std::runtime_error(why.str());
+  }
+  if (data.ground_truth.front().stamp > first_command + kGroundTruthLateS) {
+    std::ostringstream why;
+    why << std::setprecision(3) << robot_files << "Groundtruth.dat begins "
+        << data.ground_truth.front().stamp - first_command
+        << " s after the first command: the run starts at the first ground-truth pose, not "
+           "where the robot was";
+    data.warnings.push_back(why.str());
+  }
+  for (const std::string& warning : data.warnings) {
+    std::cerr << "mrclam_to_bag: warning: " << warning << "\n";
+  }
+  const core::Pose2 start = io::interpolatePose(data.ground_truth, first_command);
   int not_integrated = 0;
   const std::vector<io::StampedPose> odometry =
       io::integrateMrclamOdometry(data.odometry, start, arguments.max_gap_s, &not_integrated);
   const std::vector<io::MrclamMeasurementGroup> groups =
       io::groupLandmarkMeasurements(data.measurements);
 
-  const Counts counts = writeBag(arguments, data, odometry, groups);
+  std::size_t robots = 0, unknown = 0;
+  for (const io::MrclamMeasurement& m : data.measurements) {
+    if (m.subject < 0)
+      ++unknown;
+    else if (m.subject < io::kMrclamFirstLandmarkSubject)
+      ++robots;
+  }
+  if (groups.empty()) {
+    throw std::runtime_error(
+        robot_files + "Measurement.dat: no landmark sighting" +
+        (arguments.start_s > 0.0 || arguments.duration_s > 0.0 ? " kept by --start/--duration"
+                                                               : "") +
+        " (" + std::to_string(measurements_read) + " sightings: " + std::to_string(robots) +
+        " of robots, " + std::to_string(unknown) +
+        " of barcodes not in Barcodes.dat); the bag would have no /features");
+  }
+
+  // The side files first: the bag appears only when complete, so a bag on disk means a whole
+  // conversion (benchmarks/run_mrclam reuses one it finds).
   const std::string reference_path = io::besideBag(arguments.bag_path, ".ref.tum");
   const std::string odometry_path = io::besideBag(arguments.bag_path, ".odom.tum");
   const std::string landmarks_path = io::besideBag(arguments.bag_path, ".landmarks.yaml");
   io::writeTum(reference_path, data.ground_truth);
   io::writeTum(odometry_path, odometry);
   writeLandmarks(landmarks_path, arguments, data);
-
-  std::size_t robots = 0, unknown = 0;
-  for (const io::MrclamMeasurement& m : data.measurements) {
-    if (m.subject < 0)
-      ++unknown;
-    else if (m.subject < 6)
-      ++robots;
-  }
+  const Counts counts = writeBag(arguments, data, odometry, groups);
   std::cerr << "mrclam_to_bag: robot " << arguments.robot << ": " << counts.odometry
             << " odometry poses over " << (odometry.back().stamp - odometry.front().stamp)
             << " s (start at the ground-truth pose " << start.transpose() << "), "

@@ -17,6 +17,8 @@ expect "mrclam_to_bag --help" 0 "usage: mrclam_to_bag" "$bin/mrclam_to_bag" -h
 expect "mrclam_to_bag bad robot" 2 "usage: mrclam_to_bag" "$bin/mrclam_to_bag" "$work" x "$work/m.bag"
 expect "mrclam_to_bag negative delay" 2 "--command-delay needs a non-negative number, got '-1'" \
   "$bin/mrclam_to_bag" "$work" 1 "$work/m.bag" --command-delay -1
+expect "mrclam_to_bag negative start" 2 "--start needs a non-negative number, got '-5'" \
+  "$bin/mrclam_to_bag" "$work" 1 "$work/m.bag" --start -5
 expect "mrclam_to_bag missing dataset" 1 "no_such_input" "$bin/mrclam_to_bag" "$missing" 1 "$work/m.bag"
 expect "victoria_park_to_bag --help" 0 "usage: victoria_park_to_bag" "$bin/victoria_park_to_bag" --help
 expect "victoria_park_to_bag bad option" 2 "usage: victoria_park_to_bag" \

@@ -112,8 +112,57 @@ TEST(MrclamParse, MalformedLinesNameFileAndLine) {
             "Robot1_Measurement.dat:2: barcode is not an integer");
   EXPECT_EQ(errorOf(parseMeasurementText, "1 14 -2 0\n"),
             "Robot1_Measurement.dat:1: negative range");
-  EXPECT_EQ(errorOf(parseBarcodeText, "1 5\n2 5\n"), "Barcodes.dat:2: barcode 5 listed twice");
+  EXPECT_EQ(errorOf(parseBarcodeText, "1 5\n2 5\n"),
+            "Barcodes.dat:2: barcode 5 listed twice (first at line 1)");
+  EXPECT_EQ(errorOf(parseBarcodeText, "1 5\n1 6\n"),
+            "Barcodes.dat:2: subject 1 listed twice (first at line 1)");
+  EXPECT_NE(errorOf(parseBarcodeText, "0 5\n").find("Barcodes.dat:1: subject 0 is not"),
+            std::string::npos);
   EXPECT_EQ(errorOf(parseOdometryText, "# only a header\n"), "");
+}
+
+void parseLandmarkText(const std::string& text) {
+  std::istringstream in(text);
+  parseMrclamLandmarks(in, "Landmark_Groundtruth.dat");
+}
+
+void parseGroundTruthText(const std::string& text) {
+  std::istringstream in(text);
+  parseMrclamGroundTruth(in, "Robot1_Groundtruth.dat");
+}
+
+/// Values no MRCLAM file can hold: each named with its file and line.
+TEST(MrclamParse, OutOfRangeBearingsHeadingsLandmarksAndStampsNameFileAndLine) {
+  EXPECT_EQ(errorOf(parseMeasurementText, "1 14 2 0.5\n1 14 2 100\n"),
+            "Robot1_Measurement.dat:2: bearing = 100 is outside [-6.28319, 6.28319]");
+  EXPECT_EQ(errorOf(parseGroundTruthText, "1 0 0 1e300\n"),
+            "Robot1_Groundtruth.dat:1: theta = 1e+300 is outside [-1000, 1000]");
+  EXPECT_EQ(errorOf(parseLandmarkText, "6 1 2 0 0\n7 1e200 2 0 0\n"),
+            "Landmark_Groundtruth.dat:2: x = 1e+200 is outside [-1e+06, 1e+06]");
+  EXPECT_EQ(errorOf(parseLandmarkText, "6 1 2 -0.5 0\n"),
+            "Landmark_Groundtruth.dat:1: sd_x = -0.5 is outside [0, 1e+06]");
+  EXPECT_EQ(errorOf(parseLandmarkText, "6 1 2 0 0\n6 3 4 0 0\n"),
+            "Landmark_Groundtruth.dat:2: subject 6 listed twice (first at line 1)");
+  EXPECT_NE(errorOf(parseOdometryText, "0.000 0.1 0\n").find(
+                "Robot1_Odometry.dat:1: t = 0 is not a positive Unix time"),
+            std::string::npos);
+}
+
+/// Old Mac line ends (a lone CR) split lines as LF and CRLF do, and a UTF-8 byte-order mark
+/// is skipped; before, a CR-only file was one comment line and read as empty.
+TEST(MrclamParse, LoneCarriageReturnsEndLinesAndAByteOrderMarkIsSkipped) {
+  std::istringstream cr("\xEF\xBB\xBF# header\r10 14 2 0.1\r\r11 14 3 0.2\r");
+  const std::vector<MrclamMeasurement> m = parseMrclamMeasurements(cr, "m.dat");
+  ASSERT_EQ(m.size(), 2u);
+  EXPECT_DOUBLE_EQ(m[1].range_m, 3.0);
+  EXPECT_EQ(m[0].line, 2u);
+  EXPECT_EQ(m[1].line, 4u);
+  std::istringstream crlf("# header\r\n10 0.1 0\r\n\r\n11 0.2 0\r\n");
+  const std::vector<MrclamOdometry> o = parseMrclamOdometry(crlf, "o.dat");
+  ASSERT_EQ(o.size(), 2u);
+  EXPECT_EQ(o[1].line, 4u);
+  EXPECT_EQ(errorOf(parseOdometryText, "1 0.1 0\r2 x 0\r"),
+            "Robot1_Odometry.dat:2: not a finite number: 'x' (expected t v w)");
 }
 
 TEST(MrclamRead, MissingFileIsNamed) {
@@ -199,6 +248,55 @@ TEST(MrclamRead, ReadsADirectoryAndCrops) {
   EXPECT_THROW(delayMrclamCommands(-0.1, &delayed), std::invalid_argument);
   EXPECT_THROW(delayMrclamCommands(std::nan(""), &delayed), std::invalid_argument);
   EXPECT_DOUBLE_EQ(delayed.odometry[0].stamp, 100.25);  // unchanged by the rejected delays
+}
+
+/// Commands out of time order are sorted and reported, commands sharing a stamp reported, a
+/// sighted landmark the survey lacks named, and an empty barcode or landmark table refused.
+TEST(MrclamRead, RepairsAndReportsOdometryOrderAndRefusesEmptyTables) {
+  const std::string dir = std::string(::testing::TempDir()) + "/mrclam_order_test";
+  ASSERT_EQ(std::system(("mkdir -p " + dir).c_str()), 0);
+  const auto write = [&](const std::string& name, const std::string& text) {
+    std::ofstream(dir + "/" + name) << text;
+  };
+  write("Barcodes.dat", "# h\n1 5\n6 63\n7 64\n");
+  write("Landmark_Groundtruth.dat", "# h\n6 1 2 0 0\n");
+  write("Robot1_Odometry.dat", "# h\n100 0.1 0\n102 0.3 0\n101 0.2 0\n102 0 0\n103 0 0\n");
+  write("Robot1_Measurement.dat", "# h\n100.5 63 2 0\n101.5 64 2 0\n");
+  write("Robot1_Groundtruth.dat", "# h\n99 0 0 0\n104 0 0 0\n");
+  const MrclamRobot data = readMrclamRobot(dir, 1);
+  ASSERT_EQ(data.odometry.size(), 5u);
+  for (std::size_t i = 1; i < data.odometry.size(); ++i) {
+    EXPECT_LE(data.odometry[i - 1].stamp, data.odometry[i].stamp);
+  }
+  EXPECT_DOUBLE_EQ(data.odometry[1].v_mps, 0.2);  // line 4 moved before line 3
+  EXPECT_DOUBLE_EQ(data.odometry[2].v_mps, 0.3);  // of the two at 102, line 3 stays first
+  ASSERT_EQ(data.warnings.size(), 3u);
+  EXPECT_NE(data.warnings[0].find("Robot1_Odometry.dat: 1 command(s) stamped before the line "
+                                  "above them (first at line 4); sorted by time"),
+            std::string::npos)
+      << data.warnings[0];
+  EXPECT_NE(data.warnings[1].find("1 command(s) share the stamp of the one before (first at "
+                                  "line 5)"),
+            std::string::npos)
+      << data.warnings[1];
+  EXPECT_NE(data.warnings[2].find("no position for sighted landmark subject(s) 7"),
+            std::string::npos)
+      << data.warnings[2];
+  // The first command at 102 (0.3 m/s) is integrated over [102, 103].
+  const std::vector<StampedPose> poses = integrateMrclamOdometry(data.odometry, core::Pose2::Zero());
+  ASSERT_EQ(poses.size(), 4u);
+  EXPECT_NEAR(poses.back().pose.x(), 0.1 + 0.2 + 0.3, 1e-12);
+
+  write("Barcodes.dat", "# only a header\n");
+  try {
+    readMrclamRobot(dir, 1);
+    FAIL() << "no exception";
+  } catch (const std::runtime_error& error) {
+    EXPECT_EQ(std::string(error.what()), dir + "/Barcodes.dat: no data line");
+  }
+  write("Barcodes.dat", "# h\n1 5\n6 63\n");
+  write("Landmark_Groundtruth.dat", "");
+  EXPECT_THROW(readMrclamRobot(dir, 1), std::runtime_error);
 }
 
 TEST(MrclamOdometryIntegration, StraightLineAndCircle) {

@@ -16,6 +16,9 @@
 namespace rbpf_slam {
 namespace io {
 
+/// Subjects 1..5 are the robots, 6 and up the landmarks (every MRCLAM dataset).
+constexpr int kMrclamFirstLandmarkSubject = 6;
+
 /// One velocity command of RobotN_Odometry.dat (`t v w`).
 struct MrclamOdometry {
   double stamp = 0.0;    // s, Unix time
@@ -51,6 +54,7 @@ struct MrclamRobot {
   std::vector<StampedPose> ground_truth;        // Vicon, map frame
   std::vector<MrclamLandmark> landmarks;        // surveyed, map frame
   std::map<int, int> subject_of_barcode;        // Barcodes.dat, barcode -> subject
+  std::vector<std::string> warnings;            // what was read but looks wrong or was repaired
 };
 
 /// Measurements taken at one instant (one camera frame).
@@ -83,8 +87,11 @@ void resolveSubjects(const std::map<int, int>& subject_of_barcode,
                      std::vector<MrclamMeasurement>* measurements);
 
 /// Reads DIR/Barcodes.dat, DIR/Landmark_Groundtruth.dat and DIR/RobotN_{Odometry,Measurement,
-/// Groundtruth}.dat. Throws std::runtime_error naming the file when one is missing or malformed,
-/// std::invalid_argument when robot is not 1..5.
+/// Groundtruth}.dat. Throws std::runtime_error naming the file when one is missing, malformed or
+/// holds no data line (the measurements may be empty), std::invalid_argument when robot is not
+/// 1..5. Sorts every file by time; commands out of time order, commands sharing a stamp (the
+/// first at a stamp is the one integrated), sighted landmarks without a surveyed position and
+/// odometry the ground truth does not cover are reported in `warnings`.
 MrclamRobot readMrclamRobot(const std::string& directory, int robot);
 
 /// Keeps only what lies in [start, start + duration_s] for odometry, measurements and ground
@@ -121,7 +128,8 @@ std::vector<StampedPose> integrateMrclamOdometry(const std::vector<MrclamOdometr
 /// The landmark sightings (subject >= first_landmark_subject; robots and unknown barcodes are
 /// dropped) grouped by equal stamp, in time order.
 std::vector<MrclamMeasurementGroup> groupLandmarkMeasurements(
-    const std::vector<MrclamMeasurement>& measurements, int first_landmark_subject = 6);
+    const std::vector<MrclamMeasurement>& measurements,
+    int first_landmark_subject = kMrclamFirstLandmarkSubject);
 
 }  // namespace io
 }  // namespace rbpf_slam

@@ -9,6 +9,7 @@ namespace io {
 constexpr double kMaxPlausibleCoordinateM = 1e6;  // poses and landmarks
 constexpr double kMaxPlausibleSpeed = 100.0;      // m/s and rad/s
 constexpr double kMaxPlausibleRangeM = 1000.0;    // a range sensor's reading
+constexpr double kMaxPlausibleAngleRad = 1000.0;  // a logged heading, even if never wrapped
 constexpr double kMaxRosStampS = 4294967295.0;    // ros::Time holds 32-bit seconds
 
 }  // namespace io
