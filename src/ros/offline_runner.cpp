@@ -196,23 +196,6 @@ long loadTransforms(const rosbag::Bag& bag, const std::vector<ros::Time>& run_st
   return skipped;
 }
 
-/// Transducer poses in the base frame from tf frames PREFIX0, PREFIX1, ... (until one is
-/// missing); empty when there is none.
-std::vector<core::Pose2> lookupTransducers(const tf2::BufferCore& tf, const std::string& base,
-                                           const std::string& prefix, const ros::Time& stamp) {
-  constexpr int kMaxTransducers = 64;
-  std::vector<core::Pose2> poses;
-  for (int i = 0; i < kMaxTransducers; ++i) {
-    try {
-      poses.push_back(
-          toPose2(tf.lookupTransform(base, prefix + std::to_string(i), stamp).transform));
-    } catch (const tf2::TransformException&) {
-      break;
-    }
-  }
-  return poses;
-}
-
 /// "'/a' (type), '/b' (type)": the bag's topics, for error messages.
 std::string describeTopics(const rosbag::Bag& bag) {
   std::map<std::string, std::string> types;

@@ -200,26 +200,24 @@ void SlamNode::sonarCloudArrived(const topic_tools::ShapeShifter::ConstPtr& msg)
 
 void SlamNode::sonarCloudCallback(const sensor_msgs::PointCloud::ConstPtr& msg) {
   constexpr double kAxisTolerance = 0.05;  // m: a cloud point lies on its transducer's axis
-  constexpr int kMaxTransducers = 64;
   if (!readyForFrame()) return;
   core::Pose2 odom_pose;
   SensorMount cloud_frame;
   if (!lookupPoses(msg->header, &odom_pose, &cloud_frame)) return;
   const io::RosOptions& o = config_.ros;
-  for (int i = 0; sonar_transducers_.empty() && i < kMaxTransducers; ++i) {
-    const std::string frame = o.sonar_frame_prefix + std::to_string(i);
-    try {
-      const auto t = tf_buffer_.lookupTransform(o.base_frame, frame, ros::Time(0));
-      sonar_transducers_.push_back(toPose2(t.transform));
-    } catch (const tf2::TransformException&) {
-      if (i == 0) {
-        diagnostics_.recordDrop("no sonar transducer in tf");
-        warnThrottled("sonar transducers", "sonar_cloud needs the transducer poses, but tf has "
-                                           "no frame " + frame + " under " + o.base_frame);
-        return;
-      }
-      break;
+  if (sonar_transducers_.empty()) {  // the whole ring, once (it used to stop at sonar_0)
+    sonar_transducers_ =
+        lookupTransducers(tf_buffer_, o.base_frame, o.sonar_frame_prefix, ros::Time(0));
+    if (sonar_transducers_.empty()) {
+      diagnostics_.recordDrop("no sonar transducer in tf");
+      warnThrottled("sonar transducers", "sonar_cloud needs the transducer poses, but tf has "
+                                         "no frame " + o.sonar_frame_prefix + "0 under " +
+                                         o.base_frame);
+      return;
     }
+    ROS_INFO_STREAM("rbpf_slam_node: sonar_cloud read through " << sonar_transducers_.size()
+                    << " transducer(s), " << o.sonar_frame_prefix << "0.."
+                    << sonar_transducers_.size() - 1 << " in tf");
   }
   int unmatched = 0;
   const std::vector<core::ConeReading> readings = core::coneReadingsFromCloud(

@@ -12,6 +12,7 @@
 #include <tf2_ros/transform_listener.h>
 #include <visualization_msgs/MarkerArray.h>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <memory>
@@ -258,14 +259,18 @@ TEST_F(BagPlaybackTest, BagPlayedToTheEnd) {
                       << ros::Time::now().toSec() << ")";
 }
 
-// ~expected_markers: "lines" (laser configs), "points" (range-bearing landmarks) or "both".
+// ~expected_markers: "lines" (laser configs), "points" (range-bearing landmarks) or "both";
+// ~min_line_markers (default 1): the fewest line landmarks one ~landmarks message must show.
 TEST_F(BagPlaybackTest, LandmarkMarkersContainTheExpectedKinds) {
   std::string expected = "lines";
+  int min_lines = 1;
   ros::NodeHandle("~").param<std::string>("expected_markers", expected, expected);
+  ros::NodeHandle("~").param("min_line_markers", min_lines, min_lines);
   std::lock_guard<std::mutex> lock(observer_->mutex_);
   EXPECT_GT(observer_->landmark_messages_, 0) << "nothing on ~landmarks";
   if (expected == "lines" || expected == "both") {
-    EXPECT_GT(observer_->max_line_markers_, 0) << "no LINE_LIST marker in namespace 'lines'";
+    EXPECT_GE(observer_->max_line_markers_, std::max(min_lines, 1))
+        << "too few LINE_LIST markers in namespace 'lines'";
   }
   if (expected == "points" || expected == "both") {
     EXPECT_GT(observer_->max_point_markers_, 0) << "no marker in namespace 'points'";

@@ -14,6 +14,9 @@
 #include <map>
 #include <string>
 #include <utility>
+#include <vector>
+
+#include "rbpf_slam/core/geometry.h"
 
 namespace rbpf_slam {
 namespace rosbridge {
@@ -40,6 +43,11 @@ class ThrottledWarnings {
 /// base_frame yet (start-up: everything waits in the bounded queue).
 bool frameInTf(const tf2_ros::Buffer& tf, const std::string& base_frame, const std::string& frame,
                std::string* error);
+
+/// Sonar transducer poses in the base frame from tf frames PREFIX0, PREFIX1, ... (up to 64,
+/// until one is missing); empty when tf has no PREFIX0. For a sonar ring given as one cloud.
+std::vector<core::Pose2> lookupTransducers(const tf2::BufferCore& tf, const std::string& base,
+                                           const std::string& prefix, const ros::Time& stamp);
 
 /// A subscription whose messages reach on_message only once tf can transform their stamp into
 /// target_frame (tf2_ros::MessageFilter, bounded queue). Messages in a frame not connected to
