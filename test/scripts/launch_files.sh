@@ -19,6 +19,11 @@ for launch in "$root"/launch/*.launch; do
       echo "FAIL: $name starts rbpf_slam/$type, which roslaunch cannot find"; status=1
     fi
   done
+  # A node of this package reads its private parameters strictly, so one left on the master by
+  # an earlier launch (another config's keys) must not reach it: every tag clears them.
+  if grep -E '<node [^>]*pkg="rbpf_slam"' "$launch" | grep -vq 'clear_params="true"'; then
+    echo "FAIL: $name starts an rbpf_slam node without clear_params=\"true\""; status=1
+  fi
   echo "ok $name: $(echo "$nodes" | tr '\n' ' ')"
 done
 [ "$status" -eq 0 ] && echo "PASS"
