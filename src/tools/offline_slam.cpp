@@ -26,8 +26,10 @@ const char kUsage[] =
     "  --reference F    TUM ground truth: ATE in summary.json\n"
     "  --output-bag F   the input's tf and sensors plus map -> odom, pose, landmarks, trajectory\n"
     "Writes DIR/trajectory.tum, trajectory_online.tum, landmarks.yaml, summary.json, map.png,\n"
-    "map.pgm and map.yaml. Exits 1 when no frame could be used or --reference could not be\n"
-    "evaluated (the outputs are written all the same), 2 on bad arguments.\n";
+    "map.pgm and map.yaml. Exits 2 on bad arguments, 1 when the bag or the config cannot be\n"
+    "read, a config or --set value is refused, a topic carries the wrong message type,\n"
+    "--output-bag names the input, no frame could be used or --reference could not be\n"
+    "evaluated (the outputs are written all the same in the last two cases).\n";
 
 struct Arguments {
   rbpf_slam::rosbridge::OfflineOptions options;
