@@ -616,7 +616,32 @@ bool SlamNode::checkClock() {
   return true;
 }
 
+std::string SlamNode::inputTopics() const {
+  const io::RosOptions& o = config_.ros;
+  std::vector<std::string> topics;
+  if (scan_input_) topics.push_back(o.scan_topic);
+  if (sonar_input_) topics.push_back(o.sonar_topic);
+  if (sonar_cloud_input_) topics.push_back(o.sonar_cloud_topic);
+  if (features_input_) topics.push_back(o.features_topic);
+  std::string text;
+  for (const std::string& topic : topics) {
+    text += (text.empty() ? "'" : ", '") + nh_.resolveName(topic) + "'";
+  }
+  return text.empty() ? "no topic" : text;
+}
+
 void SlamNode::publishDiagnostics(const ros::WallTimerEvent&) {
+  // A user who got a topic or frame name wrong sees nothing happen: say what is awaited.
+  constexpr double kSilentInputWarnS = 15.0;
+  const double waited = (ros::WallTime::now() - started_).toSec();
+  if (updates_ == 0 && !paused_ && waited >= kSilentInputWarnS) {
+    const io::RosOptions& o = config_.ros;
+    std::ostringstream why;
+    why << "no update in " << static_cast<int>(waited) << " s: waiting for " << inputTopics()
+        << " and tf " << o.odom_frame << " -> " << o.base_frame
+        << " (check the names against `rostopic list` and the config's *_topic / *_frame keys)";
+    warnThrottled("no input", why.str());
+  }
   diagnostics_.setPaused(paused_);
   diagnostics_.setOdometryGaps(pipeline_.session().gaps());
   const ros::Time now = ros::Time::now();
@@ -635,6 +660,7 @@ void SlamNode::resetAll(const std::string& why) {
   if (sonar_cloud_input_) sonar_cloud_input_->clear();
   if (features_input_) features_input_->clear();
   updates_ = 0;
+  started_ = ros::WallTime::now();  // the "nothing arrives" warning waits afresh
   map_published_at_update_ = -1;  // the new map's first grid is published like the first one
   stale_drops_in_a_row_ = 0;
   publishLandmarks(ros::Time::now());  // DELETE for every landmark shown

@@ -78,6 +78,8 @@ class SlamNode {
                    SensorMount* frame_mount);
   void handleResult(core::FrameResult result, const ros::Time& stamp, double update_ms);
   void publishDiagnostics(const ros::WallTimerEvent& event);
+  /// The topics the node waits on, for the warning when nothing arrives.
+  std::string inputTopics() const;
   /// ~pose, ~trajectory (at once with trajectory_now, else throttled), ~landmarks, ~particles.
   void publishState(const ros::Time& stamp, bool trajectory_now = false);
   void publishLandmarks(const ros::Time& stamp);
@@ -152,6 +154,7 @@ class SlamNode {
   int stale_drops_in_a_row_ = 0;  // "older than the tf cache" drops since the last good frame
   ThrottledWarnings warnings_{"rbpf_slam_node"};
   long updates_ = 0;
+  ros::WallTime started_ = ros::WallTime::now();  // for the "nothing arrives" warning
 };
 
 }  // namespace rosbridge
