@@ -105,7 +105,8 @@ void requireUnique(std::map<int, std::size_t>* line_of, int key, const char* wha
   const auto inserted = line_of->emplace(key, line);
   if (!inserted.second) {
     throw lineError(source, line,
-                    std::string(what) + " " + std::to_string(key) + " listed twice (first at line " +
+                    std::string(what) + " " + std::to_string(key) +
+                        " listed twice (first at line " +
                         std::to_string(inserted.first->second) + ")");
   }
 }

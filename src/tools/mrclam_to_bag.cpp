@@ -316,8 +316,9 @@ int run(const Arguments& arguments) {
             << " /features messages (" << (arguments.known_ids ? "known" : "unknown")
             << " ids; dropped " << robots << " sightings of robots and " << unknown
             << " of unknown barcodes, of " << measurements_read << " sightings"
-            << (arguments.start_s > 0.0 || arguments.duration_s > 0.0 ? " kept by --start/--duration"
-                                                                      : "")
+            << (arguments.start_s > 0.0 || arguments.duration_s > 0.0
+                    ? " kept by --start/--duration"
+                    : "")
             << "), "
             << counts.ground_truth << " ground-truth poses; " << not_integrated
             << " command interval(s) over " << arguments.max_gap_s << " s not integrated\n"

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
+#include <functional>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -21,7 +22,8 @@ const char kHeader[] =
     "# UTIAS Multi-Robot Cooperative Localization and Mapping Dataset\n"
     "# Time [s]    x [m]    y [m]    orientation [rad]\n";
 
-std::string errorOf(void (*parse)(const std::string&), const std::string& text) {
+std::string errorOf(const std::function<void(const std::string&)>& parse,
+                    const std::string& text) {
   try {
     parse(text);
   } catch (const std::runtime_error& error) {
@@ -71,20 +73,21 @@ TEST(MrclamParse, MeasurementsBarcodesLandmarksAndGroundTruth) {
   EXPECT_NEAR(g[0].pose.z(), 7.0 - 2.0 * M_PI, 1e-12);  // wrapped into (-pi, pi]
 }
 
-void parseOdometryText(const std::string& text) {
-  std::istringstream in(text);
-  parseMrclamOdometry(in, "Robot1_Odometry.dat");
+/// A parser of one file, fed from text, for errorOf.
+template <typename Result>
+std::function<void(const std::string&)> parserOf(
+    Result (*parse)(std::istream&, const std::string&), const std::string& source) {
+  return [parse, source](const std::string& text) {
+    std::istringstream in(text);
+    parse(in, source);
+  };
 }
 
-void parseMeasurementText(const std::string& text) {
-  std::istringstream in(text);
-  parseMrclamMeasurements(in, "Robot1_Measurement.dat");
-}
-
-void parseBarcodeText(const std::string& text) {
-  std::istringstream in(text);
-  parseMrclamBarcodes(in, "Barcodes.dat");
-}
+const auto parseOdometryText = parserOf(parseMrclamOdometry, "Robot1_Odometry.dat");
+const auto parseMeasurementText = parserOf(parseMrclamMeasurements, "Robot1_Measurement.dat");
+const auto parseBarcodeText = parserOf(parseMrclamBarcodes, "Barcodes.dat");
+const auto parseLandmarkText = parserOf(parseMrclamLandmarks, "Landmark_Groundtruth.dat");
+const auto parseGroundTruthText = parserOf(parseMrclamGroundTruth, "Robot1_Groundtruth.dat");
 
 /// Finite but absurd values (a corrupt file) name the file, the line and the limit; they used
 /// to be dead-reckoned to 4e228 m, or stop the converter in ros::Time without a line.
@@ -119,16 +122,6 @@ TEST(MrclamParse, MalformedLinesNameFileAndLine) {
   EXPECT_NE(errorOf(parseBarcodeText, "0 5\n").find("Barcodes.dat:1: subject 0 is not"),
             std::string::npos);
   EXPECT_EQ(errorOf(parseOdometryText, "# only a header\n"), "");
-}
-
-void parseLandmarkText(const std::string& text) {
-  std::istringstream in(text);
-  parseMrclamLandmarks(in, "Landmark_Groundtruth.dat");
-}
-
-void parseGroundTruthText(const std::string& text) {
-  std::istringstream in(text);
-  parseMrclamGroundTruth(in, "Robot1_Groundtruth.dat");
 }
 
 /// Values no MRCLAM file can hold: each named with its file and line.
@@ -283,7 +276,8 @@ TEST(MrclamRead, RepairsAndReportsOdometryOrderAndRefusesEmptyTables) {
             std::string::npos)
       << data.warnings[2];
   // The first command at 102 (0.3 m/s) is integrated over [102, 103].
-  const std::vector<StampedPose> poses = integrateMrclamOdometry(data.odometry, core::Pose2::Zero());
+  const std::vector<StampedPose> poses =
+      integrateMrclamOdometry(data.odometry, core::Pose2::Zero());
   ASSERT_EQ(poses.size(), 4u);
   EXPECT_NEAR(poses.back().pose.x(), 0.1 + 0.2 + 0.3, 1e-12);
 
