@@ -279,6 +279,32 @@ void reportUnsurveyedSubjects(MrclamRobot* data) {
   data->warnings.push_back(message.str());
 }
 
+// Drops a sighting that repeats one of its frame exactly (same stamp, barcode, range and
+// bearing: a line written twice would count as two sightings). Measurements sorted by stamp.
+void dropRepeatedSightings(const std::string& source, MrclamRobot* data) {
+  std::vector<MrclamMeasurement>& m = data->measurements;
+  std::vector<MrclamMeasurement> kept;
+  kept.reserve(m.size());
+  std::size_t repeated = 0, first_line = 0;
+  std::size_t frame_begin = 0;  // first of the kept sightings at the current stamp
+  for (const MrclamMeasurement& x : m) {
+    if (kept.empty() || kept.back().stamp != x.stamp) frame_begin = kept.size();
+    const bool seen = std::any_of(kept.begin() + frame_begin, kept.end(), [&](const auto& y) {
+      return y.barcode == x.barcode && y.range_m == x.range_m && y.bearing_rad == x.bearing_rad;
+    });
+    if (!seen) {
+      kept.push_back(x);
+    } else if (repeated++ == 0) {
+      first_line = x.line;
+    }
+  }
+  if (repeated == 0) return;
+  m.swap(kept);
+  data->warnings.push_back(source + ": " + std::to_string(repeated) +
+                           " sighting line(s) repeat one of the same frame exactly (first at "
+                           "line " + std::to_string(first_line) + "); each counted once");
+}
+
 }  // namespace
 
 MrclamRobot readMrclamRobot(const std::string& directory, int robot) {
@@ -309,6 +335,7 @@ MrclamRobot readMrclamRobot(const std::string& directory, int robot) {
   std::stable_sort(
       data.measurements.begin(), data.measurements.end(),
       [](const MrclamMeasurement& a, const MrclamMeasurement& b) { return a.stamp < b.stamp; });
+  dropRepeatedSightings(prefix + "Measurement.dat", &data);
   return data;
 }
 

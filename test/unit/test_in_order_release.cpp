@@ -12,9 +12,9 @@ using Names = std::vector<std::string>;
 
 TEST(InOrderRelease, ALaterMessageWaitsForAnEarlierOneStillInTheGate) {
   InOrderRelease<double, std::string> order(10);
-  order.entered(1.0);
-  order.entered(2.0);
-  order.entered(3.0);
+  order.entered(1.0, "");
+  order.entered(2.0, "");
+  order.entered(3.0, "");
   EXPECT_EQ(order.left(2.0, "b"), Names{});  // 1.0 still waits for tf
   EXPECT_EQ(order.held(), 1u);
   EXPECT_EQ(order.left(1.0, "a"), (Names{"a", "b"}));
@@ -25,9 +25,9 @@ TEST(InOrderRelease, ALaterMessageWaitsForAnEarlierOneStillInTheGate) {
 
 TEST(InOrderRelease, ADroppedEarlierMessageLetsTheLaterOnesGo) {
   InOrderRelease<double, std::string> order(10);
-  order.entered(1.0);
-  order.entered(2.0);
-  order.entered(3.0);
+  order.entered(1.0, "");
+  order.entered(2.0, "");
+  order.entered(3.0, "");
   EXPECT_EQ(order.left(3.0, "c"), Names{});
   EXPECT_EQ(order.left(2.0, "b"), Names{});
   EXPECT_EQ(order.dropped(1.0), (Names{"b", "c"}));  // tf never came for 1.0
@@ -35,10 +35,10 @@ TEST(InOrderRelease, ADroppedEarlierMessageLetsTheLaterOnesGo) {
 
 TEST(InOrderRelease, MessagesInOrderPassAtOnceAndEqualStampsDoNotBlockEachOther) {
   InOrderRelease<double, std::string> order(10);
-  order.entered(1.0);
+  order.entered(1.0, "");
   EXPECT_EQ(order.left(1.0, "a"), Names{"a"});
-  order.entered(2.0);
-  order.entered(2.0);
+  order.entered(2.0, "");
+  order.entered(2.0, "");
   EXPECT_EQ(order.left(2.0, "b"), Names{"b"});
   EXPECT_EQ(order.left(2.0, "b2"), Names{"b2"});
   // A message that never entered (the gate answered for something unknown) passes too.
@@ -47,7 +47,7 @@ TEST(InOrderRelease, MessagesInOrderPassAtOnceAndEqualStampsDoNotBlockEachOther)
 
 TEST(InOrderRelease, AtMostMaxHeldWaitThenTheUnansweredEarlierStampIsForgotten) {
   InOrderRelease<double, std::string> order(2);
-  for (double t : {1.0, 2.0, 3.0, 4.0}) order.entered(t);
+  for (double t : {1.0, 2.0, 3.0, 4.0}) order.entered(t, "");
   EXPECT_EQ(order.left(2.0, "b"), Names{});
   EXPECT_EQ(order.left(3.0, "c"), Names{});
   EXPECT_EQ(order.left(4.0, "d"), (Names{"b", "c", "d"}));  // 1.0 given up on
@@ -58,12 +58,32 @@ TEST(InOrderRelease, AtMostMaxHeldWaitThenTheUnansweredEarlierStampIsForgotten) 
 
 TEST(InOrderRelease, ClearForgetsWhatWaitsAndWhatIsInTheGate) {
   InOrderRelease<double, std::string> order(10);
-  order.entered(1.0);
-  order.entered(2.0);
+  order.entered(1.0, "");
+  order.entered(2.0, "");
   EXPECT_EQ(order.left(2.0, "b"), Names{});
   order.clear();
   EXPECT_EQ(order.held(), 0u);
   EXPECT_EQ(order.inGate(), 0u);
-  order.entered(7.0);
+  order.entered(7.0, "");
   EXPECT_EQ(order.left(7.0, "g"), Names{"g"});
+}
+
+/// A message that can no longer leave the gate (its transform will not come, though a later
+/// one's did) is not waited for: before, mapping stalled until the gate's queue overflowed
+/// (faults.test, a clock jump back).
+TEST(InOrderRelease, AnEarlierMessageThatCannotLeaveAnyMoreIsNotWaitedFor) {
+  std::string stuck = "a";
+  InOrderRelease<double, std::string> order(
+      10, [&stuck](const std::string& name) { return name != stuck; });
+  order.entered(1.0, "a");
+  order.entered(2.0, "b");
+  order.entered(3.0, "c");
+  EXPECT_EQ(order.left(2.0, "b"), Names{"b"});  // "a" cannot leave: "b" goes on
+  EXPECT_EQ(order.inGate(), 1u);                // "c" still waits in the gate
+  stuck = "none";
+  order.entered(4.0, "d");
+  order.entered(5.0, "e");
+  EXPECT_EQ(order.left(5.0, "e"), Names{});  // "d" may still leave: "e" waits for it
+  EXPECT_EQ(order.left(4.0, "d"), Names{});  // now "c" (3.0, may still leave) holds both
+  EXPECT_EQ(order.left(3.0, "c"), (Names{"c", "d", "e"}));
 }

@@ -254,7 +254,8 @@ TEST(MrclamRead, RepairsAndReportsOdometryOrderAndRefusesEmptyTables) {
   write("Barcodes.dat", "# h\n1 5\n6 63\n7 64\n");
   write("Landmark_Groundtruth.dat", "# h\n6 1 2 0 0\n");
   write("Robot1_Odometry.dat", "# h\n100 0.1 0\n102 0.3 0\n101 0.2 0\n102 0 0\n103 0 0\n");
-  write("Robot1_Measurement.dat", "# h\n100.5 63 2 0\n101.5 64 2 0\n");
+  write("Robot1_Measurement.dat",
+        "# h\n100.5 63 2 0\n101.5 64 2 0\n100.5 64 3 0\n100.5 63 2 0\n100.5 63 2.5 0\n");
   write("Robot1_Groundtruth.dat", "# h\n99 0 0 0\n104 0 0 0\n");
   const MrclamRobot data = readMrclamRobot(dir, 1);
   ASSERT_EQ(data.odometry.size(), 5u);
@@ -263,7 +264,9 @@ TEST(MrclamRead, RepairsAndReportsOdometryOrderAndRefusesEmptyTables) {
   }
   EXPECT_DOUBLE_EQ(data.odometry[1].v_mps, 0.2);  // line 4 moved before line 3
   EXPECT_DOUBLE_EQ(data.odometry[2].v_mps, 0.3);  // of the two at 102, line 3 stays first
-  ASSERT_EQ(data.warnings.size(), 3u);
+  ASSERT_EQ(data.measurements.size(), 4u);  // line 5 repeats line 2: one sighting
+  EXPECT_DOUBLE_EQ(data.measurements[2].range_m, 2.5);
+  ASSERT_EQ(data.warnings.size(), 4u);
   EXPECT_NE(data.warnings[0].find("Robot1_Odometry.dat: 1 command(s) stamped before the line "
                                   "above them (first at line 4); sorted by time"),
             std::string::npos)
@@ -275,6 +278,10 @@ TEST(MrclamRead, RepairsAndReportsOdometryOrderAndRefusesEmptyTables) {
   EXPECT_NE(data.warnings[2].find("no position for sighted landmark subject(s) 7"),
             std::string::npos)
       << data.warnings[2];
+  EXPECT_NE(data.warnings[3].find("Robot1_Measurement.dat: 1 sighting line(s) repeat one of the "
+                                  "same frame exactly (first at line 5)"),
+            std::string::npos)
+      << data.warnings[3];
   // The first command at 102 (0.3 m/s) is integrated over [102, 103].
   const std::vector<StampedPose> poses =
       integrateMrclamOdometry(data.odometry, core::Pose2::Zero());

@@ -3,15 +3,17 @@
 // gate is tf2_ros::MessageFilter, which holds a message until tf covers its stamp: a later
 // message that arrives when tf already covers it can leave before an earlier one still waiting,
 // and the SLAM pipeline then refuses the earlier one ("stamp not after the last"). Here a
-// message that left waits until every earlier one still in the gate has left or been dropped.
-// At most max_held wait: beyond that the earliest goes on, and earlier keys the gate never
-// answered for are forgotten (a gate that loses a message silently cannot stall the stream).
+// message that left waits until every earlier one still in the gate has left or been dropped,
+// unless that one cannot leave any more (MayStillLeave: for tf, the transform at its stamp is
+// not there although a later one is, e.g. after a clock jump cleared the buffer; it would only
+// die when the gate's queue overflows). At most max_held wait: beyond that the earliest goes
+// on, and earlier keys the gate never answered for are forgotten.
 // ROS-free, so that it is unit-tested without a roscore.
 
 #include <algorithm>
 #include <cstddef>
+#include <functional>
 #include <map>
-#include <set>
 #include <utility>
 #include <vector>
 
@@ -21,10 +23,16 @@ namespace core {
 template <typename Key, typename Value>
 class InOrderRelease {
  public:
-  explicit InOrderRelease(std::size_t max_held) : max_held_(std::max<std::size_t>(max_held, 1)) {}
+  /// Whether a message still in the gate can yet leave it (the gate's condition holds for it
+  /// now, its release is on its way); one that cannot is not waited for.
+  using MayStillLeave = std::function<bool(const Value&)>;
 
-  /// A message with this key went into the gate.
-  void entered(const Key& key) { in_gate_.insert(key); }
+  explicit InOrderRelease(std::size_t max_held, MayStillLeave may_still_leave = nullptr)
+      : max_held_(std::max<std::size_t>(max_held, 1)),
+        may_still_leave_(std::move(may_still_leave)) {}
+
+  /// A message went into the gate.
+  void entered(const Key& key, const Value& value) { in_gate_.emplace(key, value); }
 
   /// The gate let the message with this key out: the messages now due, in key order.
   std::vector<Value> left(const Key& key, Value value) {
@@ -58,7 +66,12 @@ class InOrderRelease {
     std::vector<Value> out;
     while (!held_.empty()) {
       const Key first = held_.begin()->first;
-      if (!in_gate_.empty() && *in_gate_.begin() < first) {
+      // Earlier messages that cannot leave any more are not waited for.
+      while (!in_gate_.empty() && in_gate_.begin()->first < first && may_still_leave_ &&
+             !may_still_leave_(in_gate_.begin()->second)) {
+        in_gate_.erase(in_gate_.begin());
+      }
+      if (!in_gate_.empty() && in_gate_.begin()->first < first) {
         if (held_.size() <= max_held_) break;
         in_gate_.erase(in_gate_.begin(), in_gate_.lower_bound(first));  // never answered for
       }
@@ -69,8 +82,9 @@ class InOrderRelease {
   }
 
   const std::size_t max_held_;
-  std::multiset<Key> in_gate_;        // keys of the messages still in the gate
-  std::multimap<Key, Value> held_;    // left the gate, waiting for an earlier one
+  const MayStillLeave may_still_leave_;
+  std::multimap<Key, Value> in_gate_;  // the messages still in the gate
+  std::multimap<Key, Value> held_;     // left the gate, waiting for an earlier one
 };
 
 }  // namespace core

@@ -73,7 +73,10 @@ class TfGatedSubscriber {
         base_frame_(std::move(base_frame)),
         handlers_(std::move(handlers)),
         filter_(*tf, target_frame, queue_size, nh),
-        order_(queue_size) {
+        order_(queue_size, [this, target_frame](const Ptr& msg) {
+          return tf_->canTransform(target_frame, stripSlash(msg->header.frame_id),
+                                   msg->header.stamp);
+        }) {
     // An empty topic: no subscription, the owner feeds messages with add() (a topic whose
     // messages come in another type first, e.g. PointCloud2 converted to PointCloud).
     if (!topic.empty()) {
@@ -96,7 +99,7 @@ class TfGatedSubscriber {
   void add(const Ptr& msg) {
     std::string error;
     if (frameInTf(*tf_, base_frame_, msg->header.frame_id, &error)) {
-      order_.entered(msg->header.stamp);  // before add(): the filter may answer at once
+      order_.entered(msg->header.stamp, msg);  // before add(): the filter may answer at once
       filter_.add(msg);
     } else if (handlers_.on_unknown_frame) {
       handlers_.on_unknown_frame(msg, error);
