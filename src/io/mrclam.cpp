@@ -362,6 +362,13 @@ void cropMrclamRobot(double skip_s, double duration_s, MrclamRobot* data) {
   const double end = duration_s > 0.0 ? start + duration_s
                                        : std::numeric_limits<double>::infinity();
   const auto outside = [&](double stamp) { return stamp < start || stamp > end; };
+  if (std::all_of(data->odometry.begin(), data->odometry.end(),
+                  [&](const MrclamOdometry& c) { return outside(c.stamp); })) {
+    std::ostringstream why;
+    why << "no odometry command between " << skip_s << " and " << skip_s + duration_s
+        << " s after the first";
+    throw std::invalid_argument(why.str());
+  }
   auto& o = data->odometry;
   o.erase(
       std::remove_if(o.begin(), o.end(), [&](const MrclamOdometry& x) { return outside(x.stamp); }),

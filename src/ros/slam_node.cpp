@@ -205,20 +205,23 @@ void SlamNode::sonarCloudCallback(const sensor_msgs::PointCloud::ConstPtr& msg) 
   SensorMount cloud_frame;
   if (!lookupPoses(msg->header, &odom_pose, &cloud_frame)) return;
   const io::RosOptions& o = config_.ros;
-  if (sonar_transducers_.empty()) {  // the whole ring, once (it used to stop at sonar_0)
-    sonar_transducers_ =
-        lookupTransducers(tf_buffer_, o.base_frame, o.sonar_frame_prefix, ros::Time(0));
-    if (sonar_transducers_.empty()) {
-      diagnostics_.recordDrop("no sonar transducer in tf");
-      warnThrottled("sonar transducers", "sonar_cloud needs the transducer poses, but tf has "
-                                         "no frame " + o.sonar_frame_prefix + "0 under " +
-                                         o.base_frame);
-      return;
-    }
-    ROS_INFO_STREAM("rbpf_slam_node: sonar_cloud read through " << sonar_transducers_.size()
-                    << " transducer(s), " << o.sonar_frame_prefix << "0.."
-                    << sonar_transducers_.size() - 1 << " in tf");
+  // The whole ring (it used to stop at sonar_0), looked up at every cloud: static transforms
+  // of a ring may come in one by one after the first cloud.
+  std::vector<core::Pose2> ring =
+      lookupTransducers(tf_buffer_, o.base_frame, o.sonar_frame_prefix, ros::Time(0));
+  if (ring.empty()) {
+    diagnostics_.recordDrop("no sonar transducer in tf");
+    warnThrottled("sonar transducers", "sonar_cloud needs the transducer poses, but tf has "
+                                       "no frame " + o.sonar_frame_prefix + "0 under " +
+                                       o.base_frame);
+    return;
   }
+  if (ring.size() != sonar_transducers_.size()) {
+    ROS_INFO_STREAM("rbpf_slam_node: sonar_cloud read through " << ring.size()
+                    << " transducer(s), " << o.sonar_frame_prefix << "0.." << ring.size() - 1
+                    << " in tf");
+  }
+  sonar_transducers_ = std::move(ring);
   int unmatched = 0;
   const std::vector<core::ConeReading> readings = core::coneReadingsFromCloud(
       toBasePoints(*msg, cloud_frame.pose, cloud_frame.upside_down), sonar_transducers_,

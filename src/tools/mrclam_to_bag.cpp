@@ -17,6 +17,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <cstdlib>
 #include <fstream>
 #include <iomanip>
@@ -301,7 +302,11 @@ int run(const Arguments& arguments) {
   }
 
   // The side files first: the bag appears only when complete, so a bag on disk means a whole
-  // conversion (benchmarks/run_mrclam reuses one it finds).
+  // conversion (benchmarks/run_mrclam reuses one it finds); an older bag there goes first.
+  std::error_code ignored;
+  if (std::filesystem::is_regular_file(arguments.bag_path, ignored)) {
+    std::filesystem::remove(arguments.bag_path, ignored);
+  }
   const std::string reference_path = io::besideBag(arguments.bag_path, ".ref.tum");
   const std::string odometry_path = io::besideBag(arguments.bag_path, ".odom.tum");
   const std::string landmarks_path = io::besideBag(arguments.bag_path, ".landmarks.yaml");

@@ -226,6 +226,7 @@ TEST(MrclamRead, ReadsADirectoryAndCrops) {
   EXPECT_THROW(cropMrclamRobot(std::nan(""), 0.0, &refused), std::invalid_argument);
   EXPECT_THROW(cropMrclamRobot(0.0, -2.0, &refused), std::invalid_argument);
   EXPECT_THROW(cropMrclamRobot(0.0, HUGE_VAL, &refused), std::invalid_argument);
+  EXPECT_THROW(cropMrclamRobot(2.0, 2.0, &refused), std::invalid_argument);  // [102, 104]: none
   EXPECT_EQ(refused.odometry.size(), 3u);
   EXPECT_EQ(refused.measurements.size(), 3u);
 
@@ -297,7 +298,12 @@ TEST(MrclamRead, RepairsAndReportsOdometryOrderAndRefusesEmptyTables) {
   }
   write("Barcodes.dat", "# h\n1 5\n6 63\n");
   write("Landmark_Groundtruth.dat", "");
-  EXPECT_THROW(readMrclamRobot(dir, 1), std::runtime_error);
+  try {
+    readMrclamRobot(dir, 1);
+    FAIL() << "no exception";
+  } catch (const std::runtime_error& error) {
+    EXPECT_EQ(std::string(error.what()), dir + "/Landmark_Groundtruth.dat: no data line");
+  }
 }
 
 TEST(MrclamOdometryIntegration, StraightLineAndCircle) {

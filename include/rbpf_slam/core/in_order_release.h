@@ -34,16 +34,16 @@ class InOrderRelease {
   /// A message went into the gate.
   void entered(const Key& key, const Value& value) { in_gate_.emplace(key, value); }
 
-  /// The gate let the message with this key out: the messages now due, in key order.
+  /// The gate let this message out: the messages now due, in key order.
   std::vector<Value> left(const Key& key, Value value) {
-    answered(key);
+    answered(key, value);
     held_.emplace(key, std::move(value));
     return due();
   }
 
-  /// The gate dropped the message with this key: the messages now due, in key order.
-  std::vector<Value> dropped(const Key& key) {
-    answered(key);
+  /// The gate dropped this message: the messages now due, in key order.
+  std::vector<Value> dropped(const Key& key, const Value& value) {
+    answered(key, value);
     return due();
   }
 
@@ -57,9 +57,15 @@ class InOrderRelease {
   std::size_t held() const { return held_.size(); }
 
  private:
-  void answered(const Key& key) {
-    const auto it = in_gate_.find(key);
-    if (it != in_gate_.end()) in_gate_.erase(it);
+  /// The gate's entry of this message (not another with the same key) is answered for.
+  void answered(const Key& key, const Value& value) {
+    const auto range = in_gate_.equal_range(key);
+    for (auto it = range.first; it != range.second; ++it) {
+      if (it->second == value) {
+        in_gate_.erase(it);
+        return;
+      }
+    }
   }
 
   std::vector<Value> due() {

@@ -90,15 +90,15 @@ void resolveSubjects(const std::map<int, int>& subject_of_barcode,
 /// Groundtruth}.dat. Throws std::runtime_error naming the file when one is missing, malformed or
 /// holds no data line (the measurements may be empty), std::invalid_argument when robot is not
 /// 1..5. Sorts every file by time; commands out of time order, commands sharing a stamp (the
-/// first at a stamp is the one integrated), sighted landmarks without a surveyed position and
-/// odometry the ground truth does not cover are reported in `warnings`.
+/// first at a stamp is the one integrated), sighting lines repeating one of their frame exactly
+/// (kept once) and sighted landmarks without a surveyed position are reported in `warnings`.
 MrclamRobot readMrclamRobot(const std::string& directory, int robot);
 
 /// Keeps only what lies in [start, start + duration_s] for odometry, measurements and ground
 /// truth, where start is the first odometry stamp plus skip_s (a recording that begins later,
-/// somewhere else); duration_s <= 0 keeps everything from start on. Throws
+/// somewhere else); duration_s 0 keeps everything from start on. Throws
 /// std::invalid_argument, changing nothing, for a negative or non-finite skip_s or duration_s,
-/// or when no odometry command would remain (skip_s beyond the recording).
+/// or when no odometry command would remain.
 void cropMrclamRobot(double skip_s, double duration_s, MrclamRobot* data);
 
 /// Moves every odometry command `delay_s` later: the logged velocity commands lead the robot's

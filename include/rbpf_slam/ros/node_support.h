@@ -73,9 +73,8 @@ class TfGatedSubscriber {
         base_frame_(std::move(base_frame)),
         handlers_(std::move(handlers)),
         filter_(*tf, target_frame, queue_size, nh),
-        order_(queue_size, [this, target_frame](const Ptr& msg) {
-          return tf_->canTransform(target_frame, stripSlash(msg->header.frame_id),
-                                   msg->header.stamp);
+        order_(queue_size, [this, target = stripSlash(target_frame)](const Ptr& msg) {
+          return tf_->canTransform(target, stripSlash(msg->header.frame_id), msg->header.stamp);
         }) {
     // An empty topic: no subscription, the owner feeds messages with add() (a topic whose
     // messages come in another type first, e.g. PointCloud2 converted to PointCloud).
@@ -85,11 +84,12 @@ class TfGatedSubscriber {
           boost::function<void(const Ptr&)>([this](const Ptr& msg) { add(msg); }));
     }
     filter_.registerCallback(boost::function<void(const Ptr&)>(
-        [this](const Ptr& msg) { deliver(order_.left(msg->header.stamp, msg)); }));
+        [this](const Ptr& msg) { deliver(order_.left(msg->header.stamp, msg), clears_); }));
     filter_.registerFailureCallback([this](const Ptr& msg, tf2_ros::FilterFailureReason reason) {
-      std::vector<Ptr> due = order_.dropped(msg->header.stamp);
+      std::vector<Ptr> due = order_.dropped(msg->header.stamp, msg);
+      const unsigned long clears = clears_;  // on_failure may reset the input
       if (handlers_.on_failure) handlers_.on_failure(msg, reason);
-      deliver(std::move(due));
+      deliver(std::move(due), clears);
     });
   }
   TfGatedSubscriber(const TfGatedSubscriber&) = delete;
@@ -114,8 +114,9 @@ class TfGatedSubscriber {
   std::string topic() const { return subscriber_.getTopic(); }
 
  private:
-  void deliver(std::vector<Ptr> due) {
-    const unsigned long clears = clears_;
+  /// Hands on the messages due unless the input was reset since `clears` was read (by a
+  /// handler, here or before): those are from before the reset.
+  void deliver(std::vector<Ptr> due, unsigned long clears) {
     for (const Ptr& msg : due) {
       if (clears_ != clears) return;  // a handler reset the input: the rest is from before it
       handlers_.on_message(msg);
