@@ -169,11 +169,23 @@ TEST(MrclamRead, MissingFileIsNamed) {
   EXPECT_THROW(readMrclamRobot("/tmp", 6), std::invalid_argument);
 }
 
+/// A scratch dataset directory under the test's temporary directory, and a writer of its files.
+struct DatasetDir {
+  explicit DatasetDir(const std::string& name)
+      : path(std::string(::testing::TempDir()) + "/" + name) {
+    EXPECT_EQ(std::system(("mkdir -p " + path).c_str()), 0);
+  }
+  void write(const std::string& file, const std::string& text) const {
+    std::ofstream(path + "/" + file) << text;
+  }
+  const std::string path;
+};
+
 TEST(MrclamRead, ReadsADirectoryAndCrops) {
-  const std::string dir = std::string(::testing::TempDir()) + "/mrclam_test";
-  ASSERT_EQ(std::system(("mkdir -p " + dir).c_str()), 0);
-  const auto write = [&](const std::string& name, const std::string& text) {
-    std::ofstream(dir + "/" + name) << text;
+  const DatasetDir fixture("mrclam_test");
+  const std::string& dir = fixture.path;
+  const auto write = [&](const std::string& file, const std::string& text) {
+    fixture.write(file, text);
   };
   write("Barcodes.dat", "# h\n1 5\n6 63\n");
   write("Landmark_Groundtruth.dat", "# h\n6 1 2 0 0\n");
@@ -247,10 +259,10 @@ TEST(MrclamRead, ReadsADirectoryAndCrops) {
 /// Commands out of time order are sorted and reported, commands sharing a stamp reported, a
 /// sighted landmark the survey lacks named, and an empty barcode or landmark table refused.
 TEST(MrclamRead, RepairsAndReportsOdometryOrderAndRefusesEmptyTables) {
-  const std::string dir = std::string(::testing::TempDir()) + "/mrclam_order_test";
-  ASSERT_EQ(std::system(("mkdir -p " + dir).c_str()), 0);
-  const auto write = [&](const std::string& name, const std::string& text) {
-    std::ofstream(dir + "/" + name) << text;
+  const DatasetDir fixture("mrclam_order_test");
+  const std::string& dir = fixture.path;
+  const auto write = [&](const std::string& file, const std::string& text) {
+    fixture.write(file, text);
   };
   write("Barcodes.dat", "# h\n1 5\n6 63\n7 64\n");
   write("Landmark_Groundtruth.dat", "# h\n6 1 2 0 0\n");
