@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
+#include <iomanip>
 #include <limits>
 #include <set>
 #include <sstream>
@@ -62,7 +63,8 @@ void readRow(const std::string& text, std::size_t line, const std::string& sourc
 }
 
 // Every data line of a file, by readRow. Lines end at LF, CRLF or a lone CR (old Mac files);
-// a UTF-8 byte-order mark at the start is skipped.
+// CRs right before an LF (CRCRLF: a CRLF file converted once more) end one line with it. A
+// UTF-8 byte-order mark at the start is skipped.
 std::vector<Row> readRows(std::istream& in, const std::string& source, std::size_t columns,
                           const std::string& format) {
   std::vector<Row> rows;
@@ -70,11 +72,14 @@ std::vector<Row> readRows(std::istream& in, const std::string& source, std::size
   std::string raw;
   while (std::getline(in, raw)) {
     if (line == 0 && raw.compare(0, 3, "\xEF\xBB\xBF") == 0) raw.erase(0, 3);
+    std::size_t stop = raw.size();
+    while (stop > 0 && raw[stop - 1] == '\r') --stop;  // the CR(s) of CRLF end this line
+    raw.erase(stop);
     for (std::size_t begin = 0;;) {
       const std::size_t cr = raw.find('\r', begin);
       const std::size_t end = cr == std::string::npos ? raw.size() : cr;
       readRow(raw.substr(begin, end - begin), ++line, source, columns, format, &rows);
-      if (cr == std::string::npos || cr + 1 == raw.size()) break;  // a CRLF's CR ends the line
+      if (cr == std::string::npos) break;
       begin = cr + 1;
     }
   }
@@ -262,6 +267,35 @@ void reportAndSortOdometry(const std::string& source, MrclamRobot* data) {
   }
 }
 
+// Sorts the ground truth by time, reporting poses out of order and stretches without a pose
+// (the reference is interpolated across them: Vicon lost the robot, or a stray stamp).
+void reportAndSortGroundTruth(const std::string& source, MrclamRobot* data) {
+  std::vector<StampedPose>& g = data->ground_truth;
+  std::size_t earlier = 0;
+  for (std::size_t i = 1; i < g.size(); ++i) earlier += g[i].stamp < g[i - 1].stamp ? 1 : 0;
+  if (earlier > 0) {
+    std::stable_sort(g.begin(), g.end(),
+                     [](const StampedPose& a, const StampedPose& b) { return a.stamp < b.stamp; });
+    data->warnings.push_back(source + ": " + std::to_string(earlier) +
+                             " pose(s) stamped before the line above them; sorted by time");
+  }
+  std::size_t gaps = 0, widest = 0;
+  for (std::size_t i = 1; i < g.size(); ++i) {
+    const double gap = g[i].stamp - g[i - 1].stamp;
+    if (gap <= kMrclamGroundTruthGapS) continue;
+    if (gaps++ == 0 || gap > g[widest].stamp - g[widest - 1].stamp) widest = i;
+  }
+  if (gaps > 0) {
+    std::ostringstream message;
+    message << source << ": " << gaps << " stretch(es) of more than " << kMrclamGroundTruthGapS
+            << " s without a pose; the longest, " << std::fixed << std::setprecision(3)
+            << g[widest].stamp - g[widest - 1].stamp
+            << " s from t = " << g[widest - 1].stamp
+            << ", is interpolated across in the reference (a stray stamp?)";
+    data->warnings.push_back(message.str());
+  }
+}
+
 // Names the landmark subjects sighted that Landmark_Groundtruth.dat has no position for.
 void reportUnsurveyedSubjects(MrclamRobot* data) {
   std::set<int> surveyed, unsurveyed;
@@ -330,8 +364,7 @@ MrclamRobot readMrclamRobot(const std::string& directory, int robot) {
   if (data.ground_truth.empty()) throw std::runtime_error(prefix + "Groundtruth.dat: no data line");
   reportAndSortOdometry(prefix + "Odometry.dat", &data);
   reportUnsurveyedSubjects(&data);
-  std::stable_sort(data.ground_truth.begin(), data.ground_truth.end(),
-                   [](const StampedPose& a, const StampedPose& b) { return a.stamp < b.stamp; });
+  reportAndSortGroundTruth(prefix + "Groundtruth.dat", &data);
   std::stable_sort(
       data.measurements.begin(), data.measurements.end(),
       [](const MrclamMeasurement& a, const MrclamMeasurement& b) { return a.stamp < b.stamp; });

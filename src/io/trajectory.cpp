@@ -8,6 +8,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "rbpf_slam/io/tool_arguments.h"
+
 namespace rbpf_slam {
 namespace io {
 namespace {
@@ -103,6 +105,7 @@ void writeTum(std::ostream& out, const std::vector<StampedPose>& poses) {
 }
 
 void writeTum(const std::string& path, const std::vector<StampedPose>& poses) {
+  requireReplaceableFile(path);  // not into a pipe or a device
   std::ofstream out(path);
   if (!out) throw std::runtime_error(path + ": cannot open for writing");
   out << "# timestamp x y z qx qy qz qw\n";

@@ -5,6 +5,8 @@
 #include <cstring>
 #include <stdexcept>
 
+#include "rbpf_slam/io/tool_arguments.h"
+
 namespace rbpf_slam {
 namespace rosbridge {
 
@@ -18,6 +20,8 @@ void openBagForReading(rosbag::Bag* bag, const std::string& path) {
 
 PartialBag::PartialBag(const std::string& path)
     : path_(path), partial_(path + ".part"), bag_(std::make_unique<rosbag::Bag>()) {
+  io::requireReplaceableFile(path_);  // the commit's rename would replace a device or directory
+  io::requireReplaceableFile(partial_);
   try {
     bag_->open(partial_, rosbag::bagmode::Write);
   } catch (const rosbag::BagException& e) {

@@ -303,13 +303,17 @@ int run(const Arguments& arguments) {
 
   // The side files first: the bag appears only when complete, so a bag on disk means a whole
   // conversion (benchmarks/run_mrclam reuses one it finds); an older bag there goes first.
+  const std::string reference_path = io::besideBag(arguments.bag_path, ".ref.tum");
+  const std::string odometry_path = io::besideBag(arguments.bag_path, ".odom.tum");
+  const std::string landmarks_path = io::besideBag(arguments.bag_path, ".landmarks.yaml");
+  for (const std::string& path : {arguments.bag_path, arguments.bag_path + ".part",
+                                  reference_path, odometry_path, landmarks_path}) {
+    io::requireReplaceableFile(path);  // nothing written when one cannot be
+  }
   std::error_code ignored;
   if (std::filesystem::is_regular_file(arguments.bag_path, ignored)) {
     std::filesystem::remove(arguments.bag_path, ignored);
   }
-  const std::string reference_path = io::besideBag(arguments.bag_path, ".ref.tum");
-  const std::string odometry_path = io::besideBag(arguments.bag_path, ".odom.tum");
-  const std::string landmarks_path = io::besideBag(arguments.bag_path, ".landmarks.yaml");
   io::writeTum(reference_path, data.ground_truth);
   io::writeTum(odometry_path, odometry);
   writeLandmarks(landmarks_path, arguments, data);

@@ -238,6 +238,10 @@ int run(const Arguments& arguments) {
 
   const std::string reference_path = rbpf_slam::io::besideBag(arguments.output, ".ref.tum");
   const std::string truth_path = rbpf_slam::io::besideBag(arguments.output, ".landmarks.yaml");
+  // Nothing is written when one output cannot be: close()'s renames would replace a device.
+  for (const std::string& path : {reference_path, reference_path + ".part", truth_path}) {
+    rbpf_slam::io::requireReplaceableFile(path);
+  }
   BagWriter writer(arguments.output, simulator, reference_path);
   sim::SimEvent event;
   while (simulator.next(&event)) writer.write(event);

@@ -132,6 +132,24 @@ expect "offline_slam --output-bag write fails" 1 "res.bag: Error" limited "$bin/
 for left in big.bag big.bag.part big.ref.tum big.ref.tum.part r/res.bag r/res.bag.part; do
   [ ! -e "$work/$left" ] || { echo "FAIL: $left left behind by a failed write"; status=1; }
 done
+# An output path that is a directory, a pipe or a device is not written over (before: the
+# finished bag was renamed onto it, which replaces /dev/full when run as root, and a pipe at the
+# ground truth's path blocked the tool until timeout killed it).
+mkdir -p "$work/dir.bag"
+expect "simulate onto a directory" 1 "dir.bag: exists and is a directory" "$bin/simulate" \
+  --world "$root/worlds/test_small.yaml" --output "$work/dir.bag" --duration 1
+mkfifo "$work/pipe.ref.tum"
+expect "simulate onto a pipe" 1 "pipe.ref.tum: exists and is a pipe" timeout 60 "$bin/simulate" \
+  --world "$root/worlds/test_small.yaml" --output "$work/pipe.bag" --duration 1
+expect "offline_slam --output-bag onto a pipe" 1 "pipe.ref.tum: exists and is a pipe" \
+  timeout 60 "$bin/offline_slam" --bag "$root/test/data/intel_head.bag" \
+  --config "$root/config/laser_fastslam2.yaml" --output "$work/p" \
+  --output-bag "$work/pipe.ref.tum" --no-progress --set particles=5
+for left in pipe.bag pipe.bag.part dir.bag.part pipe.ref.tum.part; do
+  [ ! -e "$work/$left" ] || { echo "FAIL: $left left behind by a refused output"; status=1; }
+done
+[ -d "$work/dir.bag" ] && [ -p "$work/pipe.ref.tum" ] ||
+  { echo "FAIL: the directory or the pipe was replaced"; status=1; }
 expect "validate_bag bad gap" 2 "--max-gap needs a positive number" "$bin/validate_bag" x.bag \
   --max-gap 0
 expect "evaluate unlimited gap" 0 "ate" "$bin/evaluate" "$work/a.tum" "$work/a.tum" \

@@ -141,8 +141,9 @@ TEST(MrclamParse, OutOfRangeBearingsHeadingsLandmarksAndStampsNameFileAndLine) {
             std::string::npos);
 }
 
-/// Old Mac line ends (a lone CR) split lines as LF and CRLF do, and a UTF-8 byte-order mark
-/// is skipped; before, a CR-only file was one comment line and read as empty.
+/// Old Mac line ends (a lone CR) split lines as LF and CRLF do, CRCRLF ends one line, and a
+/// UTF-8 byte-order mark is skipped; before, a CR-only file was one comment line and read as
+/// empty.
 TEST(MrclamParse, LoneCarriageReturnsEndLinesAndAByteOrderMarkIsSkipped) {
   std::istringstream cr("\xEF\xBB\xBF# header\r10 14 2 0.1\r\r11 14 3 0.2\r");
   const std::vector<MrclamMeasurement> m = parseMrclamMeasurements(cr, "m.dat");
@@ -155,6 +156,9 @@ TEST(MrclamParse, LoneCarriageReturnsEndLinesAndAByteOrderMarkIsSkipped) {
   ASSERT_EQ(o.size(), 2u);
   EXPECT_EQ(o[1].line, 4u);
   EXPECT_EQ(errorOf(parseOdometryText, "1 0.1 0\r2 x 0\r"),
+            "Robot1_Odometry.dat:2: not a finite number: 'x' (expected t v w)");
+  // CRCRLF (a CRLF file converted again) ends one line: the error is on line 2, not 3.
+  EXPECT_EQ(errorOf(parseOdometryText, "1 0.1 0\r\r\n2 x 0\r\r\n"),
             "Robot1_Odometry.dat:2: not a finite number: 'x' (expected t v w)");
 }
 
@@ -269,7 +273,8 @@ TEST(MrclamRead, RepairsAndReportsOdometryOrderAndRefusesEmptyTables) {
   write("Robot1_Odometry.dat", "# h\n100 0.1 0\n102 0.3 0\n101 0.2 0\n102 0 0\n103 0 0\n");
   write("Robot1_Measurement.dat",
         "# h\n100.5 63 2 0\n101.5 64 2 0\n100.5 64 3 0\n100.5 63 2 0\n100.5 63 2.5 0\n");
-  write("Robot1_Groundtruth.dat", "# h\n99 0 0 0\n104 0 0 0\n");
+  // A stray pose 1000 s after the rest, written before the last one.
+  write("Robot1_Groundtruth.dat", "# h\n99 0 0 0\n1104 0 0 0\n104 0 0 0\n");
   const MrclamRobot data = readMrclamRobot(dir, 1);
   ASSERT_EQ(data.odometry.size(), 5u);
   for (std::size_t i = 1; i < data.odometry.size(); ++i) {
@@ -279,7 +284,7 @@ TEST(MrclamRead, RepairsAndReportsOdometryOrderAndRefusesEmptyTables) {
   EXPECT_DOUBLE_EQ(data.odometry[2].v_mps, 0.3);  // of the two at 102, line 3 stays first
   ASSERT_EQ(data.measurements.size(), 4u);  // line 5 repeats line 2: one sighting
   EXPECT_DOUBLE_EQ(data.measurements[2].range_m, 2.5);
-  ASSERT_EQ(data.warnings.size(), 4u);
+  ASSERT_EQ(data.warnings.size(), 6u);
   EXPECT_NE(data.warnings[0].find("Robot1_Odometry.dat: 1 command(s) stamped before the line "
                                   "above them (first at line 4); sorted by time"),
             std::string::npos)
@@ -291,10 +296,20 @@ TEST(MrclamRead, RepairsAndReportsOdometryOrderAndRefusesEmptyTables) {
   EXPECT_NE(data.warnings[2].find("no position for sighted landmark subject(s) 7"),
             std::string::npos)
       << data.warnings[2];
-  EXPECT_NE(data.warnings[3].find("Robot1_Measurement.dat: 1 sighting line(s) repeat one of the "
-                                  "same frame exactly (first at line 5)"),
+  EXPECT_NE(data.warnings[3].find("Robot1_Groundtruth.dat: 1 pose(s) stamped before the line "
+                                  "above them; sorted by time"),
             std::string::npos)
       << data.warnings[3];
+  EXPECT_NE(data.warnings[4].find("Robot1_Groundtruth.dat: 1 stretch(es) of more than 10 s "
+                                  "without a pose; the longest, 1000.000 s from t = 104.000,"),
+            std::string::npos)
+      << data.warnings[4];
+  ASSERT_EQ(data.ground_truth.size(), 3u);
+  EXPECT_DOUBLE_EQ(data.ground_truth[1].stamp, 104.0);
+  EXPECT_NE(data.warnings[5].find("Robot1_Measurement.dat: 1 sighting line(s) repeat one of the "
+                                  "same frame exactly (first at line 5)"),
+            std::string::npos)
+      << data.warnings[5];
   // The first command at 102 (0.3 m/s) is integrated over [102, 103].
   const std::vector<StampedPose> poses =
       integrateMrclamOdometry(data.odometry, core::Pose2::Zero());

@@ -18,6 +18,9 @@ namespace io {
 
 /// Subjects 1..5 are the robots, 6 and up the landmarks (every MRCLAM dataset).
 constexpr int kMrclamFirstLandmarkSubject = 6;
+/// Vicon ground truth comes at 100 Hz (dataset 6: at most 2 s between two poses); a longer
+/// stretch without one is reported by readMrclamRobot.
+constexpr double kMrclamGroundTruthGapS = 10.0;
 
 /// One velocity command of RobotN_Odometry.dat (`t v w`).
 struct MrclamOdometry {
@@ -89,9 +92,10 @@ void resolveSubjects(const std::map<int, int>& subject_of_barcode,
 /// Reads DIR/Barcodes.dat, DIR/Landmark_Groundtruth.dat and DIR/RobotN_{Odometry,Measurement,
 /// Groundtruth}.dat. Throws std::runtime_error naming the file when one is missing, malformed or
 /// holds no data line (the measurements may be empty), std::invalid_argument when robot is not
-/// 1..5. Sorts every file by time; commands out of time order, commands sharing a stamp (the
-/// first at a stamp is the one integrated), sighting lines repeating one of their frame exactly
-/// (kept once) and sighted landmarks without a surveyed position are reported in `warnings`.
+/// 1..5. Sorts every file by time; commands and ground-truth poses out of time order, commands
+/// sharing a stamp (the first at a stamp is the one integrated), ground truth missing for more
+/// than kMrclamGroundTruthGapS, sighting lines repeating one of their frame exactly (kept once)
+/// and sighted landmarks without a surveyed position are reported in `warnings`.
 MrclamRobot readMrclamRobot(const std::string& directory, int robot);
 
 /// Keeps only what lies in [start, start + duration_s] for odometry, measurements and ground

@@ -22,7 +22,8 @@ void openBagForReading(rosbag::Bag* bag, const std::string& path);
 /// only by the commit. (A process killed by a signal can still leave PATH.part, never PATH.)
 class PartialBag {
  public:
-  /// Throws std::runtime_error naming PATH when PATH.part cannot be created.
+  /// Throws std::runtime_error naming PATH when PATH.part cannot be created, or when PATH or
+  /// PATH.part exists and is not a regular file (io::requireReplaceableFile).
   explicit PartialBag(const std::string& path);
   /// Without commit(): closes and removes PATH.part.
   ~PartialBag();
