@@ -64,7 +64,20 @@ YAML::Node paramsToYaml(const XmlRpc::XmlRpcValue& value) {
 io::SlamConfig loadConfigFromParams(const ros::NodeHandle& private_nh,
                                     const std::set<std::string>& node_parameters) {
   const std::string ns = private_nh.getNamespace();
-  const std::string source = "~ parameters (" + ns + ")";
+  std::string source = "~ parameters (" + ns + ")";
+  XmlRpc::XmlRpcValue file_param;
+  if (private_nh.getParam(kConfigFileParam, file_param)) {
+    if (file_param.getType() != XmlRpc::XmlRpcValue::TypeString) {
+      throw io::ConfigError(source + ": " + kConfigFileParam + " must be a file path");
+    }
+    const std::string file = static_cast<std::string>(file_param);
+    if (!file.empty()) {
+      // The file the launch file loaded, read as offline_slam reads it: a key written twice
+      // (which rosparam keeps once, silently) or any other error is named with the file.
+      io::loadSlamConfig(file);
+      source = "~ parameters (" + ns + ", loaded from " + file + ")";
+    }
+  }
   XmlRpc::XmlRpcValue tree;
   YAML::Node root(YAML::NodeType::Map);
   if (private_nh.getParam("", tree)) {
@@ -72,7 +85,10 @@ io::SlamConfig loadConfigFromParams(const ros::NodeHandle& private_nh,
       throw io::ConfigError(source + ": " + ns + " must be a namespace of parameters");
     }
     for (auto it = tree.begin(); it != tree.end(); ++it) {
-      if (isRosAddedKey(it->first) || node_parameters.count(it->first)) continue;
+      if (isRosAddedKey(it->first) || node_parameters.count(it->first) ||
+          it->first == kConfigFileParam) {
+        continue;
+      }
       root[it->first] = paramsToYaml(it->second);
     }
   }

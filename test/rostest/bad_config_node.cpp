@@ -9,7 +9,9 @@
 #include <unistd.h>
 
 #include <cmath>
+#include <cstdio>
 #include <cstring>
+#include <fstream>
 #include <string>
 #include <vector>
 
@@ -145,6 +147,40 @@ TEST(LoadConfigFromParams, SameRulesAsYamlFiles) {
   nh.setParam("resample_threshold", std::nan(""));
   EXPECT_THROW(rosbridge::loadConfigFromParams(nh), io::ConfigError);
   nh.deleteParam("");
+}
+
+// With ~config_file (the launch files set it to the file they load): the file is read as
+// offline_slam reads it, so a key written twice (rosparam keeps one copy silently) is refused
+// naming the file, and a bad parameter names the file it came from.
+TEST(LoadConfigFromParams, TheConfigFileIsCheckedAndNamed) {
+  const std::string file = std::string(::testing::TempDir()) + "/rbpf_twice.yaml";
+  std::ofstream(file) << "particles: 30\nparticles: 40\n";
+  ros::NodeHandle nh("~file_loader");
+  nh.deleteParam("");
+  nh.setParam("particles", 40);  // what rosparam would have loaded from it
+  nh.setParam("config_file", file);
+  try {
+    rosbridge::loadConfigFromParams(nh);
+    ADD_FAILURE() << "a key written twice in the config file was accepted";
+  } catch (const io::ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find(file + ": key 'particles' appears more than once"),
+              std::string::npos)
+        << e.what();
+  }
+  std::ofstream(file) << "particles: 30\n";
+  nh.setParam("particles", 30);
+  EXPECT_EQ(rosbridge::loadConfigFromParams(nh).filter.particles, 30);  // not a config key
+  nh.setParam("particles", -3);  // e.g. set after the file by another <param>
+  try {
+    rosbridge::loadConfigFromParams(nh);
+    ADD_FAILURE() << "particles -3 was accepted";
+  } catch (const io::ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("loaded from " + file), std::string::npos) << e.what();
+  }
+  nh.setParam("config_file", 3);
+  EXPECT_THROW(rosbridge::loadConfigFromParams(nh), io::ConfigError);
+  nh.deleteParam("");
+  std::remove(file.c_str());
 }
 
 // sim_node's parameters: a mistyped name or a value of the wrong type used to fall back to
