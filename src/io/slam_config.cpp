@@ -36,7 +36,6 @@ void readAssociation(YamlSection section, core::AssociationOptions* o) {
   section.read("line_overlap_margin_m", &o->line_overlap_margin_m);
   section.read("sample", &o->sample);
   section.read("sample_weight", &o->sample_weight);
-  section.read("sample_new", &o->sample_new);
   section.read("exclusive", &o->exclusive);
   section.finish();
 }

@@ -458,60 +458,6 @@ TEST(FastSlam2, SampledAssociationDrawsByLikelihoodAndWeighsByTheirSum) {
   EXPECT_TRUE(fresh == fresh_copy);
 }
 
-// association.sample_new: "a new landmark" is one of the hypotheses drawn for a sighting inside
-// a landmark's gate, with the likelihood of a sighting at new_landmark_chi2 (FastSLAM's p0); the
-// weight is the sum over every hypothesis. Off, the landmark is always taken.
-TEST(FastSlam2, SampledAssociationCanDrawANewLandmark) {
-  FilterOptions options;
-  options.particles = 1;
-  options.association.sample = true;
-  options.association.gate_chi2 = 9.21;
-  options.association.new_landmark_chi2 = 10.0;
-  const Eigen::Vector2d at(5.0, 0.45);  // inside the gate, far enough for p0 to count
-  const Eigen::Matrix2d lm_cov = 1e-3 * Eigen::Matrix2d::Identity();
-  LandmarkMap map;
-  Landmark lm;
-  lm.id = 0;
-  lm.mean = at;
-  lm.covariance = lm_cov;
-  map.add(lm);
-  const Eigen::Matrix3d pose_cov = Eigen::Vector3d(0.01, 0.01, 0.0004).asDiagonal();
-  Observation o;
-  o.z << 5.0, 0.0;
-  o.noise = Eigen::Vector2d(0.01, 0.0004).asDiagonal();
-  const double l_match = handMatchLogLikelihood(o.z, at, lm_cov, pose_cov, o.noise);
-  const double l_new = -0.5 * 10.0 - 0.5 * std::log(o.noise.determinant()) - std::log(2 * M_PI);
-  const double p_new = 1.0 / (1.0 + std::exp(l_match - l_new));
-  ASSERT_GT(p_new, 0.05);
-  ASSERT_LT(p_new, 0.95);
-  const double sum = std::max(l_match, l_new) + std::log1p(std::exp(-std::abs(l_match - l_new)));
-
-  Rng rng(5);
-  const ProposalFastSlam2 without(options);
-  for (int i = 0; i < 50; ++i) {
-    const ProposalFastSlam2::Proposal q =
-        without.refineProposal(map, Pose2::Zero(), pose_cov, {o}, &rng);
-    ASSERT_EQ(q.matched.size(), 1u) << "sample_new off created a landmark inside the gate";
-    ASSERT_TRUE(q.fresh.empty());
-  }
-  options.association.sample_new = true;
-  const ProposalFastSlam2 with_new(options);
-  const int draws = 4000;
-  int fresh = 0;
-  for (int i = 0; i < draws; ++i) {
-    const ProposalFastSlam2::Proposal q =
-        with_new.refineProposal(map, Pose2::Zero(), pose_cov, {o}, &rng);
-    ASSERT_EQ(q.matched.size() + q.fresh.size(), 1u);
-    ASSERT_NEAR(q.log_likelihood, sum, 1e-9) << "weight is not the sum over the hypotheses";
-    if (!q.fresh.empty()) {
-      ++fresh;
-      EXPECT_EQ(q.mean, Pose2::Zero()) << "a new landmark moved the pose";
-    }
-  }
-  const double sigma = std::sqrt(p_new * (1.0 - p_new) / draws);
-  EXPECT_NEAR(static_cast<double>(fresh) / draws, p_new, 4.0 * sigma);
-}
-
 // measurement.landmark_iterations: a point landmark's update relinearised at the updated mean is
 // Gauss-Newton on the prior plus the sighting, so it reaches the MAP estimate, which the one-step
 // EKF misses when the range is weak against the bearing; one iteration is the EKF step itself.

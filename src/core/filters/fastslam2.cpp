@@ -341,42 +341,31 @@ FastSlam2::Proposal FastSlam2::refineProposal(const LandmarkMap& map, const Pose
     const bool exclusive = a.exclusive && o.known_id < 0 && is_point;
     Match m = associate(map, q.mean, q.cov, o, sampling ? &gated : nullptr,
                         exclusive ? &taken : nullptr);
-    // Likelihood of a new landmark: as if observed at the new-landmark threshold.
-    const double scale = rule_->weightNoiseScale();  // as for a match (1: FastSLAM 2.0)
-    const double new_ll = -0.5 * a.new_landmark_chi2 -
-                          0.5 * std::log(scale * scale * o.noise.determinant()) - kLog2Pi;
     if (m.index >= 0 && m.distance2 < a.gate_chi2) {
       double ll = 0.0;       // the weight's factor for this observation (log)
       double drawn_ll = 0.0;  // the likelihood of the match taken (log)
-      const bool draw_new = sampling && a.sample_new && std::isfinite(new_ll);
-      if (sampling && (gated.size() > 1 || draw_new)) {
-        // Data association sampling: draw the match (or a new landmark) by likelihood.
+      if (sampling && gated.size() > 1) {
+        // Data association sampling: draw the match by likelihood.
         likelihoods.clear();
         for (const Match& g : gated) likelihoods.push_back(matchLogLikelihood(q.cov, o, g));
-        if (draw_new) likelihoods.push_back(new_ll);
         const double total = logSumExp(likelihoods);
         if (!std::isfinite(total)) continue;
         const double u = sampleUniform(*rng);
         double cumulative = 0.0;
         int pick = -1;
-        for (size_t j = 0; j < likelihoods.size(); ++j) {
+        for (size_t j = 0; j < gated.size(); ++j) {
           if (!std::isfinite(likelihoods[j])) continue;
           pick = static_cast<int>(j);  // the last finite one if rounding leaves u above the sum
           cumulative += std::exp(likelihoods[j] - total);
           if (u < cumulative) break;
         }
+        m = gated[pick];
+        drawn_ll = likelihoods[pick];
         // sum: the importance weight of the draw (the association's marginal, every landmark
         // in the gate equally likely a priori); max: the most likely match's, as without
         // sampling (a particle is not favoured for having copies of a landmark in the gate).
         ll = a.sample_weight == "max" ? *std::max_element(likelihoods.begin(), likelihoods.end())
                                       : total;
-        if (draw_new && pick == static_cast<int>(gated.size())) {
-          q.log_likelihood += ll;  // no match: nothing for the pointwise rule to add later
-          q.fresh.push_back(static_cast<int>(k));
-          continue;
-        }
-        m = gated[pick];
-        drawn_ll = likelihoods[pick];
       } else {
         ll = drawn_ll = matchLogLikelihood(q.cov, o, m);
       }
@@ -403,7 +392,10 @@ FastSlam2::Proposal FastSlam2::refineProposal(const LandmarkMap& map, const Pose
       q.matched.emplace_back(static_cast<int>(k), m.index);
       if (a.exclusive && is_point) taken.push_back(m.index);  // known ids take theirs too
     } else if (m.index < 0 || m.distance2 > a.new_landmark_chi2) {
-      q.log_likelihood += new_ll;
+      // Likelihood of a new landmark: as if observed at the new-landmark threshold.
+      const double scale = rule_->weightNoiseScale();  // as for a match (1: FastSLAM 2.0)
+      q.log_likelihood += -0.5 * a.new_landmark_chi2 -
+                          0.5 * std::log(scale * scale * o.noise.determinant()) - kLog2Pi;
       q.fresh.push_back(static_cast<int>(k));
     }
     // Between the gate and the new-landmark threshold: ambiguous, left out.

@@ -28,11 +28,6 @@ struct AssociationOptions {
   // The weight of a sampled match: "sum" of the gated landmarks' likelihoods (the draw's
   // importance weight) or "max", the most likely one's as without sampling (no gain for copies).
   std::string sample_weight = "sum";
-  // With sampling: "a new landmark" is one of the hypotheses drawn for a feature inside a
-  // landmark's gate, with the likelihood of a feature at new_landmark_chi2 (FastSLAM's p0,
-  // Montemerlo et al. 2003), so that some particles map a landmark first seen near a mapped one
-  // (e.g. after a long stretch without sightings) instead of all matching it.
-  bool sample_new = false;
   // One-to-one within a frame: a point landmark matched by one feature of the frame is not a
   // candidate for the frame's other point features without a known id, which take their
   // landmarks in order of their best match's Mahalanobis distance at the prior pose. Applies to
