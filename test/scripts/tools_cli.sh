@@ -132,6 +132,38 @@ expect "offline_slam --output-bag write fails" 1 "res.bag: Error" limited "$bin/
 for left in big.bag big.bag.part big.ref.tum big.ref.tum.part r/res.bag r/res.bag.part; do
   [ ! -e "$work/$left" ] || { echo "FAIL: $left left behind by a failed write"; status=1; }
 done
+# mrclam_to_bag's checks on a whole dataset (a tiny one written here): ground truth that does
+# not cover the commands, or no landmark sighting, is refused before anything is written; ground
+# truth that begins late or holds a stray pose far away, and commands sharing a stamp, are
+# warned about.
+ds="$work/mrclam"
+mkdir -p "$ds"
+printf '# s b\n1 5\n6 63\n' >"$ds/Barcodes.dat"
+printf '# s x y sdx sdy\n6 2 0 0.001 0.001\n' >"$ds/Landmark_Groundtruth.dat"
+printf '# t v w\n100 0.1 0\n101 0.1 0\n102 0.1 0\n102 0.2 0\n103 0.1 0\n104 0 0\n' \
+  >"$ds/Robot1_Odometry.dat"
+printf '# t b r b\n101 63 1.5 0.1\n101.5 5 1 0\n' >"$ds/Robot1_Measurement.dat"
+truth() { printf '# t x y th\n'; for t in "$@"; do printf '%s 0 0 0\n' "$t"; done; }
+truth 99 100 101 102 103 104 105 >"$ds/Robot1_Groundtruth.dat"
+expect "mrclam_to_bag tiny dataset" 0 "command\(s\) share the stamp of the one before" \
+  "$bin/mrclam_to_bag" "$ds" 1 "$work/tiny.bag"
+[ -s "$work/tiny.bag" ] || { echo "FAIL: no tiny.bag"; status=1; }
+truth 99 100 101 102 103 104 105 1105 >"$ds/Robot1_Groundtruth.dat"
+expect "mrclam_to_bag stray ground truth" 0 "1 stretch\(es\) of more than 10 s without a pose" \
+  "$bin/mrclam_to_bag" "$ds" 1 "$work/tiny.bag"
+truth 103 104 105 >"$ds/Robot1_Groundtruth.dat"
+expect "mrclam_to_bag late ground truth" 0 "Groundtruth.dat begins 3 s after the first command" \
+  "$bin/mrclam_to_bag" "$ds" 1 "$work/tiny.bag"
+truth 200 201 >"$ds/Robot1_Groundtruth.dat"
+expect "mrclam_to_bag ground truth elsewhere" 1 "no ground-truth pose while the commands run" \
+  "$bin/mrclam_to_bag" "$ds" 1 "$work/elsewhere.bag"
+truth 99 105 >"$ds/Robot1_Groundtruth.dat"
+printf '# t b r b\n101.5 5 1 0\n' >"$ds/Robot1_Measurement.dat"
+expect "mrclam_to_bag no landmark sighting" 1 "Measurement.dat: no landmark sighting \(1 sightings: 1 of robots" \
+  "$bin/mrclam_to_bag" "$ds" 1 "$work/blind.bag"
+for left in elsewhere.bag elsewhere.ref.tum blind.bag blind.ref.tum; do
+  [ ! -e "$work/$left" ] || { echo "FAIL: $left written although the conversion was refused"; status=1; }
+done
 # An output path that is a directory, a pipe or a device is not written over (before: the
 # finished bag was renamed onto it, which replaces /dev/full when run as root, and a pipe at the
 # ground truth's path blocked the tool until timeout killed it).
