@@ -25,7 +25,14 @@ for world in ("w1", "w2"):
                 f.write(f"{i * 0.2:.1f} {x * 0.5} {y * 0.5} 0 0 0 0 1\n")
         with open(stem + ".landmarks.yaml", "w") as f:
             f.write("landmarks:\n  - {id: 0, x_m: 2, y_m: 1}\n"
-                    "  - {id: 1, x_m: 6, y_m: -1, after_x_m: 6.5, after_y_m: -1}\n")
+                    "  - {id: 1, x_m: 6, y_m: -1, after_x_m: 6.5, after_y_m: -1}\n"
+                    "objects:\n"
+                    "  - {name: walls, shape: polygon, closed: true,"
+                    " points: [[-1, -2], [11, -2], [11, 11], [-1, 11]]}\n"
+                    "  - {name: table, shape: polygon, closed: true,"
+                    " points: [[4, 3], [5, 3], [5, 4]], after_points: [[6, 3], [7, 3], [7, 4]]}\n"
+                    "  - {name: box, shape: polyline, closed: false, removed: true,"
+                    " points: [[8, 1], [9, 1]]}\n")
 PY
 make_runs() {
   /usr/bin/python3 - "$work" "$@" <<'PY'
@@ -57,7 +64,7 @@ mkdir -p "$work/a" "$work/b"
 make_runs a cfg_a 0.0
 make_runs b cfg_b 0.3
 
-expect "two figures" 0 "wrote .*fig_seeds.png, .*fig_map.png" \
+expect "two figures" 0 "wrote .*fig_seeds.png, .*fig_map.png; the map draws 3 objects \(1 moved, 1 removed\)" \
   "$plot" "$work/a/results.json" "$work/b/results.json" --out "$work/fig" \
   --map-world w2 --map-seed 3
 for png in fig_seeds fig_map; do
@@ -100,6 +107,12 @@ expect "no successful runs" 1 "no successful runs in .*failed.json" \
   "$plot" "$work/a/failed.json" "$work/b/results.json" --out "$work/x"
 expect "NaN, missing keys and a failed seed are plotted around" 0 "wrote .*gaps_seeds.png" \
   "$plot" "$work/a/gaps.json" "$work/b/results.json" --out "$work/gaps"
+cp "$work/bags/w1_seed1.landmarks.yaml" "$work/w1_seed1.keep"
+sed -i 's/points: \[\[-1, -2\]/points: [[-1]/' "$work/bags/w1_seed1.landmarks.yaml"
+expect "a malformed object" 1 "cannot read the objects of .*w1_seed1.landmarks.yaml" \
+  "$plot" "$work/a/results.json" "$work/b/results.json" --out "$work/x" \
+  --map-world w1 --map-seed 1
+cp "$work/w1_seed1.keep" "$work/bags/w1_seed1.landmarks.yaml"
 rm "$work/b/runs/w1/2/trajectory.tum"
 expect "a missing trajectory" 1 "cannot read trajectory .*w1/2/trajectory.tum" \
   "$plot" "$work/a/results.json" "$work/b/results.json" --out "$work/x" \
