@@ -268,7 +268,7 @@ void reportAndSortOdometry(const std::string& source, MrclamRobot* data) {
 }
 
 // Sorts the ground truth by time, reporting poses out of order and stretches without a pose
-// (the reference is interpolated across them: Vicon lost the robot, or a stray stamp).
+// (in the whole file: --start / --duration crop later).
 void reportAndSortGroundTruth(const std::string& source, MrclamRobot* data) {
   std::vector<StampedPose>& g = data->ground_truth;
   std::size_t earlier = 0;
@@ -291,7 +291,7 @@ void reportAndSortGroundTruth(const std::string& source, MrclamRobot* data) {
             << " s without a pose; the longest, " << std::fixed << std::setprecision(3)
             << g[widest].stamp - g[widest - 1].stamp
             << " s from t = " << g[widest - 1].stamp
-            << ", is interpolated across in the reference (a stray stamp?)";
+            << " (a stray stamp, or Vicon lost the robot): the reference has no pose there";
     data->warnings.push_back(message.str());
   }
 }

@@ -57,7 +57,8 @@ void requireReplaceableFile(const std::string& path) {
                      : std::filesystem::is_character_file(status) ||
                              std::filesystem::is_block_file(status)
                          ? "a device"
-                         : "not a regular file";
+                     : std::filesystem::is_socket(status) ? "a socket"
+                                                          : "something else";
   throw std::runtime_error(path + ": exists and is " + kind +
                            " (not a regular file); not written over");
 }

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <limits>
+#include <set>
 #include <sstream>
 #include <string>
 
@@ -29,7 +30,50 @@ std::string doubleText(double value) {
   return out.str();
 }
 
+/// A private string parameter, "" when unset; io::ConfigError naming it when not a string.
+std::string stringParam(const ros::NodeHandle& private_nh, const char* key,
+                        const std::string& source) {
+  XmlRpc::XmlRpcValue value;
+  if (!private_nh.getParam(key, value)) return "";
+  if (value.getType() != XmlRpc::XmlRpcValue::TypeString) {
+    throw io::ConfigError(source + ": " + key + " must be a string");
+  }
+  return static_cast<std::string>(value);
+}
+
+/// The first key repeated in one mapping of `node` (yaml-cpp keeps both copies), with where.
+bool findRepeatedKey(const YAML::Node& node, const std::string& where, std::string* found) {
+  if (node.IsSequence()) {
+    for (std::size_t i = 0; i < node.size(); ++i) {
+      if (findRepeatedKey(node[i], where + "[" + std::to_string(i) + "]", found)) return true;
+    }
+  }
+  if (!node.IsMap()) return false;
+  std::set<std::string> seen;
+  for (const auto& item : node) {
+    const std::string key = item.first.IsScalar() ? item.first.Scalar() : std::string("?");
+    if (!seen.insert(key).second) {
+      *found = "key '" + key + "' appears more than once " +
+               (where.empty() ? std::string("at the top level") : "in " + where);
+      return true;
+    }
+    if (findRepeatedKey(item.second, where.empty() ? key : where + "." + key, found)) return true;
+  }
+  return false;
+}
+
 }  // namespace
+
+void requireNoRepeatedKey(const std::string& text, const std::string& source) {
+  YAML::Node root;
+  try {
+    root = YAML::Load(text);
+  } catch (const YAML::Exception& e) {
+    throw io::ConfigError(source + ": not valid YAML: " + e.what());
+  }
+  std::string found;
+  if (findRepeatedKey(root, "", &found)) throw io::ConfigError(source + ": " + found);
+}
 
 YAML::Node paramsToYaml(const XmlRpc::XmlRpcValue& value) {
   // XmlRpcValue's accessors are non-const; work on a copy (cheap: it is reference-counted
@@ -65,19 +109,13 @@ io::SlamConfig loadConfigFromParams(const ros::NodeHandle& private_nh,
                                     const std::set<std::string>& node_parameters) {
   const std::string ns = private_nh.getNamespace();
   std::string source = "~ parameters (" + ns + ")";
-  XmlRpc::XmlRpcValue file_param;
-  if (private_nh.getParam(kConfigFileParam, file_param)) {
-    if (file_param.getType() != XmlRpc::XmlRpcValue::TypeString) {
-      throw io::ConfigError(source + ": " + kConfigFileParam + " must be a file path");
-    }
-    const std::string file = static_cast<std::string>(file_param);
-    if (!file.empty()) {
-      // The file the launch file loaded, read as offline_slam reads it: a key written twice
-      // (which rosparam keeps once, silently) or any other error is named with the file.
-      io::loadSlamConfig(file);
-      source = "~ parameters (" + ns + ", loaded from " + file + ")";
-    }
-  }
+  const std::string file = stringParam(private_nh, kConfigFileParam, source);
+  if (!file.empty()) source = "~ parameters (" + ns + ", loaded from " + file + ")";
+  // The file's text as roslaunch read it (`textfile`, resolved where `<rosparam load>` is, so a
+  // relative path or a file on another machine is found): a key written twice, which rosparam
+  // keeps once without a word, is refused naming the file.
+  const std::string text = stringParam(private_nh, kConfigTextParam, source);
+  if (!text.empty()) requireNoRepeatedKey(text, file.empty() ? source : file);
   XmlRpc::XmlRpcValue tree;
   YAML::Node root(YAML::NodeType::Map);
   if (private_nh.getParam("", tree)) {
@@ -86,7 +124,7 @@ io::SlamConfig loadConfigFromParams(const ros::NodeHandle& private_nh,
     }
     for (auto it = tree.begin(); it != tree.end(); ++it) {
       if (isRosAddedKey(it->first) || node_parameters.count(it->first) ||
-          it->first == kConfigFileParam) {
+          it->first == kConfigFileParam || it->first == kConfigTextParam) {
         continue;
       }
       root[it->first] = paramsToYaml(it->second);

@@ -219,8 +219,9 @@ int run(const Arguments& arguments) {
   for (const io::StampedPose& pose : scans) {
     reference.push_back({kStampOffsetS + pose.stamp, pose.pose});
   }
-  writeBag(arguments, log, odometry);
   const std::string reference_path = io::besideBag(arguments.bag_path, ".ref.tum");
+  io::requireReplaceableFile(reference_path);  // refused before the bag is written
+  writeBag(arguments, log, odometry);
   io::writeTum(reference_path, reference);
 
   reportSkipped(log, motion_stats);

@@ -238,7 +238,8 @@ int run(const Arguments& arguments) {
 
   const std::string reference_path = rbpf_slam::io::besideBag(arguments.output, ".ref.tum");
   const std::string truth_path = rbpf_slam::io::besideBag(arguments.output, ".landmarks.yaml");
-  // Nothing is written when one output cannot be: close()'s renames would replace a device.
+  // Nothing is written when one output cannot be (a directory, pipe or device there): close()
+  // renames the ground truth onto its path, and the truth file is opened for writing.
   for (const std::string& path : {reference_path, reference_path + ".part", truth_path}) {
     rbpf_slam::io::requireReplaceableFile(path);
   }

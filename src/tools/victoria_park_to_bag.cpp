@@ -105,6 +105,8 @@ int run(const Arguments& arguments) {
   if (arguments.max_poses > 0 && static_cast<long>(poses.size()) > arguments.max_poses) {
     poses.resize(arguments.max_poses);
   }
+  const std::string odometry_path = io::besideBag(arguments.bag_path, ".odom.tum");
+  io::requireReplaceableFile(odometry_path);  // refused before the bag is written
   rbpf_slam::rosbridge::PartialBag output(arguments.bag_path);  // the bag appears when complete
   std::vector<io::StampedPose> track;
   std::uint32_t feature_seq = 0;
@@ -132,7 +134,6 @@ int run(const Arguments& arguments) {
     track.push_back({t, pose});
   }
   output.commit();
-  const std::string odometry_path = io::besideBag(arguments.bag_path, ".odom.tum");
   io::writeTum(odometry_path, track);
   std::cerr << "victoria_park_to_bag: " << poses.size() << " poses over "
             << (poses.size() - 1) * arguments.dt_s << " s (dt " << arguments.dt_s << " s), "

@@ -9,9 +9,7 @@
 #include <unistd.h>
 
 #include <cmath>
-#include <cstdio>
 #include <cstring>
-#include <fstream>
 #include <string>
 #include <vector>
 
@@ -149,27 +147,29 @@ TEST(LoadConfigFromParams, SameRulesAsYamlFiles) {
   nh.deleteParam("");
 }
 
-// With ~config_file (the launch files set it to the file they load): the file is read as
-// offline_slam reads it, so a key written twice (rosparam keeps one copy silently) is refused
-// naming the file, and a bad parameter names the file it came from.
+// With ~config_file and ~config_text (the launch files set them beside the rosparam load):
+// a key written twice in the file (rosparam keeps one copy without a word) is refused naming
+// the file and the key, and a bad parameter names the file it came from. The text is what
+// roslaunch read, so no path is opened here (a relative one would not be found from the
+// node's working directory).
 TEST(LoadConfigFromParams, TheConfigFileIsCheckedAndNamed) {
-  const std::string file = std::string(::testing::TempDir()) + "/rbpf_twice.yaml";
-  std::ofstream(file) << "particles: 30\nparticles: 40\n";
+  const std::string file = "my_configs/twice.yaml";  // relative, as roslaunch may be given
   ros::NodeHandle nh("~file_loader");
   nh.deleteParam("");
-  nh.setParam("particles", 40);  // what rosparam would have loaded from it
+  nh.setParam("particles", 40);  // what rosparam loaded from it
   nh.setParam("config_file", file);
+  nh.setParam("config_text", std::string("particles: 30\nmotion:\n  alpha1: 0.1\n"
+                                         "  alpha1: 0.2\nparticles: 40\n"));
   try {
     rosbridge::loadConfigFromParams(nh);
     ADD_FAILURE() << "a key written twice in the config file was accepted";
   } catch (const io::ConfigError& e) {
-    EXPECT_NE(std::string(e.what()).find(file + ": key 'particles' appears more than once"),
+    EXPECT_NE(std::string(e.what()).find(file + ": key 'alpha1' appears more than once in motion"),
               std::string::npos)
         << e.what();
   }
-  std::ofstream(file) << "particles: 30\n";
-  nh.setParam("particles", 30);
-  EXPECT_EQ(rosbridge::loadConfigFromParams(nh).filter.particles, 30);  // not a config key
+  nh.setParam("config_text", std::string("particles: 40\nmotion: {alpha1: 0.1}\n"));
+  EXPECT_EQ(rosbridge::loadConfigFromParams(nh).filter.particles, 40);  // neither is a key
   nh.setParam("particles", -3);  // e.g. set after the file by another <param>
   try {
     rosbridge::loadConfigFromParams(nh);
@@ -177,10 +177,13 @@ TEST(LoadConfigFromParams, TheConfigFileIsCheckedAndNamed) {
   } catch (const io::ConfigError& e) {
     EXPECT_NE(std::string(e.what()).find("loaded from " + file), std::string::npos) << e.what();
   }
+  nh.setParam("particles", 40);
+  nh.setParam("config_text", std::string("particles: [1, 2\n"));
+  EXPECT_THROW(rosbridge::loadConfigFromParams(nh), io::ConfigError);
+  nh.setParam("config_text", std::string("particles: 40\n"));
   nh.setParam("config_file", 3);
   EXPECT_THROW(rosbridge::loadConfigFromParams(nh), io::ConfigError);
   nh.deleteParam("");
-  std::remove(file.c_str());
 }
 
 // sim_node's parameters: a mistyped name or a value of the wrong type used to fall back to

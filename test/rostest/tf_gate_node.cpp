@@ -39,13 +39,15 @@ Gate::Ptr scan(double stamp, const std::string& frame = "base_link") {
   return msg;
 }
 
-/// Runs the node's callbacks (the filter's answers) until nothing is left.
-void spinFor(double seconds) {
+/// Runs the node's callbacks (the filter's answers) for `seconds`, or until `done` holds.
+template <typename Done>
+void spinUntil(double seconds, Done done) {
   const ros::WallTime end = ros::WallTime::now() + ros::WallDuration(seconds);
-  while (ros::WallTime::now() < end) {
+  while (ros::WallTime::now() < end && !done()) {
     ros::spinOnce();
     ros::WallDuration(0.01).sleep();
   }
+  ros::spinOnce();  // whatever else is queued by then
 }
 
 struct Recorder {
@@ -70,10 +72,10 @@ TEST(TfGatedSubscriber, MessagesWaitingForTfLeaveInStampOrder) {
   Recorder r;
   Gate gate(nh, "", 10, &tf, "base_link", "odom", r.handlers());
   for (double stamp : {103.0, 101.0, 102.0}) gate.add(scan(stamp));
-  spinFor(0.3);
+  spinUntil(0.3, [] { return false; });
   EXPECT_TRUE(r.delivered.empty()) << "handed on before tf had the stamps";
   tf.setTransform(odomToBase(104.0), "test", false);  // all three can be transformed now
-  spinFor(0.5);
+  spinUntil(5.0, [&r] { return r.delivered.size() >= 3; });
   // The filter answers in its queue's order (103 first); without the in-order release, 103
   // would be handed on first and the pipeline would refuse 101 and 102 as older.
   EXPECT_EQ(r.delivered, (std::vector<double>{101.0, 102.0, 103.0}));
@@ -93,8 +95,10 @@ TEST(TfGatedSubscriber, ClearDropsWhatWaitsAndUnknownFramesAreNamedAtOnce) {
   gate.clear();  // e.g. after the clock jumped back
   gate.add(scan(103.0));
   tf.setTransform(odomToBase(104.0), "test", false);
-  spinFor(0.5);
+  spinUntil(5.0, [&r] { return !r.delivered.empty(); });
+  spinUntil(0.2, [] { return false; });  // a message from before clear() would come by now
   EXPECT_EQ(r.delivered, (std::vector<double>{103.0})) << "a message from before clear() left";
+  EXPECT_TRUE(r.failed.empty());
 }
 
 }  // namespace

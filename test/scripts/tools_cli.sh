@@ -164,9 +164,9 @@ expect "mrclam_to_bag no landmark sighting" 1 "Measurement.dat: no landmark sigh
 for left in elsewhere.bag elsewhere.ref.tum blind.bag blind.ref.tum; do
   [ ! -e "$work/$left" ] || { echo "FAIL: $left written although the conversion was refused"; status=1; }
 done
-# An output path that is a directory, a pipe or a device is not written over (before: the
-# finished bag was renamed onto it, which replaces /dev/full when run as root, and a pipe at the
-# ground truth's path blocked the tool until timeout killed it).
+# An output path that is a directory, a pipe or a device is not written over (before: a
+# finished file was renamed onto it, which replaces /dev/full when run as root and a pipe as
+# anyone; a file opened directly at a pipe's path, as mrclam_to_bag's side files were, blocks).
 mkdir -p "$work/dir.bag"
 expect "simulate onto a directory" 1 "dir.bag: exists and is a directory" "$bin/simulate" \
   --world "$root/worlds/test_small.yaml" --output "$work/dir.bag" --duration 1

@@ -273,8 +273,8 @@ TEST(MrclamRead, RepairsAndReportsOdometryOrderAndRefusesEmptyTables) {
   write("Robot1_Odometry.dat", "# h\n100 0.1 0\n102 0.3 0\n101 0.2 0\n102 0 0\n103 0 0\n");
   write("Robot1_Measurement.dat",
         "# h\n100.5 63 2 0\n101.5 64 2 0\n100.5 64 3 0\n100.5 63 2 0\n100.5 63 2.5 0\n");
-  // A stray pose 1000 s after the rest, written before the last one.
-  write("Robot1_Groundtruth.dat", "# h\n99 0 0 0\n1104 0 0 0\n104 0 0 0\n");
+  // A stray pose far after the rest, written before the last two, and a 26 s stretch.
+  write("Robot1_Groundtruth.dat", "# h\n99 0 0 0\n1104 0 0 0\n104 0 0 0\n130 0 0 0\n");
   const MrclamRobot data = readMrclamRobot(dir, 1);
   ASSERT_EQ(data.odometry.size(), 5u);
   for (std::size_t i = 1; i < data.odometry.size(); ++i) {
@@ -300,11 +300,11 @@ TEST(MrclamRead, RepairsAndReportsOdometryOrderAndRefusesEmptyTables) {
                                   "above them; sorted by time"),
             std::string::npos)
       << data.warnings[3];
-  EXPECT_NE(data.warnings[4].find("Robot1_Groundtruth.dat: 1 stretch(es) of more than 10 s "
-                                  "without a pose; the longest, 1000.000 s from t = 104.000,"),
+  EXPECT_NE(data.warnings[4].find("Robot1_Groundtruth.dat: 2 stretch(es) of more than 10 s "
+                                  "without a pose; the longest, 974.000 s from t = 130.000 "),
             std::string::npos)
       << data.warnings[4];
-  ASSERT_EQ(data.ground_truth.size(), 3u);
+  ASSERT_EQ(data.ground_truth.size(), 4u);
   EXPECT_DOUBLE_EQ(data.ground_truth[1].stamp, 104.0);
   EXPECT_NE(data.warnings[5].find("Robot1_Measurement.dat: 1 sighting line(s) repeat one of the "
                                   "same frame exactly (first at line 5)"),

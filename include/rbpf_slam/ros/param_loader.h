@@ -18,12 +18,18 @@ namespace rosbridge {
 /// their text; non-finite doubles as .inf / .nan so the range checks reject them).
 YAML::Node paramsToYaml(const XmlRpc::XmlRpcValue& value);
 
-/// The private parameter naming the config file a launch file loaded into the namespace
-/// (`<param name="config_file" value="$(arg config)"/>` beside the `<rosparam load>`): not a
-/// config key. When set, that file must itself be a valid config (io::loadSlamConfig: a key
-/// written twice, which rosparam silently keeps once, is refused naming the file), and
-/// errors in the parameters name it.
+/// Private parameters a launch file sets beside `<rosparam command="load" file="F"/>`:
+/// `<param name="config_file" type="str" value="F"/>` names the file in error messages, and
+/// `<param name="config_text" textfile="F"/>` hands the node the file's text (read by
+/// roslaunch, like the rosparam load) so that a key written twice, which rosparam keeps once
+/// without a word, is refused naming the file. Neither is a config key; the parameters stay
+/// what configures the node.
 constexpr const char* kConfigFileParam = "config_file";
+constexpr const char* kConfigTextParam = "config_text";
+
+/// io::ConfigError "SOURCE: key 'K' appears more than once in SECTION" for the first key
+/// repeated in one mapping of the YAML `text` (or "SOURCE: not valid YAML: ...").
+void requireNoRepeatedKey(const std::string& text, const std::string& source);
 
 /// Parses the whole private parameter tree of private_nh with io::parseSlamConfig. Parameters
 /// that ROS tools add to a private namespace are skipped. Throws io::ConfigError naming the
