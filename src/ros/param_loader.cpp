@@ -62,8 +62,8 @@ bool findRepeatedKey(const YAML::Node& node, const std::string& where, std::stri
   return false;
 }
 
-}  // namespace
-
+/// io::ConfigError "SOURCE: key 'K' appears more than once in SECTION" for the first key
+/// repeated in one mapping of the YAML `text` (or "SOURCE: not valid YAML: ...").
 void requireNoRepeatedKey(const std::string& text, const std::string& source) {
   YAML::Node root;
   try {
@@ -74,6 +74,8 @@ void requireNoRepeatedKey(const std::string& text, const std::string& source) {
   std::string found;
   if (findRepeatedKey(root, "", &found)) throw io::ConfigError(source + ": " + found);
 }
+
+}  // namespace
 
 YAML::Node paramsToYaml(const XmlRpc::XmlRpcValue& value) {
   // XmlRpcValue's accessors are non-const; work on a copy (cheap: it is reference-counted

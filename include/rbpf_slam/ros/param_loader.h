@@ -27,10 +27,6 @@ YAML::Node paramsToYaml(const XmlRpc::XmlRpcValue& value);
 constexpr const char* kConfigFileParam = "config_file";
 constexpr const char* kConfigTextParam = "config_text";
 
-/// io::ConfigError "SOURCE: key 'K' appears more than once in SECTION" for the first key
-/// repeated in one mapping of the YAML `text` (or "SOURCE: not valid YAML: ...").
-void requireNoRepeatedKey(const std::string& text, const std::string& source);
-
 /// Parses the whole private parameter tree of private_nh with io::parseSlamConfig. Parameters
 /// that ROS tools add to a private namespace are skipped. Throws io::ConfigError naming the
 /// namespace (and the config_file, when set) and the key.
