@@ -27,6 +27,7 @@
 #include "rbpf_slam/io/json_writer.h"
 #include "rbpf_slam/io/landmark_file.h"
 #include "rbpf_slam/io/map_image.h"
+#include "rbpf_slam/io/tool_arguments.h"
 #include "rbpf_slam/io/trajectory.h"
 #include "rbpf_slam/ros/bag_files.h"
 #include "rbpf_slam/ros/conversions.h"
@@ -360,6 +361,17 @@ OfflineSummary OfflineRunner::run() {
   if (error || !std::filesystem::is_directory(options_.output_dir)) {
     throw std::runtime_error(options_.output_dir + ": cannot create the output directory" +
                              (error ? ": " + error.message() : ""));
+  }
+  // Every file of the run directory is checked now: a directory or a pipe at one of them
+  // would otherwise be found only after the whole bag was mapped, with the files before it
+  // written and those after it not.
+  for (const char* name : {"trajectory.tum", "trajectory_online.tum", "landmarks.yaml",
+                           "summary.json", "map.png", "map.pgm", "map.yaml"}) {
+    io::requireReplaceableFile(options_.output_dir + "/" + name);
+  }
+  if (config_.smoothing.enabled) {
+    io::requireReplaceableFile(options_.output_dir + "/trajectory_filter.tum");
+    io::requireReplaceableFile(options_.output_dir + "/landmarks_filter.yaml");
   }
   if (!options_.output_bag.empty()) {
     std::error_code same_error;
@@ -790,12 +802,15 @@ OfflineSummary OfflineRunner::writeOutputs(const OfflineSummary& in) const {
         .number("smoothing_s", summary.smoothing_s)
         .string("smoothing", summary.smoothing);
   }
-  std::ofstream(dir + "/summary.json") << json.str();
+  std::ofstream summary_file(dir + "/summary.json");
+  summary_file << json.str();
+  const bool summary_written = static_cast<bool>(summary_file.flush());
   if (has_grid) {
     io::drawGridRunMap(dir + "/map.png", grid, path, reference_path);
   } else {
     io::drawRunMap(dir + "/map.png", path, reference_path, landmarks);
   }
+  if (!summary_written) throw std::runtime_error(dir + "/summary.json: cannot be written");
   return summary;
 }
 

@@ -26,9 +26,11 @@ const char kUsage[] =
     "  --reference F    TUM ground truth: ATE in summary.json\n"
     "  --output-bag F   the input's tf and sensors plus map -> odom, pose, landmarks, trajectory\n"
     "Writes DIR/trajectory.tum, trajectory_online.tum, landmarks.yaml, summary.json, map.png,\n"
-    "map.pgm and map.yaml. Exits 2 on bad arguments, 1 when the bag or the config cannot be\n"
-    "read, a config or --set value is refused, a topic carries the wrong message type,\n"
-    "--output-bag names the input, no frame could be used or --reference could not be\n"
+    "map.pgm and map.yaml (with smoothing also trajectory_filter.tum, landmarks_filter.yaml).\n"
+    "Exits 2 on bad arguments, 1 when the bag or the config cannot be read, a config or --set\n"
+    "value is refused, a topic carries the wrong message type, an output is a directory, a\n"
+    "pipe or a device (checked before the bag is read), --output-bag names the input, an\n"
+    "output cannot be written, no frame could be used or --reference could not be\n"
     "evaluated (the outputs are written all the same in the last two cases).\n";
 
 struct Arguments {

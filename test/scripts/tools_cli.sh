@@ -177,6 +177,23 @@ expect "offline_slam --output-bag onto a pipe" 1 "pipe.ref.tum: exists and is a 
   timeout 60 "$bin/offline_slam" --bag "$root/test/data/intel_head.bag" \
   --config "$root/config/laser_fastslam2.yaml" --output "$work/p" \
   --output-bag "$work/pipe.ref.tum" --no-progress --set particles=5
+# offline_slam's run directory: every file is checked before the bag is read (before: a pipe at
+# summary.json blocked the tool after the whole run, a directory at landmarks.yaml stopped it
+# with the files before it written).
+mkdir -p "$work/rundir/landmarks.yaml" "$work/rundir2"
+mkfifo "$work/rundir2/summary.json"
+expect "offline_slam run directory file is a directory" 1 \
+  "rundir/landmarks.yaml: exists and is a directory" "$bin/offline_slam" \
+  --bag "$root/test/data/intel_head.bag" --config "$root/config/laser_fastslam2.yaml" \
+  --output "$work/rundir" --no-progress --set particles=5
+expect "offline_slam run directory file is a pipe" 1 "rundir2/summary.json: exists and is a pipe" \
+  timeout 60 "$bin/offline_slam" --bag "$root/test/data/intel_head.bag" \
+  --config "$root/config/laser_fastslam2.yaml" --output "$work/rundir2" --no-progress \
+  --set particles=5
+for dir in rundir rundir2; do
+  [ "$(ls "$work/$dir" | wc -l)" -eq 1 ] ||
+    { echo "FAIL: $dir: files written although an output was refused: $(ls "$work/$dir")"; status=1; }
+done
 for left in pipe.bag pipe.bag.part dir.bag.part pipe.ref.tum.part; do
   [ ! -e "$work/$left" ] || { echo "FAIL: $left left behind by a refused output"; status=1; }
 done
