@@ -267,8 +267,7 @@ void reportAndSortOdometry(const std::string& source, MrclamRobot* data) {
   }
 }
 
-// Sorts the ground truth by time, reporting poses out of order and stretches without a pose
-// (in the whole file: --start / --duration crop later).
+// Sorts the ground truth by time, reporting poses out of order.
 void reportAndSortGroundTruth(const std::string& source, MrclamRobot* data) {
   std::vector<StampedPose>& g = data->ground_truth;
   std::size_t earlier = 0;
@@ -278,21 +277,6 @@ void reportAndSortGroundTruth(const std::string& source, MrclamRobot* data) {
                      [](const StampedPose& a, const StampedPose& b) { return a.stamp < b.stamp; });
     data->warnings.push_back(source + ": " + std::to_string(earlier) +
                              " pose(s) stamped before the line above them; sorted by time");
-  }
-  std::size_t gaps = 0, widest = 0;
-  for (std::size_t i = 1; i < g.size(); ++i) {
-    const double gap = g[i].stamp - g[i - 1].stamp;
-    if (gap <= kMrclamGroundTruthGapS) continue;
-    if (gaps++ == 0 || gap > g[widest].stamp - g[widest - 1].stamp) widest = i;
-  }
-  if (gaps > 0) {
-    std::ostringstream message;
-    message << source << ": " << gaps << " stretch(es) of more than " << kMrclamGroundTruthGapS
-            << " s without a pose; the longest, " << std::fixed << std::setprecision(3)
-            << g[widest].stamp - g[widest - 1].stamp
-            << " s from t = " << g[widest - 1].stamp
-            << " (a stray stamp, or Vicon lost the robot): the reference has no pose there";
-    data->warnings.push_back(message.str());
   }
 }
 
@@ -414,6 +398,23 @@ void cropMrclamRobot(double skip_s, double duration_s, MrclamRobot* data) {
   g.erase(
       std::remove_if(g.begin(), g.end(), [&](const StampedPose& x) { return outside(x.stamp); }),
       g.end());
+}
+
+void reportGroundTruthGaps(const std::string& source, MrclamRobot* data) {
+  const std::vector<StampedPose>& g = data->ground_truth;
+  std::size_t gaps = 0, widest = 0;
+  for (std::size_t i = 1; i < g.size(); ++i) {
+    const double gap = g[i].stamp - g[i - 1].stamp;
+    if (gap <= kMrclamGroundTruthGapS) continue;
+    if (gaps++ == 0 || gap > g[widest].stamp - g[widest - 1].stamp) widest = i;
+  }
+  if (gaps == 0) return;
+  std::ostringstream message;
+  message << source << ": " << gaps << " stretch(es) of more than " << kMrclamGroundTruthGapS
+          << " s without a pose; the longest, " << std::fixed << std::setprecision(3)
+          << g[widest].stamp - g[widest - 1].stamp << " s from t = " << g[widest - 1].stamp
+          << " (a stray stamp, or Vicon lost the robot): the reference has no pose there";
+  data->warnings.push_back(message.str());
 }
 
 void delayMrclamCommands(double delay_s, MrclamRobot* data) {

@@ -247,6 +247,10 @@ int run(const Arguments& arguments) {
   ros::Time::init();
   io::MrclamRobot data = io::readMrclamRobot(arguments.dataset_dir, arguments.robot);
   io::cropMrclamRobot(arguments.start_s, arguments.duration_s, &data);
+  // Stretches without ground truth in the part kept only.
+  io::reportGroundTruthGaps(arguments.dataset_dir + "/Robot" + std::to_string(arguments.robot) +
+                                "_Groundtruth.dat",
+                            &data);
   io::delayMrclamCommands(arguments.command_delay_s, &data);
   const std::size_t measurements_read = data.measurements.size();  // within --start/--duration
   const std::string robot_files = arguments.dataset_dir + "/Robot" +

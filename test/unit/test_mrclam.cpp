@@ -275,7 +275,7 @@ TEST(MrclamRead, RepairsAndReportsOdometryOrderAndRefusesEmptyTables) {
         "# h\n100.5 63 2 0\n101.5 64 2 0\n100.5 64 3 0\n100.5 63 2 0\n100.5 63 2.5 0\n");
   // A stray pose far after the rest, written before the last two, and a 26 s stretch.
   write("Robot1_Groundtruth.dat", "# h\n99 0 0 0\n1104 0 0 0\n104 0 0 0\n130 0 0 0\n");
-  const MrclamRobot data = readMrclamRobot(dir, 1);
+  MrclamRobot data = readMrclamRobot(dir, 1);
   ASSERT_EQ(data.odometry.size(), 5u);
   for (std::size_t i = 1; i < data.odometry.size(); ++i) {
     EXPECT_LE(data.odometry[i - 1].stamp, data.odometry[i].stamp);
@@ -284,6 +284,8 @@ TEST(MrclamRead, RepairsAndReportsOdometryOrderAndRefusesEmptyTables) {
   EXPECT_DOUBLE_EQ(data.odometry[2].v_mps, 0.3);  // of the two at 102, line 3 stays first
   ASSERT_EQ(data.measurements.size(), 4u);  // line 5 repeats line 2: one sighting
   EXPECT_DOUBLE_EQ(data.measurements[2].range_m, 2.5);
+  ASSERT_EQ(data.warnings.size(), 5u);
+  reportGroundTruthGaps(dir + "/Robot1_Groundtruth.dat", &data);  // the whole file kept
   ASSERT_EQ(data.warnings.size(), 6u);
   EXPECT_NE(data.warnings[0].find("Robot1_Odometry.dat: 1 command(s) stamped before the line "
                                   "above them (first at line 4); sorted by time"),
@@ -300,16 +302,29 @@ TEST(MrclamRead, RepairsAndReportsOdometryOrderAndRefusesEmptyTables) {
                                   "above them; sorted by time"),
             std::string::npos)
       << data.warnings[3];
-  EXPECT_NE(data.warnings[4].find("Robot1_Groundtruth.dat: 2 stretch(es) of more than 10 s "
+  EXPECT_NE(data.warnings[5].find("/Robot1_Groundtruth.dat: 2 stretch(es) of more than 10 s "
                                   "without a pose; the longest, 974.000 s from t = 130.000 "),
             std::string::npos)
-      << data.warnings[4];
+      << data.warnings[5];
   ASSERT_EQ(data.ground_truth.size(), 4u);
   EXPECT_DOUBLE_EQ(data.ground_truth[1].stamp, 104.0);
-  EXPECT_NE(data.warnings[5].find("Robot1_Measurement.dat: 1 sighting line(s) repeat one of the "
+  EXPECT_NE(data.warnings[4].find("Robot1_Measurement.dat: 1 sighting line(s) repeat one of the "
                                   "same frame exactly (first at line 5)"),
             std::string::npos)
-      << data.warnings[5];
+      << data.warnings[4];
+  // Cropped to the commands' [100, 103] s: the stretches without a pose lie beyond it.
+  MrclamRobot cropped = readMrclamRobot(dir, 1);
+  cropMrclamRobot(0.0, 3.0, &cropped);
+  const std::size_t before = cropped.warnings.size();
+  reportGroundTruthGaps(dir + "/Robot1_Groundtruth.dat", &cropped);
+  EXPECT_EQ(cropped.warnings.size(), before) << cropped.warnings.back();
+  MrclamRobot late = readMrclamRobot(dir, 1);
+  cropMrclamRobot(0.0, 40.0, &late);  // [100, 140]: the 26 s stretch from 104 s only
+  reportGroundTruthGaps(dir + "/Robot1_Groundtruth.dat", &late);
+  EXPECT_NE(late.warnings.back().find("1 stretch(es) of more than 10 s without a pose; the "
+                                      "longest, 26.000 s from t = 104.000"),
+            std::string::npos)
+      << late.warnings.back();
   // The first command at 102 (0.3 m/s) is integrated over [102, 103].
   const std::vector<StampedPose> poses =
       integrateMrclamOdometry(data.odometry, core::Pose2::Zero());

@@ -19,7 +19,7 @@ namespace io {
 /// Subjects 1..5 are the robots, 6 and up the landmarks (every MRCLAM dataset).
 constexpr int kMrclamFirstLandmarkSubject = 6;
 /// Vicon ground truth comes at 100 Hz (dataset 6: at most 2 s between two poses); a longer
-/// stretch without one is reported by readMrclamRobot.
+/// stretch without one is reported by reportGroundTruthGaps.
 constexpr double kMrclamGroundTruthGapS = 10.0;
 
 /// One velocity command of RobotN_Odometry.dat (`t v w`).
@@ -93,9 +93,10 @@ void resolveSubjects(const std::map<int, int>& subject_of_barcode,
 /// Groundtruth}.dat. Throws std::runtime_error naming the file when one is missing, malformed or
 /// holds no data line (the measurements may be empty), std::invalid_argument when robot is not
 /// 1..5. Sorts every file by time; commands and ground-truth poses out of time order, commands
-/// sharing a stamp (the first at a stamp is the one integrated), ground truth missing for more
-/// than kMrclamGroundTruthGapS, sighting lines repeating one of their frame exactly (kept once)
-/// and sighted landmarks without a surveyed position are reported in `warnings`.
+/// sharing a stamp (the first at a stamp is the one integrated), sighting lines repeating one of
+/// their frame exactly (kept once) and sighted landmarks without a surveyed position are
+/// reported in `warnings`; stretches without ground truth are left to reportGroundTruthGaps()
+/// (after a crop, so that only the stretches in the part kept are reported).
 MrclamRobot readMrclamRobot(const std::string& directory, int robot);
 
 /// Keeps only what lies in [start, start + duration_s] for odometry, measurements and ground
@@ -104,6 +105,11 @@ MrclamRobot readMrclamRobot(const std::string& directory, int robot);
 /// std::invalid_argument, changing nothing, for a negative or non-finite skip_s or duration_s,
 /// or when no odometry command would remain.
 void cropMrclamRobot(double skip_s, double duration_s, MrclamRobot* data);
+
+/// Adds to `warnings` the stretches of more than kMrclamGroundTruthGapS without a ground-truth
+/// pose (their count, the longest and where it starts), naming `source` (the ground-truth
+/// file); ground truth sorted by time, as readMrclamRobot() leaves it.
+void reportGroundTruthGaps(const std::string& source, MrclamRobot* data);
 
 /// Moves every odometry command `delay_s` later: the logged velocity commands lead the robot's
 /// motion (dataset 6, fitted against Vicon: 0.15-0.2 s on all five robots), so a command is
