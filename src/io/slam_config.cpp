@@ -36,6 +36,7 @@ void readAssociation(YamlSection section, core::AssociationOptions* o) {
   section.read("line_overlap_margin_m", &o->line_overlap_margin_m);
   section.read("sample", &o->sample);
   section.read("sample_weight", &o->sample_weight);
+  section.read("ambiguous_weight", &o->ambiguous_weight);
   section.read("exclusive", &o->exclusive);
   section.finish();
 }

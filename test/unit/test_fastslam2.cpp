@@ -356,6 +356,64 @@ double handMatchLogLikelihood(const Eigen::Vector2d& z, const Eigen::Vector2d& l
 }
 }  // namespace
 
+/// A feature between the gate and the new-landmark threshold is neither matched nor mapped.
+/// "none" leaves it out of the weight; "soft" counts its nearest landmark's match likelihood
+/// plus the new-landmark likelihood. A feature beyond the threshold counts the latter in both.
+TEST(FastSlam2, AmbiguousFeatureWeighsAsMatchOrNewWhenSoft) {
+  FilterOptions options;
+  options.particles = 1;
+  options.association.gate_chi2 = 9.21;
+  options.association.new_landmark_chi2 = 20.0;
+  const Eigen::Vector2d lm(5.0, 0.0);
+  const Eigen::Matrix2d lm_cov = 1e-3 * Eigen::Matrix2d::Identity();
+  LandmarkMap map;
+  Landmark landmark;
+  landmark.id = 0;
+  landmark.mean = lm;
+  landmark.covariance = lm_cov;
+  map.add(landmark);
+  const Eigen::Matrix3d pose_cov = Eigen::Vector3d(0.01, 0.01, 0.0004).asDiagonal();
+  Observation ambiguous;
+  ambiguous.noise = Eigen::Vector2d(0.01, 0.0004).asDiagonal();
+  ambiguous.z << 5.0, 0.13;  // 0.13 rad off in bearing
+  Observation far = ambiguous;
+  far.z << 5.0, 0.5;
+  const double log_match =
+      handMatchLogLikelihood(ambiguous.z, lm, lm_cov, pose_cov, ambiguous.noise);
+  // Mahalanobis^2 by hand: at this geometry the innovation covariance is diag(0.021, 0.00124)
+  // (pose, landmark and noise) and the innovation (0, 0.13).
+  const double d2 = 0.13 * 0.13 / 0.00124;
+  ASSERT_GT(d2, 9.21);
+  ASSERT_LT(d2, 20.0);
+  const double log_new = -0.5 * 20.0 - 0.5 * std::log(ambiguous.noise.determinant()) -
+                         std::log(2 * M_PI);
+
+  const ProposalFastSlam2 none(options);
+  ProposalFastSlam2::Proposal q = none.refineProposal(map, Pose2::Zero(), pose_cov, {ambiguous});
+  EXPECT_TRUE(q.matched.empty());
+  EXPECT_TRUE(q.fresh.empty());
+  EXPECT_EQ(q.log_likelihood, 0.0);
+  q = none.refineProposal(map, Pose2::Zero(), pose_cov, {far});
+  ASSERT_EQ(q.fresh.size(), 1u);
+  EXPECT_NEAR(q.log_likelihood, log_new, 1e-9);
+
+  options.association.ambiguous_weight = "soft";
+  const ProposalFastSlam2 soft(options);
+  q = soft.refineProposal(map, Pose2::Zero(), pose_cov, {ambiguous});
+  EXPECT_TRUE(q.matched.empty());
+  EXPECT_TRUE(q.fresh.empty()) << "an ambiguous feature must not start a landmark";
+  EXPECT_NEAR(q.log_likelihood, std::log(std::exp(log_match) + std::exp(log_new)), 1e-9);
+  EXPECT_LT(q.log_likelihood, 0.0);
+  q = soft.refineProposal(map, Pose2::Zero(), pose_cov, {far});
+  ASSERT_EQ(q.fresh.size(), 1u);
+  EXPECT_NEAR(q.log_likelihood, log_new, 1e-9);
+  EXPECT_NEAR(soft.refineProposal(map, Pose2::Zero(), pose_cov, {ambiguous, far}).log_likelihood,
+              std::log(std::exp(log_match) + std::exp(log_new)) + log_new, 1e-9);
+
+  options.association.ambiguous_weight = "new";
+  EXPECT_THROW(validate(options), std::invalid_argument);
+}
+
 TEST(FastSlam2, SampledAssociationDrawsByLikelihoodAndWeighsByTheirSum) {
   FilterOptions options;
   options.particles = 1;

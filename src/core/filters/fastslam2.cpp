@@ -298,6 +298,12 @@ double FastSlam2::matchLogLikelihood(const Eigen::Matrix3d& pose_cov,
   return logGaussian2(innovation(observation.z, match.prediction.z), s, &s_inv);
 }
 
+double FastSlam2::newLandmarkLogLikelihood(const Observation& observation) const {
+  const double scale = rule_->weightNoiseScale();  // as for a match (1: FastSLAM 2.0)
+  return -0.5 * options_.association.new_landmark_chi2 -
+         0.5 * std::log(scale * scale * observation.noise.determinant()) - kLog2Pi;
+}
+
 std::vector<size_t> FastSlam2::associationOrder(
     const LandmarkMap& map, const Pose2& prior_mean, const Eigen::Matrix3d& prior_cov,
     const std::vector<Observation>& observations) const {
@@ -392,13 +398,18 @@ FastSlam2::Proposal FastSlam2::refineProposal(const LandmarkMap& map, const Pose
       q.matched.emplace_back(static_cast<int>(k), m.index);
       if (a.exclusive && is_point) taken.push_back(m.index);  // known ids take theirs too
     } else if (m.index < 0 || m.distance2 > a.new_landmark_chi2) {
-      // Likelihood of a new landmark: as if observed at the new-landmark threshold.
-      const double scale = rule_->weightNoiseScale();  // as for a match (1: FastSLAM 2.0)
-      q.log_likelihood += -0.5 * a.new_landmark_chi2 -
-                          0.5 * std::log(scale * scale * o.noise.determinant()) - kLog2Pi;
+      q.log_likelihood += newLandmarkLogLikelihood(o);
       q.fresh.push_back(static_cast<int>(k));
+    } else if (a.ambiguous_weight == "soft") {
+      // Between the gate and the new-landmark threshold: neither matched nor mapped. "soft"
+      // weighs it as its nearest landmark or a new one (the sum of the two likelihoods), which
+      // joins a match's weight at the gate and a new landmark's at the threshold; "none" leaves
+      // it out (a factor of 1), which favours a particle that leaves its features ambiguous
+      // over one that sees them as new (docs/results.md, session 33).
+      const double log_match = matchLogLikelihood(q.cov, o, m);
+      const double log_new = newLandmarkLogLikelihood(o);
+      q.log_likelihood += std::isfinite(log_match) ? logSumExp({log_match, log_new}) : log_new;
     }
-    // Between the gate and the new-landmark threshold: ambiguous, left out.
   }
   return q;
 }

@@ -64,6 +64,7 @@ void validate(const FilterOptions& o) {
                o.association.gate_chi2, 1000.0);
   requireRange("association.line_overlap_margin_m", o.association.line_overlap_margin_m, 0.0, 100.0);
   requireOneOf("association.sample_weight", o.association.sample_weight, {"sum", "max"});
+  requireOneOf("association.ambiguous_weight", o.association.ambiguous_weight, {"none", "soft"});
   requireRange("measurement.sigma_range_m", o.measurement.sigma_range_m, 1e-6, 100.0);
   requireRange("measurement.sigma_bearing_rad", o.measurement.sigma_bearing_rad, 1e-6, M_PI);
   requireRange("measurement.sigma_rho_m", o.measurement.sigma_rho_m, 1e-6, 100.0);

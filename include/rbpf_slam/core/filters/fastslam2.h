@@ -150,6 +150,9 @@ class FastSlam2 : public SlamFilter {
   /// log N(z; predicted z, H_pose P H_pose^T + scale (H_lm Sigma H_lm^T + R)) of a match.
   double matchLogLikelihood(const Eigen::Matrix3d& pose_cov, const Observation& observation,
                             const Match& match) const;
+  /// The weight's factor (log) of a feature taken as a new landmark: as if observed at the
+  /// new-landmark threshold, its noise scaled as a match's.
+  double newLandmarkLogLikelihood(const Observation& observation) const;
   void addLandmark(LandmarkMap* map, const Pose2& pose, const Observation& observation);
   /// The heading prior's part of a step, the same for every particle: drift tracking's turn of
   /// every particle's predicted heading (0 without it), and the walls that measure the heading,

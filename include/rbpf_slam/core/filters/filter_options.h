@@ -28,6 +28,12 @@ struct AssociationOptions {
   // The weight of a sampled match: "sum" of the gated landmarks' likelihoods (the draw's
   // importance weight) or "max", the most likely one's as without sampling (no gain for copies).
   std::string sample_weight = "sum";
+  // The weight of a feature between the gate and the new-landmark threshold (neither matched
+  // nor mapped): "none" leaves it out (a factor of 1); "soft" counts the sum of its nearest
+  // landmark's match likelihood and the new-landmark likelihood, continuous with a match's
+  // weight at the gate and a new landmark's at the threshold. fastslam2 and hinf_fastslam
+  // (robust_fastslam2's robust steps count the new-landmark likelihood).
+  std::string ambiguous_weight = "none";
   // One-to-one within a frame: a point landmark matched by one feature of the frame is not a
   // candidate for the frame's other point features without a known id, which take their
   // landmarks in order of their best match's Mahalanobis distance at the prior pose. Applies to
