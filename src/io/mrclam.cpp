@@ -402,17 +402,23 @@ void cropMrclamRobot(double skip_s, double duration_s, MrclamRobot* data) {
 
 void reportGroundTruthGaps(const std::string& source, MrclamRobot* data) {
   const std::vector<StampedPose>& g = data->ground_truth;
-  std::size_t gaps = 0, widest = 0;
-  for (std::size_t i = 1; i < g.size(); ++i) {
-    const double gap = g[i].stamp - g[i - 1].stamp;
-    if (gap <= kMrclamGroundTruthGapS) continue;
-    if (gaps++ == 0 || gap > g[widest].stamp - g[widest - 1].stamp) widest = i;
-  }
+  std::size_t gaps = 0;
+  double widest = 0.0, widest_from = 0.0;
+  const auto stretch = [&](double from, double to) {
+    if (to - from <= kMrclamGroundTruthGapS) return;
+    if (gaps++ == 0 || to - from > widest) {
+      widest = to - from;
+      widest_from = from;
+    }
+  };
+  for (std::size_t i = 1; i < g.size(); ++i) stretch(g[i - 1].stamp, g[i].stamp);
+  // Commands running on after the last pose (the file's end, or where a crop cut it).
+  if (!g.empty() && !data->odometry.empty()) stretch(g.back().stamp, data->odometry.back().stamp);
   if (gaps == 0) return;
   std::ostringstream message;
   message << source << ": " << gaps << " stretch(es) of more than " << kMrclamGroundTruthGapS
-          << " s without a pose; the longest, " << std::fixed << std::setprecision(3)
-          << g[widest].stamp - g[widest - 1].stamp << " s from t = " << g[widest - 1].stamp
+          << " s without a pose; the longest, " << std::fixed << std::setprecision(3) << widest
+          << " s from t = " << widest_from
           << " (a stray stamp, or Vicon lost the robot): the reference has no pose there";
   data->warnings.push_back(message.str());
 }

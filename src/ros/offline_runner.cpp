@@ -374,6 +374,9 @@ OfflineSummary OfflineRunner::run() {
     io::requireReplaceableFile(options_.output_dir + "/landmarks_filter.yaml");
   }
   if (!options_.output_bag.empty()) {
+    // Also checked by the output bag itself when it opens, but that is after the tf is read.
+    io::requireReplaceableFile(options_.output_bag);
+    io::requireReplaceableFile(options_.output_bag + ".part");
     std::error_code same_error;
     if (std::filesystem::equivalent(options_.output_bag, options_.bag_path, same_error)) {
       throw std::runtime_error("--output-bag " + options_.output_bag + " is the input bag " +

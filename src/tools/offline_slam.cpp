@@ -29,7 +29,7 @@ const char kUsage[] =
     "map.pgm and map.yaml (with smoothing also trajectory_filter.tum, landmarks_filter.yaml).\n"
     "Exits 2 on bad arguments, 1 when the bag or the config cannot be read, a config or --set\n"
     "value is refused, a topic carries the wrong message type, an output is a directory, a\n"
-    "pipe or a device (checked before the bag is read), --output-bag names the input, an\n"
+    "pipe, a device or a socket (checked before the bag is read), --output-bag names the input, an\n"
     "output cannot be written, no frame could be used or --reference could not be\n"
     "evaluated (the outputs are written all the same in the last two cases).\n";
 

@@ -11,7 +11,8 @@
 # fails (0.062 m, 0.69 x, 7 of 10 with the most likely match). Since session 25 the config runs
 # an ensemble of four filters and the online pose is the leader's: 0.050 m (0.55 x), 9 of 10
 # (one filter, `--set ensemble.members=1`: the figures above); since session 27 eight:
-# 0.050 m (0.55 x), 10 of 10.
+# 0.050 m (0.55 x), 10 of 10. With `--set association.ambiguous_weight=soft` (session 33, not
+# shipped): 0.066 m (0.73 x), 6 of 10, and it fails.
 # Extra arguments go to each filter run's offline_slam (e.g. --set particles=100 to see it fail).
 set -euo pipefail
 

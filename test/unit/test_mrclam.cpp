@@ -312,19 +312,23 @@ TEST(MrclamRead, RepairsAndReportsOdometryOrderAndRefusesEmptyTables) {
                                   "same frame exactly (first at line 5)"),
             std::string::npos)
       << data.warnings[4];
-  // Cropped to the commands' [100, 103] s: the stretches without a pose lie beyond it.
-  MrclamRobot cropped = readMrclamRobot(dir, 1);
-  cropMrclamRobot(0.0, 3.0, &cropped);
-  const std::size_t before = cropped.warnings.size();
-  reportGroundTruthGaps(dir + "/Robot1_Groundtruth.dat", &cropped);
-  EXPECT_EQ(cropped.warnings.size(), before) << cropped.warnings.back();
   MrclamRobot late = readMrclamRobot(dir, 1);
   cropMrclamRobot(0.0, 40.0, &late);  // [100, 140]: the 26 s stretch from 104 s only
+  MrclamRobot past_the_end = late;
   reportGroundTruthGaps(dir + "/Robot1_Groundtruth.dat", &late);
   EXPECT_NE(late.warnings.back().find("1 stretch(es) of more than 10 s without a pose; the "
                                       "longest, 26.000 s from t = 104.000"),
             std::string::npos)
       << late.warnings.back();
+  // Commands running 40 s past the last pose (130 s) count as a stretch too.
+  MrclamOdometry last;
+  last.stamp = 170.0;
+  past_the_end.odometry.push_back(last);
+  reportGroundTruthGaps(dir + "/Robot1_Groundtruth.dat", &past_the_end);
+  EXPECT_NE(past_the_end.warnings.back().find("2 stretch(es) of more than 10 s without a pose; "
+                                              "the longest, 40.000 s from t = 130.000"),
+            std::string::npos)
+      << past_the_end.warnings.back();
   // The first command at 102 (0.3 m/s) is integrated over [102, 103].
   const std::vector<StampedPose> poses =
       integrateMrclamOdometry(data.odometry, core::Pose2::Zero());

@@ -159,6 +159,7 @@ TEST(SlamConfig, OverridesApplyDottedKeys) {
   applyOverride(&root, "association.gate_chi2=4.5");
   applyOverride(&root, "particles=7");
   applyOverride(&root, "association.exclusive=true");
+  applyOverride(&root, "association.ambiguous_weight=soft");
   applyOverride(&root, "measurement.landmark_iterations=3");
   applyOverride(&root, "smoothing.enabled=true");
   applyOverride(&root, "use_lines=false");
@@ -186,6 +187,8 @@ TEST(SlamConfig, OverridesApplyDottedKeys) {
   EXPECT_DOUBLE_EQ(c.filter.association.gate_chi2, 4.5);
   EXPECT_TRUE(c.filter.association.exclusive);
   EXPECT_FALSE(core::AssociationOptions().exclusive);
+  EXPECT_EQ(c.filter.association.ambiguous_weight, "soft");
+  EXPECT_EQ(core::AssociationOptions().ambiguous_weight, "none");
   EXPECT_THROW(applyOverride(&root, "novalue"), ConfigError);
 }
 
@@ -260,6 +263,7 @@ TEST(SlamConfig, MrclamConfigsShareTheExistenceAndAssociationSettings) {
     EXPECT_EQ(c.filter.existence.sighting_count, 2) << name;
     EXPECT_EQ(c.filter.existence.merge_chi2, 9.21) << name;
     EXPECT_FALSE(c.filter.association.exclusive) << name;  // session 22: tried, not shipped
+    EXPECT_EQ(c.filter.association.ambiguous_weight, "none") << name;  // session 33: not shipped
     EXPECT_EQ(c.filter.measurement.landmark_iterations, 1) << name;  // session 23: not shipped
     // Session 24: the path and map smoothed after the run, the frames kept for it.
     EXPECT_TRUE(c.smoothing.enabled) << name;

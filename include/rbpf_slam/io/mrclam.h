@@ -107,8 +107,9 @@ MrclamRobot readMrclamRobot(const std::string& directory, int robot);
 void cropMrclamRobot(double skip_s, double duration_s, MrclamRobot* data);
 
 /// Adds to `warnings` the stretches of more than kMrclamGroundTruthGapS without a ground-truth
-/// pose (their count, the longest and where it starts), naming `source` (the ground-truth
-/// file); ground truth sorted by time, as readMrclamRobot() leaves it.
+/// pose, between two poses or from the last pose to the last command (their count, the longest
+/// and where it starts), naming `source` (the ground-truth file); ground truth and commands
+/// sorted by time, as readMrclamRobot() leaves them.
 void reportGroundTruthGaps(const std::string& source, MrclamRobot* data);
 
 /// Moves every odometry command `delay_s` later: the logged velocity commands lead the robot's

@@ -80,8 +80,11 @@ class OfflineRunner {
   /// With a filter built elsewhere (dpf_master_node: the local filters in other processes).
   OfflineRunner(const io::SlamConfig& config, const OfflineOptions& options,
                 std::unique_ptr<core::SlamFilter> filter);
-  /// Processes the whole bag and writes trajectory.tum, landmarks.yaml, summary.json and
-  /// map.png into the output directory. Throws std::runtime_error with a clear message.
+  /// Processes the whole bag and writes trajectory.tum, trajectory_online.tum, landmarks.yaml,
+  /// summary.json and map.png/.pgm/.yaml (with smoothing also trajectory_filter.tum and
+  /// landmarks_filter.yaml) into the output directory. Throws std::runtime_error with a clear
+  /// message; before the bag is read when one of those paths (or the output bag's) is a
+  /// directory, a pipe or a device.
   OfflineSummary run();
   const core::SlamPipeline& pipeline() const { return pipeline_; }
 

@@ -81,6 +81,7 @@ FastSlam2::FastSlam2(const FilterOptions& options)
 
 FastSlam2::FastSlam2(const FilterOptions& options, std::unique_ptr<EstimatorRule> rule)
     : options_(options),
+      soft_ambiguous_(options.association.ambiguous_weight == "soft"),
       motion_model_(createMotionModel(options.motion)),
       rule_(std::move(rule)),
       rng_(options.seed),
@@ -400,10 +401,10 @@ FastSlam2::Proposal FastSlam2::refineProposal(const LandmarkMap& map, const Pose
     } else if (m.index < 0 || m.distance2 > a.new_landmark_chi2) {
       q.log_likelihood += newLandmarkLogLikelihood(o);
       q.fresh.push_back(static_cast<int>(k));
-    } else if (a.ambiguous_weight == "soft") {
+    } else if (soft_ambiguous_) {
       // Between the gate and the new-landmark threshold: neither matched nor mapped. "soft"
-      // weighs it as its nearest landmark or a new one (the sum of the two likelihoods), which
-      // joins a match's weight at the gate and a new landmark's at the threshold; "none" leaves
+      // weighs it as its nearest landmark or a new one (the sum of the two likelihoods), close
+      // to a match's weight at the gate and a new landmark's at the threshold; "none" leaves
       // it out (a factor of 1), which favours a particle that leaves its features ambiguous
       // over one that sees them as new (docs/results.md, session 33).
       const double log_match = matchLogLikelihood(q.cov, o, m);

@@ -174,6 +174,7 @@ class FastSlam2 : public SlamFilter {
                       const Observation& observation, double* log_likelihood);
 
   const FilterOptions options_;
+  const bool soft_ambiguous_;  // association.ambiguous_weight == "soft", compared once
   std::unique_ptr<MotionModel> motion_model_;
   std::unique_ptr<EstimatorRule> rule_;
   Rng rng_;

@@ -30,9 +30,11 @@ struct AssociationOptions {
   std::string sample_weight = "sum";
   // The weight of a feature between the gate and the new-landmark threshold (neither matched
   // nor mapped): "none" leaves it out (a factor of 1); "soft" counts the sum of its nearest
-  // landmark's match likelihood and the new-landmark likelihood, continuous with a match's
-  // weight at the gate and a new landmark's at the threshold. fastslam2 and hinf_fastslam
-  // (robust_fastslam2's robust steps count the new-landmark likelihood).
+  // landmark's match likelihood and the new-landmark likelihood (close to, not equal to, a
+  // match's weight at the gate and a new landmark's at the threshold). fastslam2 and
+  // hinf_fastslam (with pointwise weights the marginal likelihood at the proposal, not at the
+  // drawn pose; untested there); robust_fastslam2's robust steps count the new-landmark
+  // likelihood.
   std::string ambiguous_weight = "none";
   // One-to-one within a frame: a point landmark matched by one feature of the frame is not a
   // candidate for the frame's other point features without a known id, which take their
