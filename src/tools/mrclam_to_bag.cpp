@@ -245,16 +245,14 @@ constexpr double kGroundTruthLateS = 0.5;
 /// The work once the arguments are understood; the exit status.
 int run(const Arguments& arguments) {
   ros::Time::init();
+  const std::string robot_files = arguments.dataset_dir + "/Robot" +
+                                  std::to_string(arguments.robot) + "_";
   io::MrclamRobot data = io::readMrclamRobot(arguments.dataset_dir, arguments.robot);
   io::cropMrclamRobot(arguments.start_s, arguments.duration_s, &data);
   // Stretches without ground truth in the part kept only.
-  io::reportGroundTruthGaps(arguments.dataset_dir + "/Robot" + std::to_string(arguments.robot) +
-                                "_Groundtruth.dat",
-                            &data);
+  io::reportGroundTruthGaps(robot_files + "Groundtruth.dat", &data);
   io::delayMrclamCommands(arguments.command_delay_s, &data);
   const std::size_t measurements_read = data.measurements.size();  // within --start/--duration
-  const std::string robot_files = arguments.dataset_dir + "/Robot" +
-                                  std::to_string(arguments.robot) + "_";
   if (data.odometry.size() < 2) {
     throw std::runtime_error(robot_files + "Odometry.dat: " +
                              std::to_string(data.odometry.size()) +

@@ -216,8 +216,7 @@ double RobustFastSlam2::updateCandidate(Particle* particle, const Pose2& predict
     const Observation& o = observations[k];
     // An observation no candidate can explain by a landmark of the oldest set counts the same
     // for all: as if observed at the new-landmark threshold.
-    const double log_new =
-        -0.5 * a.new_landmark_chi2 - 0.5 * std::log(o.noise.determinant()) - kLog2Pi;
+    const double log_new = newLandmarkLogLikelihood(o);
     const Match m = associate(map, mean, cov, o);
     if (m.index < 0 || m.distance2 >= a.gate_chi2) {
       log_likelihood += log_new;
