@@ -26,6 +26,10 @@ uint8_t pgmValue(int8_t cell) {
 
 }  // namespace
 
+std::vector<std::string> gridMapFiles(const std::string& prefix) {
+  return {prefix + ".pgm", prefix + ".yaml"};
+}
+
 std::vector<std::string> writeGridMap(const std::string& prefix, const core::GridMapData& grid,
                                       const std::string& comment) {
   const int width = std::max(grid.width, 1), height = std::max(grid.height, 1);
@@ -36,7 +40,9 @@ std::vector<std::string> writeGridMap(const std::string& prefix, const core::Gri
       pixels[static_cast<size_t>(height - 1 - y) * width + x] = pgmValue(grid.at(x, y));
     }
   }
-  const std::string pgm_path = prefix + ".pgm", yaml_path = prefix + ".yaml";
+  const std::vector<std::string> files = gridMapFiles(prefix);
+  const std::string& pgm_path = files[0];
+  const std::string& yaml_path = files[1];
   {
     std::ofstream pgm(pgm_path, std::ios::binary);
     if (!pgm) throw std::runtime_error(pgm_path + ": cannot be written");
@@ -52,7 +58,7 @@ std::vector<std::string> writeGridMap(const std::string& prefix, const core::Gri
        << "\norigin: [" << grid.origin_x_m << ", " << grid.origin_y_m << ", 0.0]\nnegate: 0\n"
        << "occupied_thresh: 0.65\nfree_thresh: 0.196\n";
   if (!yaml) throw std::runtime_error(yaml_path + ": write failed");
-  return {pgm_path, yaml_path};
+  return files;
 }
 
 core::GridMapData readGridMap(const std::string& yaml_path) {

@@ -41,6 +41,34 @@ namespace {
 constexpr double kCloudAxisTolerance = 0.05;  // m: a cloud point lies on its transducer's axis
 constexpr double kLandmarkPointRadius = 0.1;  // m: a point landmark's disc in map.pgm
 
+// The files of a run directory, named once: run() checks them all before reading the bag and
+// writeOutputs() writes them.
+struct RunFiles {
+  explicit RunFiles(const std::string& dir)
+      : trajectory(dir + "/trajectory.tum"),
+        online(dir + "/trajectory_online.tum"),
+        trajectory_filter(dir + "/trajectory_filter.tum"),
+        landmarks(dir + "/landmarks.yaml"),
+        landmarks_filter(dir + "/landmarks_filter.yaml"),
+        summary(dir + "/summary.json"),
+        picture(dir + "/map.png"),
+        map_prefix(dir + "/map") {}
+
+  /// Every file the run writes; the filter's own path and map only with smoothing.
+  std::vector<std::string> all(bool smoothing) const {
+    std::vector<std::string> files = {trajectory, online, landmarks, summary, picture};
+    for (const std::string& f : io::gridMapFiles(map_prefix)) files.push_back(f);
+    if (smoothing) {
+      files.push_back(trajectory_filter);
+      files.push_back(landmarks_filter);
+    }
+    return files;
+  }
+
+  std::string trajectory, online, trajectory_filter, landmarks, landmarks_filter, summary,
+      picture, map_prefix;
+};
+
 bool topicIs(const std::string& topic, const std::string& name) {
   return stripSlash(topic) == stripSlash(name);
 }
@@ -365,13 +393,8 @@ OfflineSummary OfflineRunner::run() {
   // Every file of the run directory is checked now: a directory or a pipe at one of them
   // would otherwise be found only after the whole bag was mapped, with the files before it
   // written and those after it not.
-  for (const char* name : {"trajectory.tum", "trajectory_online.tum", "landmarks.yaml",
-                           "summary.json", "map.png", "map.pgm", "map.yaml"}) {
-    io::requireReplaceableFile(options_.output_dir + "/" + name);
-  }
-  if (config_.smoothing.enabled) {
-    io::requireReplaceableFile(options_.output_dir + "/trajectory_filter.tum");
-    io::requireReplaceableFile(options_.output_dir + "/landmarks_filter.yaml");
+  for (const std::string& file : RunFiles(options_.output_dir).all(config_.smoothing.enabled)) {
+    io::requireReplaceableFile(file);
   }
   if (!options_.output_bag.empty()) {
     // Also checked by the output bag itself when it opens, but that is after the tf is read.
@@ -666,7 +689,7 @@ OfflineSummary OfflineRunner::run() {
 
 OfflineSummary OfflineRunner::writeOutputs(const OfflineSummary& in) const {
   OfflineSummary summary = in;
-  const std::string& dir = options_.output_dir;  // made by run() before the bag was read
+  const RunFiles files(options_.output_dir);  // its directory made by run() before the bag
   // The trajectory: the best particle's path when the filter keeps paths (FastSLAM's estimate
   // of the whole path, the one its map was built from, corrected by every loop it closed),
   // else the pose estimated at each update. The latter is always in trajectory_online.tum.
@@ -682,8 +705,8 @@ OfflineSummary OfflineRunner::writeOutputs(const OfflineSummary& in) const {
   std::vector<core::LandmarkEstimate> landmarks = pipeline_.session().filter().landmarks();
   if (config_.smoothing.enabled) {
     // The filter's own path and map stay beside the smoothed ones.
-    io::writeTum(dir + "/trajectory_filter.tum", estimate);
-    io::writeLandmarksYaml(dir + "/landmarks_filter.yaml", landmarks);
+    io::writeTum(files.trajectory_filter, estimate);
+    io::writeLandmarksYaml(files.landmarks_filter, landmarks);
     const auto start = std::chrono::steady_clock::now();
     const core::SmoothingResult smoothed =
         core::smoothSession(pipeline_.session(), config_.filter, config_.smoothing);
@@ -702,8 +725,8 @@ OfflineSummary OfflineRunner::writeOutputs(const OfflineSummary& in) const {
                            "%s\n", smoothed.message.c_str());
     }
   }
-  io::writeTum(dir + "/trajectory.tum", estimate);
-  io::writeTum(dir + "/trajectory_online.tum", online);
+  io::writeTum(files.trajectory, estimate);
+  io::writeTum(files.online, online);
 
   std::vector<core::Pose2> reference_path;
   if (!options_.reference_path.empty()) {
@@ -725,7 +748,7 @@ OfflineSummary OfflineRunner::writeOutputs(const OfflineSummary& in) const {
     }
   }
 
-  io::writeLandmarksYaml(dir + "/landmarks.yaml", landmarks);
+  io::writeLandmarksYaml(files.landmarks, landmarks);
 
   io::JsonObjectWriter json;
   json.string("variant", config_.filter.variant)
@@ -784,7 +807,7 @@ OfflineSummary OfflineRunner::writeOutputs(const OfflineSummary& in) const {
       grid = core::rasterizeLandmarks(landmarks, config_.ros.map_resolution, 1.0,
                                       kLandmarkPointRadius);
     }
-    io::writeGridMap(dir + "/map", grid);
+    io::writeGridMap(files.map_prefix, grid);
   } catch (const std::runtime_error& e) {
     std::fprintf(stderr, "offline_slam: map.pgm not written: %s\n", e.what());
   }
@@ -805,15 +828,15 @@ OfflineSummary OfflineRunner::writeOutputs(const OfflineSummary& in) const {
         .number("smoothing_s", summary.smoothing_s)
         .string("smoothing", summary.smoothing);
   }
-  std::ofstream summary_file(dir + "/summary.json");
+  std::ofstream summary_file(files.summary);
   summary_file << json.str();
   const bool summary_written = static_cast<bool>(summary_file.flush());
   if (has_grid) {
-    io::drawGridRunMap(dir + "/map.png", grid, path, reference_path);
+    io::drawGridRunMap(files.picture, grid, path, reference_path);
   } else {
-    io::drawRunMap(dir + "/map.png", path, reference_path, landmarks);
+    io::drawRunMap(files.picture, path, reference_path, landmarks);
   }
-  if (!summary_written) throw std::runtime_error(dir + "/summary.json: cannot be written");
+  if (!summary_written) throw std::runtime_error(files.summary + ": cannot be written");
   return summary;
 }
 

@@ -10,6 +10,9 @@
 namespace rbpf_slam {
 namespace io {
 
+/// The two files writeGridMap writes for PREFIX: PREFIX.pgm and PREFIX.yaml.
+std::vector<std::string> gridMapFiles(const std::string& prefix);
+
 /// Writes PREFIX.pgm and PREFIX.yaml (image, resolution, origin, negate 0, occupied_thresh
 /// 0.65, free_thresh 0.196); cells >= 65 are occupied, 0..19 free, the rest unknown. Returns
 /// the two paths; throws std::runtime_error naming the file on failure.
