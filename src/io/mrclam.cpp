@@ -184,8 +184,10 @@ std::map<int, int> parseMrclamBarcodes(std::istream& in, const std::string& sour
   return subject_of_barcode;
 }
 
-std::vector<StampedPose> parseMrclamGroundTruth(std::istream& in, const std::string& source) {
+std::vector<StampedPose> parseMrclamGroundTruth(std::istream& in, const std::string& source,
+                                                std::vector<std::size_t>* lines) {
   std::vector<StampedPose> poses;
+  if (lines) lines->clear();
   for (const Row& row : readRows(in, source, 4, "t x y theta")) {
     requireStamp(source, row.line, row.values[0]);
     requireWithin(source, row.line, "x", row.values[1], -kMaxPlausibleCoordinateM,
@@ -198,6 +200,7 @@ std::vector<StampedPose> parseMrclamGroundTruth(std::istream& in, const std::str
     pose.stamp = row.values[0];
     pose.pose = core::Pose2(row.values[1], row.values[2], core::wrapAngle(row.values[3]));
     poses.push_back(pose);
+    if (lines) lines->push_back(row.line);
   }
   return poses;
 }
@@ -267,16 +270,20 @@ void reportAndSortOdometry(const std::string& source, MrclamRobot* data) {
   }
 }
 
-// Sorts the ground truth by time, reporting poses out of order.
-void reportAndSortGroundTruth(const std::string& source, MrclamRobot* data) {
+// Sorts the ground truth by time, reporting poses out of order (lines: each pose's line).
+void reportAndSortGroundTruth(const std::string& source, const std::vector<std::size_t>& lines,
+                              MrclamRobot* data) {
   std::vector<StampedPose>& g = data->ground_truth;
-  std::size_t earlier = 0;
-  for (std::size_t i = 1; i < g.size(); ++i) earlier += g[i].stamp < g[i - 1].stamp ? 1 : 0;
+  std::size_t earlier = 0, first_earlier_line = 0;
+  for (std::size_t i = 1; i < g.size(); ++i) {
+    if (g[i].stamp < g[i - 1].stamp && earlier++ == 0) first_earlier_line = lines.at(i);
+  }
   if (earlier > 0) {
     std::stable_sort(g.begin(), g.end(),
                      [](const StampedPose& a, const StampedPose& b) { return a.stamp < b.stamp; });
     data->warnings.push_back(source + ": " + std::to_string(earlier) +
-                             " pose(s) stamped before the line above them; sorted by time");
+                             " pose(s) stamped before the line above them (first at line " +
+                             std::to_string(first_earlier_line) + "); sorted by time");
   }
 }
 
@@ -336,7 +343,11 @@ MrclamRobot readMrclamRobot(const std::string& directory, int robot) {
   data.landmarks = parseFile(directory + "/Landmark_Groundtruth.dat", parseMrclamLandmarks);
   data.odometry = parseFile(prefix + "Odometry.dat", parseMrclamOdometry);
   data.measurements = parseFile(prefix + "Measurement.dat", parseMrclamMeasurements);
-  data.ground_truth = parseFile(prefix + "Groundtruth.dat", parseMrclamGroundTruth);
+  std::vector<std::size_t> ground_truth_lines;
+  data.ground_truth = parseFile(prefix + "Groundtruth.dat",
+                                [&ground_truth_lines](std::istream& in, const std::string& source) {
+                                  return parseMrclamGroundTruth(in, source, &ground_truth_lines);
+                                });
   resolveSubjects(data.subject_of_barcode, &data.measurements);
   if (data.subject_of_barcode.empty()) {
     throw std::runtime_error(directory + "/Barcodes.dat: no data line");
@@ -348,7 +359,7 @@ MrclamRobot readMrclamRobot(const std::string& directory, int robot) {
   if (data.ground_truth.empty()) throw std::runtime_error(prefix + "Groundtruth.dat: no data line");
   reportAndSortOdometry(prefix + "Odometry.dat", &data);
   reportUnsurveyedSubjects(&data);
-  reportAndSortGroundTruth(prefix + "Groundtruth.dat", &data);
+  reportAndSortGroundTruth(prefix + "Groundtruth.dat", ground_truth_lines, &data);
   std::stable_sort(
       data.measurements.begin(), data.measurements.end(),
       [](const MrclamMeasurement& a, const MrclamMeasurement& b) { return a.stamp < b.stamp; });

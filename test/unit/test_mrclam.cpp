@@ -68,8 +68,11 @@ TEST(MrclamParse, MeasurementsBarcodesLandmarksAndGroundTruth) {
   EXPECT_DOUBLE_EQ(l[0].y_m, 2.7);
   EXPECT_DOUBLE_EQ(l[0].sd_y_m, 0.00005);
 
-  const std::vector<StampedPose> g = parseMrclamGroundTruth(truth, "g.dat");
+  std::vector<std::size_t> lines;
+  const std::vector<StampedPose> g = parseMrclamGroundTruth(truth, "g.dat", &lines);
   ASSERT_EQ(g.size(), 1u);
+  ASSERT_EQ(lines.size(), 1u);
+  EXPECT_EQ(lines[0], 3u);  // after the two header lines
   EXPECT_NEAR(g[0].pose.z(), 7.0 - 2.0 * M_PI, 1e-12);  // wrapped into (-pi, pi]
 }
 
@@ -87,7 +90,10 @@ const auto parseOdometryText = parserOf(parseMrclamOdometry, "Robot1_Odometry.da
 const auto parseMeasurementText = parserOf(parseMrclamMeasurements, "Robot1_Measurement.dat");
 const auto parseBarcodeText = parserOf(parseMrclamBarcodes, "Barcodes.dat");
 const auto parseLandmarkText = parserOf(parseMrclamLandmarks, "Landmark_Groundtruth.dat");
-const auto parseGroundTruthText = parserOf(parseMrclamGroundTruth, "Robot1_Groundtruth.dat");
+const std::function<void(const std::string&)> parseGroundTruthText = [](const std::string& text) {
+  std::istringstream in(text);
+  parseMrclamGroundTruth(in, "Robot1_Groundtruth.dat");
+};
 
 /// Finite but absurd values (a corrupt file) name the file, the line and the limit; they used
 /// to be dead-reckoned to 4e228 m, or stop the converter in ros::Time without a line.
@@ -299,7 +305,7 @@ TEST(MrclamRead, RepairsAndReportsOdometryOrderAndRefusesEmptyTables) {
             std::string::npos)
       << data.warnings[2];
   EXPECT_NE(data.warnings[3].find("Robot1_Groundtruth.dat: 1 pose(s) stamped before the line "
-                                  "above them; sorted by time"),
+                                  "above them (first at line 4); sorted by time"),
             std::string::npos)
       << data.warnings[3];
   EXPECT_NE(data.warnings[5].find("/Robot1_Groundtruth.dat: 2 stretch(es) of more than 10 s "

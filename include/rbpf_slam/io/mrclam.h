@@ -79,8 +79,9 @@ std::vector<MrclamMeasurement> parseMrclamMeasurements(std::istream& in, const s
 /// Barcodes.dat (`subject barcode`), as barcode -> subject. Also throws on a repeated barcode.
 std::map<int, int> parseMrclamBarcodes(std::istream& in, const std::string& source);
 
-/// RobotN_Groundtruth.dat (`t x y theta`).
-std::vector<StampedPose> parseMrclamGroundTruth(std::istream& in, const std::string& source);
+/// RobotN_Groundtruth.dat (`t x y theta`); with `lines`, each pose's 1-based line number too.
+std::vector<StampedPose> parseMrclamGroundTruth(std::istream& in, const std::string& source,
+                                                std::vector<std::size_t>* lines = nullptr);
 
 /// Landmark_Groundtruth.dat.
 std::vector<MrclamLandmark> parseMrclamLandmarks(std::istream& in, const std::string& source);
