@@ -4,7 +4,6 @@
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
-#include <filesystem>
 
 namespace rbpf_slam {
 namespace io {
@@ -46,21 +45,6 @@ std::string besideBag(const std::string& bag, const std::string& suffix) {
   const bool has_ext =
       bag.size() > ext.size() && bag.compare(bag.size() - ext.size(), ext.size(), ext) == 0;
   return (has_ext ? bag.substr(0, bag.size() - ext.size()) : bag) + suffix;
-}
-
-void requireReplaceableFile(const std::string& path) {
-  std::error_code error;
-  const std::filesystem::file_status status = std::filesystem::status(path, error);
-  if (!std::filesystem::exists(status) || std::filesystem::is_regular_file(status)) return;
-  const char* kind = std::filesystem::is_directory(status)   ? "a directory"
-                     : std::filesystem::is_fifo(status)      ? "a pipe"
-                     : std::filesystem::is_character_file(status) ||
-                             std::filesystem::is_block_file(status)
-                         ? "a device"
-                     : std::filesystem::is_socket(status) ? "a socket"
-                                                          : "something else";
-  throw std::runtime_error(path + ": exists and is " + kind +
-                           " (not a regular file); not written over");
 }
 
 }  // namespace io

@@ -8,7 +8,7 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "rbpf_slam/io/tool_arguments.h"
+#include "rbpf_slam/io/output_file.h"
 
 namespace rbpf_slam {
 namespace io {

@@ -5,7 +5,7 @@
 #include <cstring>
 #include <stdexcept>
 
-#include "rbpf_slam/io/tool_arguments.h"
+#include "rbpf_slam/io/output_file.h"
 
 namespace rbpf_slam {
 namespace rosbridge {

@@ -27,7 +27,7 @@
 #include "rbpf_slam/io/json_writer.h"
 #include "rbpf_slam/io/landmark_file.h"
 #include "rbpf_slam/io/map_image.h"
-#include "rbpf_slam/io/tool_arguments.h"
+#include "rbpf_slam/io/output_file.h"
 #include "rbpf_slam/io/trajectory.h"
 #include "rbpf_slam/ros/bag_files.h"
 #include "rbpf_slam/ros/conversions.h"

@@ -24,6 +24,7 @@
 
 #include "rbpf_slam/core/geometry.h"
 #include "rbpf_slam/io/carmen.h"
+#include "rbpf_slam/io/output_file.h"
 #include "rbpf_slam/io/tool_arguments.h"
 #include "rbpf_slam/io/trajectory.h"
 #include "rbpf_slam/ros/bag_files.h"

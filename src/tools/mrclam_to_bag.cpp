@@ -31,6 +31,7 @@
 #include "rbpf_slam/core/geometry.h"
 #include "rbpf_slam/io/json_writer.h"
 #include "rbpf_slam/io/mrclam.h"
+#include "rbpf_slam/io/output_file.h"
 #include "rbpf_slam/io/tool_arguments.h"
 #include "rbpf_slam/io/trajectory.h"
 #include "rbpf_slam/ros/bag_files.h"

@@ -20,6 +20,7 @@
 #include <string>
 
 #include "rbpf_slam/core/sim/simulator.h"
+#include "rbpf_slam/io/output_file.h"
 #include "rbpf_slam/io/tool_arguments.h"
 #include "rbpf_slam/io/world_yaml.h"
 #include "rbpf_slam/ros/bag_files.h"

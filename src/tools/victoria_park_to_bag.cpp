@@ -21,6 +21,7 @@
 #include <string>
 #include <vector>
 
+#include "rbpf_slam/io/output_file.h"
 #include "rbpf_slam/io/tool_arguments.h"
 #include "rbpf_slam/io/trajectory.h"
 #include "rbpf_slam/io/victoria_park.h"

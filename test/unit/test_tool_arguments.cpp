@@ -1,13 +1,20 @@
-// The command line every tool shares (io/tool_arguments.h).
+// The command line every tool shares (io/tool_arguments.h), and the check before a file is
+// written over (io/output_file.h).
 
 #include <gtest/gtest.h>
 
+#include <sys/stat.h>
+#include <unistd.h>
+
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <functional>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
+#include "rbpf_slam/io/output_file.h"
 #include "rbpf_slam/io/tool_arguments.h"
 
 namespace rbpf_slam {
@@ -47,6 +54,33 @@ TEST(ToolArguments, NumbersFollowTheirRule) {
   for (const char* bad : {"", "-1", " -1", "+1", "4.2", "7x", "18446744073709551616"}) {
     EXPECT_NE(errorOf([&] { parseUnsigned("--seed", bad); }), "") << bad;
   }
+}
+
+/// A missing path or a regular file may be written; a directory or a pipe is named and refused.
+TEST(OutputFile, OnlyMissingOrRegularFilesAreReplaceable) {
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / ("rbpf_output_file_" + std::to_string(getpid()));
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir / "a_directory");
+  std::ofstream(dir / "regular") << "x";
+  ASSERT_EQ(mkfifo((dir / "a_pipe").c_str(), 0600), 0);
+  EXPECT_NO_THROW(requireReplaceableFile((dir / "missing").string()));
+  EXPECT_NO_THROW(requireReplaceableFile((dir / "regular").string()));
+  const auto message = [](const std::filesystem::path& path) {
+    try {
+      requireReplaceableFile(path.string());
+    } catch (const std::runtime_error& e) {
+      return std::string(e.what());
+    }
+    return std::string("(accepted)");
+  };
+  EXPECT_EQ(message(dir / "a_directory"),
+            (dir / "a_directory").string() +
+                ": exists and is a directory (not a regular file); not written over");
+  EXPECT_EQ(message(dir / "a_pipe"),
+            (dir / "a_pipe").string() +
+                ": exists and is a pipe (not a regular file); not written over");
+  std::filesystem::remove_all(dir);
 }
 
 TEST(ToolArguments, BesideBag) {

@@ -35,13 +35,6 @@ std::uint64_t parseUnsigned(const std::string& flag, const std::string& text);
 /// OUT.bag -> OUT + suffix (the bag's path without ".bag", or the whole path if it has none).
 std::string besideBag(const std::string& bag, const std::string& suffix);
 
-/// Throws std::runtime_error "PATH: exists and is a directory (not a regular file); not written
-/// over" (a pipe, a device, a socket) when PATH exists and is not a regular file (nor a link to
-/// one). A tool calls it
-/// before writing PATH: renaming a finished file onto a device replaces the device (as root),
-/// and opening a pipe blocks until someone reads it.
-void requireReplaceableFile(const std::string& path);
-
 /// Walks argv[1..]: `while (cursor.next())`, then arg() is the argument, isOption() tells an
 /// option from a positional argument, value() / number() / count() take the option's value
 /// (std::invalid_argument "--flag needs a value" at the end of the line), unknown() throws

@@ -1,0 +1,25 @@
+#include "rbpf_slam/io/output_file.h"
+
+#include <filesystem>
+#include <stdexcept>
+
+namespace rbpf_slam {
+namespace io {
+
+void requireReplaceableFile(const std::string& path) {
+  std::error_code error;
+  const std::filesystem::file_status status = std::filesystem::status(path, error);
+  if (!std::filesystem::exists(status) || std::filesystem::is_regular_file(status)) return;
+  const char* kind = std::filesystem::is_directory(status)   ? "a directory"
+                     : std::filesystem::is_fifo(status)      ? "a pipe"
+                     : std::filesystem::is_character_file(status) ||
+                             std::filesystem::is_block_file(status)
+                         ? "a device"
+                     : std::filesystem::is_socket(status) ? "a socket"
+                                                          : "something else";
+  throw std::runtime_error(path + ": exists and is " + kind +
+                           " (not a regular file); not written over");
+}
+
+}  // namespace io
+}  // namespace rbpf_slam
