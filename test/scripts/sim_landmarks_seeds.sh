@@ -12,7 +12,8 @@
 # an ensemble of four filters and the online pose is the leader's: 0.050 m (0.55 x), 9 of 10
 # (one filter, `--set ensemble.members=1`: the figures above); since session 27 eight:
 # 0.050 m (0.55 x), 10 of 10. With `--set association.ambiguous_weight=soft` (session 33, not
-# shipped): 0.066 m (0.73 x), 6 of 10, and it fails.
+# shipped): 0.066 m (0.73 x), 6 of 10, and it fails; this world is the one where soft loses (on
+# world seeds 11 and 13, filter seeds 1-20, it is even with none; docs/results.md, session 34).
 # Extra arguments go to each filter run's offline_slam (e.g. --set particles=100 to see it fail).
 set -euo pipefail
 
