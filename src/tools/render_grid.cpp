@@ -26,6 +26,7 @@
 #include "rbpf_slam/core/grid/grid_pf.h"
 #include "rbpf_slam/core/grid/inverse_sensor_model.h"
 #include "rbpf_slam/io/grid_map_file.h"
+#include "rbpf_slam/io/output_file.h"
 #include "rbpf_slam/io/slam_config.h"
 #include "rbpf_slam/io/tool_arguments.h"
 #include "rbpf_slam/io/trajectory.h"
@@ -107,6 +108,7 @@ int run(const Arguments& arguments) {
   const io::SlamConfig config = io::loadSlamConfig(arguments.config_path, arguments.overrides);
   const core::GridOptions& options = config.filter.grid;
   core::validate(options);
+  for (const std::string& file : io::gridMapFiles(output)) io::requireReplaceableFile(file);
   std::vector<io::StampedPose> reference = io::readTum(reference_path);
   if (reference.empty()) throw std::runtime_error(reference_path + ": no poses");
   std::sort(reference.begin(), reference.end(),

@@ -190,6 +190,14 @@ expect "offline_slam run directory file is a pipe" 1 "rundir2/summary.json: exis
   timeout 60 "$bin/offline_slam" --bag "$root/test/data/intel_head.bag" \
   --config "$root/config/laser_fastslam2.yaml" --output "$work/rundir2" --no-progress \
   --set particles=5
+# render_grid's PREFIX.pgm and PREFIX.yaml likewise (before: a pipe there blocked the tool once
+# every scan was rendered).
+mkfifo "$work/gpipe.yaml"
+expect "render_grid output is a pipe" 1 "gpipe.yaml: exists and is a pipe" timeout 60 \
+  "$bin/render_grid" --bag "$root/test/data/intel_head.bag" \
+  --reference "$root/test/data/intel_head.ref.tum" --config "$root/config/grid_pf_laser.yaml" \
+  --output "$work/gpipe"
+[ ! -e "$work/gpipe.pgm" ] || { echo "FAIL: gpipe.pgm written although gpipe.yaml was refused"; status=1; }
 for dir in rundir rundir2; do
   [ "$(ls "$work/$dir" | wc -l)" -eq 1 ] ||
     { echo "FAIL: $dir: files written although an output was refused: $(ls "$work/$dir")"; status=1; }

@@ -280,7 +280,8 @@ TEST(MrclamRead, RepairsAndReportsOdometryOrderAndRefusesEmptyTables) {
   write("Robot1_Measurement.dat",
         "# h\n100.5 63 2 0\n101.5 64 2 0\n100.5 64 3 0\n100.5 63 2 0\n100.5 63 2.5 0\n");
   // A stray pose far after the rest, written before the last two, and a 26 s stretch.
-  write("Robot1_Groundtruth.dat", "# h\n99 0 0 0\n1104 0 0 0\n104 0 0 0\n130 0 0 0\n");
+  // A comment and a blank line before the pose out of order: the warning names its file line.
+  write("Robot1_Groundtruth.dat", "# h\n99 0 0 0\n1104 0 0 0\n# c\n\n104 0 0 0\n130 0 0 0\n");
   MrclamRobot data = readMrclamRobot(dir, 1);
   ASSERT_EQ(data.odometry.size(), 5u);
   for (std::size_t i = 1; i < data.odometry.size(); ++i) {
@@ -305,7 +306,7 @@ TEST(MrclamRead, RepairsAndReportsOdometryOrderAndRefusesEmptyTables) {
             std::string::npos)
       << data.warnings[2];
   EXPECT_NE(data.warnings[3].find("Robot1_Groundtruth.dat: 1 pose(s) stamped before the line "
-                                  "above them (first at line 4); sorted by time"),
+                                  "above them (first at line 6); sorted by time"),
             std::string::npos)
       << data.warnings[3];
   EXPECT_NE(data.warnings[5].find("/Robot1_Groundtruth.dat: 2 stretch(es) of more than 10 s "

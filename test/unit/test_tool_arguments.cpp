@@ -2,7 +2,6 @@
 // written over (io/output_file.h).
 
 #include <gtest/gtest.h>
-
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -63,7 +62,10 @@ TEST(OutputFile, OnlyMissingOrRegularFilesAreReplaceable) {
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir / "a_directory");
   std::ofstream(dir / "regular") << "x";
-  ASSERT_EQ(mkfifo((dir / "a_pipe").c_str(), 0600), 0);
+  if (mkfifo((dir / "a_pipe").c_str(), 0600) != 0) {
+    std::filesystem::remove_all(dir);
+    FAIL() << "mkfifo " << (dir / "a_pipe").string() << " failed";
+  }
   EXPECT_NO_THROW(requireReplaceableFile((dir / "missing").string()));
   EXPECT_NO_THROW(requireReplaceableFile((dir / "regular").string()));
   const auto message = [](const std::filesystem::path& path) {
