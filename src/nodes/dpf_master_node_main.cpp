@@ -13,6 +13,7 @@
 #include <memory>
 #include <string>
 
+#include "rbpf_slam/io/output_file.h"
 #include "rbpf_slam/ros/dpf_nodes.h"
 #include "rbpf_slam/ros/offline_runner.h"
 #include "rbpf_slam/ros/param_loader.h"
@@ -29,6 +30,12 @@ int runBag(ros::NodeHandle nh, ros::NodeHandle private_nh) {
   private_nh.getParam("reference", options.reference_path);
   options.progress = false;
   if (options.output_dir.empty()) throw std::invalid_argument("~output is required with ~bag");
+  // The status files too, before the run (a pipe there would block the node at its end; the
+  // run directory's own files are checked by OfflineRunner::run()).
+  const std::string error_file = options.output_dir + "/dpf_master.error";
+  const std::string done_file = options.output_dir + "/dpf_master.done";
+  rbpf_slam::io::requireReplaceableFile(error_file);
+  rbpf_slam::io::requireReplaceableFile(done_file);
   rbpf_slam::io::SlamConfig config =
       rb::loadConfigFromParams(private_nh, {"bag", "output", "reference"});
   config.filter.variant = "dpf";
@@ -39,7 +46,7 @@ int runBag(ros::NodeHandle nh, ros::NodeHandle private_nh) {
     rb::OfflineRunner runner(config, options, std::move(filter));
     s = runner.run();
   } catch (const std::exception& e) {
-    std::ofstream(options.output_dir + "/dpf_master.error") << e.what() << "\n";
+    std::ofstream(error_file) << e.what() << "\n";
     throw;
   }
   ROS_INFO("dpf_master_node: %ld updates, %d landmarks, %.1f s wall, update %.2f ms mean",
@@ -53,10 +60,10 @@ int runBag(ros::NodeHandle nh, ros::NodeHandle private_nh) {
     report += line + "\n";
   }
   if (failed) {
-    std::ofstream(options.output_dir + "/dpf_master.error") << report;
+    std::ofstream(error_file) << report;
     return 1;
   }
-  std::ofstream(options.output_dir + "/dpf_master.done") << s.updates << "\n";
+  std::ofstream(done_file) << s.updates << "\n";
   return 0;
 }
 
