@@ -54,8 +54,11 @@ std::vector<core::Pose2> lookupTransducers(const tf2::BufferCore& tf, const std:
 /// target_frame (tf2_ros::MessageFilter, bounded queue), in the order of their stamps
 /// (core::InOrderRelease: the filter alone let a later message overtake one still waiting for
 /// tf, and the pipeline refused the earlier one, 4 of an MRCLAM bag's 1012 frames at rate 10).
+/// A message the filter has not let out although tf covers it is handed on without it, when a
+/// later one leaves or at the next sweep (every kSweepPeriodS while messages wait): tf2_ros 0.7
+/// can lose the filter's answer (core/in_order_release.h), and the message would wait for good.
 /// Messages in a frame not connected to base_frame go to on_unknown_frame at once; messages the
-/// filter gives up on go to on_failure.
+/// filter gives up on before they were handed on go to on_failure.
 template <typename Message>
 class TfGatedSubscriber {
  public:
@@ -75,7 +78,11 @@ class TfGatedSubscriber {
         filter_(*tf, target_frame, queue_size, nh),
         order_(queue_size, [this, target = stripSlash(target_frame)](const Ptr& msg) {
           return tf_->canTransform(target, stripSlash(msg->header.frame_id), msg->header.stamp);
-        }) {
+        }),
+        sweep_timer_(nh.createWallTimer(ros::WallDuration(kSweepPeriodS),
+                                        [this](const ros::WallTimerEvent&) {
+                                          if (order_.inGate() > 0) deliver(order_.sweep(), clears_);
+                                        })) {
     // An empty topic: no subscription, the owner feeds messages with add() (a topic whose
     // messages come in another type first, e.g. PointCloud2 converted to PointCloud).
     if (!topic.empty()) {
@@ -86,13 +93,16 @@ class TfGatedSubscriber {
     filter_.registerCallback(boost::function<void(const Ptr&)>(
         [this](const Ptr& msg) { deliver(order_.left(msg->header.stamp, msg), clears_); }));
     filter_.registerFailureCallback([this](const Ptr& msg, tf2_ros::FilterFailureReason reason) {
-      std::vector<Ptr> due = order_.dropped(msg->header.stamp, msg);
+      bool handed_on = false;  // then the filter gives up on a message already processed
+      std::vector<Ptr> due = order_.dropped(msg->header.stamp, msg, &handed_on);
       const unsigned long clears = clears_;  // on_failure may reset the input
-      if (handlers_.on_failure) handlers_.on_failure(msg, reason);
+      if (!handed_on && handlers_.on_failure) handlers_.on_failure(msg, reason);
       deliver(std::move(due), clears);
     });
   }
   TfGatedSubscriber(const TfGatedSubscriber&) = delete;
+  /// s between two sweeps for messages the filter has not let out although tf covers them.
+  static constexpr double kSweepPeriodS = 0.1;
   TfGatedSubscriber& operator=(const TfGatedSubscriber&) = delete;
 
   /// A message into the tf gate, as if it had arrived on the topic.
@@ -129,6 +139,7 @@ class TfGatedSubscriber {
   message_filters::Subscriber<Message> subscriber_;
   tf2_ros::MessageFilter<Message> filter_;
   core::InOrderRelease<ros::Time, Ptr> order_;
+  ros::WallTimer sweep_timer_;
   unsigned long clears_ = 0;
 };
 
