@@ -161,3 +161,41 @@ TEST(InOrderRelease, MessagesHandedOnEarlyAreRememberedBoundedly) {
   EXPECT_EQ(order.left(0.0, "0"), Names{"0"});
   EXPECT_EQ(order.left(9.0, "9"), Names{});  // still remembered
 }
+
+/// tf grows on its own thread while a sweep tests the messages: the test goes from the latest
+/// to the earliest, so an earlier message is never found unable to leave after a later one was
+/// found able (it would be forgotten, then let out after the later one by the gate).
+TEST(InOrderRelease, ASweepDuringATfUpdateKeepsTheOrder) {
+  int calls = 0;
+  // The first test sees the old buffer (nothing can leave), every later one the new buffer.
+  InOrderRelease<double, std::string> order(10, [&calls](const std::string&) {
+    return calls++ > 0;
+  });
+  order.entered(1.0, "a");
+  order.entered(2.0, "b");
+  // Latest first: "b" is tested on the old buffer and stays, "a" on the new one and goes.
+  // (Earliest first would forget "a", hand on "b", and the gate would let "a" out after it.)
+  EXPECT_EQ(order.sweep(), Names{"a"});
+  EXPECT_EQ(order.inGate(), 1u);
+  EXPECT_EQ(order.sweep(), Names{"b"});
+}
+
+/// Two messages of one stamp: one handed on early, the other answered by the gate; each answer
+/// finds its own message. clear() forgets the early ones too.
+TEST(InOrderRelease, EarlyAndAnsweredMessagesOfOneStampAndClear) {
+  std::string can = "a";
+  InOrderRelease<double, std::string> order(
+      10, [&can](const std::string& name) { return name == can; });
+  order.entered(1.0, "a");
+  order.entered(1.0, "a2");
+  EXPECT_EQ(order.sweep(), Names{"a"});  // "a2" (same stamp, not later) still waits
+  EXPECT_EQ(order.left(1.0, "a2"), Names{"a2"});
+  EXPECT_EQ(order.left(1.0, "a"), Names{});  // the late answer for the early one
+  order.entered(2.0, "b");
+  can = "b";
+  EXPECT_EQ(order.sweep(), Names{"b"});
+  order.clear();
+  // After a reset the gate's late answer for "b" is a message never entered: handed on (the
+  // subscriber's reset count keeps it from the pipeline).
+  EXPECT_EQ(order.left(2.0, "b"), Names{"b"});
+}

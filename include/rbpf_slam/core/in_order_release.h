@@ -10,9 +10,13 @@
 // in order, and the gate's answer for it, when it comes, is ignored. The filter can lose that
 // answer: tf2_ros 0.7's MessageFilter registers a message's transform request before queueing
 // the message, and a transform arriving on tf's thread in between fires the request while the
-// message is not yet queued, so the message is never let out. One that cannot leave now, although
-// a later one could, never will (e.g. after a clock jump cleared the buffer) and is forgotten.
-// sweep() does the same without a later message, for the last ones of a stream.
+// message is not yet queued, so the message is never let out until the filter's queue overflows
+// (never, if later messages leave at once); tf2's own request can also miss a transform set
+// between its check and its registration, and wait for the next one. One that cannot leave now,
+// although a later one could, never will (e.g. after a clock jump cleared the buffer) and is
+// forgotten: this holds for messages whose frames hang on the same moving transform (a sensor's
+// frames, static on the base), which is how the nodes use it. sweep() does the same without a
+// later message, for the last ones of a stream.
 // Without the test, at most max_held wait: beyond that the earliest goes on, and earlier keys the
 // gate never answered for are forgotten.
 // ROS-free, so that it is unit-tested without a roscore.
@@ -63,14 +67,20 @@ class InOrderRelease {
   /// before the last of them that cannot (they never will). Nothing without CanLeaveNow.
   std::vector<Value> sweep() {
     if (!can_leave_now_) return {};
-    std::vector<bool> can;
-    for (const auto& entry : in_gate_) can.push_back(can_leave_now_(entry.second));
+    // Latest first: tf may grow between two tests, and an earlier message must not be found
+    // unable to leave after a later one was found able (it would be forgotten, then let out
+    // after the later one).
+    std::vector<bool> can(in_gate_.size());
+    std::size_t i = can.size();
+    for (auto it = in_gate_.rbegin(); it != in_gate_.rend(); ++it) {
+      can[--i] = can_leave_now_(it->second);
+    }
     const auto last = std::find(can.rbegin(), can.rend(), true);
     if (last == can.rend()) return {};
     const std::size_t through = static_cast<std::size_t>(can.rend() - last);  // entries to take
     auto it = in_gate_.begin();
-    for (std::size_t i = 0; i < through; ++i) {
-      if (can[i]) handOnEarly(it->first, it->second);
+    for (std::size_t k = 0; k < through; ++k) {
+      if (can[k]) handOnEarly(it->first, it->second);
       it = in_gate_.erase(it);
     }
     return due();
@@ -97,7 +107,8 @@ class InOrderRelease {
 
   /// The message goes on without the gate's answer; the answer is ignored when it comes. The
   /// gate may never answer (the lost request): at most 2 max_held such entries are kept, the
-  /// oldest forgotten first.
+  /// earliest stamp forgotten first; should the gate answer for one forgotten, the message is
+  /// handed on again (the pipeline refuses it as not after the last).
   void handOnEarly(const Key& key, const Value& value) {
     held_.emplace(key, value);
     handed_on_.emplace(key, value);

@@ -56,7 +56,8 @@ std::vector<core::Pose2> lookupTransducers(const tf2::BufferCore& tf, const std:
 /// tf, and the pipeline refused the earlier one, 4 of an MRCLAM bag's 1012 frames at rate 10).
 /// A message the filter has not let out although tf covers it is handed on without it, when a
 /// later one leaves or at the next sweep (every kSweepPeriodS while messages wait): tf2_ros 0.7
-/// can lose the filter's answer (core/in_order_release.h), and the message would wait for good.
+/// can lose the filter's answer (core/in_order_release.h), and the message would wait until the
+/// filter's queue overflows (for good if later messages leave at once).
 /// Messages in a frame not connected to base_frame go to on_unknown_frame at once; messages the
 /// filter gives up on before they were handed on go to on_failure.
 template <typename Message>
@@ -77,12 +78,10 @@ class TfGatedSubscriber {
         handlers_(std::move(handlers)),
         filter_(*tf, target_frame, queue_size, nh),
         order_(queue_size, [this, target = stripSlash(target_frame)](const Ptr& msg) {
-          return tf_->canTransform(target, stripSlash(msg->header.frame_id), msg->header.stamp);
-        }),
-        sweep_timer_(nh.createWallTimer(ros::WallDuration(kSweepPeriodS),
-                                        [this](const ros::WallTimerEvent&) {
-                                          if (order_.inGate() > 0) deliver(order_.sweep(), clears_);
-                                        })) {
+          // An empty frame is the filter's to refuse (tf2 would log an error for it here).
+          const std::string frame = stripSlash(msg->header.frame_id);
+          return !frame.empty() && tf_->canTransform(target, frame, msg->header.stamp);
+        }) {
     // An empty topic: no subscription, the owner feeds messages with add() (a topic whose
     // messages come in another type first, e.g. PointCloud2 converted to PointCloud).
     if (!topic.empty()) {
@@ -99,6 +98,10 @@ class TfGatedSubscriber {
       if (!handed_on && handlers_.on_failure) handlers_.on_failure(msg, reason);
       deliver(std::move(due), clears);
     });
+    sweep_timer_ = nh.createWallTimer(ros::WallDuration(kSweepPeriodS),
+                                      [this](const ros::WallTimerEvent&) {
+                                        if (order_.inGate() > 0) deliver(order_.sweep(), clears_);
+                                      });
   }
   TfGatedSubscriber(const TfGatedSubscriber&) = delete;
   /// s between two sweeps for messages the filter has not let out although tf covers them.
