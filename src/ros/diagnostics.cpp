@@ -1,5 +1,6 @@
 #include "rbpf_slam/ros/diagnostics.h"
 
+#include <cmath>
 #include <sstream>
 
 namespace rbpf_slam {
@@ -35,7 +36,8 @@ void SlamDiagnostics::recordDrop(const std::string& cause, long count) {
 
 diagnostic_msgs::DiagnosticArray SlamDiagnostics::report(const ros::Time& stamp,
                                                          const core::FilterStats& stats,
-                                                         int particles) {
+                                                         int particles,
+                                                         double wall_period_s) {
   diagnostic_msgs::DiagnosticStatus status;
   status.name = name_;
   status.hardware_id = "rbpf_slam";
@@ -52,6 +54,9 @@ diagnostic_msgs::DiagnosticArray SlamDiagnostics::report(const ros::Time& stamp,
              stats.last_neff < options_.low_neff_fraction * particles) {
     problem = "effective sample size " + text(stats.last_neff) + " of " +
               std::to_string(particles) + " particles";
+  } else if (busyFraction(wall_period_s) > options_.busy_fraction) {
+    problem = "handling frames " + text(std::lround(100.0 * busyFraction(wall_period_s))) +
+              " % of the time: falling behind, frames are dropped unseen from the topic's queue";
   } else if (mean_ms > options_.slow_update_ms) {
     problem = "updates take " + text(mean_ms) + " ms on average";
   }
@@ -65,6 +70,10 @@ diagnostic_msgs::DiagnosticArray SlamDiagnostics::report(const ros::Time& stamp,
   status.values.push_back(keyValue("updates", text(updates_total_)));
   status.values.push_back(keyValue("updates since last report", text(updates_period_)));
   status.values.push_back(keyValue("update time mean [ms]", text(mean_ms)));
+  if (wall_period_s > 0.0) {
+    status.values.push_back(
+        keyValue("busy [%]", text(std::lround(100.0 * busyFraction(wall_period_s)))));
+  }
   if (options_.filter_fields) {
     status.values.push_back(keyValue("Neff", text(stats.last_neff)));
     status.values.push_back(keyValue("particles", text(particles)));
@@ -93,6 +102,7 @@ diagnostic_msgs::DiagnosticArray SlamDiagnostics::report(const ros::Time& stamp,
   }
   updates_period_ = 0;
   update_ms_sum_period_ = 0.0;
+  busy_ms_period_ = 0.0;
   drops_period_.clear();
 
   diagnostic_msgs::DiagnosticArray array;

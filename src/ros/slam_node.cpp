@@ -368,6 +368,13 @@ bool SlamNode::lookupPoses(const std_msgs::Header& header, core::Pose2* odom_pos
 }
 
 void SlamNode::handleResult(core::FrameResult result, const ros::Time& stamp, double update_ms) {
+  // The frame's share of the node's time: its update and all that is published after it.
+  struct BusyTime {
+    SlamDiagnostics* diagnostics;
+    double update_ms;
+    std::chrono::steady_clock::time_point start = std::chrono::steady_clock::now();
+    ~BusyTime() { diagnostics->recordBusy(update_ms + millisecondsSince(start)); }
+  } busy{&diagnostics_, update_ms};
   ROS_DEBUG_STREAM("Frame at " << stamp << ": " << describe(result));
   if (result == core::FrameResult::kReset) {
     // The session threw the map away itself: stamps far back several frames in a row, or an
@@ -645,12 +652,26 @@ void SlamNode::publishDiagnostics(const ros::WallTimerEvent&) {
         << " (check the names against `rostopic list` and the config's *_topic / *_frame keys)";
     warnThrottled("no input", why.str());
   }
+  // Frames coming faster than they are handled overflow the topic's queue, which roscpp empties
+  // without a word: say it when frames take most of the time.
+  const ros::WallTime wall_now = ros::WallTime::now();
+  const double wall_period = (wall_now - last_diagnostics_).toSec();
+  last_diagnostics_ = wall_now;
+  const double busy = diagnostics_.busyFraction(wall_period);
+  if (busy > DiagnosticsOptions().busy_fraction) {
+    std::ostringstream why;
+    why << "handling frames " << std::lround(100.0 * busy)
+        << " % of the time: the node falls behind its input and the topic's queue (queue_size "
+        << config_.ros.queue_size << ") drops frames unseen; play the bag slower, or lower "
+        << "particles (or ensemble.members), or raise linear_update / angular_update";
+    warnThrottled("busy", why.str());
+  }
   diagnostics_.setPaused(paused_);
   diagnostics_.setOdometryGaps(pipeline_.session().gaps());
   const ros::Time now = ros::Time::now();
   diagnostics_publisher_.publish(diagnostics_.report(
-      now.isZero() ? ros::Time(ros::WallTime::now().toSec()) : now,
-      pipeline_.session().filter().stats(), config_.filter.particles));
+      now.isZero() ? ros::Time(wall_now.toSec()) : now, pipeline_.session().filter().stats(),
+      config_.filter.particles, wall_period));
 }
 
 void SlamNode::resetAll(const std::string& why) {

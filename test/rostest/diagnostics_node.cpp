@@ -39,6 +39,30 @@ TEST(Diagnostics, OkWhileMappingWithTheFigures) {
   EXPECT_EQ(value(s, "Neff"), "80");
 }
 
+/// Frames handled most of the wall time: the node falls behind, and roscpp drops the frames its
+/// topic queue cannot hold without a word, so the report says so (and not before 90 %).
+TEST(Diagnostics, BusyMostOfTheTimeWarnsThatFramesAreDropped) {
+  rosbridge::SlamDiagnostics diagnostics("rbpf_slam_node");
+  diagnostics.recordUpdate(400.0);
+  diagnostics.recordBusy(460.0);
+  auto s = diagnostics.report(ros::Time(1.0), healthy(), 100, 0.5).status[0];
+  EXPECT_EQ(s.level, diagnostic_msgs::DiagnosticStatus::WARN);
+  EXPECT_EQ(s.message,
+            "handling frames 92 % of the time: falling behind, frames are dropped unseen from "
+            "the topic's queue");
+  EXPECT_EQ(value(s, "busy [%]"), "92");
+  EXPECT_DOUBLE_EQ(diagnostics.busyFraction(1.0), 0.0);  // the period's share restarted
+  diagnostics.recordUpdate(10.0);
+  diagnostics.recordBusy(100.0);
+  s = diagnostics.report(ros::Time(2.0), healthy(), 100, 1.0).status[0];
+  EXPECT_EQ(s.level, diagnostic_msgs::DiagnosticStatus::OK);
+  EXPECT_EQ(value(s, "busy [%]"), "10");
+  // Without a wall period (another node) there is no share to report.
+  diagnostics.recordBusy(100.0);
+  s = diagnostics.report(ros::Time(3.0), healthy(), 100).status[0];
+  EXPECT_EQ(value(s, "busy [%]"), "<missing busy [%]>");
+}
+
 TEST(Diagnostics, EnsembleLeaderChangesAreShownOnceThereAreAny) {
   rosbridge::SlamDiagnostics diagnostics("rbpf_slam_node");
   diagnostics.recordUpdate(1.0);

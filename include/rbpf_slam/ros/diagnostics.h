@@ -1,6 +1,7 @@
 #pragma once
 // The node's health on /diagnostics (diagnostic_msgs): effective sample size, landmark
-// count, update time, frames processed, dropped messages by cause, resets, pause state.
+// count, update time, share of the time spent on frames, frames processed, dropped messages by
+// cause, resets, pause state.
 
 #include <diagnostic_msgs/DiagnosticArray.h>
 #include <ros/time.h>
@@ -17,6 +18,9 @@ namespace rosbridge {
 struct DiagnosticsOptions {
   double low_neff_fraction = 0.1;  // Neff below this fraction of the particles
   double slow_update_ms = 200.0;   // mean update time above this
+  /// Share of the wall time spent handling frames above this: the node cannot keep up, and a
+  /// topic's queue drops frames before the node sees them (roscpp says nothing of it).
+  double busy_fraction = 0.9;
   /// false for a node without a filter (a feature extractor): the report leaves out Neff,
   /// particles, landmarks, resamples, weight resets and fallbacks.
   bool filter_fields = true;
@@ -36,6 +40,12 @@ class SlamDiagnostics {
       : name_(std::move(name)), options_(options) {}
 
   void recordUpdate(double update_ms);
+  /// Wall time spent handling one frame (its update and what is published after it).
+  void recordBusy(double ms) { busy_ms_period_ += ms; }
+  /// The share of wall_period_s spent handling frames since the last report (0 without one).
+  double busyFraction(double wall_period_s) const {
+    return wall_period_s > 0.0 ? busy_ms_period_ / (1000.0 * wall_period_s) : 0.0;
+  }
   /// Something that could not be used (a message, or `count` features or points of one);
   /// cause is a short fixed phrase ("no tf", "bad scan").
   void recordDrop(const std::string& cause, long count = 1);
@@ -51,14 +61,16 @@ class SlamDiagnostics {
   void setPaused(bool paused) { paused_ = paused; }
 
   /// The report for the period since the previous call (then the period counters restart).
+  /// wall_period_s: the wall time since the previous report (0: unknown, no busy share).
   diagnostic_msgs::DiagnosticArray report(const ros::Time& stamp, const core::FilterStats& stats,
-                                          int particles);
+                                          int particles, double wall_period_s = 0.0);
 
  private:
   const std::string name_;
   const DiagnosticsOptions options_;
   long updates_period_ = 0, updates_total_ = 0, resets_total_ = 0;
   double update_ms_sum_period_ = 0.0;
+  double busy_ms_period_ = 0.0;
   std::map<std::string, long> drops_period_, drops_total_;
   bool paused_ = false;
   long odometry_gaps_ = -1;  // -1: not reported
