@@ -56,7 +56,7 @@ diagnostic_msgs::DiagnosticArray SlamDiagnostics::report(const ros::Time& stamp,
               std::to_string(particles) + " particles";
   } else if (busyFraction(wall_period_s) > options_.busy_fraction) {
     problem = "handling frames " + text(std::lround(100.0 * busyFraction(wall_period_s))) +
-              " % of the time: falling behind, frames are dropped unseen from the topic's queue";
+              " % of the time: falling behind, the topic's queue drops frames unseen when full";
   } else if (mean_ms > options_.slow_update_ms) {
     problem = "updates take " + text(mean_ms) + " ms on average";
   }

@@ -661,9 +661,9 @@ void SlamNode::publishDiagnostics(const ros::WallTimerEvent&) {
   if (busy > DiagnosticsOptions().busy_fraction) {
     std::ostringstream why;
     why << "handling frames " << std::lround(100.0 * busy)
-        << " % of the time: the node falls behind its input and the topic's queue (queue_size "
-        << config_.ros.queue_size << ") drops frames unseen; play the bag slower, or lower "
-        << "particles (or ensemble.members), or raise linear_update / angular_update";
+        << " % of the time: the node falls behind its input, and the topic's queue (queue_size "
+        << config_.ros.queue_size << ") drops frames unseen when full; play the bag slower, "
+        << "or lower particles (or ensemble.members), or raise linear_update / angular_update";
     warnThrottled("busy", why.str());
   }
   diagnostics_.setPaused(paused_);

@@ -48,8 +48,8 @@ TEST(Diagnostics, BusyMostOfTheTimeWarnsThatFramesAreDropped) {
   auto s = diagnostics.report(ros::Time(1.0), healthy(), 100, 0.5).status[0];
   EXPECT_EQ(s.level, diagnostic_msgs::DiagnosticStatus::WARN);
   EXPECT_EQ(s.message,
-            "handling frames 92 % of the time: falling behind, frames are dropped unseen from "
-            "the topic's queue");
+            "handling frames 92 % of the time: falling behind, the topic's queue drops frames "
+            "unseen when full");
   EXPECT_EQ(value(s, "busy [%]"), "92");
   EXPECT_DOUBLE_EQ(diagnostics.busyFraction(1.0), 0.0);  // the period's share restarted
   diagnostics.recordUpdate(10.0);
