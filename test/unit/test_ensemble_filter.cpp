@@ -597,6 +597,9 @@ TEST(EnsembleFilter, EachLandmarkCountsAsSightingsLeftOutWhenChoosingAMember) {
   EXPECT_EQ(r.landmarks_smoothed, 3) << r.message;
   EXPECT_NE(r.message.find("30 sightings left out + 10 x 3 landmarks"), std::string::npos)
       << r.message;
+  // Every member's sightings left out and landmarks, for a choice that went wrong.
+  EXPECT_NE(r.message.find("every member's score: 0: 0 + 8, 1: 30 + 3"), std::string::npos)
+      << r.message;
 }
 
 // smoothing.member_consensus_margin in smoothSession: the lost member of the test above, with its
