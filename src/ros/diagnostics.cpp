@@ -27,11 +27,21 @@ void SlamDiagnostics::recordUpdate(double update_ms) {
   ++updates_period_;
   ++updates_total_;
   update_ms_sum_period_ += update_ms;
+  busy_ms_period_ += update_ms;
 }
 
 void SlamDiagnostics::recordDrop(const std::string& cause, long count) {
   drops_period_[cause] += count;
   drops_total_[cause] += count;
+}
+
+diagnostic_msgs::DiagnosticArray SlamDiagnostics::report(const ros::Time& stamp,
+                                                         const core::FilterStats& stats,
+                                                         int particles) {
+  const ros::WallTime now = ros::WallTime::now();
+  const double wall_period_s = (now - last_report_wall_).toSec();
+  last_report_wall_ = now;
+  return report(stamp, stats, particles, wall_period_s);
 }
 
 diagnostic_msgs::DiagnosticArray SlamDiagnostics::report(const ros::Time& stamp,

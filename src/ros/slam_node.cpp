@@ -368,12 +368,16 @@ bool SlamNode::lookupPoses(const std_msgs::Header& header, core::Pose2* odom_pos
 }
 
 void SlamNode::handleResult(core::FrameResult result, const ros::Time& stamp, double update_ms) {
-  // The frame's share of the node's time: its update and all that is published after it.
+  // The frame's share of the node's time beyond its update (recordUpdate counts that): all
+  // that is published after it.
   struct BusyTime {
     SlamDiagnostics* diagnostics;
-    double update_ms;
+    double update_ms;  // counted here when the frame was not an update
+    bool updated = false;
     std::chrono::steady_clock::time_point start = std::chrono::steady_clock::now();
-    ~BusyTime() { diagnostics->recordBusy(update_ms + millisecondsSince(start)); }
+    ~BusyTime() {
+      diagnostics->recordBusy((updated ? 0.0 : update_ms) + millisecondsSince(start));
+    }
   } busy{&diagnostics_, update_ms};
   ROS_DEBUG_STREAM("Frame at " << stamp << ": " << describe(result));
   if (result == core::FrameResult::kReset) {
@@ -398,6 +402,7 @@ void SlamNode::handleResult(core::FrameResult result, const ros::Time& stamp, do
     return;
   }
   diagnostics_.recordUpdate(update_ms);
+  busy.updated = true;
   ++updates_;
   stale_drops_in_a_row_ = 0;
   const int rejected = pipeline_.session().lastStats().features_rejected;
@@ -654,10 +659,7 @@ void SlamNode::publishDiagnostics(const ros::WallTimerEvent&) {
   }
   // Frames coming faster than they are handled overflow the topic's queue, which roscpp empties
   // without a word: say it when frames take most of the time.
-  const ros::WallTime wall_now = ros::WallTime::now();
-  const double wall_period = (wall_now - last_diagnostics_).toSec();
-  last_diagnostics_ = wall_now;
-  const double busy = diagnostics_.busyFraction(wall_period);
+  const double busy = diagnostics_.busyFractionNow();
   if (busy > DiagnosticsOptions().busy_fraction) {
     std::ostringstream why;
     why << "handling frames " << std::lround(100.0 * busy)
@@ -670,8 +672,8 @@ void SlamNode::publishDiagnostics(const ros::WallTimerEvent&) {
   diagnostics_.setOdometryGaps(pipeline_.session().gaps());
   const ros::Time now = ros::Time::now();
   diagnostics_publisher_.publish(diagnostics_.report(
-      now.isZero() ? ros::Time(wall_now.toSec()) : now, pipeline_.session().filter().stats(),
-      config_.filter.particles, wall_period));
+      now.isZero() ? ros::Time(ros::WallTime::now().toSec()) : now,
+      pipeline_.session().filter().stats(), config_.filter.particles));
 }
 
 void SlamNode::resetAll(const std::string& why) {

@@ -28,7 +28,7 @@ TEST(Diagnostics, OkWhileMappingWithTheFigures) {
   rosbridge::SlamDiagnostics diagnostics("rbpf_slam_node");
   diagnostics.recordUpdate(2.0);
   diagnostics.recordUpdate(4.0);
-  const auto array = diagnostics.report(ros::Time(10.0), healthy(), 100);
+  const auto array = diagnostics.report(ros::Time(10.0), healthy(), 100, 1.0);
   ASSERT_EQ(array.status.size(), 1u);
   const auto& s = array.status[0];
   EXPECT_EQ(s.level, diagnostic_msgs::DiagnosticStatus::OK);
@@ -43,8 +43,8 @@ TEST(Diagnostics, OkWhileMappingWithTheFigures) {
 /// topic queue cannot hold without a word, so the report says so (and not before 90 %).
 TEST(Diagnostics, BusyMostOfTheTimeWarnsThatFramesAreDropped) {
   rosbridge::SlamDiagnostics diagnostics("rbpf_slam_node");
-  diagnostics.recordUpdate(400.0);
-  diagnostics.recordBusy(460.0);
+  diagnostics.recordUpdate(400.0);  // an update's time is busy time
+  diagnostics.recordBusy(60.0);     // and so is what is published after it
   auto s = diagnostics.report(ros::Time(1.0), healthy(), 100, 0.5).status[0];
   EXPECT_EQ(s.level, diagnostic_msgs::DiagnosticStatus::WARN);
   EXPECT_EQ(s.message,
@@ -53,25 +53,30 @@ TEST(Diagnostics, BusyMostOfTheTimeWarnsThatFramesAreDropped) {
   EXPECT_EQ(value(s, "busy [%]"), "92");
   EXPECT_DOUBLE_EQ(diagnostics.busyFraction(1.0), 0.0);  // the period's share restarted
   diagnostics.recordUpdate(10.0);
-  diagnostics.recordBusy(100.0);
+  diagnostics.recordBusy(90.0);
   s = diagnostics.report(ros::Time(2.0), healthy(), 100, 1.0).status[0];
   EXPECT_EQ(s.level, diagnostic_msgs::DiagnosticStatus::OK);
   EXPECT_EQ(value(s, "busy [%]"), "10");
-  // Without a wall period (another node) there is no share to report.
+  // Without a wall period there is no share to report.
   diagnostics.recordBusy(100.0);
-  s = diagnostics.report(ros::Time(3.0), healthy(), 100).status[0];
+  s = diagnostics.report(ros::Time(3.0), healthy(), 100, 0.0).status[0];
   EXPECT_EQ(value(s, "busy [%]"), "<missing busy [%]>");
+  // Over the wall time since the last report (microseconds here, against 1000 s recorded).
+  diagnostics.recordUpdate(1e6);
+  EXPECT_GT(diagnostics.busyFractionNow(), 0.9);
+  s = diagnostics.report(ros::Time(4.0), healthy(), 100).status[0];
+  EXPECT_EQ(s.level, diagnostic_msgs::DiagnosticStatus::WARN);
 }
 
 TEST(Diagnostics, EnsembleLeaderChangesAreShownOnceThereAreAny) {
   rosbridge::SlamDiagnostics diagnostics("rbpf_slam_node");
   diagnostics.recordUpdate(1.0);
   core::FilterStats stats = healthy();
-  EXPECT_EQ(value(diagnostics.report(ros::Time(1.0), stats, 100).status[0],
+  EXPECT_EQ(value(diagnostics.report(ros::Time(1.0), stats, 100, 1.0).status[0],
                   "ensemble leader changes"),
             "<missing ensemble leader changes>");
   stats.leader_changes = 3;
-  EXPECT_EQ(value(diagnostics.report(ros::Time(2.0), stats, 100).status[0],
+  EXPECT_EQ(value(diagnostics.report(ros::Time(2.0), stats, 100, 1.0).status[0],
                   "ensemble leader changes"),
             "3");
 }
@@ -82,13 +87,13 @@ TEST(Diagnostics, DropsWarnForOnePeriodAndAreCountedByCause) {
   diagnostics.recordDrop("no tf");
   diagnostics.recordDrop("no tf");
   diagnostics.recordDrop("bad scan");
-  auto s = diagnostics.report(ros::Time(1.0), healthy(), 100).status[0];
+  auto s = diagnostics.report(ros::Time(1.0), healthy(), 100, 1.0).status[0];
   EXPECT_EQ(s.level, diagnostic_msgs::DiagnosticStatus::WARN);
   EXPECT_NE(s.message.find("3 message(s) dropped"), std::string::npos) << s.message;
   EXPECT_EQ(value(s, "dropped: no tf"), "2");
   EXPECT_EQ(value(s, "dropped: bad scan"), "1");
   diagnostics.recordUpdate(1.0);
-  s = diagnostics.report(ros::Time(2.0), healthy(), 100).status[0];
+  s = diagnostics.report(ros::Time(2.0), healthy(), 100, 1.0).status[0];
   EXPECT_EQ(s.level, diagnostic_msgs::DiagnosticStatus::OK) << "drops of an earlier period";
   EXPECT_EQ(value(s, "dropped: no tf"), "2") << "totals are kept";
 }
@@ -98,24 +103,24 @@ TEST(Diagnostics, LowNeffSlowUpdatesAndPauseWarn) {
   diagnostics.recordUpdate(1.0);
   core::FilterStats degenerate = healthy();
   degenerate.last_neff = 3.0;
-  auto s = diagnostics.report(ros::Time(1.0), degenerate, 100).status[0];
+  auto s = diagnostics.report(ros::Time(1.0), degenerate, 100, 1.0).status[0];
   EXPECT_EQ(s.level, diagnostic_msgs::DiagnosticStatus::WARN);
   EXPECT_NE(s.message.find("effective sample size"), std::string::npos) << s.message;
 
   diagnostics.recordUpdate(500.0);
-  s = diagnostics.report(ros::Time(2.0), healthy(), 100).status[0];
+  s = diagnostics.report(ros::Time(2.0), healthy(), 100, 1.0).status[0];
   EXPECT_EQ(s.level, diagnostic_msgs::DiagnosticStatus::WARN);
   EXPECT_NE(s.message.find("500 ms"), std::string::npos) << s.message;
 
   diagnostics.setPaused(true);
-  s = diagnostics.report(ros::Time(3.0), healthy(), 100).status[0];
+  s = diagnostics.report(ros::Time(3.0), healthy(), 100, 1.0).status[0];
   EXPECT_EQ(s.level, diagnostic_msgs::DiagnosticStatus::WARN);
   EXPECT_EQ(value(s, "paused"), "true");
 }
 
 TEST(Diagnostics, WaitingBeforeTheFirstUpdate) {
   rosbridge::SlamDiagnostics diagnostics("rbpf_slam_node");
-  const auto s = diagnostics.report(ros::Time(1.0), core::FilterStats(), 100).status[0];
+  const auto s = diagnostics.report(ros::Time(1.0), core::FilterStats(), 100, 1.0).status[0];
   EXPECT_EQ(s.level, diagnostic_msgs::DiagnosticStatus::OK);
   EXPECT_EQ(s.message, "waiting for data");
 }

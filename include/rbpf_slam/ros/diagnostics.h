@@ -39,12 +39,17 @@ class SlamDiagnostics {
   explicit SlamDiagnostics(std::string name, DiagnosticsOptions options = DiagnosticsOptions())
       : name_(std::move(name)), options_(options) {}
 
+  /// One frame processed in update_ms of wall time (counted as busy time too).
   void recordUpdate(double update_ms);
-  /// Wall time spent handling one frame (its update and what is published after it).
+  /// More wall time spent on frames beyond their updates (what is published after them).
   void recordBusy(double ms) { busy_ms_period_ += ms; }
-  /// The share of wall_period_s spent handling frames since the last report (0 without one).
+  /// The share of wall_period_s spent on frames since the last report (0 without a period).
   double busyFraction(double wall_period_s) const {
     return wall_period_s > 0.0 ? busy_ms_period_ / (1000.0 * wall_period_s) : 0.0;
+  }
+  /// The same over the wall time since the last report.
+  double busyFractionNow() const {
+    return busyFraction((ros::WallTime::now() - last_report_wall_).toSec());
   }
   /// Something that could not be used (a message, or `count` features or points of one);
   /// cause is a short fixed phrase ("no tf", "bad scan").
@@ -60,10 +65,13 @@ class SlamDiagnostics {
   void setOdometryGaps(long total) { odometry_gaps_ = total; }
   void setPaused(bool paused) { paused_ = paused; }
 
-  /// The report for the period since the previous call (then the period counters restart).
-  /// wall_period_s: the wall time since the previous report (0: unknown, no busy share).
+  /// The report for the period since the previous call (then the period counters restart),
+  /// with the share of the wall time since then spent on frames.
   diagnostic_msgs::DiagnosticArray report(const ros::Time& stamp, const core::FilterStats& stats,
-                                          int particles, double wall_period_s = 0.0);
+                                          int particles);
+  /// The same over a given wall period (0: no busy share), for tests.
+  diagnostic_msgs::DiagnosticArray report(const ros::Time& stamp, const core::FilterStats& stats,
+                                          int particles, double wall_period_s);
 
  private:
   const std::string name_;
@@ -71,6 +79,7 @@ class SlamDiagnostics {
   long updates_period_ = 0, updates_total_ = 0, resets_total_ = 0;
   double update_ms_sum_period_ = 0.0;
   double busy_ms_period_ = 0.0;
+  ros::WallTime last_report_wall_ = ros::WallTime::now();
   std::map<std::string, long> drops_period_, drops_total_;
   bool paused_ = false;
   long odometry_gaps_ = -1;  // -1: not reported

@@ -155,7 +155,6 @@ class SlamNode {
   ThrottledWarnings warnings_{"rbpf_slam_node"};
   long updates_ = 0;
   ros::WallTime started_ = ros::WallTime::now();  // for the "nothing arrives" warning
-  ros::WallTime last_diagnostics_ = ros::WallTime::now();  // the busy share's period
 };
 
 }  // namespace rosbridge
