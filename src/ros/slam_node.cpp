@@ -660,7 +660,7 @@ void SlamNode::publishDiagnostics(const ros::WallTimerEvent&) {
   // Frames coming faster than they are handled overflow the topic's queue, which roscpp empties
   // without a word: say it when frames take most of the time.
   const double busy = diagnostics_.busyFractionNow();
-  if (busy > DiagnosticsOptions().busy_fraction) {
+  if (busy > diagnostics_.options().busy_fraction) {
     std::ostringstream why;
     why << "handling frames " << std::lround(100.0 * busy)
         << " % of the time: the node falls behind its input, and the topic's queue (queue_size "

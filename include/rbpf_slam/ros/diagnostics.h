@@ -39,6 +39,8 @@ class SlamDiagnostics {
   explicit SlamDiagnostics(std::string name, DiagnosticsOptions options = DiagnosticsOptions())
       : name_(std::move(name)), options_(options) {}
 
+  const DiagnosticsOptions& options() const { return options_; }
+
   /// One frame processed in update_ms of wall time (counted as busy time too).
   void recordUpdate(double update_ms);
   /// More wall time spent on frames beyond their updates (what is published after them).
