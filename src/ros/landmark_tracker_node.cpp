@@ -37,6 +37,7 @@ LandmarkTrackerNode::LandmarkTrackerNode(ros::NodeHandle nh, ros::NodeHandle pri
 }
 
 void LandmarkTrackerNode::featuresCallback(const FeatureArray::ConstPtr& msg) {
+  const SlamDiagnostics::BusyScope busy(&diagnostics_);
   const io::RosOptions& o = config_.ros;
   core::Pose2 odom_pose;
   SensorMount frame;

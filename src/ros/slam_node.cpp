@@ -143,6 +143,7 @@ std::unique_ptr<TfGatedSubscriber<Message>> SlamNode::subscribeFiltered(
 }
 
 void SlamNode::sonarCallback(const sensor_msgs::Range::ConstPtr& msg) {
+  const SlamDiagnostics::BusyScope busy(&diagnostics_);
   if (!readyForFrame()) return;
   core::Pose2 odom_pose;
   SensorMount mount;
@@ -167,6 +168,7 @@ void SlamNode::sonarCallback(const sensor_msgs::Range::ConstPtr& msg) {
 }
 
 void SlamNode::sonarCloudArrived(const topic_tools::ShapeShifter::ConstPtr& msg) {
+  const SlamDiagnostics::BusyScope busy(&diagnostics_);
   const std::string& type = msg->getDataType();
   // Decoding happens here, not in roscpp: a message that does not decode (a truncated one
   // from a damaged bag) must be dropped, not end the node.
@@ -199,6 +201,7 @@ void SlamNode::sonarCloudArrived(const topic_tools::ShapeShifter::ConstPtr& msg)
 }
 
 void SlamNode::sonarCloudCallback(const sensor_msgs::PointCloud::ConstPtr& msg) {
+  const SlamDiagnostics::BusyScope busy(&diagnostics_);
   constexpr double kAxisTolerance = 0.05;  // m: a cloud point lies on its transducer's axis
   if (!readyForFrame()) return;
   core::Pose2 odom_pose;
@@ -239,6 +242,7 @@ void SlamNode::sonarCloudCallback(const sensor_msgs::PointCloud::ConstPtr& msg) 
 }
 
 void SlamNode::scanCallback(const sensor_msgs::LaserScan::ConstPtr& msg) {
+  const SlamDiagnostics::BusyScope busy(&diagnostics_);
   if (!readyForFrame()) return;
   core::Pose2 odom_pose;
   SensorMount mount;
@@ -257,6 +261,7 @@ void SlamNode::scanCallback(const sensor_msgs::LaserScan::ConstPtr& msg) {
 }
 
 void SlamNode::featuresCallback(const FeatureArray::ConstPtr& msg) {
+  const SlamDiagnostics::BusyScope busy(&diagnostics_);
   if (!readyForFrame()) return;
   core::Pose2 odom_pose;
   SensorMount frame;
@@ -275,6 +280,7 @@ void SlamNode::featuresCallback(const FeatureArray::ConstPtr& msg) {
 }
 
 void SlamNode::odometryTfCallback(const tf2_msgs::TFMessage::ConstPtr& msg) {
+  const SlamDiagnostics::BusyScope busy(&diagnostics_);
   const std::string odom = stripSlash(config_.ros.odom_frame);
   const std::string base = stripSlash(config_.ros.base_frame);
   for (const auto& t : msg->transforms) {
@@ -368,17 +374,6 @@ bool SlamNode::lookupPoses(const std_msgs::Header& header, core::Pose2* odom_pos
 }
 
 void SlamNode::handleResult(core::FrameResult result, const ros::Time& stamp, double update_ms) {
-  // The frame's share of the node's time beyond its update (recordUpdate counts that): all
-  // that is published after it.
-  struct BusyTime {
-    SlamDiagnostics* diagnostics;
-    double update_ms;  // counted here when the frame was not an update
-    bool updated = false;
-    std::chrono::steady_clock::time_point start = std::chrono::steady_clock::now();
-    ~BusyTime() {
-      diagnostics->recordBusy((updated ? 0.0 : update_ms) + millisecondsSince(start));
-    }
-  } busy{&diagnostics_, update_ms};
   ROS_DEBUG_STREAM("Frame at " << stamp << ": " << describe(result));
   if (result == core::FrameResult::kReset) {
     // The session threw the map away itself: stamps far back several frames in a row, or an
@@ -402,7 +397,6 @@ void SlamNode::handleResult(core::FrameResult result, const ros::Time& stamp, do
     return;
   }
   diagnostics_.recordUpdate(update_ms);
-  busy.updated = true;
   ++updates_;
   stale_drops_in_a_row_ = 0;
   const int rejected = pipeline_.session().lastStats().features_rejected;
@@ -657,23 +651,23 @@ void SlamNode::publishDiagnostics(const ros::WallTimerEvent&) {
         << " (check the names against `rostopic list` and the config's *_topic / *_frame keys)";
     warnThrottled("no input", why.str());
   }
-  // Frames coming faster than they are handled overflow the topic's queue, which roscpp empties
-  // without a word: say it when frames take most of the time.
-  const double busy = diagnostics_.busyFractionNow();
-  if (busy > diagnostics_.options().busy_fraction) {
-    std::ostringstream why;
-    why << "handling frames " << std::lround(100.0 * busy)
-        << " % of the time: the node falls behind its input, and the topic's queue (queue_size "
-        << config_.ros.queue_size << ") drops frames unseen when full; play the bag slower, "
-        << "or lower particles (or ensemble.members), or raise linear_update / angular_update";
-    warnThrottled("busy", why.str());
-  }
   diagnostics_.setPaused(paused_);
   diagnostics_.setOdometryGaps(pipeline_.session().gaps());
   const ros::Time now = ros::Time::now();
   diagnostics_publisher_.publish(diagnostics_.report(
       now.isZero() ? ros::Time(ros::WallTime::now().toSec()) : now,
       pipeline_.session().filter().stats(), config_.filter.particles));
+  // Input coming faster than it is handled overflows the topic's queue, which roscpp empties
+  // without a word: say it when the inputs take most of the time (the report's own figure).
+  const double busy = diagnostics_.lastBusyFraction();
+  if (busy > diagnostics_.options().busy_fraction) {
+    std::ostringstream why;
+    why << "handling input " << std::lround(100.0 * busy)
+        << " % of the time: the node falls behind its input, and the topic's queue (queue_size "
+        << config_.ros.queue_size << ") drops frames unseen when full; play the bag slower, "
+        << "or lower particles (or ensemble.members), or raise linear_update / angular_update";
+    warnThrottled("busy", why.str());
+  }
 }
 
 void SlamNode::resetAll(const std::string& why) {

@@ -44,6 +44,7 @@ SonarFeaturesNode::SonarFeaturesNode(ros::NodeHandle nh, ros::NodeHandle private
 }
 
 void SonarFeaturesNode::sonarCallback(const sensor_msgs::Range::ConstPtr& msg) {
+  const SlamDiagnostics::BusyScope busy(&diagnostics_);
   const double stamp = msg->header.stamp.toSec();
   if (stamp + config_.session.reset_on_time_jump_back_s < last_stamp_) {
     warnings_.warn("time jump", "Sonar stamps went back by " +

@@ -6,6 +6,7 @@
 #include <diagnostic_msgs/DiagnosticArray.h>
 #include <ros/time.h>
 
+#include <chrono>
 #include <map>
 #include <string>
 
@@ -18,8 +19,9 @@ namespace rosbridge {
 struct DiagnosticsOptions {
   double low_neff_fraction = 0.1;  // Neff below this fraction of the particles
   double slow_update_ms = 200.0;   // mean update time above this
-  /// Share of the wall time spent handling frames above this: the node cannot keep up, and a
-  /// topic's queue drops frames before the node sees them (roscpp says nothing of it).
+  /// Share of the wall time spent on inputs above this (rounded to a percent): the node cannot
+  /// keep up, and a topic's queue drops frames before the node sees them (roscpp says nothing
+  /// of it). Bursts and other processes on the CPU can fill the queue below it too.
   double busy_fraction = 0.9;
   /// false for a node without a filter (a feature extractor): the report leaves out Neff,
   /// particles, landmarks, resamples, weight resets and fallbacks.
@@ -41,18 +43,28 @@ class SlamDiagnostics {
 
   const DiagnosticsOptions& options() const { return options_; }
 
-  /// One frame processed in update_ms of wall time (counted as busy time too).
   void recordUpdate(double update_ms);
-  /// More wall time spent on frames beyond their updates (what is published after them).
+  /// Wall time the node's thread spent on its inputs (a whole callback: lookups, conversion,
+  /// update, publishing); BusyScope records a callback's.
   void recordBusy(double ms) { busy_ms_period_ += ms; }
-  /// The share of wall_period_s spent on frames since the last report (0 without a period).
-  double busyFraction(double wall_period_s) const {
-    return wall_period_s > 0.0 ? busy_ms_period_ / (1000.0 * wall_period_s) : 0.0;
-  }
-  /// The same over the wall time since the last report.
-  double busyFractionNow() const {
-    return busyFraction((ros::WallTime::now() - last_report_wall_).toSec());
-  }
+  /// Records the time from its construction to its end as busy time.
+  class BusyScope {
+   public:
+    explicit BusyScope(SlamDiagnostics* diagnostics) : diagnostics_(diagnostics) {}
+    BusyScope(const BusyScope&) = delete;
+    BusyScope& operator=(const BusyScope&) = delete;
+    ~BusyScope() {
+      diagnostics_->recordBusy(std::chrono::duration<double, std::milli>(
+                                   std::chrono::steady_clock::now() - start_)
+                                   .count());
+    }
+
+   private:
+    SlamDiagnostics* diagnostics_;
+    const std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now();
+  };
+  /// The busy share of the last report (0 before one, or when it had no period).
+  double lastBusyFraction() const { return last_busy_fraction_; }
   /// Something that could not be used (a message, or `count` features or points of one);
   /// cause is a short fixed phrase ("no tf", "bad scan").
   void recordDrop(const std::string& cause, long count = 1);
@@ -68,12 +80,16 @@ class SlamDiagnostics {
   void setPaused(bool paused) { paused_ = paused; }
 
   /// The report for the period since the previous call (then the period counters restart),
-  /// with the share of the wall time since then spent on frames.
+  /// with the share of the (steady) wall time since the last busy share spent on inputs. A
+  /// period under kMinBusyPeriodS (a timer catching up after a long callback) gives no share:
+  /// its busy time is carried into the next.
   diagnostic_msgs::DiagnosticArray report(const ros::Time& stamp, const core::FilterStats& stats,
                                           int particles);
-  /// The same over a given wall period (0: no busy share), for tests.
+  /// The same over a given wall period (0: no busy share, the busy time carried over); the
+  /// clock is not read (tests).
   diagnostic_msgs::DiagnosticArray report(const ros::Time& stamp, const core::FilterStats& stats,
                                           int particles, double wall_period_s);
+  static constexpr double kMinBusyPeriodS = 0.5;
 
  private:
   const std::string name_;
@@ -81,7 +97,8 @@ class SlamDiagnostics {
   long updates_period_ = 0, updates_total_ = 0, resets_total_ = 0;
   double update_ms_sum_period_ = 0.0;
   double busy_ms_period_ = 0.0;
-  ros::WallTime last_report_wall_ = ros::WallTime::now();
+  double last_busy_fraction_ = 0.0;
+  std::chrono::steady_clock::time_point busy_since_ = std::chrono::steady_clock::now();
   std::map<std::string, long> drops_period_, drops_total_;
   bool paused_ = false;
   long odometry_gaps_ = -1;  // -1: not reported
