@@ -598,7 +598,9 @@ TEST(EnsembleFilter, EachLandmarkCountsAsSightingsLeftOutWhenChoosingAMember) {
   EXPECT_NE(r.message.find("30 sightings left out + 10 x 3 landmarks"), std::string::npos)
       << r.message;
   // Every member's sightings left out and landmarks, for a choice that went wrong.
-  EXPECT_NE(r.message.find("every member's score: 0: 0 + 8, 1: 30 + 3"), std::string::npos)
+  EXPECT_NE(r.message.find("each smoothed member's sightings left out and landmarks: 0: 0 and 8, "
+                           "1: 30 and 3"),
+            std::string::npos)
       << r.message;
 }
 

@@ -497,10 +497,11 @@ SmoothingResult smoothSession(const SlamSession& session, const FilterOptions& o
   why << "member " << best.member << " of " << filter.members() << " (the filter's leader "
       << filter.leader() << "; " << consensus << best.sightings_left_out
       << " sightings left out + " << smoothing.member_landmark_cost << " x "
-      << best.landmarks_smoothed << " landmarks): " << best.message << "; every member's score:";
+      << best.landmarks_smoothed << " landmarks): " << best.message
+      << "; each smoothed member's sightings left out and landmarks:";
   for (size_t i = 0; i < smoothed.size(); ++i) {
     why << (i == 0 ? " " : ", ") << smoothed[i].member << ": " << smoothed[i].sightings_left_out
-        << " + " << smoothed[i].landmarks_smoothed;
+        << " and " << smoothed[i].landmarks_smoothed;
   }
   best.message = why.str();
   return best;
