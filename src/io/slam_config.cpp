@@ -384,6 +384,8 @@ SlamConfig parseSlamConfigTree(const YAML::Node& root, const std::string& source
   smoothing.read("min_sightings", &config.smoothing.min_sightings);
   smoothing.read("member_landmark_cost", &config.smoothing.member_landmark_cost);
   smoothing.read("member_consensus_margin", &config.smoothing.member_consensus_margin);
+  smoothing.read("merge_max_cost", &config.smoothing.merge_max_cost);
+  smoothing.read("merge_max_distance_m", &config.smoothing.merge_max_distance_m);
   smoothing.finish();
   s.keep_frames = config.smoothing.enabled;
   top.read("map_file", &config.map_file);

@@ -225,6 +225,100 @@ TEST(MapSmoother, TheHuberKernelResistsSightingsFarOff) {
   EXPECT_LT(error[1], 0.9 * error[0]);
 }
 
+/// Rotates a point or a pose by angle about the origin.
+Eigen::Vector2d rotated(const Eigen::Vector2d& p, double angle) {
+  return Eigen::Rotation2Dd(angle) * p;
+}
+Pose2 rotated(const Pose2& p, double angle) {
+  const Eigen::Vector2d xy = rotated(Eigen::Vector2d(p.head<2>()), angle);
+  return Pose2(xy.x(), xy.y(), core::wrapAngle(p.z() + angle));
+}
+
+// A filter that lost its heading in a silence (frame 20: odometry of little weight) maps the
+// landmarks it meets again as copies, turned by its heading error: the second lap's path and
+// copies are the truth turned by 0.5 rad. Without merging the smoother keeps both maps (each
+// lap explains its own sightings); with merging it joins each copy to its landmark and turns
+// the second lap back.
+TEST(MapSmoother, CopiesMappedAfterASilenceAreMerged) {
+  Scene scene;
+  scene.points = {{0.5, 0.5}, {-1.0, 1.0}, {-0.5, -1.5}};
+  const int steps = 40;
+  const std::vector<Pose2> lap = circle(steps / 2).truth;
+  scene.truth = lap;  // two laps
+  scene.truth.insert(scene.truth.end(), lap.begin(), lap.end());
+  addExactFrames(&scene);
+  scene.frames[20].motion_covariance = Eigen::Vector3d(1.0, 1.0, 0.5 * 0.5).asDiagonal();
+  const double turn = 0.5;
+  std::vector<Pose2> path = scene.truth;
+  for (int i = 20; i < steps; ++i) path[i] = rotated(scene.truth[i], turn);
+  std::vector<Eigen::Vector2d> mapped = scene.points;
+  for (const Eigen::Vector2d& p : scene.points) mapped.push_back(rotated(p, turn));
+
+  core::SmoothingOptions options;
+  const core::SmoothingResult kept = core::smoothPathAndMap(path, scene.frames, mapOf(mapped),
+                                                            options);
+  ASSERT_TRUE(kept.ok) << kept.message;
+  EXPECT_EQ(kept.landmarks_smoothed, 6);
+  EXPECT_EQ(kept.landmarks_merged, 0);
+  EXPECT_GT((kept.path[30] - scene.truth[30]).head<2>().norm(), 0.3);
+
+  options.merge_max_cost = 30.0;
+  const core::SmoothingResult r = core::smoothPathAndMap(path, scene.frames, mapOf(mapped),
+                                                         options);
+  ASSERT_TRUE(r.ok) << r.message;
+  EXPECT_EQ(r.landmarks_merged, 3);
+  EXPECT_NE(r.message.find("merged 13 into 10"), std::string::npos) << r.message;
+  ASSERT_EQ(r.landmarks.size(), 3u);
+  EXPECT_EQ(r.landmarks_smoothed, 3);
+  EXPECT_EQ(r.sightings_used, 120);
+  EXPECT_EQ(r.sightings_left_out, 0);
+  for (size_t k = 0; k < scene.points.size(); ++k) {
+    EXPECT_EQ(r.landmarks[k].id, static_cast<int>(k) + 10);  // seen as often: the first kept
+    EXPECT_EQ(r.landmarks[k].observations, 14);               // both copies' counts
+    EXPECT_LT((r.landmarks[k].mean - scene.points[k]).norm(), 1e-4) << k;
+  }
+  for (int i = 0; i < steps; ++i) {
+    EXPECT_LT((r.path[i] - scene.truth[i]).head<2>().norm(), 1e-4) << i;
+    EXPECT_NEAR(core::wrapAngle(r.path[i].z() - scene.truth[i].z()), 0.0, 1e-4) << i;
+  }
+}
+
+// Two landmarks 0.3 m apart, one seen on the first lap and the other on the second, with exact
+// odometry: merging them would cost far more than merge_max_cost, so both stay. Two landmarks
+// sighted in one frame are never merged, however close and however cheap.
+TEST(MapSmoother, DistinctLandmarksAreNotMerged) {
+  Scene scene;
+  scene.points = {{0.5, 0.5}, {-1.0, 1.0}, {-0.5, -1.5}, {0.5, 0.8}};
+  const int steps = 40;
+  const std::vector<Pose2> lap = circle(steps / 2).truth;
+  scene.truth = lap;  // two laps
+  scene.truth.insert(scene.truth.end(), lap.begin(), lap.end());
+  addExactFrames(&scene);
+  for (int i = 0; i < steps; ++i) {  // the first point on lap 1 only, the fourth on lap 2 only
+    auto& o = scene.frames[i].observations;
+    o.erase(o.begin() + (i < 20 ? 3 : 0));
+  }
+  core::SmoothingOptions options;
+  options.merge_max_cost = 30.0;
+  core::SmoothingResult r =
+      core::smoothPathAndMap(scene.truth, scene.frames, mapOf(scene.points), options);
+  ASSERT_TRUE(r.ok) << r.message;
+  EXPECT_EQ(r.landmarks_merged, 0);
+  EXPECT_EQ(r.landmarks.size(), 4u);
+  EXPECT_EQ(r.message.find("merged"), std::string::npos) << r.message;
+
+  // The same two seen together in every frame, 0.05 m apart: not a candidate pair.
+  scene = Scene();
+  scene.points = {{0.5, 0.5}, {-1.0, 1.0}, {-0.5, -1.5}, {0.5, 0.55}};
+  scene.truth = circle(20).truth;
+  addExactFrames(&scene);
+  options.merge_max_cost = 1e6;
+  r = core::smoothPathAndMap(scene.truth, scene.frames, mapOf(scene.points), options);
+  ASSERT_TRUE(r.ok) << r.message;
+  EXPECT_EQ(r.landmarks_merged, 0);
+  EXPECT_EQ(r.landmarks.size(), 4u);
+}
+
 // Nothing to smooth (no landmark seen often enough) is a refusal, not a dead-reckoned path.
 TEST(MapSmoother, NoSightingIsARefusal) {
   const Scene scene = circle(10);

@@ -164,6 +164,8 @@ TEST(SlamConfig, OverridesApplyDottedKeys) {
   applyOverride(&root, "smoothing.enabled=true");
   applyOverride(&root, "use_lines=false");
   applyOverride(&root, "smoothing.huber_k=0");
+  applyOverride(&root, "smoothing.merge_max_cost=25");
+  applyOverride(&root, "smoothing.merge_max_distance_m=2.5");
   applyOverride(&root, "ensemble.members=3");
   applyOverride(&root, "ensemble.rank_by=new_landmarks");
   applyOverride(&root, "ensemble.switch_margin=12.5");
@@ -181,6 +183,9 @@ TEST(SlamConfig, OverridesApplyDottedKeys) {
   EXPECT_TRUE(c.smoothing.enabled);
   EXPECT_TRUE(c.session.keep_frames);  // follows smoothing.enabled
   EXPECT_EQ(c.smoothing.huber_k, 0.0);
+  EXPECT_DOUBLE_EQ(c.smoothing.merge_max_cost, 25.0);
+  EXPECT_DOUBLE_EQ(c.smoothing.merge_max_distance_m, 2.5);
+  EXPECT_EQ(core::SmoothingOptions().merge_max_cost, 0.0);  // off unless asked
   EXPECT_EQ(c.filter.measurement.landmark_iterations, 3);
   EXPECT_EQ(core::MeasurementOptions().landmark_iterations, 1);
   EXPECT_EQ(c.filter.particles, 7);

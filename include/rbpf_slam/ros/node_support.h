@@ -104,9 +104,10 @@ class TfGatedSubscriber {
                                       });
   }
   TfGatedSubscriber(const TfGatedSubscriber&) = delete;
+  TfGatedSubscriber& operator=(const TfGatedSubscriber&) = delete;
+
   /// s between two sweeps for messages the filter has not let out although tf covers them.
   static constexpr double kSweepPeriodS = 0.1;
-  TfGatedSubscriber& operator=(const TfGatedSubscriber&) = delete;
 
   /// A message into the tf gate, as if it had arrived on the topic.
   void add(const Ptr& msg) {

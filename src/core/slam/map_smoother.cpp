@@ -29,6 +29,8 @@ void validate(const SmoothingOptions& o) {
   requireRange("smoothing.min_sightings", o.min_sightings, 1, 1000000);
   requireRange("smoothing.member_landmark_cost", o.member_landmark_cost, 0.0, 1e9);
   requireRange("smoothing.member_consensus_margin", o.member_consensus_margin, 0.0, 1e9);
+  requireRange("smoothing.merge_max_cost", o.merge_max_cost, 0.0, 1e9);
+  requireRange("smoothing.merge_max_distance_m", o.merge_max_distance_m, 0.0, 1e6);
 }
 
 namespace {
@@ -224,16 +226,17 @@ bool finiteInput(const std::vector<Pose2>& path, const std::vector<SmoothingFram
   return true;
 }
 
-/// One round: associate at path, then solve. Input checked by the caller.
-SmoothingResult solve(const std::vector<Pose2>& path, const std::vector<SmoothingFrame>& frames,
-                      const std::vector<LandmarkEstimate>& landmarks,
-                      const SmoothingOptions& options) {
+/// Solves with a given association (match[i][o]: the landmark of frame i's observation o, or
+/// -1), starting at path and the landmarks' means. Input checked by the caller.
+SmoothingResult solveWith(const std::vector<Pose2>& path,
+                          const std::vector<SmoothingFrame>& frames,
+                          const std::vector<LandmarkEstimate>& landmarks,
+                          const std::vector<std::vector<int>>& match,
+                          const SmoothingOptions& options) {
   SmoothingResult result;
   result.path = path;
   result.landmarks = landmarks;
   // Sightings per landmark; landmarks seen often enough become variables.
-  const std::vector<std::vector<int>> match =
-      associate(path, frames, landmarks, options.gate_chi2);
   std::vector<int> seen(landmarks.size(), 0);
   for (const auto& frame : match) {
     for (int k : frame) {
@@ -364,6 +367,134 @@ SmoothingResult solve(const std::vector<Pose2>& path, const std::vector<Smoothin
   return result;
 }
 
+/// One round: associate at path, then solve; *match (if given) receives the association.
+SmoothingResult solve(const std::vector<Pose2>& path, const std::vector<SmoothingFrame>& frames,
+                      const std::vector<LandmarkEstimate>& landmarks,
+                      const SmoothingOptions& options,
+                      std::vector<std::vector<int>>* match = nullptr) {
+  std::vector<std::vector<int>> m = associate(path, frames, landmarks, options.gate_chi2);
+  SmoothingResult result = solveWith(path, frames, landmarks, m, options);
+  if (match) *match = std::move(m);
+  return result;
+}
+
+/// What the merge step needs to know of each landmark under an association.
+struct LandmarkSightings {
+  int count = 0;
+  int known_id = -1;        // of its sightings (-1: none carries one)
+  bool mixed_ids = false;   // its sightings carry different known ids
+  std::vector<int> frames;  // frames that sight it, ascending, each once
+};
+
+std::vector<LandmarkSightings> sightingsOf(const std::vector<SmoothingFrame>& frames,
+                                           const std::vector<std::vector<int>>& match,
+                                           size_t landmarks) {
+  std::vector<LandmarkSightings> of(landmarks);
+  for (size_t i = 0; i < match.size(); ++i) {
+    for (size_t o = 0; o < match[i].size(); ++o) {
+      const int k = match[i][o];
+      if (k < 0) continue;
+      LandmarkSightings& l = of[k];
+      ++l.count;
+      if (l.frames.empty() || l.frames.back() != static_cast<int>(i)) {
+        l.frames.push_back(static_cast<int>(i));
+      }
+      const int id = frames[i].observations[o].known_id;
+      if (id >= 0) {
+        if (l.known_id >= 0 && l.known_id != id) l.mixed_ids = true;
+        l.known_id = id;
+      }
+    }
+  }
+  return of;
+}
+
+bool sightedTogether(const std::vector<int>& a, const std::vector<int>& b) {
+  for (size_t i = 0, j = 0; i < a.size() && j < b.size();) {
+    if (a[i] == b[j]) return true;
+    if (a[i] < b[j]) ++i; else ++j;
+  }
+  return false;
+}
+
+/// The association with landmark `from`'s sightings given to `into` and `from` removed (the
+/// indices above it shift down by one).
+std::vector<std::vector<int>> mergedMatch(const std::vector<std::vector<int>>& match, int from,
+                                          int into) {
+  std::vector<std::vector<int>> merged = match;
+  for (auto& frame : merged) {
+    for (int& k : frame) {
+      if (k == from) k = into;
+      if (k > from) --k;
+    }
+  }
+  return merged;
+}
+
+/// Merges copies of a landmark in a smoothed result (see SmoothingOptions::merge_max_cost):
+/// greedily, the pair whose merge raises the least-squares cost least, while that rise is at
+/// most merge_max_cost. `match` is the association `start` was solved with. Returns start
+/// unchanged when no pair qualifies; else the result of the last merge, its message saying
+/// what was merged.
+SmoothingResult mergeCopies(const SmoothingResult& start, const std::vector<SmoothingFrame>& frames,
+                            std::vector<std::vector<int>> match, const SmoothingOptions& options) {
+  SmoothingResult current = start;
+  std::ostringstream merged_ids;
+  int merges = 0;
+  while (true) {
+    const std::vector<LandmarkSightings> of = sightingsOf(frames, match, current.landmarks.size());
+    const auto usable = [&](size_t k) {
+      return current.landmarks[k].type == LandmarkType::kPoint &&
+             of[k].count >= options.min_sightings && !of[k].mixed_ids;
+    };
+    double best_rise = std::numeric_limits<double>::infinity();
+    SmoothingResult best;
+    std::vector<std::vector<int>> best_match;
+    int best_from = -1, best_into = -1;
+    for (size_t a = 0; a < current.landmarks.size(); ++a) {
+      if (!usable(a)) continue;
+      for (size_t b = a + 1; b < current.landmarks.size(); ++b) {
+        if (!usable(b) || of[a].known_id != of[b].known_id) continue;
+        if ((current.landmarks[a].mean - current.landmarks[b].mean).norm() >
+            options.merge_max_distance_m) {
+          continue;
+        }
+        // One frame sights two different landmarks, never one twice.
+        if (sightedTogether(of[a].frames, of[b].frames)) continue;
+        // The landmark seen more often keeps its id and is the merged one's starting point.
+        const bool a_keeps = of[a].count >= of[b].count;
+        const int into = static_cast<int>(a_keeps ? a : b), from = static_cast<int>(a_keeps ? b : a);
+        std::vector<LandmarkEstimate> landmarks = current.landmarks;
+        landmarks[into].observations += landmarks[from].observations;
+        landmarks.erase(landmarks.begin() + from);
+        std::vector<std::vector<int>> m = mergedMatch(match, from, into);
+        SmoothingResult trial = solveWith(current.path, frames, landmarks, m, options);
+        if (!trial.ok) continue;
+        const double rise = trial.final_cost - current.final_cost;
+        if (rise < best_rise) {
+          best_rise = rise;
+          best = std::move(trial);
+          best_match = std::move(m);
+          best_from = from;
+          best_into = into;
+        }
+      }
+    }
+    if (best_from < 0 || !(best_rise <= options.merge_max_cost)) break;
+    merged_ids << (merges == 0 ? "" : ", ") << current.landmarks[best_from].id << " into "
+               << current.landmarks[best_into].id << " (cost +" << best_rise << ")";
+    ++merges;
+    best.initial_cost = current.initial_cost;
+    best.iterations += current.iterations;
+    current = std::move(best);
+    match = std::move(best_match);
+  }
+  if (merges == 0) return start;
+  current.landmarks_merged = merges;
+  current.message += "; merged " + merged_ids.str();
+  return current;
+}
+
 }  // namespace
 
 SmoothingResult smoothPathAndMap(const std::vector<Pose2>& path,
@@ -385,16 +516,32 @@ SmoothingResult smoothPathAndMap(const std::vector<Pose2>& path,
   }
   if (!finiteInput(path, frames, landmarks, &result.message)) return result;
   // Each further round associates again at the path and map of the one before.
+  std::vector<std::vector<int>> match;
   for (int round = 0; round < options.rounds; ++round) {
-    SmoothingResult next = solve(result.path, frames, result.landmarks, options);
-    if (!next.ok) return round == 0 ? next : result;
+    std::vector<std::vector<int>> next_match;
+    SmoothingResult next = solve(result.path, frames, result.landmarks, options, &next_match);
+    if (!next.ok) {
+      if (round == 0) return next;
+      break;
+    }
     if (round > 0) {
       next.initial_cost = result.initial_cost;
       next.iterations += result.iterations;
     }
     result = next;
+    match = std::move(next_match);
   }
-  return result;
+  if (!(options.merge_max_cost > 0.0) || match.empty()) return result;
+  SmoothingResult merged = mergeCopies(result, frames, match, options);
+  if (merged.landmarks_merged == 0) return result;
+  // The merged map at the path it gave: sightings left out before may fall in a gate now.
+  SmoothingResult again = solve(merged.path, frames, merged.landmarks, options);
+  if (!again.ok) return merged;
+  again.initial_cost = result.initial_cost;
+  again.iterations += merged.iterations;
+  again.landmarks_merged = merged.landmarks_merged;
+  again.message += merged.message.substr(merged.message.find("; merged"));
+  return again;
 }
 
 size_t chooseMember(const std::vector<SmoothingResult>& smoothed, const SmoothingOptions& options,
@@ -502,6 +649,7 @@ SmoothingResult smoothSession(const SlamSession& session, const FilterOptions& o
   for (size_t i = 0; i < smoothed.size(); ++i) {
     why << (i == 0 ? " " : ", ") << smoothed[i].member << ": " << smoothed[i].sightings_left_out
         << " and " << smoothed[i].landmarks_smoothed;
+    if (smoothed[i].landmarks_merged > 0) why << " (" << smoothed[i].landmarks_merged << " merged)";
   }
   best.message = why.str();
   return best;

@@ -40,6 +40,15 @@ struct SmoothingOptions {
   // found the same path agree, each one that lost its way is lost differently. 0: the best
   // score alone. Needs three smoothed members or more (else the score alone).
   double member_consensus_margin = 0.0;
+  // Copies of a landmark merged after the solution (0: off). A filter that lost its heading in
+  // a silence maps the landmarks it meets again as new ones; the smoother, free to bend the path
+  // within the odometry's noise, can join them. Two point landmarks never sighted in one frame
+  // and at most merge_max_distance_m apart are a candidate pair; the pair whose merge (its
+  // sightings given to one landmark, then solved again) raises the least-squares cost least is
+  // merged while that rise is at most merge_max_cost; then the merged map is associated and
+  // solved once more at the new path.
+  double merge_max_cost = 0.0;
+  double merge_max_distance_m = 3.0;
 };
 
 /// Throws std::invalid_argument naming the first out-of-range field.
@@ -64,6 +73,7 @@ struct SmoothingResult {
   double initial_cost = 0.0;   // sum of squared (robust-weighted) normalised residuals
   double final_cost = 0.0;
   int member = 0;              // smoothSession on an ensemble: the member smoothed
+  int landmarks_merged = 0;    // copies merged (SmoothingOptions::merge_max_cost)
 };
 
 /// Smooths path (one pose per frame, in the map frame) and the point landmarks (whatever
