@@ -234,52 +234,78 @@ Pose2 rotated(const Pose2& p, double angle) {
   return Pose2(xy.x(), xy.y(), core::wrapAngle(p.z() + angle));
 }
 
-// A filter that lost its heading in a silence (frame 20: odometry of little weight) maps the
-// landmarks it meets again as copies, turned by its heading error: the second lap's path and
-// copies are the truth turned by 0.5 rad. Without merging the smoother keeps both maps (each
-// lap explains its own sightings); with merging it joins each copy to its landmark and turns
-// the second lap back.
+// A filter that lost its heading in a silence (frame 20, odometry of little weight that turns
+// the robot 0.5 rad too far) maps the landmarks it meets again as copies: the second lap's path
+// and copies are the truth turned by 0.5 rad about the centre, which that odometry agrees with
+// exactly. Without merging the smoother keeps both maps (each lap explains its own sightings at
+// no cost); with merging it joins each copy to its landmark, turns the second lap back (at a
+// cost: the silence's odometry now disagrees by 0.5 rad) and, associating again, takes in a
+// sighting left out before. The copies are sighted in two more frames than the landmarks, so
+// they keep their ids (the higher indices merged into).
 TEST(MapSmoother, CopiesMappedAfterASilenceAreMerged) {
   Scene scene;
-  scene.points = {{0.5, 0.5}, {-1.0, 1.0}, {-0.5, -1.5}};
+  scene.points = {{0.5, 0.5}, {-1.0, 1.0}, {-0.5, -1.5}, {2.0, -0.5}};
   const int steps = 40;
   const std::vector<Pose2> lap = circle(steps / 2).truth;
   scene.truth = lap;  // two laps
   scene.truth.insert(scene.truth.end(), lap.begin(), lap.end());
   addExactFrames(&scene);
-  scene.frames[20].motion_covariance = Eigen::Vector3d(1.0, 1.0, 0.5 * 0.5).asDiagonal();
   const double turn = 0.5;
   std::vector<Pose2> path = scene.truth;
   for (int i = 20; i < steps; ++i) path[i] = rotated(scene.truth[i], turn);
-  std::vector<Eigen::Vector2d> mapped = scene.points;
-  for (const Eigen::Vector2d& p : scene.points) mapped.push_back(rotated(p, turn));
+  scene.frames[20].motion = core::between(path[19], path[20]);
+  scene.frames[20].motion_covariance = Eigen::Vector3d(1.0, 1.0, 0.5 * 0.5).asDiagonal();
+  for (int i = 0; i < steps; ++i) {
+    auto& o = scene.frames[i].observations;
+    if (i < 2) o.erase(o.begin(), o.begin() + 3);  // the first three unseen in frames 0 and 1
+    if (i >= 20 && i != 30) o.pop_back();  // the fourth seen once on the second lap
+  }
+  std::vector<Eigen::Vector2d> mapped = scene.points;  // ids 10-13
+  for (int k = 0; k < 3; ++k) mapped.push_back(rotated(scene.points[k], turn));  // ids 14-16
 
   core::SmoothingOptions options;
   const core::SmoothingResult kept = core::smoothPathAndMap(path, scene.frames, mapOf(mapped),
                                                             options);
   ASSERT_TRUE(kept.ok) << kept.message;
-  EXPECT_EQ(kept.landmarks_smoothed, 6);
+  EXPECT_EQ(kept.landmarks_smoothed, 7);
   EXPECT_EQ(kept.landmarks_merged, 0);
-  EXPECT_GT((kept.path[30] - scene.truth[30]).head<2>().norm(), 0.3);
+  EXPECT_EQ(kept.sightings_left_out, 1);  // the fourth's, seen from the turned lap
+  EXPECT_LT(kept.final_cost, 1e-6);
+  EXPECT_GT((kept.path[30] - scene.truth[30]).head<2>().norm(), 1.0);
+
+  // The merges cost +0.08 (the second lap turns about the merged landmark), then +3.1 (the
+  // silence's odometry gives way), then next to nothing: each limit stops the greedy merging.
+  for (const auto& [limit, merges] : {std::pair<double, int>{0.05, 0}, {1.0, 1}}) {
+    options.merge_max_cost = limit;
+    const core::SmoothingResult dear =
+        core::smoothPathAndMap(path, scene.frames, mapOf(mapped), options);
+    ASSERT_TRUE(dear.ok) << dear.message;
+    EXPECT_EQ(dear.landmarks_merged, merges) << dear.message;
+    EXPECT_EQ(dear.landmarks.size(), 7u - merges);
+  }
 
   options.merge_max_cost = 30.0;
   const core::SmoothingResult r = core::smoothPathAndMap(path, scene.frames, mapOf(mapped),
                                                          options);
   ASSERT_TRUE(r.ok) << r.message;
-  EXPECT_EQ(r.landmarks_merged, 3);
-  EXPECT_NE(r.message.find("merged 13 into 10"), std::string::npos) << r.message;
-  ASSERT_EQ(r.landmarks.size(), 3u);
-  EXPECT_EQ(r.landmarks_smoothed, 3);
-  EXPECT_EQ(r.sightings_used, 120);
-  EXPECT_EQ(r.sightings_left_out, 0);
-  for (size_t k = 0; k < scene.points.size(); ++k) {
-    EXPECT_EQ(r.landmarks[k].id, static_cast<int>(k) + 10);  // seen as often: the first kept
-    EXPECT_EQ(r.landmarks[k].observations, 14);               // both copies' counts
-    EXPECT_LT((r.landmarks[k].mean - scene.points[k]).norm(), 1e-4) << k;
+  EXPECT_EQ(r.landmarks_merged, 3) << r.message;
+  EXPECT_NE(r.message.find("merged 1"), std::string::npos) << r.message;
+  EXPECT_NE(r.message.find(" into 14"), std::string::npos) << r.message;
+  ASSERT_EQ(r.landmarks.size(), 4u);
+  EXPECT_EQ(r.landmarks_smoothed, 4);
+  EXPECT_EQ(r.sightings_left_out, 0);  // associated again at the merged path
+  EXPECT_EQ(r.sightings_used, 3 * 38 + 21);
+  EXPECT_GT(r.final_cost, 0.5);  // the silence's odometry is off now
+  EXPECT_EQ(r.landmarks[0].id, 13);
+  EXPECT_LT((r.landmarks[0].mean - scene.points[3]).norm(), 1e-2);
+  for (int k = 0; k < 3; ++k) {
+    EXPECT_EQ(r.landmarks[k + 1].id, k + 14);        // the copies' ids
+    EXPECT_EQ(r.landmarks[k + 1].observations, 14);  // both counts
+    EXPECT_LT((r.landmarks[k + 1].mean - scene.points[k]).norm(), 1e-2) << k;
   }
   for (int i = 0; i < steps; ++i) {
-    EXPECT_LT((r.path[i] - scene.truth[i]).head<2>().norm(), 1e-4) << i;
-    EXPECT_NEAR(core::wrapAngle(r.path[i].z() - scene.truth[i].z()), 0.0, 1e-4) << i;
+    EXPECT_LT((r.path[i] - scene.truth[i]).head<2>().norm(), 1e-2) << i;
+    EXPECT_NEAR(core::wrapAngle(r.path[i].z() - scene.truth[i].z()), 0.0, 1e-2) << i;
   }
 }
 

@@ -226,6 +226,16 @@ bool finiteInput(const std::vector<Pose2>& path, const std::vector<SmoothingFram
   return true;
 }
 
+/// The one-line account of a solution.
+std::string describe(const SmoothingResult& r) {
+  std::ostringstream text;
+  text << r.landmarks_smoothed << " landmarks and " << r.path.size() << " poses from "
+       << r.sightings_used << " sightings (" << r.sightings_left_out
+       << " outside every gate), cost " << r.initial_cost << " -> " << r.final_cost << " in "
+       << r.iterations << " iterations";
+  return text.str();
+}
+
 /// Solves with a given association (match[i][o]: the landmark of frame i's observation o, or
 /// -1), starting at path and the landmarks' means. Input checked by the caller.
 SmoothingResult solveWith(const std::vector<Pose2>& path,
@@ -358,12 +368,7 @@ SmoothingResult solveWith(const std::vector<Pose2>& path,
     result.message = "the solution is not finite; the filter's path and map are kept";
     return result;
   }
-  std::ostringstream text;
-  text << smoothed << " landmarks and " << poses << " poses from " << result.sightings_used
-       << " sightings (" << result.sightings_left_out << " outside every gate), cost "
-       << result.initial_cost << " -> " << result.final_cost << " in " << result.iterations
-       << " iterations";
-  result.message = text.str();
+  result.message = describe(result);
   return result;
 }
 
@@ -377,6 +382,9 @@ SmoothingResult solve(const std::vector<Pose2>& path, const std::vector<Smoothin
   if (match) *match = std::move(m);
   return result;
 }
+
+/// Levenberg-Marquardt iterations at least for each solve of the merge step.
+constexpr int kMergeIterations = 100;
 
 /// What the merge step needs to know of each landmark under an association.
 struct LandmarkSightings {
@@ -437,8 +445,12 @@ std::vector<std::vector<int>> mergedMatch(const std::vector<std::vector<int>>& m
 /// unchanged when no pair qualifies; else the result of the last merge, its message saying
 /// what was merged.
 SmoothingResult mergeCopies(const SmoothingResult& start, const std::vector<SmoothingFrame>& frames,
-                            std::vector<std::vector<int>> match, const SmoothingOptions& options) {
-  SmoothingResult current = start;
+                            std::vector<std::vector<int>> match, SmoothingOptions options) {
+  // Costs are compared between solutions: each solve gets iterations enough to converge, and
+  // the start is first solved on from where it stopped.
+  options.max_iterations = std::max(options.max_iterations, kMergeIterations);
+  SmoothingResult current = solveWith(start.path, frames, start.landmarks, match, options);
+  if (!current.ok) return start;
   std::ostringstream merged_ids;
   int merges = 0;
   while (true) {
@@ -484,14 +496,14 @@ SmoothingResult mergeCopies(const SmoothingResult& start, const std::vector<Smoo
     merged_ids << (merges == 0 ? "" : ", ") << current.landmarks[best_from].id << " into "
                << current.landmarks[best_into].id << " (cost +" << best_rise << ")";
     ++merges;
-    best.initial_cost = current.initial_cost;
-    best.iterations += current.iterations;
     current = std::move(best);
     match = std::move(best_match);
   }
   if (merges == 0) return start;
+  current.initial_cost = start.initial_cost;
+  current.iterations = start.iterations;  // the merge step's solves are not counted
   current.landmarks_merged = merges;
-  current.message += "; merged " + merged_ids.str();
+  current.message = describe(current) + "; merged " + merged_ids.str();
   return current;
 }
 
@@ -534,13 +546,14 @@ SmoothingResult smoothPathAndMap(const std::vector<Pose2>& path,
   if (!(options.merge_max_cost > 0.0) || match.empty()) return result;
   SmoothingResult merged = mergeCopies(result, frames, match, options);
   if (merged.landmarks_merged == 0) return result;
-  // The merged map at the path it gave: sightings left out before may fall in a gate now.
+  // The merged map associated again at the path it gave: sightings left out before may fall in
+  // a gate now. Kept unless it leaves more out (a smaller cost from fewer sightings is no gain).
   SmoothingResult again = solve(merged.path, frames, merged.landmarks, options);
-  if (!again.ok) return merged;
+  if (!again.ok || again.sightings_left_out > merged.sightings_left_out) return merged;
   again.initial_cost = result.initial_cost;
   again.iterations += merged.iterations;
   again.landmarks_merged = merged.landmarks_merged;
-  again.message += merged.message.substr(merged.message.find("; merged"));
+  again.message = describe(again) + merged.message.substr(merged.message.find("; merged"));
   return again;
 }
 

@@ -42,11 +42,15 @@ struct SmoothingOptions {
   double member_consensus_margin = 0.0;
   // Copies of a landmark merged after the solution (0: off). A filter that lost its heading in
   // a silence maps the landmarks it meets again as new ones; the smoother, free to bend the path
-  // within the odometry's noise, can join them. Two point landmarks never sighted in one frame
-  // and at most merge_max_distance_m apart are a candidate pair; the pair whose merge (its
-  // sightings given to one landmark, then solved again) raises the least-squares cost least is
-  // merged while that rise is at most merge_max_cost; then the merged map is associated and
-  // solved once more at the new path.
+  // within the odometry's noise, can join them. Two point landmarks that are each smoothed (at
+  // least min_sightings sightings), never sighted in one frame, of the same known id or none,
+  // and at most merge_max_distance_m apart are a candidate pair. The pair whose merge (one's
+  // sightings given to the other, the one sighted more often, which keeps its id; then solved
+  // again, to convergence) raises the least-squares cost least is merged while that rise is at
+  // most merge_max_cost (per merge, not in total). Each pass solves once per candidate pair.
+  // Then the merged map is associated and solved once more at the new path (kept unless it
+  // leaves more sightings out). On an ensemble the merges come before the member choice, so a
+  // member's copies, once merged, no longer count against it (member_landmark_cost).
   double merge_max_cost = 0.0;
   double merge_max_distance_m = 3.0;
 };
@@ -79,7 +83,8 @@ struct SmoothingResult {
 /// Smooths path (one pose per frame, in the map frame) and the point landmarks (whatever
 /// options.enabled says: that switch is for the callers). frames[0]'s motion is ignored: the
 /// first pose is held (it anchors the map frame). A landmark keeps its id and its observation
-/// count (the filter's); the covariance is the one given the smoothed path. Non-finite input,
+/// count (the filter's; merged copies, SmoothingOptions::merge_max_cost, are removed and their
+/// counts added); the covariance is the one given the smoothed path. Non-finite input,
 /// sizes that disagree or no usable sighting give ok = false with the input unchanged.
 SmoothingResult smoothPathAndMap(const std::vector<Pose2>& path,
                                  const std::vector<SmoothingFrame>& frames,
