@@ -384,6 +384,15 @@ TEST(MapSmoother, BadInputIsRefusedByName) {
   options.gate_chi2 = -1.0;
   EXPECT_THROW(core::smoothPathAndMap(scene.truth, scene.frames, mapOf(scene.points), options),
                std::invalid_argument);
+  options = core::SmoothingOptions();
+  options.merge_max_cost = -1.0;
+  try {
+    core::smoothPathAndMap(scene.truth, scene.frames, mapOf(scene.points), options);
+    ADD_FAILURE() << "a negative merge_max_cost was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("smoothing.merge_max_cost"), std::string::npos)
+        << e.what();
+  }
 }
 
 // A session keeps one frame per trajectory point only when asked to, and smoothSession then
