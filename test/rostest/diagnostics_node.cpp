@@ -89,6 +89,21 @@ TEST(Diagnostics, AShortPeriodGivesNoBusyShare) {
   }
 }
 
+/// Nested BusyScopes (a callback whose tf gate hands its message on at once) record once, when
+/// the outermost ends: nothing is recorded while it is open.
+TEST(Diagnostics, NestedBusyScopesRecordOnlyTheOutermost) {
+  rosbridge::SlamDiagnostics diagnostics("rbpf_slam_node");
+  {
+    const rosbridge::SlamDiagnostics::BusyScope outer(&diagnostics);
+    { const rosbridge::SlamDiagnostics::BusyScope inner(&diagnostics); }
+    // A report with a period of 1 ns would show any recorded time as an enormous share.
+    diagnostics.report(ros::Time(1.0), healthy(), 100, 1e-9);
+    EXPECT_DOUBLE_EQ(diagnostics.lastBusyFraction(), 0.0);
+  }
+  diagnostics.report(ros::Time(2.0), healthy(), 100, 1e-9);
+  EXPECT_GT(diagnostics.lastBusyFraction(), 0.0);  // the outer scope's time
+}
+
 TEST(Diagnostics, EnsembleLeaderChangesAreShownOnceThereAreAny) {
   rosbridge::SlamDiagnostics diagnostics("rbpf_slam_node");
   diagnostics.recordUpdate(1.0);

@@ -47,13 +47,18 @@ class SlamDiagnostics {
   /// Wall time the node's thread spent on its inputs (a whole callback: lookups, conversion,
   /// update, publishing); BusyScope records a callback's.
   void recordBusy(double ms) { busy_ms_period_ += ms; }
-  /// Records the time from its construction to its end as busy time.
+  /// Records the time from its construction to its end as busy time. Scopes nest (a callback
+  /// whose tf gate hands a message on at once runs the gated callback inside it): only the
+  /// outermost one records, so no time counts twice.
   class BusyScope {
    public:
-    explicit BusyScope(SlamDiagnostics* diagnostics) : diagnostics_(diagnostics) {}
+    explicit BusyScope(SlamDiagnostics* diagnostics) : diagnostics_(diagnostics) {
+      ++diagnostics_->busy_depth_;
+    }
     BusyScope(const BusyScope&) = delete;
     BusyScope& operator=(const BusyScope&) = delete;
     ~BusyScope() {
+      if (--diagnostics_->busy_depth_ > 0) return;
       diagnostics_->recordBusy(std::chrono::duration<double, std::milli>(
                                    std::chrono::steady_clock::now() - start_)
                                    .count());
@@ -97,6 +102,7 @@ class SlamDiagnostics {
   long updates_period_ = 0, updates_total_ = 0, resets_total_ = 0;
   double update_ms_sum_period_ = 0.0;
   double busy_ms_period_ = 0.0;
+  int busy_depth_ = 0;  // BusyScopes open
   double last_busy_fraction_ = 0.0;
   std::chrono::steady_clock::time_point busy_since_ = std::chrono::steady_clock::now();
   std::map<std::string, long> drops_period_, drops_total_;
