@@ -442,10 +442,11 @@ std::vector<std::vector<int>> mergedMatch(const std::vector<std::vector<int>>& m
 /// Merges copies of a landmark in a smoothed result (see SmoothingOptions::merge_max_cost):
 /// greedily, the pair whose merge raises the least-squares cost least, while that rise is at
 /// most merge_max_cost. `match` is the association `start` was solved with. Returns start
-/// unchanged when no pair qualifies; else the result of the last merge, its message saying
-/// what was merged.
+/// unchanged when no pair qualifies; else the result of the last merge, its message (and
+/// *merges_text) saying what was merged.
 SmoothingResult mergeCopies(const SmoothingResult& start, const std::vector<SmoothingFrame>& frames,
-                            std::vector<std::vector<int>> match, SmoothingOptions options) {
+                            std::vector<std::vector<int>> match, SmoothingOptions options,
+                            std::string* merges_text) {
   // Costs are compared between solutions: each solve gets iterations enough to converge, and
   // the start is first solved on from where it stopped.
   options.max_iterations = std::max(options.max_iterations, kMergeIterations);
@@ -503,7 +504,8 @@ SmoothingResult mergeCopies(const SmoothingResult& start, const std::vector<Smoo
   current.initial_cost = start.initial_cost;
   current.iterations = start.iterations;  // the merge step's solves are not counted
   current.landmarks_merged = merges;
-  current.message = describe(current) + "; merged " + merged_ids.str();
+  *merges_text = "; merged " + merged_ids.str();
+  current.message = describe(current) + *merges_text;
   return current;
 }
 
@@ -544,7 +546,8 @@ SmoothingResult smoothPathAndMap(const std::vector<Pose2>& path,
     match = std::move(next_match);
   }
   if (!(options.merge_max_cost > 0.0) || match.empty()) return result;
-  SmoothingResult merged = mergeCopies(result, frames, match, options);
+  std::string merges_text;
+  SmoothingResult merged = mergeCopies(result, frames, match, options, &merges_text);
   if (merged.landmarks_merged == 0) return result;
   // The merged map associated again at the path it gave: sightings left out before may fall in
   // a gate now. Kept unless it leaves more out (a smaller cost from fewer sightings is no gain).
@@ -553,7 +556,7 @@ SmoothingResult smoothPathAndMap(const std::vector<Pose2>& path,
   again.initial_cost = result.initial_cost;
   again.iterations += merged.iterations;
   again.landmarks_merged = merged.landmarks_merged;
-  again.message = describe(again) + merged.message.substr(merged.message.find("; merged"));
+  again.message = describe(again) + merges_text;
   return again;
 }
 
