@@ -386,7 +386,6 @@ SlamConfig parseSlamConfigTree(const YAML::Node& root, const std::string& source
   smoothing.read("member_consensus_margin", &config.smoothing.member_consensus_margin);
   smoothing.read("merge_max_cost", &config.smoothing.merge_max_cost);
   smoothing.read("merge_max_distance_m", &config.smoothing.merge_max_distance_m);
-  smoothing.read("merge_kept_member_only", &config.smoothing.merge_kept_member_only);
   smoothing.finish();
   s.keep_frames = config.smoothing.enabled;
   top.read("map_file", &config.map_file);

@@ -642,46 +642,6 @@ TEST(EnsembleFilter, TheSmootherAsksForAConsensusOnlyWithinTheMarginAndFromThree
   EXPECT_EQ(pair.message.find("scoring within"), std::string::npos) << pair.message;
 }
 
-// smoothing.merge_kept_member_only: member 0 lost its heading and mapped copies of the posts;
-// member 1 kept to the truth but never mapped the last post. With a landmark costing 10
-// sightings, member 0 scores 0 + 10 x 8 unmerged and 0 + 10 x 4 merged, member 1 30 + 10 x 3.
-// Merging in every member before the choice keeps member 0 with its copies merged; merging the
-// kept member only lets the choice see the maps as the filter left them (member 1, nothing to
-// merge). With no landmark cost member 0 is kept either way, and merged after the choice.
-TEST(EnsembleFilter, MergingTheKeptMemberOnlyComesAfterTheChoice) {
-  FixedSession s;
-  FixedEnsemble* fixed = s.fixed;
-  s.loseWithCopies(0);
-  fixed->members_[1].path = s.truth;
-  fixed->members_[1].map.assign(s.map.begin(), s.map.end() - 1);
-  core::FilterOptions filter = pointOptions(1);
-  core::SmoothingOptions smoothing;
-  smoothing.enabled = true;
-  smoothing.merge_max_cost = 9.21;
-  smoothing.member_landmark_cost = 10.0;
-  const core::SmoothingResult before = core::smoothSession(*s.session, filter, smoothing);
-  ASSERT_TRUE(before.ok) << before.message;
-  EXPECT_EQ(before.member, 0) << before.message;
-  EXPECT_EQ(before.landmarks_merged, 4) << before.message;
-  EXPECT_EQ(before.landmarks.size(), 4u) << before.message;
-
-  smoothing.merge_kept_member_only = true;
-  const core::SmoothingResult after = core::smoothSession(*s.session, filter, smoothing);
-  ASSERT_TRUE(after.ok) << after.message;
-  EXPECT_EQ(after.member, 1) << after.message;
-  EXPECT_EQ(after.landmarks_merged, 0) << after.message;
-  EXPECT_NE(after.message.find("0: 0 and 8, 1: 30 and 3"), std::string::npos) << after.message;
-
-  smoothing.member_landmark_cost = 0.0;
-  const core::SmoothingResult kept = core::smoothSession(*s.session, filter, smoothing);
-  ASSERT_TRUE(kept.ok) << kept.message;
-  EXPECT_EQ(kept.member, 0) << kept.message;
-  EXPECT_EQ(kept.landmarks_merged, 4) << kept.message;
-  EXPECT_EQ(kept.landmarks.size(), 4u) << kept.message;
-  EXPECT_EQ(kept.sightings_left_out, 0) << kept.message;
-  EXPECT_NE(kept.message.find("0: 0 and 4 (4 merged)"), std::string::npos) << kept.message;
-}
-
 /// A smoothing result of a three-pose straight path whose middle pose is bent sideways by bend:
 /// two such paths are |bend_a - bend_b| x sqrt(2) / 3 apart after alignment.
 core::SmoothingResult bentResult(int member, double bend, int left_out) {

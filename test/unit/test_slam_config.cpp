@@ -166,7 +166,6 @@ TEST(SlamConfig, OverridesApplyDottedKeys) {
   applyOverride(&root, "smoothing.huber_k=0");
   applyOverride(&root, "smoothing.merge_max_cost=25");
   applyOverride(&root, "smoothing.merge_max_distance_m=2.5");
-  applyOverride(&root, "smoothing.merge_kept_member_only=true");
   applyOverride(&root, "ensemble.members=3");
   applyOverride(&root, "ensemble.rank_by=new_landmarks");
   applyOverride(&root, "ensemble.switch_margin=12.5");
@@ -186,8 +185,6 @@ TEST(SlamConfig, OverridesApplyDottedKeys) {
   EXPECT_EQ(c.smoothing.huber_k, 0.0);
   EXPECT_DOUBLE_EQ(c.smoothing.merge_max_cost, 25.0);
   EXPECT_DOUBLE_EQ(c.smoothing.merge_max_distance_m, 2.5);
-  EXPECT_TRUE(c.smoothing.merge_kept_member_only);
-  EXPECT_FALSE(core::SmoothingOptions().merge_kept_member_only);
   EXPECT_EQ(core::SmoothingOptions().merge_max_cost, 0.0);  // off unless asked
   EXPECT_EQ(c.filter.measurement.landmark_iterations, 3);
   EXPECT_EQ(core::MeasurementOptions().landmark_iterations, 1);

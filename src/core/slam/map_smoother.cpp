@@ -509,13 +509,13 @@ SmoothingResult mergeCopies(const SmoothingResult& start, const std::vector<Smoo
   return current;
 }
 
-/// The rounds of association and solution; *match receives the last round's association (the
-/// one the result was solved with).
-SmoothingResult smoothRounds(const std::vector<Pose2>& path,
-                             const std::vector<SmoothingFrame>& frames,
-                             const std::vector<LandmarkEstimate>& landmarks,
-                             const SmoothingOptions& options,
-                             std::vector<std::vector<int>>* match) {
+}  // namespace
+
+SmoothingResult smoothPathAndMap(const std::vector<Pose2>& path,
+                                 const std::vector<SmoothingFrame>& frames,
+                                 const std::vector<LandmarkEstimate>& landmarks,
+                                 const SmoothingOptions& options) {
+  validate(options);
   SmoothingResult result;
   result.path = path;
   result.landmarks = landmarks;
@@ -530,6 +530,7 @@ SmoothingResult smoothRounds(const std::vector<Pose2>& path,
   }
   if (!finiteInput(path, frames, landmarks, &result.message)) return result;
   // Each further round associates again at the path and map of the one before.
+  std::vector<std::vector<int>> match;
   for (int round = 0; round < options.rounds; ++round) {
     std::vector<std::vector<int>> next_match;
     SmoothingResult next = solve(result.path, frames, result.landmarks, options, &next_match);
@@ -542,17 +543,9 @@ SmoothingResult smoothRounds(const std::vector<Pose2>& path,
       next.iterations += result.iterations;
     }
     result = next;
-    *match = std::move(next_match);
+    match = std::move(next_match);
   }
-  return result;
-}
-
-/// The merge step on a smoothed result (SmoothingOptions::merge_max_cost), then the merged map
-/// associated and solved again. Returns result itself when nothing was merged.
-SmoothingResult mergeStep(const SmoothingResult& result, const std::vector<SmoothingFrame>& frames,
-                          const std::vector<std::vector<int>>& match,
-                          const SmoothingOptions& options) {
-  if (!result.ok || !(options.merge_max_cost > 0.0)) return result;
+  if (!(options.merge_max_cost > 0.0) || match.empty()) return result;
   std::string merges_text;
   SmoothingResult merged = mergeCopies(result, frames, match, options, &merges_text);
   if (merged.landmarks_merged == 0) return result;
@@ -565,18 +558,6 @@ SmoothingResult mergeStep(const SmoothingResult& result, const std::vector<Smoot
   again.landmarks_merged = merged.landmarks_merged;
   again.message = describe(again) + merges_text;
   return again;
-}
-
-}  // namespace
-
-SmoothingResult smoothPathAndMap(const std::vector<Pose2>& path,
-                                 const std::vector<SmoothingFrame>& frames,
-                                 const std::vector<LandmarkEstimate>& landmarks,
-                                 const SmoothingOptions& options) {
-  validate(options);
-  std::vector<std::vector<int>> match;
-  SmoothingResult result = smoothRounds(path, frames, landmarks, options, &match);
-  return mergeStep(result, frames, match, options);
 }
 
 size_t chooseMember(const std::vector<SmoothingResult>& smoothed, const SmoothingOptions& options,
@@ -660,36 +641,21 @@ SmoothingResult smoothSession(const SlamSession& session, const FilterOptions& o
   }
   SmoothingResult leader = refused;
   leader.message = "its path is not one pose per frame";
-  validate(smoothing);
-  const bool merge_after_choice = smoothing.merge_kept_member_only;
   std::vector<SmoothingResult> smoothed;  // every member that could be smoothed
-  std::vector<std::vector<std::vector<int>>> matches;  // the association each was solved with
   for (int k = 0; k < filter.members(); ++k) {
     const std::vector<Pose2> path = filter.member(k).bestPath();
     if (path.size() != frames.size()) continue;  // not a path per frame: not comparable
-    std::vector<std::vector<int>> match;
-    SmoothingResult r =
-        smoothRounds(path, frames, filter.member(k).landmarks(), smoothing, &match);
-    if (!merge_after_choice) r = mergeStep(r, frames, match, smoothing);
+    SmoothingResult r = smoothPathAndMap(path, frames, filter.member(k).landmarks(), smoothing);
     r.member = k;
     if (k == filter.leader()) leader = r;
-    if (r.ok) {
-      smoothed.push_back(std::move(r));
-      matches.push_back(std::move(match));
-    }
+    if (r.ok) smoothed.push_back(std::move(r));
   }
   if (smoothed.empty()) {
     leader.message = "no member of the ensemble could be smoothed; the leader's: " + leader.message;
     return leader;
   }
   std::string consensus;
-  const size_t chosen = chooseMember(smoothed, smoothing, &consensus);
-  SmoothingResult& best = smoothed[chosen];
-  if (merge_after_choice) {
-    const int member = best.member;
-    best = mergeStep(best, frames, matches[chosen], smoothing);
-    best.member = member;
-  }
+  SmoothingResult& best = smoothed[chooseMember(smoothed, smoothing, &consensus)];
   std::ostringstream why;
   why << "member " << best.member << " of " << filter.members() << " (the filter's leader "
       << filter.leader() << "; " << consensus << best.sightings_left_out

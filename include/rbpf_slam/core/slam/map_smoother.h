@@ -50,13 +50,9 @@ struct SmoothingOptions {
   // most merge_max_cost (per merge, not in total). Each pass solves once per candidate pair.
   // Then the merged map is associated and solved once more at the new path (kept unless it
   // leaves more sightings out). On an ensemble the merges come before the member choice, so a
-  // member's copies, once merged, no longer count against it (member_landmark_cost), unless
-  // merge_kept_member_only.
+  // member's copies, once merged, no longer count against it (member_landmark_cost).
   double merge_max_cost = 0.0;
   double merge_max_distance_m = 3.0;
-  // On an ensemble: merge in the kept member only, after the member choice (which then sees
-  // each member's map as the filter left it): one member's merge step instead of every one's.
-  bool merge_kept_member_only = false;
 };
 
 /// Throws std::invalid_argument naming the first out-of-range field.
