@@ -24,6 +24,8 @@ constexpr std::size_t kMalformedExamples = 5;
 constexpr std::size_t kFlaserFieldsAfterBeams = 7;
 // ODOM: type, x y theta tv rv accel, timestamp (host and logger timestamp may follow).
 constexpr std::size_t kOdomFields = 8;
+// The host and logger timestamp after a record's own fields.
+constexpr std::size_t kOptionalTrailingFields = 2;
 
 std::vector<std::string> splitFields(const std::string& line) {
   std::vector<std::string> fields;
@@ -83,6 +85,12 @@ bool parseOdom(const std::vector<std::string>& fields, std::size_t line_number, 
     return malformed(log, line_number,
                      "ODOM needs 7 numbers, got " + std::to_string(fields.size() - 1) + " fields");
   }
+  if (fields.size() > kOdomFields + kOptionalTrailingFields) {
+    return malformed(log, line_number, "ODOM with " + std::to_string(fields.size()) +
+                                           " fields, at most " +
+                                           std::to_string(kOdomFields + kOptionalTrailingFields) +
+                                           " (two records on one line?)");
+  }
   std::vector<double> values;
   const long bad = parseFields(fields, 1, kOdomFields - 1, &values);
   if (bad >= 0) return malformed(log, line_number, "ODOM field '" + fields[bad] + "'");
@@ -112,6 +120,13 @@ bool parseFlaser(const std::vector<std::string>& fields, std::size_t line_number
                          std::to_string(2 + beams + kFlaserFieldsAfterBeams) + " fields, got " +
                          std::to_string(fields.size()));
   }
+  const std::size_t most = 2 + beams + kFlaserFieldsAfterBeams + kOptionalTrailingFields;
+  if (fields.size() > most) {
+    return malformed(log, line_number,
+                     "FLASER with " + std::to_string(beams) + " beams and " +
+                         std::to_string(fields.size()) + " fields, at most " +
+                         std::to_string(most) + " (two records on one line?)");
+  }
   CarmenLaser laser;
   long bad = parseFields(fields, 2, beams, &laser.ranges);
   std::vector<double> values;
@@ -128,8 +143,11 @@ bool parseFlaser(const std::vector<std::string>& fields, std::size_t line_number
   return true;
 }
 
-void parseLine(std::string line, std::size_t line_number, CarmenLog* log) {
-  if (!line.empty() && line.back() == '\r') line.pop_back();
+void parseLine(const std::string& line, std::size_t line_number, CarmenLog* log) {
+  if (line.find('\0') != std::string::npos) {
+    malformed(log, line_number, "a NUL byte in the line (a damaged file?)");
+    return;
+  }
   const std::vector<std::string> fields = splitFields(line);
   if (fields.empty() || fields[0][0] == '#') return;
   const std::string& type = fields[0];
@@ -173,13 +191,25 @@ std::vector<std::size_t> longestIncreasingSubsequence(const std::vector<double>&
   return run;
 }
 
+/// One line as read up to '\n' (without it): a CRLF line's '\r' dropped, and a lone '\r' (old Mac
+/// line ends) taken as a line end, each piece counted as a line.
+void parseRecord(std::string text, std::size_t* line_number, CarmenLog* log) {
+  if (!text.empty() && text.back() == '\r') text.pop_back();
+  std::size_t start = 0;
+  for (std::size_t cr = text.find('\r'); cr != std::string::npos; cr = text.find('\r', start)) {
+    parseLine(text.substr(start, cr - start), ++*line_number, log);
+    start = cr + 1;
+  }
+  parseLine(start == 0 ? text : text.substr(start), ++*line_number, log);
+}
+
 }  // namespace
 
 CarmenLog parseCarmenLog(std::istream& in) {
   CarmenLog log;
   std::string line;
   std::size_t line_number = 0;
-  while (std::getline(in, line)) parseLine(line, ++line_number, &log);
+  while (std::getline(in, line)) parseRecord(line, &line_number, &log);
   return log;
 }
 
@@ -187,15 +217,19 @@ CarmenLog readCarmenLog(const std::string& path) {
   gzFile file = gzopen(path.c_str(), "rb");  // reads uncompressed files unchanged
   if (file == nullptr) throw std::runtime_error(path + ": cannot open CARMEN log");
   CarmenLog log;
-  std::string line;
+  std::string pending;  // read, not yet split into lines (bytes as read: NULs included)
   std::size_t line_number = 0;
   std::vector<char> buffer(1 << 16);
-  while (gzgets(file, buffer.data(), static_cast<int>(buffer.size())) != nullptr) {
-    line += buffer.data();
-    if (line.empty() || line.back() != '\n') continue;  // a longer line: read on
-    line.pop_back();
-    parseLine(line, ++line_number, &log);
-    line.clear();
+  int got = 0;
+  while ((got = gzread(file, buffer.data(), static_cast<unsigned>(buffer.size()))) > 0) {
+    pending.append(buffer.data(), static_cast<std::size_t>(got));
+    std::size_t start = 0;
+    for (std::size_t end = pending.find('\n'); end != std::string::npos;
+         end = pending.find('\n', start)) {
+      parseRecord(pending.substr(start, end - start), &line_number, &log);
+      start = end + 1;
+    }
+    pending.erase(0, start);
   }
   int error_number = Z_OK;
   const char* error_text = gzerror(file, &error_number);
@@ -205,7 +239,7 @@ CarmenLog readCarmenLog(const std::string& path) {
     throw std::runtime_error(path + ": read error after line " + std::to_string(line_number) +
                              ": " + message);
   }
-  if (!line.empty()) parseLine(line, ++line_number, &log);  // no final newline
+  if (!pending.empty()) parseRecord(pending, &line_number, &log);  // no final newline
   return log;
 }
 

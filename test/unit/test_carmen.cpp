@@ -105,6 +105,58 @@ TEST(CarmenParse, RejectsBadBeamCounts) {
   EXPECT_EQ(ok.lasers.size(), 1u);
 }
 
+/// Two records joined by a lost newline are one malformed line, not a record whose tail is
+/// dropped unseen; old Mac line ends (a lone \r) end lines as \n does.
+TEST(CarmenParse, JoinedRecordsAndLoneCarriageReturns) {
+  const CarmenLog joined = parse(
+      "ODOM 0 0 0 0 0 0 0.5 host 0.5 FLASER 2 4.0 5.0 1.6 2.1 0.45 1.5 2.1 0.4 2.0 host 2.0\n"
+      "FLASER 2 4.0 5.0 1.6 2.1 0.45 1.5 2.1 0.4 2.0 host 2.0 ODOM 0 0 0 0 0 0 2.5 host 2.5\n"
+      "ODOM 0 0 0 0 0 0 3.5 host 3.5\n");
+  EXPECT_EQ(joined.odometry.size(), 1u);
+  EXPECT_TRUE(joined.lasers.empty());
+  ASSERT_EQ(joined.malformed_examples.size(), 2u);
+  EXPECT_EQ(joined.malformed_examples[0].rfind("line 1: ODOM with 23 fields, at most 10", 0), 0u)
+      << joined.malformed_examples[0];
+  EXPECT_EQ(joined.malformed_examples[1].rfind("line 2: FLASER with 2 beams and 23 fields, at most 13", 0), 0u)
+      << joined.malformed_examples[1];
+  EXPECT_NE(joined.malformed_examples[1].find("two records on one line"), std::string::npos);
+
+  const CarmenLog mac = parse(
+      "ODOM 0 0 0 0 0 0 0.5 host 0.5\rODOM 0 0 0 0 0 0 0.6\r"
+      "FLASER 2 4.0 5.0 1.6 2.1 0.45 1.5 2.1 0.4 2.0 host 2.0\rODOM bad\r");
+  EXPECT_EQ(mac.odometry.size(), 2u);
+  ASSERT_EQ(mac.lasers.size(), 1u);
+  EXPECT_EQ(mac.lasers[0].line, 3u);
+  ASSERT_EQ(mac.malformed_examples.size(), 1u);
+  EXPECT_EQ(mac.malformed_examples[0].rfind("line 4:", 0), 0u) << mac.malformed_examples[0];
+}
+
+/// A NUL byte (a file damaged in a crash) makes its line malformed, named, and the lines after
+/// it keep their numbers.
+TEST(CarmenRead, NulBytesAreNamedAndKeepLineNumbers) {
+  const std::string path = tempPath("rbpf_slam_nul.log");
+  const std::string text = std::string("ODOM 0 0 0 0 0 0 0.5 host 0.5\n") +
+                           std::string(10, '\0') +
+                           "FLASER 2 4.0 5.0 1.6 2.1 0.45 1.5 2.1 0.4 2.0 host 2.0\n"
+                           "ODOM 0 0 0 0 0 0 2.5 host 2.5\n"
+                           "ODOM bad\n" +
+                           std::string(5, '\0');
+  {
+    std::ofstream out(path, std::ios::binary);
+    out.write(text.data(), static_cast<std::streamsize>(text.size()));
+  }
+  const CarmenLog log = readCarmenLog(path);
+  EXPECT_EQ(log.odometry.size(), 2u);
+  EXPECT_TRUE(log.lasers.empty());
+  ASSERT_EQ(log.malformed_examples.size(), 3u);
+  EXPECT_EQ(log.malformed_examples[0].rfind("line 2: a NUL byte", 0), 0u)
+      << log.malformed_examples[0];
+  EXPECT_EQ(log.malformed_examples[1].rfind("line 4:", 0), 0u) << log.malformed_examples[1];
+  EXPECT_EQ(log.malformed_examples[2].rfind("line 5: a NUL byte", 0), 0u)
+      << log.malformed_examples[2];
+  std::remove(path.c_str());
+}
+
 TEST(CarmenRead, GzipAndPlainFilesGiveTheSameLog) {
   const std::string plain = tempPath("rbpf_slam_test.log");
   const std::string compressed = tempPath("rbpf_slam_test.log.gz");
