@@ -211,9 +211,12 @@ std::vector<MrclamLandmark> parseMrclamLandmarks(std::istream& in, const std::st
   for (const Row& row : readRows(in, source, 5, "subject x y sd_x sd_y")) {
     MrclamLandmark landmark;
     landmark.subject = toInteger(row.values[0], source, row.line, "subject");
-    if (landmark.subject < 1) {
+    if (landmark.subject < kMrclamFirstLandmarkSubject) {
       throw lineError(source, row.line,
-                      "subject " + std::to_string(landmark.subject) + " is not a landmark number");
+                      "subject " + std::to_string(landmark.subject) +
+                          " is not a landmark number (robots are 1-" +
+                          std::to_string(kMrclamFirstLandmarkSubject - 1) + ", landmarks from " +
+                          std::to_string(kMrclamFirstLandmarkSubject) + ")");
     }
     requireUnique(&line_of_subject, landmark.subject, "subject", source, row.line);
     for (int k : {1, 2}) {
@@ -268,6 +271,22 @@ void reportAndSortOdometry(const std::string& source, MrclamRobot* data) {
                              std::to_string(first_shared_line) +
                              "); the first command at a stamp is the one integrated");
   }
+}
+
+// Sorts the sightings by time, reporting those stamped before the line above them.
+void reportAndSortSightings(const std::string& source, MrclamRobot* data) {
+  std::vector<MrclamMeasurement>& m = data->measurements;
+  std::size_t earlier = 0, first_earlier_line = 0;
+  for (std::size_t i = 1; i < m.size(); ++i) {
+    if (m[i].stamp < m[i - 1].stamp && earlier++ == 0) first_earlier_line = m[i].line;
+  }
+  if (earlier == 0) return;
+  std::stable_sort(m.begin(), m.end(), [](const MrclamMeasurement& a, const MrclamMeasurement& b) {
+    return a.stamp < b.stamp;
+  });
+  data->warnings.push_back(source + ": " + std::to_string(earlier) +
+                           " sighting(s) stamped before the line above them (first at line " +
+                           std::to_string(first_earlier_line) + "); sorted by time");
 }
 
 // Sorts the ground truth by time, reporting poses out of order (lines: each pose's line).
@@ -360,9 +379,7 @@ MrclamRobot readMrclamRobot(const std::string& directory, int robot) {
   reportAndSortOdometry(prefix + "Odometry.dat", &data);
   reportUnsurveyedSubjects(&data);
   reportAndSortGroundTruth(prefix + "Groundtruth.dat", ground_truth_lines, &data);
-  std::stable_sort(
-      data.measurements.begin(), data.measurements.end(),
-      [](const MrclamMeasurement& a, const MrclamMeasurement& b) { return a.stamp < b.stamp; });
+  reportAndSortSightings(prefix + "Measurement.dat", &data);
   dropRepeatedSightings(prefix + "Measurement.dat", &data);
   return data;
 }

@@ -142,6 +142,9 @@ TEST(MrclamParse, OutOfRangeBearingsHeadingsLandmarksAndStampsNameFileAndLine) {
             "Landmark_Groundtruth.dat:1: sd_x = -0.5 is outside [0, 1e+06]");
   EXPECT_EQ(errorOf(parseLandmarkText, "6 1 2 0 0\n6 3 4 0 0\n"),
             "Landmark_Groundtruth.dat:2: subject 6 listed twice (first at line 1)");
+  EXPECT_EQ(errorOf(parseLandmarkText, "6 1 2 0 0\n3 5 5 0.01 0.01\n"),  // robot 3's subject
+            "Landmark_Groundtruth.dat:2: subject 3 is not a landmark number (robots are 1-5, "
+            "landmarks from 6)");
   EXPECT_NE(errorOf(parseOdometryText, "0.000 0.1 0\n").find(
                 "Robot1_Odometry.dat:1: t = 0 is not a positive Unix time"),
             std::string::npos);
@@ -266,7 +269,7 @@ TEST(MrclamRead, ReadsADirectoryAndCrops) {
   EXPECT_DOUBLE_EQ(delayed.odometry[0].stamp, 100.25);  // unchanged by the rejected delays
 }
 
-/// Commands out of time order are sorted and reported, commands sharing a stamp reported, a
+/// Commands and sightings out of time order are sorted and reported, commands sharing a stamp reported, a
 /// sighted landmark the survey lacks named, and an empty barcode or landmark table refused.
 TEST(MrclamRead, RepairsAndReportsOdometryOrderAndRefusesEmptyTables) {
   const DatasetDir fixture("mrclam_order_test");
@@ -291,9 +294,9 @@ TEST(MrclamRead, RepairsAndReportsOdometryOrderAndRefusesEmptyTables) {
   EXPECT_DOUBLE_EQ(data.odometry[2].v_mps, 0.3);  // of the two at 102, line 3 stays first
   ASSERT_EQ(data.measurements.size(), 4u);  // line 5 repeats line 2: one sighting
   EXPECT_DOUBLE_EQ(data.measurements[2].range_m, 2.5);
-  ASSERT_EQ(data.warnings.size(), 5u);
-  reportGroundTruthGaps(dir + "/Robot1_Groundtruth.dat", &data);  // the whole file kept
   ASSERT_EQ(data.warnings.size(), 6u);
+  reportGroundTruthGaps(dir + "/Robot1_Groundtruth.dat", &data);  // the whole file kept
+  ASSERT_EQ(data.warnings.size(), 7u);
   EXPECT_NE(data.warnings[0].find("Robot1_Odometry.dat: 1 command(s) stamped before the line "
                                   "above them (first at line 4); sorted by time"),
             std::string::npos)
@@ -309,16 +312,20 @@ TEST(MrclamRead, RepairsAndReportsOdometryOrderAndRefusesEmptyTables) {
                                   "above them (first at line 6); sorted by time"),
             std::string::npos)
       << data.warnings[3];
-  EXPECT_NE(data.warnings[5].find("/Robot1_Groundtruth.dat: 2 stretch(es) of more than 10 s "
-                                  "without a pose; the longest, 974.000 s from t = 130.000 "),
-            std::string::npos)
-      << data.warnings[5];
-  ASSERT_EQ(data.ground_truth.size(), 4u);
-  EXPECT_DOUBLE_EQ(data.ground_truth[1].stamp, 104.0);
-  EXPECT_NE(data.warnings[4].find("Robot1_Measurement.dat: 1 sighting line(s) repeat one of the "
-                                  "same frame exactly (first at line 5)"),
+  EXPECT_NE(data.warnings[4].find("Robot1_Measurement.dat: 1 sighting(s) stamped before the "
+                                  "line above them (first at line 4); sorted by time"),
             std::string::npos)
       << data.warnings[4];
+  EXPECT_NE(data.warnings[6].find("/Robot1_Groundtruth.dat: 2 stretch(es) of more than 10 s "
+                                  "without a pose; the longest, 974.000 s from t = 130.000 "),
+            std::string::npos)
+      << data.warnings[6];
+  ASSERT_EQ(data.ground_truth.size(), 4u);
+  EXPECT_DOUBLE_EQ(data.ground_truth[1].stamp, 104.0);
+  EXPECT_NE(data.warnings[5].find("Robot1_Measurement.dat: 1 sighting line(s) repeat one of the "
+                                  "same frame exactly (first at line 5)"),
+            std::string::npos)
+      << data.warnings[5];
   MrclamRobot late = readMrclamRobot(dir, 1);
   cropMrclamRobot(0.0, 40.0, &late);  // [100, 140]: the 26 s stretch from 104 s only
   MrclamRobot past_the_end = late;

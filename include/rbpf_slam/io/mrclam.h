@@ -83,7 +83,7 @@ std::map<int, int> parseMrclamBarcodes(std::istream& in, const std::string& sour
 std::vector<StampedPose> parseMrclamGroundTruth(std::istream& in, const std::string& source,
                                                 std::vector<std::size_t>* lines = nullptr);
 
-/// Landmark_Groundtruth.dat.
+/// Landmark_Groundtruth.dat; a subject below kMrclamFirstLandmarkSubject (a robot) is an error.
 std::vector<MrclamLandmark> parseMrclamLandmarks(std::istream& in, const std::string& source);
 
 /// Sets every measurement's subject from its barcode (-1 when the barcode is not in the table).
@@ -93,7 +93,7 @@ void resolveSubjects(const std::map<int, int>& subject_of_barcode,
 /// Reads DIR/Barcodes.dat, DIR/Landmark_Groundtruth.dat and DIR/RobotN_{Odometry,Measurement,
 /// Groundtruth}.dat. Throws std::runtime_error naming the file when one is missing, malformed or
 /// holds no data line (the measurements may be empty), std::invalid_argument when robot is not
-/// 1..5. Sorts every file by time; commands and ground-truth poses out of time order, commands
+/// 1..5. Sorts every file by time; commands, sightings and ground-truth poses out of time order, commands
 /// sharing a stamp (the first at a stamp is the one integrated), sighting lines repeating one of
 /// their frame exactly (kept once) and sighted landmarks without a surveyed position are
 /// reported in `warnings`; stretches without ground truth are left to reportGroundTruthGaps()
