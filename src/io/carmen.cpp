@@ -270,9 +270,20 @@ std::vector<StampedPose> correctedMotion(const CarmenLog& log, CorrectedMotionSt
   const std::size_t scans = log.lasers.size();
   std::vector<double> window_low(scans + 1, -std::numeric_limits<double>::infinity());
   std::vector<double> window_high(scans + 1, std::numeric_limits<double>::infinity());
+  std::size_t latest = 0;  // the scan with the latest stamp so far
   for (std::size_t s = 0; s < scans; ++s) {
     window_low[s + 1] = std::max(window_low[s], log.lasers[s].stamp);
     window_high[s] = log.lasers[s].stamp;
+    if (s > 0 && log.lasers[s].stamp < log.lasers[latest].stamp) {
+      if (counts.scans_out_of_order++ == 0) {
+        counts.first_out_of_order_line = log.lasers[s].line;
+        counts.first_out_of_order_stamp = log.lasers[s].stamp;
+        counts.latest_before_line = log.lasers[latest].line;
+        counts.latest_before_stamp = log.lasers[latest].stamp;
+      }
+    } else {
+      latest = s;
+    }
   }
 
   struct Sample {

@@ -15,9 +15,11 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <iomanip>
 #include <iostream>
 #include <map>
 #include <optional>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -161,6 +163,16 @@ void reportSkipped(const io::CarmenLog& log, const io::CorrectedMotionStats& mot
             << motion.odometry_dropped
             << " with a stamp outside their scans' window or out of order, "
             << motion.duplicate_stamps << " duplicate stamp(s)\n";
+  if (motion.scans_out_of_order > 0) {
+    std::ostringstream stamps;  // seconds as logged (1e9 and more), to the millisecond
+    stamps << std::fixed << std::setprecision(3) << motion.first_out_of_order_stamp
+           << " s, after line " << motion.latest_before_line << "'s " << motion.latest_before_stamp;
+    std::cerr << "carmen_to_bag: warning: " << motion.scans_out_of_order
+              << " FLASER scan(s) stamped before an earlier scan, sorted by time (the first at "
+                 "line "
+              << motion.first_out_of_order_line << ", " << stamps.str()
+              << " s; a stamp far ahead also drops the ODOM lines after it)\n";
+  }
 }
 
 void writeBag(const Arguments& arguments, const io::CarmenLog& log,

@@ -117,7 +117,9 @@ TEST(CarmenParse, JoinedRecordsAndLoneCarriageReturns) {
   ASSERT_EQ(joined.malformed_examples.size(), 2u);
   EXPECT_EQ(joined.malformed_examples[0].rfind("line 1: ODOM with 23 fields, at most 10", 0), 0u)
       << joined.malformed_examples[0];
-  EXPECT_EQ(joined.malformed_examples[1].rfind("line 2: FLASER with 2 beams and 23 fields, at most 13", 0), 0u)
+  EXPECT_EQ(joined.malformed_examples[1].rfind(
+                "line 2: FLASER with 2 beams and 23 fields, at most 13", 0),
+            0u)
       << joined.malformed_examples[1];
   EXPECT_NE(joined.malformed_examples[1].find("two records on one line"), std::string::npos);
 
@@ -261,6 +263,7 @@ TEST(CorrectedMotion, KeepsScanPosesAndOrderedOdometryBetweenThem) {
   EXPECT_EQ(stats.odometry_used, 5u);
   EXPECT_EQ(stats.odometry_dropped, 5u);
   EXPECT_EQ(stats.duplicate_stamps, 0u);
+  EXPECT_EQ(stats.scans_out_of_order, 0u);
 }
 
 TEST(CorrectedMotion, SortsScansLoggedOutOfOrder) {
@@ -282,6 +285,11 @@ TEST(CorrectedMotion, SortsScansLoggedOutOfOrder) {
   EXPECT_DOUBLE_EQ(motion[3].pose.x(), 3.0);  // the first of two equal stamps
   EXPECT_EQ(stats.duplicate_stamps, 1u);
   EXPECT_EQ(stats.odometry_dropped, 1u);
+  EXPECT_EQ(stats.scans_out_of_order, 1u);  // line 2's 9.5 s after line 1's 10 s
+  EXPECT_EQ(stats.first_out_of_order_line, 2u);
+  EXPECT_DOUBLE_EQ(stats.first_out_of_order_stamp, 9.5);
+  EXPECT_EQ(stats.latest_before_line, 1u);
+  EXPECT_DOUBLE_EQ(stats.latest_before_stamp, 10.0);
 
   const std::vector<StampedPose> scans = scanPoses(log);
   ASSERT_EQ(scans.size(), 4u);

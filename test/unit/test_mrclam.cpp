@@ -269,8 +269,9 @@ TEST(MrclamRead, ReadsADirectoryAndCrops) {
   EXPECT_DOUBLE_EQ(delayed.odometry[0].stamp, 100.25);  // unchanged by the rejected delays
 }
 
-/// Commands and sightings out of time order are sorted and reported, commands sharing a stamp reported, a
-/// sighted landmark the survey lacks named, and an empty barcode or landmark table refused.
+/// Commands and sightings out of time order are sorted and reported, commands sharing a stamp
+/// reported, a sighted landmark the survey lacks named, and an empty barcode or landmark table
+/// refused.
 TEST(MrclamRead, RepairsAndReportsOdometryOrderAndRefusesEmptyTables) {
   const DatasetDir fixture("mrclam_order_test");
   const std::string& dir = fixture.path;

@@ -72,6 +72,14 @@ struct CorrectedMotionStats {
   std::size_t odometry_used = 0;
   std::size_t odometry_dropped = 0;  // stamp outside its scans' window or out of order
   std::size_t duplicate_stamps = 0;  // samples dropped because another had the same stamp
+  // FLASER scans stamped before an earlier scan in the file (sorted by time, they also narrow
+  // the ODOM windows): how many, the first one's line, and the earlier scan it follows (the
+  // latest stamped up to there: a stamp far ahead of its neighbours shows here).
+  std::size_t scans_out_of_order = 0;
+  std::size_t first_out_of_order_line = 0;
+  double first_out_of_order_stamp = 0.0;
+  std::size_t latest_before_line = 0;
+  double latest_before_stamp = 0.0;
 };
 
 /// The robot's motion as the corrected log describes it: the corrected pose at every scan

@@ -93,10 +93,10 @@ void resolveSubjects(const std::map<int, int>& subject_of_barcode,
 /// Reads DIR/Barcodes.dat, DIR/Landmark_Groundtruth.dat and DIR/RobotN_{Odometry,Measurement,
 /// Groundtruth}.dat. Throws std::runtime_error naming the file when one is missing, malformed or
 /// holds no data line (the measurements may be empty), std::invalid_argument when robot is not
-/// 1..5. Sorts every file by time; commands, sightings and ground-truth poses out of time order, commands
-/// sharing a stamp (the first at a stamp is the one integrated), sighting lines repeating one of
-/// their frame exactly (kept once) and sighted landmarks without a surveyed position are
-/// reported in `warnings`; stretches without ground truth are left to reportGroundTruthGaps()
+/// 1..5. Sorts every file by time; commands, sightings and ground-truth poses out of time order,
+/// commands sharing a stamp (the first at a stamp is the one integrated), sighting lines
+/// repeating one of their frame exactly (kept once) and sighted landmarks without a surveyed
+/// position are reported in `warnings`; stretches without ground truth are left to reportGroundTruthGaps()
 /// (after a crop, so that only the stretches in the part kept are reported).
 MrclamRobot readMrclamRobot(const std::string& directory, int robot);
 
