@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <set>
 #include <sstream>
 
@@ -14,6 +15,27 @@ std::string describe(const YAML::Node& node) {
   std::ostringstream out;
   out << node;
   return out.str();
+}
+
+/// A scalar written as a decimal integer (an optional sign, then digits only; leading zeros are
+/// decimal, as a user means them: yaml-cpp would read 010 as octal 8 and 0x10 as 16), its sign
+/// and magnitude. False for anything else, or a magnitude beyond unsigned long long.
+bool decimalInteger(const YAML::Node& node, bool* negative, unsigned long long* magnitude) {
+  if (!node.IsScalar()) return false;
+  const std::string& text = node.Scalar();
+  std::size_t i = 0;
+  *negative = false;
+  if (i < text.size() && (text[i] == '+' || text[i] == '-')) *negative = text[i++] == '-';
+  if (i == text.size()) return false;
+  *magnitude = 0;
+  constexpr unsigned long long kMax = std::numeric_limits<unsigned long long>::max();
+  for (; i < text.size(); ++i) {
+    if (text[i] < '0' || text[i] > '9') return false;
+    const unsigned digit = static_cast<unsigned>(text[i] - '0');
+    if (*magnitude > (kMax - digit) / 10) return false;
+    *magnitude = *magnitude * 10 + digit;
+  }
+  return true;
 }
 
 std::string rangeText(double min, double max) {
@@ -66,12 +88,14 @@ void YamlSection::read(const std::string& key, double* value, double min, double
 void YamlSection::read(const std::string& key, int* value, int min, int max) {
   const YAML::Node n = child(key);
   if (!n) return;
-  long long parsed;
-  try {
-    parsed = n.as<long long>();
-  } catch (const YAML::Exception&) {
+  long long parsed = 0;
+  bool negative = false;
+  unsigned long long magnitude = 0;
+  if (!decimalInteger(n, &negative, &magnitude) ||
+      magnitude > static_cast<unsigned long long>(std::numeric_limits<long long>::max())) {
     throw ConfigError(where(key) + " = " + describe(n) + " is not an integer");
   }
+  parsed = negative ? -static_cast<long long>(magnitude) : static_cast<long long>(magnitude);
   if (parsed < min || parsed > max) {
     throw ConfigError(where(key) + " = " + describe(n) + " is out of range " +
                       rangeText(min, max));
@@ -84,18 +108,16 @@ void YamlSection::read(const std::string& key, unsigned long* value) {
   if (!n) return;
   // The whole unsigned range (an ensemble member's seed, which needs all 64 bits, can be given
   // back as a config seed); a negative number is named as such.
-  const bool negative = n.IsScalar() && !n.Scalar().empty() && n.Scalar()[0] == '-';
-  try {
-    if (negative) {
-      const long long parsed = n.as<long long>();
-      if (parsed < 0) throw ConfigError(where(key) + " = " + describe(n) + " must be >= 0");
-      *value = static_cast<unsigned long>(parsed);  // -0
-      return;
-    }
-    *value = static_cast<unsigned long>(n.as<unsigned long long>());
-  } catch (const YAML::Exception&) {
+  bool negative = false;
+  unsigned long long magnitude = 0;
+  if (!decimalInteger(n, &negative, &magnitude) ||
+      magnitude > std::numeric_limits<unsigned long>::max()) {
     throw ConfigError(where(key) + " = " + describe(n) + " is not a non-negative integer");
   }
+  if (negative && magnitude > 0) {
+    throw ConfigError(where(key) + " = " + describe(n) + " must be >= 0");
+  }
+  *value = static_cast<unsigned long>(magnitude);
 }
 
 void YamlSection::read(const std::string& key, bool* value) {

@@ -60,6 +60,23 @@ TEST(SlamConfig, SeedTakesTheWholeUnsignedRange) {
             std::string::npos);
 }
 
+// Integers are decimal as written: yaml-cpp alone reads 020 as octal 16 and 0x10 as 16.
+TEST(SlamConfig, IntegersAreDecimal) {
+  EXPECT_EQ(parseSlamConfig(YAML::Load("particles: 020"), "t").filter.particles, 20);
+  EXPECT_EQ(parseSlamConfig(YAML::Load("particles: +12"), "t").filter.particles, 12);
+  EXPECT_EQ(parseSlamConfig(YAML::Load("seed: 010"), "t").filter.seed, 10UL);
+  EXPECT_EQ(parseSlamConfig(YAML::Load("seed: -0"), "t").filter.seed, 0UL);
+  EXPECT_NE(errorOf("particles: 0x10").find("particles = 0x10 is not an integer"),
+            std::string::npos)
+      << errorOf("particles: 0x10");
+  EXPECT_NE(errorOf("particles: 0o10").find("is not an integer"), std::string::npos);
+  EXPECT_NE(errorOf("particles: 1-2").find("is not an integer"), std::string::npos);
+  EXPECT_NE(errorOf("particles: 99999999999999999999").find("is not an integer"),
+            std::string::npos);
+  EXPECT_NE(errorOf("particles: -5").find("particles = -5 is out of range"), std::string::npos);
+  EXPECT_NE(errorOf("seed: 0x10").find("is not a non-negative integer"), std::string::npos);
+}
+
 // ~trajectory is throttled by default (the whole path is sent each time); 0 is every update.
 TEST(SlamConfig, TrajectoryPublishPeriod) {
   EXPECT_DOUBLE_EQ(parseSlamConfig(YAML::Load("{}"), "t").ros.trajectory_publish_period, 0.5);
