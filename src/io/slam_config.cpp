@@ -315,8 +315,13 @@ void readRos(YamlSection& top, RosOptions* o) {
        {&o->map_frame, &o->odom_frame, &o->base_frame, &o->sonar_frame_prefix}) {
     if (!frame->empty() && frame->front() == '/') frame->erase(0, 1);
   }
-  for (const std::string* frame : {&o->map_frame, &o->odom_frame, &o->base_frame}) {
-    if (frame->empty()) throw ConfigError(top.source() + ": frame names must not be empty");
+  const std::pair<const char*, const std::string*> frames[] = {
+      {"map_frame", &o->map_frame}, {"odom_frame", &o->odom_frame}, {"base_frame", &o->base_frame}};
+  for (const auto& [key, frame] : frames) {
+    if (frame->empty()) {
+      throw ConfigError(top.where(key) + " is empty (a frame name is needed; a lone '/' is "
+                                         "empty once its leading '/' is dropped)");
+    }
   }
 }
 
@@ -437,6 +442,10 @@ SlamConfig loadSlamConfig(const std::string& path, const std::vector<std::string
     throw ConfigError(path + ": cannot read the config file: " + e.what());
   }
   if (root.IsNull()) root = YAML::Node(YAML::NodeType::Map);
+  if (!root.IsMap()) {  // before the overrides, which would index (or turn) it into a map
+    throw ConfigError(path + ": the top level must be a map of keys (key: value lines), not a " +
+                      (root.IsSequence() ? "list" : "single value"));
+  }
   for (const auto& assignment : overrides) applyOverride(&root, assignment);
   // A value out of range may come from an override, not from the file: name both.
   std::string source = path;

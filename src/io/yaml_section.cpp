@@ -212,6 +212,9 @@ void applyOverride(YAML::Node* root, const std::string& assignment) {
   if (path.back() == '.' || std::find(keys.begin(), keys.end(), "") != keys.end()) {
     throw ConfigError("--set '" + assignment + "': an empty key in '" + path + "'");
   }
+  if (!root->IsMap() && !root->IsNull()) {
+    throw ConfigError("--set '" + assignment + "': the config's top level is not a map of keys");
+  }
   YAML::Node parsed;
   try {
     parsed = YAML::Load(value);

@@ -6,6 +6,8 @@
 #include <dirent.h>
 
 #include <cmath>
+#include <cstdio>
+#include <fstream>
 #include <string>
 
 #include "rbpf_slam/core/filters/slam_filter.h"
@@ -111,7 +113,8 @@ TEST(SlamConfig, FrameNamesLoseALeadingSlash) {
   EXPECT_EQ(c.ros.odom_frame, "odom");
   EXPECT_EQ(c.ros.base_frame, "base_link");
   EXPECT_EQ(c.ros.sonar_frame_prefix, "sonar_");
-  EXPECT_NE(errorOf("odom_frame: /").find("frame names must not be empty"), std::string::npos);
+  EXPECT_NE(errorOf("odom_frame: /").find("odom_frame is empty"), std::string::npos)
+      << errorOf("odom_frame: /");
 }
 
 TEST(SlamConfig, SonarConfigSelectsTheSonarFrontEnd) {
@@ -169,6 +172,34 @@ TEST(SlamConfig, BadOverridesNameTheArgument) {
   EXPECT_NE(overrideError("motion.alpha1.x=1").find("'motion.alpha1' is not a section"),
             std::string::npos);
   EXPECT_EQ(overrideError("motion.alpha2=0.3"), "");
+  YAML::Node list = YAML::Load("[a, b]");
+  EXPECT_THROW(applyOverride(&list, "particles=5"), ConfigError);
+}
+
+// A file whose top level is a list or a single value is named as such, with or without --set
+// (which would otherwise index a scalar, or turn the list into a map of its indices).
+TEST(SlamConfig, ATopLevelThatIsNotAMapIsNamed) {
+  const std::string path = ::testing::TempDir() + "/rbpf_slam_not_a_map.yaml";
+  for (const auto& [text, kind] : {std::pair<std::string, std::string>{"hello\n", "single value"},
+                                   {"- a\n- b\n", "list"}}) {
+    {
+      std::ofstream out(path);
+      out << text;
+    }
+    for (const std::vector<std::string>& overrides :
+         {std::vector<std::string>{}, std::vector<std::string>{"particles=5"}}) {
+      try {
+        loadSlamConfig(path, overrides);
+        ADD_FAILURE() << "no error for " << kind;
+      } catch (const ConfigError& e) {
+        EXPECT_NE(std::string(e.what()).find(path + ": the top level must be a map of keys"),
+                  std::string::npos)
+            << e.what();
+        EXPECT_NE(std::string(e.what()).find("not a " + kind), std::string::npos) << e.what();
+      }
+    }
+  }
+  std::remove(path.c_str());
 }
 
 TEST(SlamConfig, OverridesApplyDottedKeys) {
