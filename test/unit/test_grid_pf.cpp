@@ -274,6 +274,27 @@ FeatureSet roomScan(double x, double y) {
   return f;
 }
 
+// The tile tables are allocated for every particle when the filter starts: a map whose tables
+// cannot fit is refused with the memory it would need, not met by std::bad_alloc (or the OOM
+// killer) later. 1264 m square at 0.02 m in tiles of 4 cells: 2.5e8 tiles, 4 GB per particle.
+TEST(GridParticleFilter, TileTablesBeyondTheMemoryLimitAreRefused) {
+  FilterOptions o = gridOptions(2);
+  o.grid.resolution_m = 0.02;
+  o.grid.size_x_m = 1264.0;
+  o.grid.size_y_m = 1264.0;
+  o.grid.tile_cells = 4;
+  try {
+    GridParticleFilter filter(o);
+    FAIL() << "no error";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("tile tables would take 7.44 GiB (2 particles"),
+              std::string::npos)
+        << e.what();
+  }
+  o.grid.tile_cells = 64;  // 625 x 625 tiles: 6 MB per particle
+  EXPECT_NO_THROW(GridParticleFilter filter(o));
+}
+
 TEST(GridParticleFilter, WeightsFollowEquation14) {
   const FilterOptions o = gridOptions(30);
   GridParticleFilter filter(o);

@@ -2,6 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iomanip>
+#include <memory>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 
@@ -12,6 +15,18 @@
 namespace rbpf_slam {
 namespace core {
 namespace {
+
+/// Every particle's grid holds a table of tile pointers over the whole map, allocated when the
+/// filter starts (the tiles themselves come as the map fills): bytes per particle.
+double tileTableBytes(const GridOptions& o) {
+  const double width = std::ceil(o.size_x_m / o.resolution_m);
+  const double height = std::ceil(o.size_y_m / o.resolution_m);
+  return std::ceil(width / o.tile_cells) * std::ceil(height / o.tile_cells) *
+         static_cast<double>(sizeof(std::shared_ptr<void>));  // as any shared_ptr
+}
+
+/// The tile tables of every particle together may take at most this much memory.
+constexpr double kMaxTileTablesBytes = 4.0 * (1ull << 30);
 
 }  // namespace
 
@@ -72,6 +87,18 @@ GridParticleFilter::GridParticleFilter(const FilterOptions& options)
     : options_(options), motion_(createMotionModel(options.motion)), rng_(options.seed) {
   validate(options_.grid);
   if (options_.particles < 1) throw std::invalid_argument("particles must be >= 1");
+  const double bytes = tileTableBytes(options_.grid) * options_.particles;
+  if (bytes > kMaxTileTablesBytes) {
+    std::ostringstream why;
+    why << "the grid's tile tables would take " << std::setprecision(3) << bytes / (1ull << 30)
+        << " GiB (" << options_.particles << " particles x a table of grid.size_x_m x "
+        << "grid.size_y_m / (grid.resolution_m x grid.tile_cells)^2 tiles, " << sizeof(std::shared_ptr<void>) << " bytes each), "
+           "more than "
+        << kMaxTileTablesBytes / (1ull << 30)
+        << " GiB: shrink the map, coarsen the resolution, enlarge grid.tile_cells or use "
+           "fewer particles";
+    throw std::invalid_argument(why.str());
+  }
   reset();
 }
 
