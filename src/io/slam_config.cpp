@@ -406,6 +406,17 @@ SlamConfig parseSlamConfigTree(const YAML::Node& root, const std::string& source
                                "use_lines: false (a line map would no longer fit the smoothed "
                                "path)");
   }
+  const core::MotionOptions& m = config.filter.motion;
+  if (config.smoothing.enabled &&
+      !((m.min_sigma_xy_m > 0.0 || m.sigma_xy_per_sqrt_s > 0.0) &&
+        (m.min_sigma_theta_rad > 0.0 || m.sigma_theta_per_sqrt_s > 0.0))) {
+    // A still robot's odometry increment would get no noise at all, which the smoother's
+    // least squares cannot weigh: refused now rather than after the run.
+    throw ConfigError(source + ": smoothing.enabled needs motion noise floors: "
+                               "motion.min_sigma_xy_m (or sigma_xy_per_sqrt_s) and "
+                               "motion.min_sigma_theta_rad (or sigma_theta_per_sqrt_s) > 0, or "
+                               "smoothing.enabled: false (e.g. for an odometry-only run)");
+  }
   if (config.filter.variant == "grid_pf" && config.frontend == "features") {
     throw ConfigError(source +
                       ": variant grid_pf maps raw laser or sonar readings: frontend "

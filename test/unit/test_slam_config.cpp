@@ -62,6 +62,24 @@ TEST(SlamConfig, SeedTakesTheWholeUnsignedRange) {
             std::string::npos);
 }
 
+// Smoothing weighs every odometry increment by its inverse covariance: with no noise floor a
+// still robot's increment has none, so the combination is refused at load, naming the way out.
+TEST(SlamConfig, SmoothingNeedsMotionNoiseFloors) {
+  const std::string floorless =
+      "smoothing: {enabled: true}\nuse_lines: false\n"
+      "motion: {min_sigma_xy_m: 0, min_sigma_theta_rad: 0}\n";
+  EXPECT_NE(errorOf(floorless).find("smoothing.enabled needs motion noise floors"),
+            std::string::npos)
+      << errorOf(floorless);
+  EXPECT_EQ(errorOf("smoothing: {enabled: false}\n"
+                    "motion: {min_sigma_xy_m: 0, min_sigma_theta_rad: 0}\n"),
+            "");
+  EXPECT_EQ(errorOf("smoothing: {enabled: true}\nuse_lines: false\nmotion: {min_sigma_xy_m: 0, "
+                    "min_sigma_theta_rad: 0, sigma_xy_per_sqrt_s: 0.01, "
+                    "sigma_theta_per_sqrt_s: 0.01}\n"),
+            "");
+}
+
 // Integers are decimal as written: yaml-cpp alone reads 020 as octal 16 and 0x10 as 16.
 TEST(SlamConfig, IntegersAreDecimal) {
   EXPECT_EQ(parseSlamConfig(YAML::Load("particles: 020"), "t").filter.particles, 20);
