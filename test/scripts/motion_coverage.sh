@@ -83,4 +83,10 @@ expect "missing ground truth" 1 'exact/Robot1_Groundtruth.dat: no such file' \
 printf 'motion:\n  model: diff_drive\n' >"$work/diff.yaml"
 expect "another motion model" 1 'diff.yaml: motion.model is diff_drive' \
   "$coverage" "$work/turned" --robots 1 --config "$work/diff.yaml"
+printf 'motion:\n  alpha1: -1\n' >"$work/negative.yaml"
+expect "a negative noise term" 1 'negative.yaml: motion.alpha1 = -1 is not a finite number >= 0' \
+  "$coverage" "$work/turned" --robots 1 --config "$work/negative.yaml"
+printf '1000 0.02\n1001 0.02\n' >"$work/turned/Robot1_Odometry.dat"
+expect "a table with a column missing" 1 'Robot1_Odometry.dat: 2 columns, expected 3 \(t v w\)' \
+  "$coverage" "$work/turned" --robots 1
 exit $status
