@@ -9,6 +9,7 @@
 #include <fstream>
 #include <iomanip>
 #include <limits>
+#include <map>
 #include <stdexcept>
 
 #include "rbpf_slam/io/grid_map_file.h"
@@ -91,8 +92,12 @@ void writeLandmarksYaml(const std::string& path,
                         const std::vector<core::LandmarkEstimate>& landmarks) {
   std::ofstream yaml(path);
   if (!yaml) throw std::runtime_error(path + ": cannot be written");
-  yaml << std::setprecision(9) << "# rbpf_slam landmark map (map frame): points x, y in m; "
-       << "lines rho (m), theta (rad) with the observed extent start/end\nlandmarks:\n";
+  // Enough digits that every number reads back as written (a covariance whose determinant is
+  // tiny must not round to a singular one); count lets a reader tell a file cut short.
+  yaml << std::setprecision(std::numeric_limits<double>::max_digits10)
+       << "# rbpf_slam landmark map (map frame): points x, y in m; "
+       << "lines rho (m), theta (rad) with the observed extent start/end\n"
+       << "count: " << landmarks.size() << "\nlandmarks:\n";
   for (const auto& l : landmarks) {
     const bool line = l.type == core::LandmarkType::kLine;
     yaml << "  - {id: " << l.id << ", type: " << (line ? "line" : "point") << ", "
@@ -116,18 +121,42 @@ std::vector<core::LandmarkEstimate> loadLandmarksYaml(const std::string& path) {
     throw std::runtime_error(path + ": cannot be read");
   } catch (const YAML::Exception& e) {
     throw std::runtime_error(path + ": not YAML: " + e.what());
+  } catch (const std::exception& e) {  // a directory, an unreadable file
+    throw std::runtime_error(path + ": cannot be read: " + e.what());
   }
-  const YAML::Node list = root.IsMap() ? root["landmarks"] : YAML::Node();
+  if (!root.IsMap()) {  // an empty file, a bare list, a single value: not a map file
+    throw std::runtime_error(path + ": 'landmarks' (a list) is missing (the file is " +
+                             (root.IsNull() ? "empty" : "not a map of keys") + ")");
+  }
+  const YAML::Node list = root["landmarks"];
   if (!list || !(list.IsSequence() || list.IsNull())) {
     throw std::runtime_error(path + ": 'landmarks' (a list) is missing");
   }
   std::vector<core::LandmarkEstimate> out;
+  std::map<int, size_t> index_of_id;
   for (size_t i = 0; list.IsSequence() && i < list.size(); ++i) {
     const std::string where = path + ": landmarks[" + std::to_string(i) + "]";
     try {
       out.push_back(readLandmark(list[i], where));
     } catch (const YAML::Exception& e) {
       throw std::runtime_error(where + ": " + e.what());
+    }
+    const auto [first, fresh] = index_of_id.emplace(out.back().id, i);
+    if (!fresh) {
+      throw std::runtime_error(where + ": id " + std::to_string(out.back().id) +
+                               " is landmarks[" + std::to_string(first->second) + "]'s too");
+    }
+  }
+  if (root["count"]) {  // written by writeLandmarksYaml: a file cut short has fewer
+    long long count = -1;
+    try {
+      count = root["count"].as<long long>();
+    } catch (const YAML::Exception&) {
+    }
+    if (count != static_cast<long long>(out.size())) {
+      throw std::runtime_error(path + ": count = " + root["count"].Scalar() + ", but " +
+                               std::to_string(out.size()) +
+                               " landmarks are listed (a file cut short?)");
     }
   }
   return out;

@@ -31,8 +31,16 @@ MapImage::MapImage(const Eigen::Vector2d& min, const Eigen::Vector2d& max, doubl
                    double margin_m)
     : origin_(min - Eigen::Vector2d::Constant(margin_m)), resolution_(resolution) {
   const Eigen::Vector2d size = (max - min).cwiseMax(0.0) + Eigen::Vector2d::Constant(2 * margin_m);
-  width_ = std::clamp(static_cast<int>(std::ceil(size.x() / resolution)), 1, 8000);
-  height_ = std::clamp(static_cast<int>(std::ceil(size.y() / resolution)), 1, 8000);
+  // Coarser than asked when the extent would not fit in kMaxSidePx (a run that flew off, a
+  // map point far away): the whole extent stays in the picture.
+  constexpr double kMaxSidePx = 8000.0;
+  if (std::isfinite(size.maxCoeff())) {
+    resolution_ = std::max(resolution_, size.maxCoeff() / kMaxSidePx);
+  }
+  width_ = std::clamp(static_cast<int>(std::ceil(std::min(size.x() / resolution_, kMaxSidePx))),
+                      1, static_cast<int>(kMaxSidePx));
+  height_ = std::clamp(static_cast<int>(std::ceil(std::min(size.y() / resolution_, kMaxSidePx))),
+                       1, static_cast<int>(kMaxSidePx));
   pixels_.assign(static_cast<size_t>(width_) * height_ * 3, 255);
 }
 
@@ -126,11 +134,20 @@ void drawRunMap(const std::string& path, const std::vector<core::Pose2>& traject
   MapImage image(min, max, resolution);
   const uint8_t grid[3] = {235, 235, 235}, grey[3] = {160, 160, 160}, blue[3] = {30, 90, 220};
   const uint8_t black[3] = {0, 0, 0}, red[3] = {220, 30, 30};
-  for (double x = std::floor(min.x()) - 1; x <= max.x() + 1; x += 1.0) {
-    image.line({x, min.y() - 1}, {x, max.y() + 1}, grid);
+  // A 1 m grid, coarsened by tens to at most kMaxGridLines lines a side on a vast extent.
+  constexpr double kMaxGridLines = 200.0;
+  const double span = (max - min).maxCoeff();
+  double spacing = 1.0;
+  while (std::isfinite(span) && span / spacing > kMaxGridLines) spacing *= 10.0;
+  const Eigen::Vector2d first = (min / spacing).array().floor() * spacing - spacing;
+  const Eigen::Vector2d lines = ((max - first) / spacing).array().floor() + 1.0;
+  for (int k = 0; std::isfinite(span) && k <= static_cast<int>(lines.x()); ++k) {
+    const double x = first.x() + k * spacing;
+    image.line({x, min.y() - spacing}, {x, max.y() + spacing}, grid);
   }
-  for (double y = std::floor(min.y()) - 1; y <= max.y() + 1; y += 1.0) {
-    image.line({min.x() - 1, y}, {max.x() + 1, y}, grid);
+  for (int k = 0; std::isfinite(span) && k <= static_cast<int>(lines.y()); ++k) {
+    const double y = first.y() + k * spacing;
+    image.line({min.x() - spacing, y}, {max.x() + spacing, y}, grid);
   }
   for (size_t i = 1; i < reference.size(); ++i) {
     image.line(reference[i - 1].head<2>(), reference[i].head<2>(), grey);

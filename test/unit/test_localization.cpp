@@ -104,6 +104,42 @@ TEST(LandmarkFile, BrokenFilesAreRejectedNamingTheEntry) {
   expectError("landmarks:\n  - {id: 6, x_m: 1.5, y_m: 2.7, sd_x_m: 0.001, sd_y_m: 0.001}\n",
               "surveyed positions (x_m, y_m) of a ground-truth file");
   EXPECT_THROW(io::loadLandmarksYaml(tempPath("does_not_exist.yaml")), std::runtime_error);
+  // Not a map file at all: empty, a bare list, a single value (each loaded as an empty map).
+  expectError("", "'landmarks' (a list) is missing (the file is empty)");
+  expectError("- {id: 1, type: point, x: 1, y: 2, covariance: [1, 0, 0, 1]}\n",
+              "(the file is not a map of keys)");
+  expectError("hello\n", "(the file is not a map of keys)");
+  // One id twice: which one a sighting with that known id joins would be a guess.
+  expectError("landmarks:\n  - {id: 4, type: point, x: 1, y: 2, covariance: [1, 0, 0, 1]}\n"
+              "  - {id: 4, type: point, x: 8, y: 2, covariance: [1, 0, 0, 1]}\n",
+              "landmarks[1]: id 4 is landmarks[0]'s too");
+  // A file cut short at a line boundary still parses: the count written with it tells.
+  expectError("count: 2\nlandmarks:\n  - {id: 4, type: point, x: 1, y: 2, "
+              "covariance: [1, 0, 0, 1]}\n",
+              "count = 2, but 1 landmarks are listed");
+  try {
+    io::loadLandmarksYaml(::testing::TempDir());
+    ADD_FAILURE() << "a directory accepted";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find(::testing::TempDir()), std::string::npos) << e.what();
+  }
+}
+
+// Every number reads back as written: a covariance close to singular stays positive definite
+// (with 9 digits [1, 0.99999999995; 0.99999999995, 1] came back as [1, 1; 1, 1] and the map
+// could not be loaded again); the count written with the map matches.
+TEST(LandmarkFile, NumbersReadBackExactly) {
+  std::vector<LandmarkEstimate> map = postMap();
+  map[0].covariance << 1.0, 0.99999999995, 0.99999999995, 1.0;
+  map[1].mean = Eigen::Vector2d(0.1, 1.0 / 3.0);
+  const std::string path = tempPath("exact.yaml");
+  io::writeLandmarksYaml(path, map);
+  const std::vector<LandmarkEstimate> back = io::loadLandmarksYaml(path);
+  ASSERT_EQ(back.size(), map.size());
+  EXPECT_EQ(back[0].covariance, map[0].covariance);
+  EXPECT_EQ(back[1].mean, map[1].mean);
+  io::writeLandmarksYaml(path, {});
+  EXPECT_TRUE(io::loadLandmarksYaml(path).empty());  // an empty map is a map
 }
 
 TEST(LandmarkFile, GridPictureMarksTheWallCells) {

@@ -13,7 +13,8 @@ namespace io {
 /// An RGB raster with a metric frame: pixel (0, 0) is the top-left corner.
 class MapImage {
  public:
-  /// Covers [min, max] (metres) plus margin at resolution metres per pixel.
+  /// Covers [min, max] (metres) plus margin at resolution metres per pixel, coarsened where
+  /// needed so that neither side exceeds 8000 pixels.
   MapImage(const Eigen::Vector2d& min, const Eigen::Vector2d& max, double resolution,
            double margin_m = 1.0);
   void line(const Eigen::Vector2d& a, const Eigen::Vector2d& b, const uint8_t rgb[3]);
@@ -34,7 +35,8 @@ class MapImage {
 };
 
 /// The standard picture of a run: trajectory (blue), reference (grey, optional), lines
-/// (black segments) and points (red), with a 1 m grid.
+/// (black segments) and points (red), with a 1 m grid (10 m, 100 m, ... on extents that would
+/// need more than 200 lines a side).
 void drawRunMap(const std::string& path, const std::vector<core::Pose2>& trajectory,
                 const std::vector<core::Pose2>& reference,
                 const std::vector<core::LandmarkEstimate>& landmarks, double resolution = 0.05);
