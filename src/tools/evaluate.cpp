@@ -1,6 +1,7 @@
 // evaluate ESTIMATE.tum REFERENCE.tum [--max-dt S] [--no-align] [--interpolate [--max-gap S]]
 // Prints ATE and relative pose errors of a trajectory against a reference as JSON on stdout.
-// Exit status: 0 on success, 2 on bad usage, 1 for unreadable files or no matched poses.
+// Exit status: 0 on success, 2 on bad usage, 1 for unreadable files, no matched poses, or one
+// matched pose to align (warns on stamps out of order and on few matches).
 
 #include <algorithm>
 #include <iostream>
@@ -69,7 +70,26 @@ int run(const Arguments& arguments) {
   const auto reference = io::readTum(positional[1]);
   if (estimate.empty()) throw std::runtime_error(positional[0] + ": no poses");
   if (reference.empty()) throw std::runtime_error(positional[1] + ": no poses");
+  // Stamps out of order are sorted by the evaluation, and of poses sharing a stamp one is
+  // matched: say so (two runs concatenated, a file written twice).
+  for (int k = 0; k < 2; ++k) {
+    const auto& poses = k == 0 ? estimate : reference;
+    std::size_t not_after = 0, first = 0;
+    for (std::size_t i = 1; i < poses.size(); ++i) {
+      if (!(poses[i].stamp > poses[i - 1].stamp) && not_after++ == 0) first = i + 1;
+    }
+    if (not_after > 0) {
+      std::cerr << "evaluate: warning: " << positional[k] << ": " << not_after
+                << " pose(s) stamped at or before the pose above them (the first is pose "
+                << first << "); evaluated in time order\n";
+    }
+  }
   const auto result = io::evaluateTrajectory(estimate, reference, arguments.options);
+  if (arguments.options.align && result.matched_poses < 2) {
+    // One pair aligns onto itself whatever the error: an ATE of 0 would say nothing.
+    throw std::runtime_error("only " + std::to_string(result.matched_poses) +
+                             " matched pose(s): the alignment needs at least 2 (or --no-align)");
+  }
   std::cout << io::toJson(result);
   // Figures over a few poses say little about the trajectory: say so (the stamps may not line
   // up within --max-dt, e.g. another clock or another rate).

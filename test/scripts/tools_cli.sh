@@ -102,10 +102,21 @@ expect "evaluate bad number" 2 "--max-dt needs a non-negative number" "$bin/eval
 expect "evaluate one file" 2 "expected ESTIMATE.tum and REFERENCE.tum" "$bin/evaluate" "$work/a.tum"
 expect "evaluate missing file" 1 "no_such_input" "$bin/evaluate" "$work/a.tum" "$missing.tum"
 expect "evaluate itself" 0 "ate" "$bin/evaluate" "$work/a.tum" "$work/a.tum"
-printf '1 0 0 0 0 0 0 1\n2 1 0 0 0 0 0 1\n3 2 0 0 0 0 0 1\n4 3 0 0 0 0 0 1\n' >"$work/four.tum"
-printf '1 0 0 0 0 0 0 1\n10 1 0 0 0 0 0 1\n20 2 0 0 0 0 0 1\n30 3 0 0 0 0 0 1\n' >"$work/far.tum"
-expect "evaluate few matches" 0 "only 1 of 4 estimate poses matched" "$bin/evaluate" \
-  "$work/four.tum" "$work/far.tum"
+for t in 1 2 3 4 5 6; do echo "$t $((t - 1)) 0 0 0 0 0 1"; done >"$work/six.tum"
+printf '1 0 0 0 0 0 0 1\n2 1 0 0 0 0 0 1\n20 2 0 0 0 0 0 1\n30 3 0 0 0 0 0 1\n40 4 0 0 0 0 0 1\n' \
+  >"$work/far.tum"
+expect "evaluate few matches" 0 "only 2 of 6 estimate poses matched" "$bin/evaluate" \
+  "$work/six.tum" "$work/far.tum"
+# One matched pose aligns onto itself (an ATE of 0 whatever the error): refused unless --no-align.
+printf '1 5 0 0 0 0 0 1\n' >"$work/one.tum"
+expect "evaluate one matched pose" 1 "only 1 matched pose\(s\): the alignment needs at least 2" \
+  "$bin/evaluate" "$work/one.tum" "$work/far.tum"
+expect "evaluate one matched pose, --no-align" 0 '"ate_rmse_m": 5' \
+  "$bin/evaluate" "$work/one.tum" "$work/far.tum" --no-align
+cat "$work/six.tum" "$work/six.tum" >"$work/twice.tum"
+expect "evaluate stamps out of order" 0 \
+  "twice.tum: 1 pose\(s\) stamped at or before the pose above them \(the first is pose 7\)" \
+  "$bin/evaluate" "$work/twice.tum" "$work/six.tum"
 expect "evaluate --max-gap without --interpolate" 2 "--max-gap applies only with --interpolate" \
   "$bin/evaluate" "$work/a.tum" "$work/a.tum" --max-gap 1
 expect "render_grid required" 2 "are required" "$bin/render_grid" --bag x.bag
