@@ -53,7 +53,13 @@ std::vector<std::string> writeGridMap(const std::string& prefix, const core::Gri
   }
   std::ofstream yaml(yaml_path);
   if (!yaml) throw std::runtime_error(yaml_path + ": cannot be written");
-  const std::string image = pgm_path.substr(pgm_path.find_last_of('/') + 1);
+  // Double-quoted: a name with '#', ': ' or brackets would otherwise be cut or not parse.
+  std::string image = "\"";
+  for (const char c : pgm_path.substr(pgm_path.find_last_of('/') + 1)) {
+    if (c == '"' || c == '\\') image += '\\';
+    image += c;
+  }
+  image += '"';
   yaml << std::setprecision(9) << "image: " << image << "\nresolution: " << grid.resolution_m
        << "\norigin: [" << grid.origin_x_m << ", " << grid.origin_y_m << ", 0.0]\nnegate: 0\n"
        << "occupied_thresh: 0.65\nfree_thresh: 0.196\n";

@@ -134,7 +134,7 @@ TEST_F(ServicesTest, SaveMapWritesALandmarkFileThatLoadsBack) {
   EXPECT_TRUE(std::ifstream(prefix + ".pgm").good());
   std::ifstream yaml(prefix + ".yaml");
   const std::string text((std::istreambuf_iterator<char>(yaml)), std::istreambuf_iterator<char>());
-  EXPECT_NE(text.find("image: saved.pgm"), std::string::npos) << text;
+  EXPECT_NE(text.find("image: \"saved.pgm\""), std::string::npos) << text;
 
   MapFile load;
   ASSERT_TRUE(callMapFile("load_map", prefix + ".landmarks.yaml", &load));

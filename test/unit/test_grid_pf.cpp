@@ -474,6 +474,12 @@ TEST(GridMapFile, WritesAndReadsMapServerFiles) {
   // Trinary: >= 65 occupied, 0..19 free, the rest unknown.
   EXPECT_EQ(back.cells, (std::vector<int8_t>{100, 0, -1, 100, 0, -1}));
   for (const auto& f : files) std::remove(f.c_str());
+  // A name that YAML would cut (' #') or not parse (': ', brackets, quotes) unquoted.
+  for (const std::string name : {"lab #2", "run: 1", "[a]", "say \"hi\""}) {
+    const std::vector<std::string> named = io::writeGridMap(std::string(dir) + "/" + name, g);
+    EXPECT_EQ(io::readGridMap(named[1]).cells, back.cells) << name;
+    for (const auto& f : named) std::remove(f.c_str());
+  }
   rmdir(dir);
 }
 
