@@ -194,7 +194,7 @@ std::vector<std::size_t> longestIncreasingSubsequence(const std::vector<double>&
 /// One line as read up to '\n' (without it): a CRLF line's '\r' dropped, and a lone '\r' (old Mac
 /// line ends) taken as a line end, each piece counted as a line.
 void parseRecord(std::string text, std::size_t* line_number, CarmenLog* log) {
-  if (!text.empty() && text.back() == '\r') text.pop_back();
+  while (!text.empty() && text.back() == '\r') text.pop_back();  // CRLF (or CRCRLF)
   std::size_t start = 0;
   for (std::size_t cr = text.find('\r'); cr != std::string::npos; cr = text.find('\r', start)) {
     parseLine(text.substr(start, cr - start), ++*line_number, log);

@@ -17,9 +17,10 @@ std::string describe(const YAML::Node& node) {
   return out.str();
 }
 
-/// A scalar written as a decimal integer (an optional sign, then digits only; leading zeros are
-/// decimal, as a user means them: yaml-cpp would read 010 as octal 8 and 0x10 as 16), its sign
-/// and magnitude. False for anything else, or a magnitude beyond unsigned long long.
+/// A scalar written as a decimal integer (an optional sign, then digits only, no leading zero),
+/// its sign and magnitude. False for anything else, or a magnitude beyond unsigned long long.
+/// yaml-cpp alone would read 0x10 as 16 and 010 as octal 8; the node's parameters come through
+/// rosparam, whose YAML 1.1 reads 010 as octal too: a leading zero is refused, not guessed.
 bool decimalInteger(const YAML::Node& node, bool* negative, unsigned long long* magnitude) {
   if (!node.IsScalar()) return false;
   const std::string& text = node.Scalar();
@@ -27,6 +28,7 @@ bool decimalInteger(const YAML::Node& node, bool* negative, unsigned long long* 
   *negative = false;
   if (i < text.size() && (text[i] == '+' || text[i] == '-')) *negative = text[i++] == '-';
   if (i == text.size()) return false;
+  if (text[i] == '0' && i + 1 < text.size()) return false;  // 010: octal to some readers
   *magnitude = 0;
   constexpr unsigned long long kMax = std::numeric_limits<unsigned long long>::max();
   for (; i < text.size(); ++i) {
@@ -93,7 +95,8 @@ void YamlSection::read(const std::string& key, int* value, int min, int max) {
   unsigned long long magnitude = 0;
   if (!decimalInteger(n, &negative, &magnitude) ||
       magnitude > static_cast<unsigned long long>(std::numeric_limits<long long>::max())) {
-    throw ConfigError(where(key) + " = " + describe(n) + " is not an integer");
+    throw ConfigError(where(key) + " = " + describe(n) +
+                      " is not an integer (decimal digits, no leading zero)");
   }
   parsed = negative ? -static_cast<long long>(magnitude) : static_cast<long long>(magnitude);
   if (parsed < min || parsed > max) {
@@ -112,7 +115,8 @@ void YamlSection::read(const std::string& key, unsigned long* value) {
   unsigned long long magnitude = 0;
   if (!decimalInteger(n, &negative, &magnitude) ||
       magnitude > std::numeric_limits<unsigned long>::max()) {
-    throw ConfigError(where(key) + " = " + describe(n) + " is not a non-negative integer");
+    throw ConfigError(where(key) + " = " + describe(n) +
+                      " is not a non-negative integer (decimal digits, no leading zero)");
   }
   if (negative && magnitude > 0) {
     throw ConfigError(where(key) + " = " + describe(n) + " must be >= 0");

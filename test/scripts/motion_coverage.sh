@@ -86,6 +86,9 @@ expect "another motion model" 1 'diff.yaml: motion.model is diff_drive' \
 printf 'motion:\n  alpha1: -1\n' >"$work/negative.yaml"
 expect "a negative noise term" 1 'negative.yaml: motion.alpha1 = -1 is not a finite number >= 0' \
   "$coverage" "$work/turned" --robots 1 --config "$work/negative.yaml"
+printf 'motion:\n  alpha1: 3e-2\n' >"$work/exponent.yaml"  # PyYAML reads 3e-2 as a string
+expect "a noise term written 3e-2" 0 '^30-inf \| 1 \|' \
+  "$coverage" "$work/turned" --robots 1 --config "$work/exponent.yaml"
 printf '1000 0.02\n1001 0.02\n' >"$work/turned/Robot1_Odometry.dat"
 expect "a table with a column missing" 1 'Robot1_Odometry.dat: 2 columns, expected 3 \(t v w\)' \
   "$coverage" "$work/turned" --robots 1

@@ -131,6 +131,11 @@ TEST(CarmenParse, JoinedRecordsAndLoneCarriageReturns) {
   EXPECT_EQ(mac.lasers[0].line, 3u);
   ASSERT_EQ(mac.malformed_examples.size(), 1u);
   EXPECT_EQ(mac.malformed_examples[0].rfind("line 4:", 0), 0u) << mac.malformed_examples[0];
+  // CR CR LF ends one line, as grep -n counts it.
+  const CarmenLog doubled = parse("ODOM 0 0 0 0 0 0 0.5 host 0.5\r\r\nODOM bad\r\r\n");
+  ASSERT_EQ(doubled.malformed_examples.size(), 1u);
+  EXPECT_EQ(doubled.malformed_examples[0].rfind("line 2:", 0), 0u)
+      << doubled.malformed_examples[0];
 }
 
 /// A NUL byte (a file damaged in a crash) makes its line malformed, named, and the lines after

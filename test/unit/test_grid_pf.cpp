@@ -276,7 +276,7 @@ FeatureSet roomScan(double x, double y) {
 
 // The tile tables are allocated for every particle when the filter starts: a map whose tables
 // cannot fit is refused with the memory it would need, not met by std::bad_alloc (or the OOM
-// killer) later. 1264 m square at 0.02 m in tiles of 4 cells: 2.5e8 tiles, 4 GB per particle.
+// killer) later. 1264 m square at 0.02 m in tiles of 4 cells: 2.5e8 tiles, 4 GB per table.
 TEST(GridParticleFilter, TileTablesBeyondTheMemoryLimitAreRefused) {
   FilterOptions o = gridOptions(2);
   o.grid.resolution_m = 0.02;
@@ -287,11 +287,12 @@ TEST(GridParticleFilter, TileTablesBeyondTheMemoryLimitAreRefused) {
     GridParticleFilter filter(o);
     FAIL() << "no error";
   } catch (const std::invalid_argument& e) {
-    EXPECT_NE(std::string(e.what()).find("tile tables would take 7.44 GiB (2 particles"),
+    EXPECT_NE(std::string(e.what()).find("tile tables would take 18.6 GiB at the peak (2 x 2 "
+                                         "particles"),
               std::string::npos)
         << e.what();
   }
-  o.grid.tile_cells = 64;  // 625 x 625 tiles: 6 MB per particle
+  o.grid.tile_cells = 64;  // 988 x 988 tiles: 15.6 MB per table
   EXPECT_NO_THROW(GridParticleFilter filter(o));
 }
 

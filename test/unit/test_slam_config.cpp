@@ -80,12 +80,17 @@ TEST(SlamConfig, SmoothingNeedsMotionNoiseFloors) {
             "");
 }
 
-// Integers are decimal as written: yaml-cpp alone reads 020 as octal 16 and 0x10 as 16.
+// Integers are plain decimal: yaml-cpp alone reads 020 as octal 16 and 0x10 as 16, and the
+// node's rosparam (YAML 1.1) reads 020 as 16 too; a leading zero is refused, not guessed.
 TEST(SlamConfig, IntegersAreDecimal) {
-  EXPECT_EQ(parseSlamConfig(YAML::Load("particles: 020"), "t").filter.particles, 20);
+  EXPECT_EQ(parseSlamConfig(YAML::Load("particles: 20"), "t").filter.particles, 20);
   EXPECT_EQ(parseSlamConfig(YAML::Load("particles: +12"), "t").filter.particles, 12);
-  EXPECT_EQ(parseSlamConfig(YAML::Load("seed: 010"), "t").filter.seed, 10UL);
+  EXPECT_EQ(parseSlamConfig(YAML::Load("seed: 0"), "t").filter.seed, 0UL);
   EXPECT_EQ(parseSlamConfig(YAML::Load("seed: -0"), "t").filter.seed, 0UL);
+  EXPECT_NE(errorOf("particles: 020").find("particles = 020 is not an integer"),
+            std::string::npos);
+  EXPECT_NE(errorOf("seed: 010").find("seed = 010 is not a non-negative integer"),
+            std::string::npos);
   EXPECT_NE(errorOf("particles: 0x10").find("particles = 0x10 is not an integer"),
             std::string::npos)
       << errorOf("particles: 0x10");

@@ -87,11 +87,13 @@ GridParticleFilter::GridParticleFilter(const FilterOptions& options)
     : options_(options), motion_(createMotionModel(options.motion)), rng_(options.seed) {
   validate(options_.grid);
   if (options_.particles < 1) throw std::invalid_argument("particles must be >= 1");
-  const double bytes = tileTableBytes(options_.grid) * options_.particles;
+  // At the peak: the template, the particles' tables and, while resampling, their copies.
+  const double bytes = tileTableBytes(options_.grid) * (2.0 * options_.particles + 1.0);
   if (bytes > kMaxTileTablesBytes) {
     std::ostringstream why;
     why << "the grid's tile tables would take " << std::setprecision(3) << bytes / (1ull << 30)
-        << " GiB (" << options_.particles << " particles x a table of grid.size_x_m x "
+        << " GiB at the peak (2 x " << options_.particles
+        << " particles while resampling + 1, each a table of grid.size_x_m x "
         << "grid.size_y_m / (grid.resolution_m x grid.tile_cells)^2 tiles, " << sizeof(std::shared_ptr<void>) << " bytes each), "
            "more than "
         << kMaxTileTablesBytes / (1ull << 30)
