@@ -82,7 +82,15 @@ core::LandmarkEstimate readLandmark(const YAML::Node& node, const std::string& w
       l.covariance.determinant() <= 0.0) {
     throw std::runtime_error(where + ": covariance is not symmetric positive definite");
   }
-  l.observations = node["observations"] ? node["observations"].as<int>() : 1;
+  if (node["observations"]) {
+    const double observations = readNumber(node, "observations", where);
+    if (observations != std::floor(observations) || observations < 0 || observations > 1e9) {
+      throw std::runtime_error(where + ": 'observations' must be an integer >= 0");
+    }
+    l.observations = static_cast<int>(observations);
+  } else {
+    l.observations = 1;
+  }
   return l;
 }
 

@@ -109,6 +109,9 @@ TEST(LandmarkFile, BrokenFilesAreRejectedNamingTheEntry) {
   expectError("- {id: 1, type: point, x: 1, y: 2, covariance: [1, 0, 0, 1]}\n",
               "(the file is not a map of keys)");
   expectError("hello\n", "(the file is not a map of keys)");
+  expectError("landmarks:\n  - {id: 4, type: point, x: 1, y: 2, covariance: [1, 0, 0, 1], "
+              "observations: 1.5}\n",
+              "landmarks[0]: 'observations' must be an integer >= 0");
   // One id twice: which one a sighting with that known id joins would be a guess.
   expectError("landmarks:\n  - {id: 4, type: point, x: 1, y: 2, covariance: [1, 0, 0, 1]}\n"
               "  - {id: 4, type: point, x: 8, y: 2, covariance: [1, 0, 0, 1]}\n",
