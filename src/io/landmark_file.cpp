@@ -47,13 +47,19 @@ Eigen::Vector2d readPair(const YAML::Node& node, const std::string& key, const s
   return v;
 }
 
+/// readNumber() that must be a whole number in [min, 1e9]; else `why` after where.
+int readInteger(const YAML::Node& node, const std::string& key, const std::string& where,
+                double min, const std::string& why) {
+  const double value = readNumber(node, key, where);
+  if (value != std::floor(value) || value < min || value > 1e9) {
+    throw std::runtime_error(where + ": " + why);
+  }
+  return static_cast<int>(value);
+}
+
 core::LandmarkEstimate readLandmark(const YAML::Node& node, const std::string& where) {
   core::LandmarkEstimate l;
-  const double id = readNumber(node, "id", where);
-  if (id != std::floor(id) || std::fabs(id) > 1e9) {
-    throw std::runtime_error(where + ": 'id' must be an integer");
-  }
-  l.id = static_cast<int>(id);
+  l.id = readInteger(node, "id", where, -1e9, "'id' must be an integer");
   const std::string type = node["type"] ? node["type"].as<std::string>() : "";
   if (type == "line") {
     l.type = core::LandmarkType::kLine;
@@ -82,15 +88,9 @@ core::LandmarkEstimate readLandmark(const YAML::Node& node, const std::string& w
       l.covariance.determinant() <= 0.0) {
     throw std::runtime_error(where + ": covariance is not symmetric positive definite");
   }
-  if (node["observations"]) {
-    const double observations = readNumber(node, "observations", where);
-    if (observations != std::floor(observations) || observations < 0 || observations > 1e9) {
-      throw std::runtime_error(where + ": 'observations' must be an integer >= 0");
-    }
-    l.observations = static_cast<int>(observations);
-  } else {
-    l.observations = 1;
-  }
+  l.observations = node["observations"] ? readInteger(node, "observations", where, 0.0,
+                                                      "'observations' must be an integer >= 0")
+                                         : 1;
   return l;
 }
 

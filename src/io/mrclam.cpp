@@ -246,21 +246,29 @@ void resolveSubjects(const std::map<int, int>& subject_of_barcode,
 
 namespace {
 
+// Sorts rows by stamp (stable); when some were stamped before the row above them, warns how
+// many, naming the first one's line (line_of(i): row i's line in the file before sorting).
+template <typename Row, typename LineOf>
+void sortReportingEarlier(const std::string& source, const char* noun, LineOf line_of,
+                          std::vector<Row>* rows, std::vector<std::string>* warnings) {
+  std::vector<Row>& r = *rows;
+  std::size_t earlier = 0, first_earlier_line = 0;
+  for (std::size_t i = 1; i < r.size(); ++i) {
+    if (r[i].stamp < r[i - 1].stamp && earlier++ == 0) first_earlier_line = line_of(i);
+  }
+  if (earlier == 0) return;
+  std::stable_sort(r.begin(), r.end(),
+                   [](const Row& a, const Row& b) { return a.stamp < b.stamp; });
+  warnings->push_back(source + ": " + std::to_string(earlier) + " " + noun +
+                      "(s) stamped before the line above them (first at line " +
+                      std::to_string(first_earlier_line) + "); sorted by time");
+}
+
 // Sorts the commands by time (stable), and says how many were out of order or share a stamp.
 void reportAndSortOdometry(const std::string& source, MrclamRobot* data) {
   std::vector<MrclamOdometry>& o = data->odometry;
-  std::size_t earlier = 0, first_earlier_line = 0;
-  for (std::size_t i = 1; i < o.size(); ++i) {
-    if (o[i].stamp < o[i - 1].stamp && earlier++ == 0) first_earlier_line = o[i].line;
-  }
-  if (earlier > 0) {
-    std::stable_sort(o.begin(), o.end(), [](const MrclamOdometry& a, const MrclamOdometry& b) {
-      return a.stamp < b.stamp;
-    });
-    data->warnings.push_back(source + ": " + std::to_string(earlier) +
-                             " command(s) stamped before the line above them (first at line " +
-                             std::to_string(first_earlier_line) + "); sorted by time");
-  }
+  sortReportingEarlier(source, "command", [&o](std::size_t i) { return o[i].line; }, &o,
+                       &data->warnings);
   std::size_t shared = 0, first_shared_line = 0;
   for (std::size_t i = 1; i < o.size(); ++i) {
     if (o[i].stamp == o[i - 1].stamp && shared++ == 0) first_shared_line = o[i].line;
@@ -270,39 +278,6 @@ void reportAndSortOdometry(const std::string& source, MrclamRobot* data) {
                              " command(s) share the stamp of the one before (first at line " +
                              std::to_string(first_shared_line) +
                              "); the first command at a stamp is the one integrated");
-  }
-}
-
-// Sorts the sightings by time, reporting those stamped before the line above them.
-void reportAndSortSightings(const std::string& source, MrclamRobot* data) {
-  std::vector<MrclamMeasurement>& m = data->measurements;
-  std::size_t earlier = 0, first_earlier_line = 0;
-  for (std::size_t i = 1; i < m.size(); ++i) {
-    if (m[i].stamp < m[i - 1].stamp && earlier++ == 0) first_earlier_line = m[i].line;
-  }
-  if (earlier == 0) return;
-  std::stable_sort(m.begin(), m.end(), [](const MrclamMeasurement& a, const MrclamMeasurement& b) {
-    return a.stamp < b.stamp;
-  });
-  data->warnings.push_back(source + ": " + std::to_string(earlier) +
-                           " sighting(s) stamped before the line above them (first at line " +
-                           std::to_string(first_earlier_line) + "); sorted by time");
-}
-
-// Sorts the ground truth by time, reporting poses out of order (lines: each pose's line).
-void reportAndSortGroundTruth(const std::string& source, const std::vector<std::size_t>& lines,
-                              MrclamRobot* data) {
-  std::vector<StampedPose>& g = data->ground_truth;
-  std::size_t earlier = 0, first_earlier_line = 0;
-  for (std::size_t i = 1; i < g.size(); ++i) {
-    if (g[i].stamp < g[i - 1].stamp && earlier++ == 0) first_earlier_line = lines.at(i);
-  }
-  if (earlier > 0) {
-    std::stable_sort(g.begin(), g.end(),
-                     [](const StampedPose& a, const StampedPose& b) { return a.stamp < b.stamp; });
-    data->warnings.push_back(source + ": " + std::to_string(earlier) +
-                             " pose(s) stamped before the line above them (first at line " +
-                             std::to_string(first_earlier_line) + "); sorted by time");
   }
 }
 
@@ -378,8 +353,12 @@ MrclamRobot readMrclamRobot(const std::string& directory, int robot) {
   if (data.ground_truth.empty()) throw std::runtime_error(prefix + "Groundtruth.dat: no data line");
   reportAndSortOdometry(prefix + "Odometry.dat", &data);
   reportUnsurveyedSubjects(&data);
-  reportAndSortGroundTruth(prefix + "Groundtruth.dat", ground_truth_lines, &data);
-  reportAndSortSightings(prefix + "Measurement.dat", &data);
+  sortReportingEarlier(prefix + "Groundtruth.dat", "pose",
+                       [&ground_truth_lines](std::size_t i) { return ground_truth_lines.at(i); },
+                       &data.ground_truth, &data.warnings);
+  sortReportingEarlier(prefix + "Measurement.dat", "sighting",
+                       [&data](std::size_t i) { return data.measurements[i].line; },
+                       &data.measurements, &data.warnings);
   dropRepeatedSightings(prefix + "Measurement.dat", &data);
   return data;
 }
