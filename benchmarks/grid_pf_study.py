@@ -22,6 +22,9 @@ import os
 import subprocess
 import sys
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import tum  # noqa: E402
+
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 BIN = os.path.join(ROOT, "devel", "lib", "rbpf_slam")
 CONFIGS = {"yatim_epuck": "config/grid_pf.yaml", "lee_sonar_room": "config/grid_pf_sonar.yaml"}
@@ -29,16 +32,11 @@ REPORT_STEPS = [100, 200, 400, 600]
 
 
 def read_tum(path):
-    rows = []
-    with open(path) as f:
-        for line in f:
-            v = line.split()
-            if len(v) != 8 or line.startswith("#"):
-                continue
-            t, x, y = float(v[0]), float(v[1]), float(v[2])
-            qz, qw = float(v[6]), float(v[7])
-            rows.append((t, x, y, 2.0 * math.atan2(qz, qw)))
-    return rows
+    """[(t, x, y, yaw)] of a TUM file; exits naming the file and line when it cannot be read."""
+    try:
+        return tum.read_tum(path)
+    except tum.TumError as error:
+        sys.exit("grid_pf_study: %s" % error)
 
 
 def read_odometry(bag_path):
@@ -137,9 +135,7 @@ def main():
     parser.add_argument("--from-json", help="re-plot and re-print a previous run's JSON")
     args = parser.parse_args()
     if args.from_json:
-        with open(args.from_json) as f:
-            results = json.load(f)
-        report(results, args.output)
+        report(load_results(args.from_json), args.output)
         return
     os.makedirs(args.work, exist_ok=True)
     worlds = args.worlds.split(",")
@@ -178,6 +174,41 @@ def main():
     with open(args.output + ".json", "w") as f:
         json.dump(results, f)
     report(results, args.output)
+
+
+def load_results(path):
+    """A previous run's JSON, checked for the keys report() reads; exits naming what is wrong."""
+    try:
+        with open(path) as f:
+            results = json.load(f)
+    except OSError as error:
+        sys.exit("grid_pf_study: cannot read %s: %s" % (path, error.strerror or error))
+    except ValueError as error:  # JSONDecodeError and UnicodeDecodeError
+        sys.exit("grid_pf_study: %s is not JSON: %s" % (path, error))
+    if not isinstance(results, dict) or not results:
+        sys.exit("grid_pf_study: %s holds no worlds (expected {world: {...}})" % path)
+    for world, entry in results.items():
+        where = "%s: world '%s'" % (path, world)
+        if not isinstance(entry, dict):
+            sys.exit("%s is not a mapping" % where)
+        for key in ("series", "seeds", "wall_s_mean", "peak_rss_mb_max"):
+            if key not in entry:
+                sys.exit("grid_pf_study: %s lacks '%s'" % (where, key))
+        series = entry["series"]
+        if not isinstance(series, dict) or "odometry" not in series:
+            sys.exit("grid_pf_study: %s: 'series' needs an 'odometry' entry" % where)
+        for name, xy in series.items():
+            if (not isinstance(xy, list) or len(xy) != 2 or
+                    not all(isinstance(axis, list) and axis and
+                            all(isinstance(v, (int, float)) for v in axis) for axis in xy)):
+                sys.exit("grid_pf_study: %s: series '%s' is not two non-empty lists of numbers"
+                         % (where, name))
+    names = list(next(iter(results.values()))["series"])
+    for world, entry in results.items():
+        if list(entry["series"]) != names:
+            sys.exit("grid_pf_study: %s: world '%s' has series %s, the first world %s"
+                     % (path, world, list(entry["series"]), names))
+    return results
 
 
 def report(results, output):
@@ -219,11 +250,15 @@ def report(results, output):
                 k = min(k, len(rx)) - 1
                 cells.append("%.4f / %.4f" % (rx[k], ry[k]))
             late = range(600, min(len(rx), len(ox)))
-            cells.append("%.4f / %.4f" % (sum(rx[k] for k in late) / len(late),
-                                          sum(ry[k] for k in late) / len(late)))
-            below = ("%.0f%% / %.0f%%" % (100.0 * sum(rx[k] < ox[k] for k in late) / len(late),
-                                          100.0 * sum(ry[k] < oy[k] for k in late) / len(late))
-                     if name != "odometry" else "")
+            if not late:  # runs of fewer than 601 steps
+                cells.append("n/a")
+                below = "n/a" if name != "odometry" else ""
+            else:
+                cells.append("%.4f / %.4f" % (sum(rx[k] for k in late) / len(late),
+                                              sum(ry[k] for k in late) / len(late)))
+                below = ("%.0f%% / %.0f%%" % (100.0 * sum(rx[k] < ox[k] for k in late) / len(late),
+                                              100.0 * sum(ry[k] < oy[k] for k in late) / len(late))
+                         if name != "odometry" else "")
             cells.append(below)
             label = name if name == "odometry" else name + " particles"
             print("| %s | %s |" % (label, " | ".join(cells)))
