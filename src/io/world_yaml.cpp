@@ -3,10 +3,15 @@
 #include <yaml-cpp/yaml.h>
 
 #include <cmath>
+#include <filesystem>
 #include <fstream>
+#include <limits>
 #include <set>
 #include <sstream>
+#include <type_traits>
 #include <vector>
+
+#include "rbpf_slam/io/yaml_section.h"
 
 namespace rbpf_slam {
 namespace io {
@@ -30,6 +35,7 @@ class MapReader {
     if (!node_.IsMap()) fail(path_ + " must be a map of key: value");
   }
 
+  const std::string& path() const { return path_; }
   std::string field(const std::string& key) const {
     return path_.empty() ? key : path_ + "." + key;
   }
@@ -52,17 +58,29 @@ class MapReader {
 
   template <typename T>
   T convert(const YAML::Node& n, const std::string& where) const {
-    try {
-      if (n.IsScalar()) return n.as<T>();
-    } catch (const YAML::Exception&) {
+    if constexpr (std::is_same_v<T, int>) {
+      // Decimal only: yaml-cpp reads 010 as octal 8 and 0x10 as 16 (laps: 010 drove 8 laps).
+      bool negative = false;
+      unsigned long long magnitude = 0;
+      if (!decimalInteger(n, &negative, &magnitude) ||
+          magnitude > static_cast<unsigned long long>(std::numeric_limits<int>::max())) {
+        fail(where + " = " + describe(n) +
+             " is not an integer (decimal digits, no leading zero, within int)");
+      }
+      return negative ? -static_cast<int>(magnitude) : static_cast<int>(magnitude);
+    } else {
+      try {
+        if (n.IsScalar()) return n.as<T>();
+      } catch (const YAML::Exception&) {
+      }
+      fail(where + " = " + describe(n) + " is not " + typeName(T()));
     }
-    fail(where + " = " + describe(n) + " is not " + typeName(T()));
   }
 
   void readEnum(const std::string& key, const std::vector<std::string>& names, int* value) {
+    if (!has(key)) return;
     std::string text;
     read(key, &text);
-    if (text.empty()) return;
     for (size_t i = 0; i < names.size(); ++i) {
       if (names[i] == text) {
         *value = static_cast<int>(i);
@@ -209,6 +227,10 @@ void readRing(const YAML::Node& node, MapReader reader, core::sim::RingSensorCon
   if (reader.has("count") && !reader.has("angles_deg")) ring->angles_deg.clear();
   reader.read("count", &ring->count);
   reader.readList("angles_deg", &ring->angles_deg);
+  if (reader.has("angles_deg") && ring->angles_deg.empty()) {
+    reader.fail(reader.field("angles_deg") + " is empty: give the transducers' directions, or "
+                "count alone for an even ring");
+  }
   reader.read("ring_radius_m", &ring->ring_radius_m);
   reader.read("cone_deg", &ring->cone_deg);
   reader.read("min_range_m", &ring->min_range_m);
@@ -283,6 +305,18 @@ core::sim::WorldChange readChange(MapReader& reader) {
     item.readPoint("translate_m", &move.translate_m);
     item.read("rotate_deg", &move.rotate_deg);
     item.read("remove", &move.remove);
+    const bool rigid = item.has("translate_m") || item.has("rotate_deg");
+    if (move.remove && (rigid || item.has("points"))) {
+      item.fail(item.field("remove") + ": true excludes points, translate_m and rotate_deg");
+    }
+    if (item.has("points") && rigid) {
+      item.fail(item.field("points") + " replaces the outline: it excludes translate_m and "
+                "rotate_deg, which would be ignored");
+    }
+    if (!move.remove && !item.has("points") && !rigid) {
+      item.fail(item.path() + ": '" + move.name + "' changes nothing: give remove: true, points, or "
+                "translate_m and/or rotate_deg");
+    }
     item.finish();
     change.objects.push_back(move);
   }
@@ -355,6 +389,10 @@ World parseWorld(const std::string& yaml_text, const std::string& source) {
 }
 
 World loadWorld(const std::string& path) {
+  std::error_code error;
+  if (std::filesystem::is_directory(path, error)) {
+    throw WorldFileError(path + ": is a directory, not a world file");
+  }
   std::ifstream file(path);
   if (!file) throw WorldFileError(path + ": cannot be opened");
   std::stringstream text;

@@ -17,10 +17,14 @@ std::string describe(const YAML::Node& node) {
   return out.str();
 }
 
-/// A scalar written as a decimal integer (an optional sign, then digits only, no leading zero),
-/// its sign and magnitude. False for anything else, or a magnitude beyond unsigned long long.
-/// yaml-cpp alone would read 0x10 as 16 and 010 as octal 8; the node's parameters come through
-/// rosparam, whose YAML 1.1 reads 010 as octal too: a leading zero is refused, not guessed.
+std::string rangeText(double min, double max) {
+  std::ostringstream out;
+  out << "[" << min << ", " << max << "]";
+  return out.str();
+}
+
+}  // namespace
+
 bool decimalInteger(const YAML::Node& node, bool* negative, unsigned long long* magnitude) {
   if (!node.IsScalar()) return false;
   const std::string& text = node.Scalar();
@@ -39,14 +43,6 @@ bool decimalInteger(const YAML::Node& node, bool* negative, unsigned long long* 
   }
   return true;
 }
-
-std::string rangeText(double min, double max) {
-  std::ostringstream out;
-  out << "[" << min << ", " << max << "]";
-  return out.str();
-}
-
-}  // namespace
 
 YamlSection::YamlSection(const YAML::Node& node, std::string source, std::string path)
     : node_(node), source_(std::move(source)), path_(std::move(path)) {

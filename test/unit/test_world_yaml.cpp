@@ -246,6 +246,105 @@ TEST(WorldYaml, RejectsWrongTypesEnumsSyntaxAndMissingFiles) {
   expectContains(loadError("/nonexistent/world.yaml"), "/nonexistent/world.yaml: cannot be opened");
 }
 
+/// The minimal world with these changes appended (a "changes:" list, indented by two spaces).
+std::string withChanges(const std::string& changes) {
+  return std::string(kMinimalWorld) + "changes:\n" + changes;
+}
+
+/// An infinite noise passed the [0, inf] checks and filled /odom with NaN.
+TEST(WorldYaml, RejectsInfiniteNoise) {
+  const std::string path = writeWorld(
+      "inf_noise.yaml", replaced(kMinimalWorld, "range_noise_m: 0.01", "range_noise_m: .inf"));
+  expectContains(loadError(path), path + ": sensors.laser.range_noise_m = inf is out of range [0, inf)");
+}
+
+/// A hair's ray spacing hung the run; 1e-300 overflowed the ray count and lost most echoes.
+TEST(WorldYaml, RejectsAbsurdSonarRayCounts) {
+  for (const char* spacing : {"1.0e-5", "1.0e-300"}) {
+    const std::string path =
+        writeWorld("rays.yaml", replaced(kMinimalWorld, "sensors:\n",
+                                         std::string("sensors:\n  sonar:\n    ray_spacing_deg: ") +
+                                             spacing + "\n"));
+    expectContains(loadError(path), path + ": sensors.sonar.ray_spacing_deg = ");
+    expectContains(loadError(path), "rays a reading over sensors.sonar.cone_deg");
+  }
+}
+
+TEST(WorldYaml, RejectsZeroLengthWallsAndFlatPolygons) {
+  const std::string wall = writeWorld(
+      "zero_wall.yaml", replaced(kMinimalWorld, "[[0, 0], [6, 0], [6, 4]", "[[0, 0], [6, 0], [6, 0], [6, 4]"));
+  expectContains(loadError(wall), wall + ": objects[0].polyline ('walls')[2] = (6, 0) repeats the "
+                                         "point before it (a wall of zero length)");
+  const std::string flat = writeWorld(
+      "flat.yaml", replaced(kMinimalWorld, "[[2.5, 1.5], [3.5, 1.5], [3.5, 2.5], [2.5, 2.5], [2.5, 1.5]]",
+                            "[[2.5, 1.5], [3.0, 1.5], [3.5, 1.5], [2.5, 1.5]]"));
+  expectContains(loadError(flat), flat + ": objects[1].polygon ('crate') encloses no area");
+}
+
+/// yaml-cpp reads 010 as octal 8 (laps: 010 drove 8 laps) and 0x10 as 16; an empty enum value
+/// fell back to the default.
+TEST(WorldYaml, RejectsOctalIntegersEmptyEnumsEmptyAnglesAndDirectories) {
+  for (const char* laps : {"010", "0x10", "1.5"}) {
+    const std::string path =
+        writeWorld("laps.yaml", replaced(kMinimalWorld, "laps: 1", std::string("laps: ") + laps));
+    expectContains(loadError(path), path + ": laps = " + laps + " is not an integer");
+  }
+  const std::string drive =
+      writeWorld("empty_drive.yaml", replaced(kMinimalWorld, "radius_m: 0.2", "radius_m: 0.2\n  drive: ''"));
+  expectContains(loadError(drive), drive + ": robot.drive = '' is not one of: diff_drive, bicycle");
+  const std::string angles = writeWorld(
+      "angles.yaml", replaced(kMinimalWorld, "sensors:\n", "sensors:\n  infrared:\n    angles_deg: []\n"));
+  expectContains(loadError(angles), angles + ": sensors.infrared.angles_deg is empty");
+  const std::string directory = fs::path(writeWorld("any.yaml", kMinimalWorld)).parent_path().string();
+  expectContains(loadError(directory), directory + ": is a directory, not a world file");
+}
+
+TEST(WorldYaml, RejectsObjectMovesThatIgnoreOrLackFields) {
+  const std::string both = writeWorld("both.yaml", withChanges(
+      "  - at_time_s: 5\n    objects:\n      - {name: crate, points: [[2, 2], [3, 2], [3, 3], [2, 2]], "
+      "translate_m: [0, 0.1]}\n"));
+  expectContains(loadError(both), both + ": changes[0].objects[0].points replaces the outline: it "
+                                         "excludes translate_m and rotate_deg");
+  const std::string removed = writeWorld("remove_and_move.yaml", withChanges(
+      "  - at_time_s: 5\n    objects:\n      - {name: crate, remove: true, rotate_deg: 10}\n"));
+  expectContains(loadError(removed), removed + ": changes[0].objects[0].remove: true excludes");
+  const std::string nothing = writeWorld("nothing.yaml", withChanges(
+      "  - at_time_s: 5\n    objects:\n      - {name: crate}\n"));
+  expectContains(loadError(nothing), nothing + ": changes[0].objects[0]: 'crate' changes nothing");
+}
+
+/// Changes used to be checked one at a time against the world as it starts: a move after a
+/// removal was dropped silently, and moves that add up onto the route were accepted.
+TEST(WorldYaml, ReplaysChangesInTheOrderTheyHappen) {
+  // Listed out of order: the removal at 5 s happens before the move at 10 s.
+  const std::string after_removal = writeWorld("after_removal.yaml", withChanges(
+      "  - at_time_s: 10\n    objects:\n      - {name: crate, translate_m: [0, 0.1]}\n"
+      "  - at_time_s: 5\n    objects:\n      - {name: crate, remove: true}\n"));
+  expectContains(loadError(after_removal),
+                 after_removal + ": changes[0].objects[0]: object 'crate' was removed by "
+                                 "changes[1], which happens before this one");
+  // Two moves of 0.3 m each are fine alone; together they put the crate on the route at y = 3.
+  const std::string one = "    objects:\n      - {name: crate, translate_m: [0, 0.3]}\n";
+  EXPECT_EQ(loadError(writeWorld("one_move.yaml", withChanges("  - at_time_s: 5\n" + one))), "");
+  const std::string adding_up = writeWorld(
+      "adding_up.yaml", withChanges("  - at_time_s: 5\n" + one + "  - at_time_s: 10\n" + one));
+  expectContains(loadError(adding_up),
+                 adding_up + ": after changes[1]: waypoints: the route from waypoints[2] to "
+                             "waypoints[3] crosses object 'crate'");
+  // A landmark post moved onto a waypoint.
+  const std::string post = writeWorld("post.yaml",
+      replaced(withChanges("  - at_time_s: 5\n    landmarks:\n      - {id: 7, x_m: 5, y_m: 3}\n"),
+               "waypoints:", "landmarks:\n  - {id: 7, x_m: 2, y_m: 2.0, radius_m: 0.1}\nwaypoints:"));
+  expectContains(loadError(post), post + ": after changes[0]: waypoints[2] = (5, 3) is inside "
+                                         "landmark 7");
+  // One object changed after a lap and at a time: the order depends on the robot's speed.
+  const std::string mixed = writeWorld("mixed.yaml",
+      replaced(withChanges("  - after_lap: 1\n" + one + "  - at_time_s: 5\n" + one), "laps: 1",
+               "laps: 2"));
+  expectContains(loadError(mixed), mixed + ": changes[1] and changes[0] both change object "
+                                           "'crate', one after a lap and one at a time");
+}
+
 }  // namespace
 }  // namespace io
 }  // namespace rbpf_slam

@@ -59,6 +59,12 @@ class YamlSection {
   std::vector<std::shared_ptr<YamlSection>> children_;
 };
 
+/// A scalar written as a decimal integer (an optional sign, then digits only, no leading zero),
+/// its sign and magnitude. False for anything else, or a magnitude beyond unsigned long long.
+/// yaml-cpp alone would read 0x10 as 16 and 010 as octal 8; the node's parameters come through
+/// rosparam, whose YAML 1.1 reads 010 as octal too: a leading zero is refused, not guessed.
+bool decimalInteger(const YAML::Node& node, bool* negative, unsigned long long* magnitude);
+
 /// Applies "a.b.c=value" overrides (as given with --set) to a YAML tree.
 void applyOverride(YAML::Node* root, const std::string& assignment);
 

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <set>
 #include <sstream>
 #include <stdexcept>
@@ -36,7 +37,10 @@ void checkRange(const std::string& field, double value, double lo, double hi, bo
        ", " + number(hi) + (hi_open || std::isinf(hi) ? ")" : "]"));
 }
 
-void nonNegative(const std::string& field, double value) { checkRange(field, value, 0.0, kInf); }
+/// 0 <= value < inf: an infinite noise or size is as broken as a negative one.
+void nonNegative(const std::string& field, double value) {
+  checkRange(field, value, 0.0, kInf, false, true);
+}
 void positive(const std::string& field, double value) {
   checkRange(field, value, 0.0, kInf, true, true);
 }
@@ -56,6 +60,12 @@ void checkObjectShape(const WorldObject& object, const std::string& field) {
     finitePoint(field + "[" + std::to_string(i) + "]", object.points[i]);
   }
   if (object.points.size() < 2) fail(field + " needs at least 2 points");
+  for (size_t i = 0; i + 1 < object.points.size(); ++i) {
+    if (object.points[i] == object.points[i + 1]) {
+      fail(field + "[" + std::to_string(i + 1) + "] = " + point(object.points[i + 1]) +
+           " repeats the point before it (a wall of zero length)");
+    }
+  }
   if (object.shape == ShapeType::kPolygon) {
     if (!isClosed(object)) {
       fail(field + " is not closed: the first point " + point(object.points.front()) +
@@ -65,6 +75,15 @@ void checkObjectShape(const WorldObject& object, const std::string& field) {
     const size_t distinct =
         object.points.size() - (object.points.front() == object.points.back() ? 1 : 0);
     if (distinct < 3) fail(field + " needs at least 3 distinct points");
+    double twice_area = 0.0;  // shoelace
+    for (size_t i = 0; i < distinct; ++i) {
+      const Eigen::Vector2d& a = object.points[i];
+      const Eigen::Vector2d& b = object.points[(i + 1) % distinct];
+      twice_area += a.x() * b.y() - b.x() * a.y();
+    }
+    if (!(std::abs(twice_area) > 1e-12)) {
+      fail(field + " encloses no area (its points are collinear or fold back on themselves)");
+    }
   }
 }
 
@@ -146,6 +165,15 @@ void checkRing(const RingSensorConfig& ring, const std::string& p, double contro
   nonNegative(p + ".range_noise_m", ring.range_noise_m);
   checkRange(p + ".critical_angle_deg", ring.critical_angle_deg, 0.0, 90.0, true);
   checkRange(p + ".ray_spacing_deg", ring.ray_spacing_deg, 0.0, ring.cone_deg, true);
+  // Every reading casts a ray per spacing over the cone; a hair's spacing made a run hang (and
+  // 1e-300 overflowed the ray count to none).
+  constexpr double kMaxRaysPerCone = 10000.0;
+  if (ring.cone_deg / ring.ray_spacing_deg > kMaxRaysPerCone) {
+    fail(p + ".ray_spacing_deg = " + number(ring.ray_spacing_deg) + " gives " +
+         number(std::ceil(ring.cone_deg / ring.ray_spacing_deg)) + " rays a reading over " +
+         p + ".cone_deg = " + number(ring.cone_deg) + " (at most " + number(kMaxRaysPerCone) +
+         ")");
+  }
 }
 
 void checkRangeBearing(const RangeBearingConfig& sensor, double control_rate_hz) {
@@ -276,10 +304,9 @@ void checkChange(const World& world, const WorldChange& change, const std::strin
     if (index < 0) fail(field + ".name '" + move.name + "' is not an object of the world");
     finitePoint(field + ".translate_m", move.translate_m);
     checkRange(field + ".rotate_deg", move.rotate_deg, -360.0, 360.0);
-    if (move.remove) continue;
-    const WorldObject moved = movedObject(world.objects[index], move);
-    checkObjectShape(moved, field + ".points");
-    checkWaypointClear(world, moved, index, "moved object");
+    for (size_t k = 0; k < move.points.size(); ++k) {
+      finitePoint(field + ".points[" + std::to_string(k) + "]", move.points[k]);
+    }
   }
   std::set<int> ids;
   for (const Landmark& landmark : world.landmarks) ids.insert(landmark.id);
@@ -302,6 +329,97 @@ void checkChange(const World& world, const WorldChange& change, const std::strin
   checkRange(field + ".count_min", random.count_min, 0, pool);
   checkRange(field + ".count_max", random.count_max, random.count_min, pool);
   nonNegative(field + ".sigma_m", random.sigma_m);
+}
+
+/// The order the simulator applies changes in, when it is known before the run: by lap, or by
+/// time. A world that triggers changes both ways must not let the two kinds touch one object or
+/// landmark, whose state would then depend on the robot's speed.
+std::vector<size_t> changeOrder(const World& world) {
+  std::vector<size_t> order(world.changes.size());
+  for (size_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::stable_sort(order.begin(), order.end(), [&world](size_t a, size_t b) {
+    const WorldChange& x = world.changes[a];
+    const WorldChange& y = world.changes[b];
+    const bool x_lap = x.after_lap != 0, y_lap = y.after_lap != 0;
+    if (x_lap != y_lap) return x_lap;  // apart; changeTargets() refuses shared targets
+    return x_lap ? x.after_lap < y.after_lap : x.at_time_s < y.at_time_s;
+  });
+  std::map<std::string, size_t> by_lap, by_time;  // target -> a change that moves it
+  for (size_t i = 0; i < world.changes.size(); ++i) {
+    const WorldChange& change = world.changes[i];
+    auto& mine = change.after_lap != 0 ? by_lap : by_time;
+    const auto& theirs = change.after_lap != 0 ? by_time : by_lap;
+    std::vector<std::string> targets;
+    for (const ObjectMove& move : change.objects) targets.push_back("object '" + move.name + "'");
+    for (const LandmarkMove& move : change.landmarks) {
+      targets.push_back("landmark " + std::to_string(move.id));
+    }
+    for (const std::string& target : targets) {
+      const auto other = theirs.find(target);
+      if (other != theirs.end()) {
+        fail("changes[" + std::to_string(i) + "] and changes[" + std::to_string(other->second) +
+             "] both change " + target + ", one after a lap and one at a time: their order " +
+             "depends on the run; trigger both by lap or both by time");
+      }
+      mine.emplace(target, i);
+    }
+  }
+  return order;
+}
+
+/// Replays the changes in the order they happen on a copy of the world: an object or landmark
+/// removed earlier cannot be moved later, and every state the robot drives through keeps the
+/// route clear (outlines, waypoints, posts), moves adding up.
+void checkChangeSequence(const World& world) {
+  World state = world;
+  std::map<std::string, size_t> removed_objects;
+  std::map<int, size_t> removed_landmarks;
+  for (size_t i : changeOrder(world)) {
+    const WorldChange& change = world.changes[i];
+    const std::string p = "changes[" + std::to_string(i) + "]";
+    for (size_t k = 0; k < change.objects.size(); ++k) {
+      const ObjectMove& move = change.objects[k];
+      const std::string field = p + ".objects[" + std::to_string(k) + "]";
+      const auto removed = removed_objects.find(move.name);
+      if (removed != removed_objects.end()) {
+        fail(field + ": object '" + move.name + "' was removed by changes[" +
+             std::to_string(removed->second) + "], which happens before this one");
+      }
+      auto object = std::find_if(state.objects.begin(), state.objects.end(),
+                                 [&move](const WorldObject& o) { return o.name == move.name; });
+      if (object == state.objects.end()) continue;  // not an object: checkChange names it
+      if (move.remove) {
+        removed_objects.emplace(move.name, i);
+        state.objects.erase(object);
+        continue;
+      }
+      *object = movedObject(*object, move);
+      checkObjectShape(*object, field + (move.points.empty() ? " (moved outline)" : ".points"));
+    }
+    for (size_t k = 0; k < change.landmarks.size(); ++k) {
+      const LandmarkMove& move = change.landmarks[k];
+      const std::string field = p + ".landmarks[" + std::to_string(k) + "]";
+      const auto removed = removed_landmarks.find(move.id);
+      if (removed != removed_landmarks.end()) {
+        fail(field + ": landmark " + std::to_string(move.id) + " was removed by changes[" +
+             std::to_string(removed->second) + "], which happens before this one");
+      }
+      auto landmark = std::find_if(state.landmarks.begin(), state.landmarks.end(),
+                                   [&move](const Landmark& l) { return l.id == move.id; });
+      if (landmark == state.landmarks.end()) continue;
+      if (move.remove) {
+        removed_landmarks.emplace(move.id, i);
+        state.landmarks.erase(landmark);
+      } else {
+        landmark->position = move.position;
+      }
+    }
+    try {
+      checkWaypoints(state);
+    } catch (const std::invalid_argument& error) {
+      fail("after " + p + ": " + error.what());
+    }
+  }
 }
 
 }  // namespace
@@ -410,6 +528,7 @@ void validate(const World& world) {
   for (size_t i = 0; i < world.changes.size(); ++i) {
     checkChange(world, world.changes[i], "changes[" + std::to_string(i) + "]");
   }
+  checkChangeSequence(world);
 }
 
 }  // namespace sim
