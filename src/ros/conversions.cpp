@@ -8,6 +8,8 @@
 #include <cstdio>
 #include <cstring>
 
+#include "rbpf_slam/core/filters/observation.h"
+
 namespace rbpf_slam {
 namespace rosbridge {
 namespace {
@@ -238,6 +240,16 @@ std::vector<Eigen::Vector2d> toBasePoints(const sensor_msgs::PointCloud& msg,
     points.push_back(core::transformPoint(frame_in_base, Eigen::Vector2d(p.x, mirror * p.y)));
   }
   return points;
+}
+
+int countUnusableCovariances(const core::FeatureSet& set) {
+  auto unusable = [](const Eigen::Matrix2d& c) {
+    return !c.isZero(0.0) && !core::finitePositiveDefinite(0.5 * (c + c.transpose()));
+  };
+  int count = 0;
+  for (const core::PointFeature& p : set.points) count += unusable(p.covariance) ? 1 : 0;
+  for (const core::LineFeature& l : set.lines) count += unusable(l.covariance) ? 1 : 0;
+  return count;
 }
 
 core::FeatureSet toFeatureSet(const FeatureArray& msg, const core::Pose2& frame_in_base,

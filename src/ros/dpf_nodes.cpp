@@ -139,7 +139,15 @@ std::vector<core::LandmarkEstimate> landmarksOf(const DpfLocalEstimate& msg) {
   const size_t n = msg.landmark_ids.size();
   if (msg.landmark_means.size() != 2 * n || msg.landmark_covariances.size() != 4 * n ||
       msg.landmark_observations.size() != n) {
-    return out;  // malformed: the master keeps no map from it
+    // Malformed: the master keeps no map from it, and says so.
+    ROS_WARN_STREAM_THROTTLE(5.0, "dpf_master_node: the estimate of local filter "
+                                      << msg.index << " at step " << msg.step << " has "
+                                      << n << " landmark ids but " << msg.landmark_means.size()
+                                      << " means (2 each), " << msg.landmark_covariances.size()
+                                      << " covariance entries (4 each) and "
+                                      << msg.landmark_observations.size()
+                                      << " observation counts: its map is left out");
+    return out;
   }
   for (size_t i = 0; i < n; ++i) {
     core::LandmarkEstimate l;
@@ -277,10 +285,26 @@ DpfLocalNode::DpfLocalNode(ros::NodeHandle nh, ros::NodeHandle private_nh) {
   core::FilterOptions options = config.filter;
   options.variant = "dpf";
   core::validate(options.dpf);
-  if (!private_nh.getParam("index", index_)) {
+  XmlRpc::XmlRpcValue index;
+  if (!private_nh.getParam("index", index)) {
     throw std::invalid_argument("dpf_local_node: ~index (0.." +
                                 std::to_string(options.dpf.local_filters - 1) + ") is required");
   }
+  if (index.getType() != XmlRpc::XmlRpcValue::TypeInt) {
+    // getParam(int) would round 1.6 to 2 and take "1" as missing.
+    std::ostringstream given;
+    if (index.getType() == XmlRpc::XmlRpcValue::TypeDouble) {
+      given << static_cast<double>(index);
+    } else if (index.getType() == XmlRpc::XmlRpcValue::TypeString) {
+      given << "'" << static_cast<std::string>(index) << "'";
+    } else {
+      given << "a value of XmlRpc type " << index.getType();
+    }
+    throw std::invalid_argument("dpf_local_node: ~index = " + given.str() +
+                                " is not an integer (0.." +
+                                std::to_string(options.dpf.local_filters - 1) + ")");
+  }
+  index_ = static_cast<int>(index);
   if (index_ < 0 || index_ >= options.dpf.local_filters) {
     throw std::invalid_argument("dpf_local_node: ~index = " + std::to_string(index_) +
                                 " is out of range [0, " +

@@ -58,8 +58,19 @@ void LandmarkTrackerNode::featuresCallback(const FeatureArray::ConstPtr& msg) {
   int dropped = 0;
   core::FeatureSet features = toFeatureSet(*msg, frame.pose, &dropped, frame.upside_down);
   if (dropped > 0) {
+    diagnostics_.recordDrop("non-finite feature", dropped);
     warnings_.warn("non-finite features", "Dropped " + std::to_string(dropped) +
-                                              " feature(s) with non-finite values");
+                                              " feature(s) with non-finite values from " +
+                                              config_.ros.features_topic);
+  }
+  const int unusable = countUnusableCovariances(features);
+  if (unusable > 0 && config_.filter.measurement.use_feature_covariance) {
+    diagnostics_.recordDrop("feature covariance not positive definite (noise floors used)",
+                            unusable);
+    warnings_.warn("feature covariances",
+                   std::to_string(unusable) + " feature(s) on " + config_.ros.features_topic +
+                       " carry a covariance that is not positive definite (all zero means "
+                       "unset and is fine): the configured measurement noise is used for them");
   }
   // Stamps far behind the last frame: a bag played again or a restarted driver.
   const double jump = config_.session.reset_on_time_jump_back_s;
@@ -80,6 +91,13 @@ void LandmarkTrackerNode::featuresCallback(const FeatureArray::ConstPtr& msg) {
   }
   diagnostics_.recordUpdate(
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+  if (frontend_.lastRejected() > 0) {
+    diagnostics_.recordSkippedFeatures(frontend_.lastRejected());
+    warnings_.warn("features rejected",
+                   "The tracker skipped " + std::to_string(frontend_.lastRejected()) +
+                       " feature(s) of the frame at " + std::to_string(msg->header.stamp.toSec()) +
+                       ": degenerate (e.g. a point at range 0) or of a kind it ignores");
+  }
   std_msgs::Header header;
   header.stamp = msg->header.stamp;
   header.frame_id = o.odom_frame;

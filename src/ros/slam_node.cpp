@@ -7,6 +7,8 @@
 #include <nav_msgs/Path.h>
 #include <visualization_msgs/MarkerArray.h>
 
+#include <Eigen/Eigenvalues>
+
 #include <chrono>
 #include <cmath>
 #include <sstream>
@@ -273,6 +275,15 @@ void SlamNode::featuresCallback(const FeatureArray::ConstPtr& msg) {
     warnThrottled("non-finite features", "Dropped " + std::to_string(dropped) +
                                              " feature(s) with non-finite values from " +
                                              features_input_->topic());
+  }
+  const int unusable = countUnusableCovariances(features);
+  if (unusable > 0 && config_.filter.measurement.use_feature_covariance) {
+    diagnostics_.recordDrop("feature covariance not positive definite (noise floors used)",
+                            unusable);
+    warnThrottled("feature covariances",
+                  std::to_string(unusable) + " feature(s) on " + features_input_->topic() +
+                      " carry a covariance that is not positive definite (all zero means unset "
+                      "and is fine): the configured measurement noise is used for them");
   }
   const auto t0 = std::chrono::steady_clock::now();
   const core::FrameResult result = pipeline_.processFeatures(features, odom_pose);
@@ -586,13 +597,34 @@ void SlamNode::initialPoseCallback(const geometry_msgs::PoseWithCovarianceStampe
   for (int i = 0; i < 3; ++i) {
     for (int j = 0; j < 3; ++j) covariance(i, j) = msg->pose.covariance[index[i] * 6 + index[j]];
   }
-  if (!covariance.allFinite() || covariance.diagonal().minCoeff() <= 0.0) {
-    // rviz sends 0.25 m^2 and 0.0685 rad^2; a zero or broken covariance gets those.
+  if (!pose.allFinite()) {
+    warnThrottled("initialpose", "Ignoring an initialpose whose position or orientation is not "
+                                 "finite");
+    return;
+  }
+  if (!core::poseCovarianceUsable(covariance)) {
+    // rviz sends 0.25 m^2 and 0.0685 rad^2; a zero (unset) or broken covariance gets those.
+    const bool unset = covariance.allFinite() && covariance.isZero(0.0);
+    if (!unset) {
+      std::ostringstream why;
+      why << "initialpose covariance (x, y, yaw rows of pose.covariance) ";
+      if (!covariance.allFinite()) {
+        why << "is not finite";
+      } else {
+        why << "is not symmetric positive semi-definite (smallest eigenvalue "
+            << Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(
+                   0.5 * (covariance + covariance.transpose()), Eigen::EigenvaluesOnly)
+                   .eigenvalues()
+                   .minCoeff()
+            << ")";
+      }
+      warnThrottled("initialpose covariance",
+                    why.str() + "; using rviz's 0.25 m^2, 0.25 m^2, 0.0685 rad^2 instead");
+    }
     covariance = Eigen::Vector3d(0.25, 0.25, 0.0685).asDiagonal();
   }
   if (!pipeline_.session().setPose(pose, covariance)) {
-    warnThrottled("initialpose", "Ignoring an initialpose that is not finite or that the "
-                                 "filter variant cannot take");
+    warnThrottled("initialpose", "Ignoring an initialpose that the filter variant cannot take");
     return;
   }
   ROS_INFO_STREAM("rbpf_slam_node: pose set to (" << pose.x() << ", " << pose.y() << ", "

@@ -46,14 +46,30 @@ SonarFeaturesNode::SonarFeaturesNode(ros::NodeHandle nh, ros::NodeHandle private
 void SonarFeaturesNode::sonarCallback(const sensor_msgs::Range::ConstPtr& msg) {
   const SlamDiagnostics::BusyScope busy(&diagnostics_);
   const double stamp = msg->header.stamp.toSec();
-  if (stamp + config_.session.reset_on_time_jump_back_s < last_stamp_) {
+  if (!(stamp > 0.0)) {
+    // tf reads a zero stamp as "the latest", so it passed the gate; the window would take it as
+    // a clock gone back.
+    drop("zero stamp", "zero stamp " + msg->header.frame_id,
+         "Dropping a sonar reading from " + msg->header.frame_id + " with a zero stamp");
+    return;
+  }
+  // As the session does (slam_session.h): several readings in a row far back are a restarted
+  // clock (a looping bag) and clear the window; one late reading is dropped, the window kept.
+  const double jump = config_.session.reset_on_time_jump_back_s;
+  const bool far_back = jump > 0.0 && stamp + jump < last_stamp_;
+  readings_back_ = far_back ? readings_back_ + 1 : 0;
+  if (far_back && readings_back_ >= config_.session.reset_after_frames_back) {
     warnings_.warn("time jump", "Sonar stamps went back by " +
-                                    std::to_string(last_stamp_ - stamp) +
-                                    " s: clearing the echo window");
+                                    std::to_string(last_stamp_ - stamp) + " s in " +
+                                    std::to_string(readings_back_) +
+                                    " readings in a row: clearing the echo window");
     extractor_.reset();
     diagnostics_.recordReset();
+    readings_back_ = 0;
   } else if (stamp < last_stamp_) {
-    drop("old stamp", "old stamp", "Dropping a sonar reading older than the last one");
+    drop("old stamp", "old stamp " + msg->header.frame_id,
+         "Dropping a sonar reading from " + msg->header.frame_id + " stamped " +
+             std::to_string(last_stamp_ - stamp) + " s before the last one");
     return;
   }
   last_stamp_ = stamp;

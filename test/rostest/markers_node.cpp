@@ -299,6 +299,33 @@ TEST(FeatureConversion, AnUpsideDownFrameMirrorsBearingsAndLines) {
   }
 }
 
+// All zero is unset and fine; a set covariance that is not positive definite is counted (the
+// filters use their noise floors for it, and the nodes say so).
+TEST(FeatureConversion, CountsCovariancesThatAreSetButNotPositiveDefinite) {
+  FeatureArray msg;
+  auto point = [&msg](double c00, double c01, double c11) {
+    PointFeature p;
+    p.range = 2.0;
+    p.bearing = 0.1;
+    p.covariance = {c00, c01, c01, c11};
+    p.id = -1;
+    msg.points.push_back(p);
+  };
+  point(0.0, 0.0, 0.0);     // unset
+  point(0.01, 0.0, 0.001);  // fine
+  point(0.01, 0.1, 0.001);  // indefinite: a positive diagonal alone
+  point(-0.01, 0.0, 0.001);
+  LineFeature l;
+  l.rho = 1.0;
+  l.theta = 0.2;
+  l.covariance = {0.01, 0.0, 0.0, 0.0};  // singular
+  msg.lines.push_back(l);
+  int dropped = 0;
+  const core::FeatureSet set = rosbridge::toFeatureSet(msg, core::Pose2::Zero(), &dropped);
+  EXPECT_EQ(dropped, 0);
+  EXPECT_EQ(rosbridge::countUnusableCovariances(set), 3);
+}
+
 TEST(FeatureConversion, AnUpsideDownCloudFrameMirrorsItsPoints) {
   const geometry_msgs::Transform t = mountRpy(M_PI, 0.0, 0.5);
   const auto mount = rosbridge::toSensorMount(t);

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "rbpf_slam/core/features/laser_line_extractor.h"
+#include "rbpf_slam/core/features/scan_matcher.h"
 
 namespace rbpf_slam {
 namespace core {
@@ -273,6 +274,51 @@ TEST(LaserLineExtractorTest, EmptyAndInvalidScansGiveNoFeatures) {
   RangeScan single = roomScan();
   single.ranges.resize(1);
   EXPECT_TRUE(extractor.extract(single).lines.empty());
+}
+
+// Beams that all hit one spot (a zero angle increment) once fitted as a line of arbitrary
+// direction with a covariance of 1e10 (the raw sums' rounding residue read as spread).
+TEST(LaserLineExtractorTest, PointsAtOneSpotGiveNoLine) {
+  LaserExtractorOptions options;
+  options.min_line_length_m = 0.0;
+  for (const std::string method : {"incremental", "split_and_merge"}) {
+    options.method = method;
+    const LaserLineExtractor extractor{options};
+    RangeScan scan;
+    scan.angle_min = 0.7;
+    scan.angle_increment = 0.0;
+    scan.range_max = 10.0;
+    scan.ranges.assign(20, 3.3f);
+    EXPECT_TRUE(extractor.extract(scan).lines.empty()) << method;
+  }
+  LineMoments same;
+  for (int i = 0; i < 20; ++i) same.add(Eigen::Vector2d(3.3 * std::cos(0.7), 3.3 * std::sin(0.7)));
+  Eigen::Vector2d normal;
+  double offset = 0.0;
+  EXPECT_FALSE(same.normal(&normal, &offset));
+}
+
+// wrapAngle promises [-pi, pi): an angle just below -pi rounded up to +pi.
+TEST(LaserLineExtractorTest, WrapAngleNeverReturnsPlusPi) {
+  for (const double a : {std::nextafter(-M_PI, -10.0), -M_PI, M_PI, 3.0 * M_PI,
+                         std::nextafter(M_PI, 10.0), -3.0 * M_PI}) {
+    const double w = wrapAngle(a);
+    EXPECT_GE(w, -M_PI) << a;
+    EXPECT_LT(w, M_PI) << a;
+  }
+  double rho = 2.0, theta = std::nextafter(-M_PI, -10.0);
+  normalizeLine(rho, theta);
+  EXPECT_LT(theta, M_PI);
+}
+
+// A mount a world away is a broken transform: no points for the matcher (its grid indices
+// overflowed), as the line extractor already refused.
+TEST(LaserLineExtractorTest, AnAbsurdMountGivesNoPoints) {
+  RangeScan scan = roomScan();
+  ASSERT_FALSE(scanPointsInBase(scan, 30.0).empty());
+  scan.sensor_pose = Pose2(1e300, 0.0, 0.0);
+  EXPECT_TRUE(scanPointsInBase(scan, 30.0).empty());
+  EXPECT_TRUE(LaserLineExtractor{LaserExtractorOptions()}.extract(scan).empty());
 }
 
 TEST(LaserLineExtractorTest, SensorPoseGivesBaseFrameFeatures) {

@@ -247,6 +247,27 @@ TEST(Localization, ResetPoseRejectsBrokenInput) {
   for (const auto& p : filter.particles()) EXPECT_LT((p.pose - Pose2(1, 2, 3)).norm(), 1e-4);
 }
 
+// A positive diagonal is not enough: xx = yy = 0.25 with xy = 1 is indefinite. Before the first
+// frame the session only stores the pose, so it must check the covariance itself (the filter's
+// refusal at the first frame used to be ignored).
+TEST(Localization, SessionRefusesACovarianceThatIsNotPositiveSemiDefinite) {
+  Eigen::Matrix3d indefinite = Eigen::Vector3d(0.25, 0.25, 0.0685).asDiagonal();
+  indefinite(0, 1) = indefinite(1, 0) = 1.0;
+  Eigen::Matrix3d asymmetric = Eigen::Vector3d(0.25, 0.25, 0.0685).asDiagonal();
+  asymmetric(0, 1) = 0.1;
+  EXPECT_FALSE(core::poseCovarianceUsable(indefinite));
+  EXPECT_FALSE(core::poseCovarianceUsable(asymmetric));
+  EXPECT_TRUE(core::poseCovarianceUsable(Eigen::Matrix3d::Zero()));
+  EXPECT_TRUE(core::poseCovarianceUsable(Eigen::Vector3d(0.25, 0.25, 0.0).asDiagonal()));
+  core::SlamSession session(std::make_unique<core::FastSlam2>(pointFilterOptions()),
+                            core::SessionOptions());
+  EXPECT_FALSE(session.setPose(Pose2(1, 2, 0), indefinite));  // before the first frame
+  session.process(1.0, Pose2::Zero(), core::FeatureSet());
+  EXPECT_LT(session.filter().estimate().mean.head<2>().norm(), 0.1);  // at the origin, not (1, 2)
+  EXPECT_FALSE(session.setPose(Pose2(1, 2, 0), indefinite));  // after it
+  EXPECT_TRUE(session.setPose(Pose2(1, 2, 0), Eigen::Vector3d(0.25, 0.25, 0.0685).asDiagonal()));
+}
+
 TEST(Localization, SessionStartsAtTheGivenPoseOnThePriorMap) {
   core::SlamSession session(std::make_unique<core::FastSlam2>(pointFilterOptions()),
                             core::SessionOptions());

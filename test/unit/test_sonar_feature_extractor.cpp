@@ -75,6 +75,24 @@ TEST(SonarFeatureExtractor, RejectsBadAndEmptyReadings) {
   EXPECT_TRUE(none.points.empty());
 }
 
+// With no maximum range configured or given, one echo at 3 km sized the vote grids by its
+// range (17 GB; at 1e5 m std::bad_alloc): echoes beyond 100 m are broken values, not kept.
+TEST(SonarFeatureExtractor, AnEchoBeyondAnySonarsReachIsNotKept) {
+  SonarExtractorOptions options;
+  options.max_range_m = 0.0;
+  SonarFeatureExtractor extractor{options};
+  const Pose2 mount(0.2, 0.0, 0.0);
+  ConeReading far = reading(3000.0, mount);
+  far.max_range = std::numeric_limits<double>::infinity();
+  ConeReading near = reading(2.0, mount);
+  near.max_range = std::numeric_limits<double>::infinity();
+  EXPECT_EQ(extractor.addReadings({far, near}, Pose2::Zero(), 1.0), 1);
+  EXPECT_EQ(extractor.stats().invalid, 1);
+  ConeReading far_mount = reading(2.0, Pose2(5000.0, 0.0, 0.0));
+  EXPECT_EQ(extractor.addReadings({far_mount}, Pose2::Zero(), 1.1), 0);
+  EXPECT_EQ(extractor.stats().invalid, 2);
+}
+
 TEST(SonarFeatureExtractor, StandingStillGivesNoFeatureHowEverManyEchoes) {
   // Forty identical echoes from one pose: the reflector could be anywhere on the arc.
   SonarFeatureExtractor extractor{SonarExtractorOptions()};

@@ -126,5 +126,49 @@ TEST(SonarSlam, TheRestOfARingAtTheSameStampIsNotRejected) {
             core::FrameResult::kUpdated);
 }
 
+// One zero-stamped or stale reading (a driver's hiccup) used to clear the echo window before the
+// session rejected its frame: the window must survive it. Several readings in a row far back
+// are a restarted clock: the map starts over at the new clock and the window goes.
+TEST(SonarSlam, AStaleReadingKeepsTheWindowARestartedClockClearsIt) {
+  const io::SlamConfig config =
+      io::loadSlamConfig(std::string(RBPF_SOURCE_DIR) + "/config/sonar_fastslam2.yaml");
+  core::SlamPipeline pipeline(config.pipeline());
+  core::ConeReading reading;
+  reading.range = 2.0;
+  reading.max_range = 5.0;
+  reading.field_of_view = 0.5;
+  ASSERT_EQ(pipeline.processSonar({reading}, core::Pose2::Zero(), 100.0),
+            core::FrameResult::kFirstFrame);
+  for (int i = 1; i < 8; ++i) {
+    reading.sensor_pose = core::Pose2(0.0, 0.0, 0.2 * i);
+    pipeline.processSonar({reading}, core::Pose2(0.01 * i, 0, 0), 100.0 + 0.1 * i);
+  }
+  const size_t window = pipeline.sonarExtractor().echoes().size();
+  ASSERT_GE(window, 2u);
+  EXPECT_EQ(pipeline.processSonar({reading}, core::Pose2(0.08, 0, 0), 0.0),
+            core::FrameResult::kRejectedStamp);
+  EXPECT_EQ(pipeline.processSonar({reading}, core::Pose2(0.08, 0, 0), 50.0),
+            core::FrameResult::kRejectedStamp);
+  EXPECT_EQ(pipeline.sonarExtractor().echoes().size(), window);
+  EXPECT_EQ(pipeline.sonarExtractor().stats().clock_jumps, 0);
+  // A reading a little out of order (transducers stamped apart) still joins the window.
+  pipeline.processSonar({reading}, core::Pose2(0.08, 0, 0), 100.65);
+  EXPECT_EQ(pipeline.sonarExtractor().echoes().size(), window + 1);
+  // A bag played again: stamps far back frame after frame start a new map (the stale reading at
+  // 50 s counts as the first of them: the session saw no frame since).
+  const long resets = pipeline.session().resets();
+  core::FrameResult last = core::FrameResult::kRejectedStamp;
+  for (int i = 0; i < config.session.reset_after_frames_back && last != core::FrameResult::kReset;
+       ++i) {
+    EXPECT_EQ(pipeline.sonarExtractor().echoes().size(), window + 1) << "reading " << i;
+    last = pipeline.processSonar({reading}, core::Pose2::Zero(), 1.0 + 0.1 * i);
+  }
+  EXPECT_EQ(last, core::FrameResult::kReset);
+  EXPECT_EQ(pipeline.session().resets(), resets + 1);
+  EXPECT_EQ(pipeline.sonarExtractor().echoes().size(), 1u);  // the new clock's reading only
+  EXPECT_EQ(pipeline.processSonar({reading}, core::Pose2(0.5, 0, 0), 2.0),
+            core::FrameResult::kUpdated);
+}
+
 }  // namespace
 }  // namespace rbpf_slam

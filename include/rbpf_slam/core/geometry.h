@@ -14,8 +14,9 @@ using Pose2 = Eigen::Vector3d;
 inline double wrapAngle(double angle) {
   if (!std::isfinite(angle)) return angle;
   angle = std::fmod(angle + M_PI, 2.0 * M_PI);
-  if (angle < 0.0) angle += 2.0 * M_PI;
-  return angle - M_PI;
+  if (angle < 0.0) angle += 2.0 * M_PI;  // may round up to 2 pi (an angle just below -pi)
+  const double wrapped = angle - M_PI;
+  return wrapped >= M_PI ? -M_PI : wrapped;
 }
 
 /// a (+) b: b expressed in a's frame, returned in a's parent frame.

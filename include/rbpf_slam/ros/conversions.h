@@ -88,6 +88,10 @@ bool toPointCloud(const sensor_msgs::PointCloud2& msg, sensor_msgs::PointCloud* 
 /// points the other way in the base frame, so bearings and line normals are mirrored first.
 core::FeatureSet toFeatureSet(const FeatureArray& msg, const core::Pose2& frame_in_base,
                               int* dropped, bool upside_down = false);
+/// Features of set whose covariance is set (not all zero) but not positive definite: the
+/// filters use their configured noise for those instead (observationNoise), which a driver
+/// publishing broken covariances should hear about.
+int countUnusableCovariances(const core::FeatureSet& set);
 FeatureArray toMsg(const core::FeatureSet& features, const std_msgs::Header& header);
 
 /// A core grid as nav_msgs/OccupancyGrid (same cell order and values) in frame at stamp.

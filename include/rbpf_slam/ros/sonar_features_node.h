@@ -52,6 +52,7 @@ class SonarFeaturesNode {
   SlamDiagnostics diagnostics_;
   ThrottledWarnings warnings_{"sonar_features"};
   double last_stamp_ = 0.0;
+  int readings_back_ = 0;  // readings in a row stamped far before last_stamp_
   long published_ = 0;
 };
 

@@ -11,6 +11,8 @@
 #include <sstream>
 #include <stdexcept>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "rbpf_slam/core/require_range.h"
 
@@ -58,11 +60,8 @@ class Extraction {
     FeatureSet features;
     features.stamp = scan_.stamp;
     const int n = static_cast<int>(scan_.ranges.size());
-    // A sensor mounted more than a kilometre from the base is a broken transform, not a robot.
-    constexpr double kMaxMountDistanceM = 1000.0;
     if (n == 0 || !std::isfinite(scan_.angle_min) || !std::isfinite(scan_.angle_increment) ||
-        !scan_.sensor_pose.allFinite() ||
-        scan_.sensor_pose.head<2>().norm() > kMaxMountDistanceM) {
+        !plausibleSensorMount(scan_.sensor_pose)) {
       return features;
     }
     if (!computePoints()) return features;
@@ -135,7 +134,7 @@ class Extraction {
       if (incremental) {
         growIncremental(i, last);
       } else {
-        splitRecursive(i, last);
+        splitAtFarthestPoints(i, last);
       }
       i = last + 1;
     }
@@ -166,33 +165,40 @@ class Extraction {
   }
 
   /// Split step of split-and-merge: split [first, last] at the point farthest from the chord
-  /// while that distance exceeds split_distance_m. Leaves share their split points.
-  void splitRecursive(int first, int last) {
-    int split = -1;
-    if (last - first >= 2) {
-      const Eigen::Vector2d& a = pts_.point[first];
-      const Eigen::Vector2d chord = pts_.point[last] - a;
-      const double length = chord.norm();
-      double best = options_.split_distance_m;
-      for (int k = first + 1; k < last; ++k) {
-        const Eigen::Vector2d d = pts_.point[k] - a;
-        const double dist =
-            length > 0.0 ? std::abs(chord.x() * d.y() - chord.y() * d.x()) / length : d.norm();
-        if (dist > best) {
-          best = dist;
-          split = k;
+  /// while that distance exceeds split_distance_m. Leaves share their split points and come
+  /// out in scan order. An explicit stack, not recursion: a sawtooth wall peels one point off
+  /// per split, and a dense scan (200k beams) overflowed the call stack.
+  void splitAtFarthestPoints(int first, int last) {
+    std::vector<std::pair<int, int>> pending{{first, last}};
+    while (!pending.empty()) {
+      const auto [a_index, b_index] = pending.back();
+      pending.pop_back();
+      int split = -1;
+      if (b_index - a_index >= 2) {
+        const Eigen::Vector2d& a = pts_.point[a_index];
+        const Eigen::Vector2d chord = pts_.point[b_index] - a;
+        const double length = chord.norm();
+        double best = options_.split_distance_m;
+        for (int k = a_index + 1; k < b_index; ++k) {
+          const Eigen::Vector2d d = pts_.point[k] - a;
+          const double dist =
+              length > 0.0 ? std::abs(chord.x() * d.y() - chord.y() * d.x()) / length : d.norm();
+          if (dist > best) {
+            best = dist;
+            split = k;
+          }
         }
       }
+      if (split < 0) {
+        Segment seg;
+        seg.first = a_index;
+        seg.last = b_index;
+        segments_.push_back(seg);
+        continue;
+      }
+      pending.emplace_back(split, b_index);  // the right half after the left one
+      pending.emplace_back(a_index, split);
     }
-    if (split < 0) {
-      Segment seg;
-      seg.first = first;
-      seg.last = last;
-      segments_.push_back(seg);
-      return;
-    }
-    splitRecursive(first, split);
-    splitRecursive(split, last);
   }
 
   /// Gives each shared split point to the earlier leaf (the boundary pass may move it),

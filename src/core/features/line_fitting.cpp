@@ -45,7 +45,10 @@ double LineMoments::spread() const { return scatterOf(*this).lambda_max; }
 bool LineMoments::normal(Eigen::Vector2d* unit_normal, double* offset) const {
   if (n < 2.0) return false;
   const Scatter s = scatterOf(*this);
-  if (!(s.lambda_max > 0.0)) return false;
+  // The scatter comes from raw sums: identical points leave a rounding residue of about
+  // 1e-16 of them, which used to fit an arbitrary direction with a singular covariance of
+  // 1e10 (var_theta = sigma^2 / lambda_max). No spread beyond that residue: no line.
+  if (!(s.lambda_max > 1e-10 * (sxx + syy))) return false;
   // Eigenvector of lambda_min: rows of (S - lambda_min I) are orthogonal to it, so the
   // normal is perpendicular to the larger row; take the better-conditioned candidate.
   const Eigen::Vector2d v1(s.b, s.lambda_min - s.a);

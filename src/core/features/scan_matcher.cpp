@@ -137,6 +137,7 @@ void validate(const ScanMatcherOptions& o) {
 
 std::vector<Eigen::Vector2d> scanPointsInBase(const RangeScan& scan, double max_range_m) {
   std::vector<Eigen::Vector2d> points;
+  if (!plausibleSensorMount(scan.sensor_pose)) return points;  // as the line extractor does
   points.reserve(scan.ranges.size());
   const double upper = std::isfinite(scan.range_max) && scan.range_max > 0.0
                            ? std::min(scan.range_max, max_range_m)

@@ -21,6 +21,10 @@ constexpr double kClockJumpBackS = 1.0;   // stamps going back more than this cl
 constexpr size_t kMaxTransducers = 128;   // distinct mounting poses kept apart
 constexpr double kMaxOdomCoordinateM = 1e6;  // beyond: a broken odometry pose, readings dropped
 constexpr double kMaxEchoDistanceM = 100.0;  // echoes taken farther away are not extracted from
+// No sonar or infrared sensor reaches this far; a longer range is a broken driver value. With
+// no maximum range configured or given, one such echo sized the vote grids by its range (3 km:
+// 17 GB; 1e5 m: std::bad_alloc).
+constexpr double kMaxEchoRangeM = 100.0;
 
 }  // namespace
 
@@ -111,6 +115,10 @@ int SonarFeatureExtractor::transducerIndex(const Pose2& mount) {
   return static_cast<int>(mounts_.size()) - 1;
 }
 
+bool SonarFeatureExtractor::wouldClearWindow(double stamp) const {
+  return !echoes_.empty() && stamp < echoes_.back().stamp - kClockJumpBackS;
+}
+
 int SonarFeatureExtractor::addReadings(const std::vector<ConeReading>& readings,
                                        const Pose2& odom_pose, double stamp) {
   stats_.readings += static_cast<long>(readings.size());
@@ -119,7 +127,7 @@ int SonarFeatureExtractor::addReadings(const std::vector<ConeReading>& readings,
     stats_.invalid += static_cast<long>(readings.size());
     return 0;
   }
-  if (!echoes_.empty() && stamp < echoes_.back().stamp - kClockJumpBackS) {
+  if (wouldClearWindow(stamp)) {
     clearWindow();
     ++stats_.clock_jumps;
   }
@@ -130,7 +138,8 @@ int SonarFeatureExtractor::addReadings(const std::vector<ConeReading>& readings,
   for (const ConeReading& reading : readings) {
     const double cone = options_.cone_rad > 0.0 ? options_.cone_rad : reading.field_of_view;
     if (!std::isfinite(reading.range) || !reading.sensor_pose.allFinite() ||
-        !(cone > 0.0 && cone < M_PI)) {
+        !(cone > 0.0 && cone < M_PI) || reading.range > kMaxEchoRangeM ||
+        reading.sensor_pose.head<2>().norm() > kMaxEchoRangeM) {
       ++stats_.invalid;
       continue;
     }

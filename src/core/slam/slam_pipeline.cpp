@@ -1,6 +1,7 @@
 #include "rbpf_slam/core/slam/slam_pipeline.h"
 
 #include <memory>
+#include <optional>
 #include <utility>
 
 namespace rbpf_slam {
@@ -103,6 +104,23 @@ void SlamPipeline::addToSubmap(std::vector<Eigen::Vector2d> points, const Pose2&
 
 FrameResult SlamPipeline::processSonar(const std::vector<ConeReading>& readings,
                                        const Pose2& odom_pose, double stamp) {
+  // A reading the session will reject must not reach the window first: the extractor clears it
+  // on any stamp a second back, so one zero-stamped or stale reading used to wipe it. (Readings
+  // a little out of order, from transducers stamped apart, still join the window.)
+  if (!std::isfinite(stamp) || stamp <= 0.0) return FrameResult::kRejectedStamp;
+  std::optional<FrameResult> restarted;
+  if (!session_.trajectory().empty() && stamp < session_.lastStamp() &&
+      sonar_extractor_.wouldClearWindow(stamp)) {
+    // The session rejects one stale frame, and starts a new map (at this frame) only after
+    // several in a row far back (a restarted clock); then the window goes too.
+    FeatureSet none;
+    none.stamp = stamp;
+    const FrameResult back = session_.process(stamp, odom_pose, none);
+    if (!usedFrame(back)) return back;
+    restarted = back;
+    sonar_extractor_.reset();
+    pending_cones_.clear();  // the old run's
+  }
   const long clock_jumps = sonar_extractor_.stats().clock_jumps;
   sonar_extractor_.addReadings(readings, odom_pose, stamp);
   // The extractor cleared its window for stamps that went back (a restarted clock, a second
@@ -116,6 +134,7 @@ FrameResult SlamPipeline::processSonar(const std::vector<ConeReading>& readings,
                            pending_cones_.end() - static_cast<long>(kMaxPendingCones));
     }
   }
+  if (restarted) return *restarted;  // this reading waits in the window for the next frame
   FrameResult result;
   if (session_.trajectory().empty()) {
     // The first frame anchors the map; the window has nothing to extract from yet.

@@ -1,5 +1,7 @@
 #include "rbpf_slam/core/slam/slam_session.h"
 
+#include <Eigen/Eigenvalues>
+
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -38,8 +40,19 @@ bool SlamSession::setMapping(bool enabled) {
   return true;
 }
 
+bool poseCovarianceUsable(const Eigen::Matrix3d& covariance) {
+  if (!covariance.allFinite()) return false;
+  const double scale = covariance.cwiseAbs().maxCoeff();
+  if (scale == 0.0) return true;  // an exact pose
+  if (((covariance - covariance.transpose()).cwiseAbs().maxCoeff() > 1e-9 * scale)) return false;
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(covariance, Eigen::EigenvaluesOnly);
+  return solver.eigenvalues().minCoeff() >= -1e-12 * scale;
+}
+
 bool SlamSession::setPose(const Pose2& pose, const Eigen::Matrix3d& covariance) {
-  if (!pose.allFinite() || !covariance.allFinite()) return false;
+  // Checked here, not only by the filter: before the first frame the pose is only stored, and a
+  // covariance the filter refuses then would be dropped without a word at that frame.
+  if (!pose.allFinite() || !poseCovarianceUsable(covariance)) return false;
   if (!has_previous_) {
     start_pose_.emplace(pose, covariance);
     return true;

@@ -29,6 +29,7 @@ void TrackerFrontend::reset() {
   anchor_ = last_odom_ = Pose2::Zero();
   last_stamp_ = 0.0;
   step_ = 0;
+  last_rejected_ = 0;
 }
 
 bool TrackerFrontend::process(const FeatureSet& features, const Pose2& odom_pose,
@@ -52,8 +53,9 @@ bool TrackerFrontend::process(const FeatureSet& features, const Pose2& odom_pose
   }
   last_odom_ = odom_pose;
   last_stamp_ = features.stamp;
-  int rejected = 0;
-  const std::vector<Observation> prepared = prepareObservations(features, options_, &rejected);
+  last_rejected_ = 0;
+  const std::vector<Observation> prepared =
+      prepareObservations(features, options_, &last_rejected_);
   const std::vector<TrackerObservation> observations = toTrackerObservations(prepared);
   // The increment's covariance in the previous base frame (the motion model's, from zero).
   *event = tracker_.update(++step_, motion.delta,

@@ -38,6 +38,13 @@ struct RangeScan {
   Pose2 sensor_pose = Pose2::Zero();  // sensor in base frame
 };
 
+/// False for a sensor pose in the base frame that is not finite or more than a kilometre from
+/// the base: a broken transform, not a robot (its points would overflow the grids' indices).
+inline bool plausibleSensorMount(const Pose2& sensor_pose) {
+  constexpr double kMaxMountDistanceM = 1000.0;
+  return sensor_pose.allFinite() && sensor_pose.head<2>().norm() <= kMaxMountDistanceM;
+}
+
 /// One cone-sensor reading (sonar, infrared), with the transducer pose in the base frame.
 struct ConeReading {
   double stamp = 0.0;

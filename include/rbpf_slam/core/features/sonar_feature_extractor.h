@@ -75,7 +75,7 @@ struct SonarExtractorStats {
   long echoes = 0;     // accepted into the window
   long no_echo = 0;    // at or beyond the maximum range
   long too_close = 0;  // below the minimum range
-  long invalid = 0;    // NaN / inf range, bad cone or mount
+  long invalid = 0;    // NaN / inf range or over 100 m, bad cone or mount (over 100 m off)
   long isolated = 0;   // rejected as cross-talk (last extraction)
   long decimated = 0;  // skipped by min_echo_spacing_m
   long extractions = 0;
@@ -104,6 +104,9 @@ class SonarFeatureExtractor {
   /// Adds readings taken with the base at odom_pose (odometry frame); each reading's
   /// sensor_pose is its transducer in the base frame. Returns the number of echoes kept.
   int addReadings(const std::vector<ConeReading>& readings, const Pose2& odom_pose, double stamp);
+  /// True when a reading at stamp would clear the window: it is more than a second before the
+  /// newest echo (a restarted clock, or a stale reading).
+  bool wouldClearWindow(double stamp) const;
   /// True when the base moved or turned enough since the last extraction (or never extracted).
   bool extractionDue(const Pose2& odom_pose) const;
   /// Lines and points from the echoes in the window, in the base frame at odom_pose.

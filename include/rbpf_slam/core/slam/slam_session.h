@@ -64,6 +64,11 @@ struct SessionFrame {
   FeatureSet features;   // points and lines only
 };
 
+/// A pose covariance (x, y, yaw) that can seed particles: finite, symmetric and positive
+/// semi-definite (zero: an exact pose). A positive diagonal alone is not enough: xx = yy = 0.25
+/// with xy = 1 has a negative eigenvalue, and samplers then jitter or drop it silently.
+bool poseCovarianceUsable(const Eigen::Matrix3d& covariance);
+
 class SlamSession {
  public:
   SlamSession(std::unique_ptr<SlamFilter> filter, const SessionOptions& options);
@@ -91,6 +96,8 @@ class SlamSession {
   bool mapping() const { return mapping_; }
   /// Puts the robot at pose (map frame) with this uncertainty (rviz's 2D Pose Estimate).
   /// Before the first frame, the first frame starts there instead of at the map origin.
+  /// False (nothing changed) for a non-finite pose, a covariance that poseCovarianceUsable()
+  /// refuses, or one the filter variant cannot take.
   bool setPose(const Pose2& pose, const Eigen::Matrix3d& covariance);
 
   /// map -> odom so that map -> base equals the filter's estimate at the last update.

@@ -41,6 +41,9 @@ class TrackerFrontend {
   Pose2 pose() const;
   int steps() const { return step_; }
   double lastStamp() const { return last_stamp_; }
+  /// Features of the last processed frame that could not be used (degenerate, e.g. a point at
+  /// range 0, or of a kind the options turn off).
+  int lastRejected() const { return last_rejected_; }
 
  private:
   const FilterOptions options_;
@@ -51,6 +54,7 @@ class TrackerFrontend {
   Pose2 last_odom_ = Pose2::Zero();  // odometry pose of the last frame
   double last_stamp_ = 0.0;
   int step_ = 0;
+  int last_rejected_ = 0;
 };
 
 }  // namespace core
