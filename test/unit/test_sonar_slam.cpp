@@ -102,16 +102,26 @@ TEST(SonarSlam, BadReadingsAreSkippedNotFatal) {
   EXPECT_EQ(pipeline.sonarExtractor().stats().readings, 0);
 }
 
+/// config/sonar_fastslam2.yaml as shipped.
+io::SlamConfig shippedSonarConfig() {
+  return io::loadSlamConfig(std::string(RBPF_SOURCE_DIR) + "/config/sonar_fastslam2.yaml");
+}
+
+/// An echo at range from a 0.5 rad cone of 5 m reach, mounted at the base.
+core::ConeReading echoAt(double range) {
+  core::ConeReading reading;
+  reading.range = range;
+  reading.max_range = 5.0;
+  reading.field_of_view = 0.5;
+  return reading;
+}
+
 // A ring arrives as one message per transducer with one stamp: the readings after the one that
 // anchored (or updated) the map join the window; none is a rejected frame.
 TEST(SonarSlam, TheRestOfARingAtTheSameStampIsNotRejected) {
-  const io::SlamConfig config =
-      io::loadSlamConfig(std::string(RBPF_SOURCE_DIR) + "/config/sonar_fastslam2.yaml");
+  const io::SlamConfig config = shippedSonarConfig();
   core::SlamPipeline pipeline(config.pipeline());
-  core::ConeReading reading;
-  reading.range = 2.0;
-  reading.max_range = 5.0;
-  reading.field_of_view = 0.5;
+  core::ConeReading reading = echoAt(2.0);
   EXPECT_EQ(pipeline.processSonar({reading}, core::Pose2::Zero(), 1.0),
             core::FrameResult::kFirstFrame);
   for (int i = 1; i < 8; ++i) {
@@ -130,13 +140,9 @@ TEST(SonarSlam, TheRestOfARingAtTheSameStampIsNotRejected) {
 // session rejected its frame: the window must survive it. Several readings in a row far back
 // are a restarted clock: the map starts over at the new clock and the window goes.
 TEST(SonarSlam, AStaleReadingKeepsTheWindowARestartedClockClearsIt) {
-  const io::SlamConfig config =
-      io::loadSlamConfig(std::string(RBPF_SOURCE_DIR) + "/config/sonar_fastslam2.yaml");
+  const io::SlamConfig config = shippedSonarConfig();
   core::SlamPipeline pipeline(config.pipeline());
-  core::ConeReading reading;
-  reading.range = 2.0;
-  reading.max_range = 5.0;
-  reading.field_of_view = 0.5;
+  core::ConeReading reading = echoAt(2.0);
   ASSERT_EQ(pipeline.processSonar({reading}, core::Pose2::Zero(), 100.0),
             core::FrameResult::kFirstFrame);
   for (int i = 1; i < 8; ++i) {
