@@ -1,5 +1,6 @@
 #include "rbpf_slam/ros/param_loader.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <set>
@@ -41,11 +42,34 @@ std::string stringParam(const ros::NodeHandle& private_nh, const char* key,
   return static_cast<std::string>(value);
 }
 
-/// The first key repeated in one mapping of `node` (yaml-cpp keeps both copies), with where.
-bool findRepeatedKey(const YAML::Node& node, const std::string& where, std::string* found) {
+/// True for a plain scalar that rosparam's YAML 1.1 reads as an integer in another base (010 is
+/// octal 8, 0x10 and 0b10 hex and binary), which the offline loader refuses: the node would
+/// otherwise run with another number than offline_slam on the same file.
+bool nonDecimalInteger(const YAML::Node& node) {
+  if (!node.IsScalar() || node.Tag() != "?") return false;  // quoted: a string
+  const std::string& t = node.Scalar();
+  std::size_t i = (!t.empty() && (t[0] == '+' || t[0] == '-')) ? 1 : 0;
+  if (t.size() < i + 2 || t[i] != '0') return false;
+  const char next = t[i + 1];
+  if (next == 'x' || next == 'X' || next == 'b' || next == 'B') return true;
+  return std::all_of(t.begin() + static_cast<long>(i), t.end(),
+                     [](char c) { return c >= '0' && c <= '9'; });
+}
+
+/// The first key repeated in one mapping of `node` (yaml-cpp keeps both copies), or the first
+/// integer written in another base than decimal, with where.
+bool findRepeatedKeyOrNonDecimal(const YAML::Node& node, const std::string& where,
+                                 std::string* found) {
+  if (nonDecimalInteger(node)) {
+    *found = (where.empty() ? std::string("the top level") : where) + " = " + node.Scalar() +
+             " is not a decimal integer (rosparam would read it as octal, hex or binary; "
+             "offline_slam refuses it): write it without the leading zero or prefix";
+    return true;
+  }
   if (node.IsSequence()) {
     for (std::size_t i = 0; i < node.size(); ++i) {
-      if (findRepeatedKey(node[i], where + "[" + std::to_string(i) + "]", found)) return true;
+      const std::string item = where + "[" + std::to_string(i) + "]";
+      if (findRepeatedKeyOrNonDecimal(node[i], item, found)) return true;
     }
   }
   if (!node.IsMap()) return false;
@@ -57,14 +81,16 @@ bool findRepeatedKey(const YAML::Node& node, const std::string& where, std::stri
                (where.empty() ? std::string("at the top level") : "in " + where);
       return true;
     }
-    if (findRepeatedKey(item.second, where.empty() ? key : where + "." + key, found)) return true;
+    const std::string inner = where.empty() ? key : where + "." + key;
+    if (findRepeatedKeyOrNonDecimal(item.second, inner, found)) return true;
   }
   return false;
 }
 
 /// io::ConfigError "SOURCE: key 'K' appears more than once in SECTION" for the first key
-/// repeated in one mapping of the YAML `text` (or "SOURCE: not valid YAML: ...").
-void requireNoRepeatedKey(const std::string& text, const std::string& source) {
+/// repeated in one mapping of the YAML `text`, "SOURCE: KEY = 010 is not a decimal integer ..."
+/// for the first integer in another base (or "SOURCE: not valid YAML: ...").
+void requireDistinctKeysAndDecimalIntegers(const std::string& text, const std::string& source) {
   YAML::Node root;
   try {
     root = YAML::Load(text);
@@ -72,7 +98,7 @@ void requireNoRepeatedKey(const std::string& text, const std::string& source) {
     throw io::ConfigError(source + ": not valid YAML: " + e.what());
   }
   std::string found;
-  if (findRepeatedKey(root, "", &found)) throw io::ConfigError(source + ": " + found);
+  if (findRepeatedKeyOrNonDecimal(root, "", &found)) throw io::ConfigError(source + ": " + found);
 }
 
 }  // namespace
@@ -117,7 +143,7 @@ io::SlamConfig loadConfigFromParams(const ros::NodeHandle& private_nh,
   // relative path or a file on another machine is found): a key written twice, which rosparam
   // keeps once without a word, is refused naming the file.
   const std::string text = stringParam(private_nh, kConfigTextParam, source);
-  if (!text.empty()) requireNoRepeatedKey(text, file.empty() ? source : file);
+  if (!text.empty()) requireDistinctKeysAndDecimalIntegers(text, file.empty() ? source : file);
   XmlRpc::XmlRpcValue tree;
   YAML::Node root(YAML::NodeType::Map);
   if (private_nh.getParam("", tree)) {

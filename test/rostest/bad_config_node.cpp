@@ -178,6 +178,23 @@ TEST(LoadConfigFromParams, TheConfigFileIsCheckedAndNamed) {
     EXPECT_NE(std::string(e.what()).find("loaded from " + file), std::string::npos) << e.what();
   }
   nh.setParam("particles", 40);
+  // rosparam's YAML 1.1 reads 040 as octal 32 (the parameter the node sees); offline_slam
+  // refuses it, so the node must too, from the file's text.
+  for (const char* written : {"040", "0x28", "-012"}) {
+    nh.setParam("config_text", "seed: 1\nresampling:\n  threshold: 0.5\nparticles: " +
+                                   std::string(written) + "\n");
+    try {
+      rosbridge::loadConfigFromParams(nh);
+      ADD_FAILURE() << "particles: " << written << " in the file was accepted";
+    } catch (const io::ConfigError& e) {
+      EXPECT_NE(std::string(e.what()).find(file + ": particles = " + written +
+                                           " is not a decimal integer"),
+                std::string::npos)
+          << e.what();
+    }
+  }
+  nh.setParam("config_text", std::string("particles: 40\nname: '040'\nsigma: 0.05\n"));
+  EXPECT_EQ(rosbridge::loadConfigFromParams(nh).filter.particles, 40);  // quoted, and decimals
   nh.setParam("config_text", std::string("particles: [1, 2\n"));
   EXPECT_THROW(rosbridge::loadConfigFromParams(nh), io::ConfigError);
   nh.setParam("config_text", std::string("particles: 40\n"));
