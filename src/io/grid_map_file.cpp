@@ -76,13 +76,33 @@ core::GridMapData readGridMap(const std::string& yaml_path) {
   }
   core::GridMapData grid;
   std::string image;
+  int negate = 0;
+  double occupied_thresh = 0.65, free_thresh = 0.196;
   try {
+    if (!root.IsMap()) throw std::runtime_error(yaml_path + ": not a map_server map (not a map)");
     image = root["image"].as<std::string>();
     grid.resolution_m = root["resolution"].as<double>();
-    grid.origin_x_m = root["origin"][0].as<double>();
-    grid.origin_y_m = root["origin"][1].as<double>();
+    const YAML::Node origin = root["origin"];
+    if (!origin.IsSequence() || origin.size() < 2) {
+      throw std::runtime_error(yaml_path + ": origin must be [x, y, yaw]");
+    }
+    grid.origin_x_m = origin[0].as<double>();
+    grid.origin_y_m = origin[1].as<double>();
+    if (root["negate"]) negate = root["negate"].as<int>();
+    if (root["occupied_thresh"]) occupied_thresh = root["occupied_thresh"].as<double>();
+    if (root["free_thresh"]) free_thresh = root["free_thresh"].as<double>();
   } catch (const YAML::Exception& e) {
     throw std::runtime_error(yaml_path + ": not a map_server map: " + e.what());
+  }
+  if (!(std::isfinite(grid.resolution_m) && grid.resolution_m > 0.0)) {
+    throw std::runtime_error(yaml_path + ": resolution must be a finite number > 0");
+  }
+  if (!std::isfinite(grid.origin_x_m) || !std::isfinite(grid.origin_y_m)) {
+    throw std::runtime_error(yaml_path + ": origin must be finite");
+  }
+  if (negate != 0 && negate != 1) throw std::runtime_error(yaml_path + ": negate must be 0 or 1");
+  if (!(free_thresh >= 0.0 && free_thresh < occupied_thresh && occupied_thresh <= 1.0)) {
+    throw std::runtime_error(yaml_path + ": need 0 <= free_thresh < occupied_thresh <= 1");
   }
   if (image.empty() || image[0] != '/') {
     const size_t slash = yaml_path.find_last_of('/');
@@ -110,17 +130,30 @@ core::GridMapData readGridMap(const std::string& yaml_path) {
     throw std::runtime_error(image + ": unsupported PGM header");
   }
   pgm.get();
-  std::vector<uint8_t> pixels(static_cast<size_t>(grid.width) * grid.height);
+  // The header's size against the bytes left, before allocating: a corrupt header must not
+  // ask for gigabytes.
+  const std::streampos data_start = pgm.tellg();
+  pgm.seekg(0, std::ios::end);
+  const std::streamoff available = pgm.tellg() - data_start;
+  pgm.seekg(data_start);
+  const unsigned long long needed = static_cast<unsigned long long>(grid.width) * grid.height;
+  if (available < 0 || needed > static_cast<unsigned long long>(available)) {
+    throw std::runtime_error(image + ": truncated (" + std::to_string(grid.width) + " x " +
+                             std::to_string(grid.height) + " pixels announced, " +
+                             std::to_string(available) + " bytes of data)");
+  }
+  std::vector<uint8_t> pixels(static_cast<size_t>(needed));
   pgm.read(reinterpret_cast<char*>(pixels.data()), static_cast<std::streamsize>(pixels.size()));
   if (!pgm) throw std::runtime_error(image + ": truncated");
   grid.cells.assign(pixels.size(), -1);
   for (int y = 0; y < grid.height; ++y) {
     for (int x = 0; x < grid.width; ++x) {
       const size_t pixel = static_cast<size_t>(grid.height - 1 - y) * grid.width + x;
-      const double occupancy = (255 - pixels[pixel]) / 255.0;
+      const double occupancy =
+          negate ? pixels[pixel] / 255.0 : (255 - pixels[pixel]) / 255.0;  // map_server's rule
       int8_t& cell = grid.cells[static_cast<size_t>(y) * grid.width + x];
-      if (occupancy > 0.65) cell = 100;
-      else if (occupancy < 0.196) cell = 0;
+      if (occupancy > occupied_thresh) cell = 100;
+      else if (occupancy < free_thresh) cell = 0;
     }
   }
   return grid;

@@ -8,6 +8,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <fstream>
+#include <iterator>
 #include <memory>
 #include <vector>
 
@@ -482,6 +484,54 @@ TEST(GridMapFile, WritesAndReadsMapServerFiles) {
     for (const auto& f : named) std::remove(f.c_str());
   }
   rmdir(dir);
+}
+
+/// The message of the error readGridMap throws on the map written as files, with its YAML
+/// edited ("" when it loads).
+std::string gridMapError(const GridMapData& g, const std::string& from, const std::string& to,
+                         const std::string& pgm_header = "") {
+  char dir[] = "/tmp/grid_map_badXXXXXX";
+  if (mkdtemp(dir) == nullptr) return "mkdtemp failed";
+  const std::vector<std::string> files = io::writeGridMap(std::string(dir) + "/m", g);
+  std::ifstream in(files[1]);
+  std::string yaml((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  if (!from.empty()) yaml.replace(yaml.find(from), from.size(), to);
+  std::ofstream(files[1]) << yaml;
+  if (!pgm_header.empty()) std::ofstream(files[0], std::ios::binary) << pgm_header;
+  std::string message;
+  try {
+    io::readGridMap(files[1]);
+  } catch (const std::runtime_error& e) {
+    message = e.what();
+  }
+  for (const auto& f : files) std::remove(f.c_str());
+  rmdir(dir);
+  return message;
+}
+
+// readGridMap used to take any resolution and origin, ignore negate and the thresholds, and
+// allocate what the PGM header announced before reading the data.
+TEST(GridMapFile, BrokenMapFilesAreNamed) {
+  GridMapData g;
+  g.resolution_m = 0.1;
+  g.width = 3;
+  g.height = 2;
+  g.cells = {100, 0, -1, 70, 19, 50};
+  EXPECT_EQ(gridMapError(g, "", ""), "");
+  EXPECT_NE(gridMapError(g, "resolution: 0.1", "resolution: 0").find("resolution must be"),
+            std::string::npos);
+  EXPECT_NE(gridMapError(g, "resolution: 0.1", "resolution: .nan").find("resolution must be"),
+            std::string::npos);
+  EXPECT_NE(gridMapError(g, "origin: [0, 0, 0.0]", "origin: [.inf, 0, 0]").find("origin must"),
+            std::string::npos);
+  EXPECT_NE(gridMapError(g, "negate: 0", "negate: 2").find("negate must be 0 or 1"),
+            std::string::npos);
+  EXPECT_NE(gridMapError(g, "free_thresh: 0.196", "free_thresh: 0.9").find("free_thresh <"),
+            std::string::npos);
+  const std::string huge = gridMapError(g, "", "", "P5\n100000 100000\n255\n\x01\x02");
+  EXPECT_NE(huge.find("truncated (100000 x 100000 pixels announced, 2 bytes of data)"),
+            std::string::npos)
+      << huge;
 }
 
 }  // namespace
