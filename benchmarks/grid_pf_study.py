@@ -190,10 +190,12 @@ def load_results(path):
     for world, entry in results.items():
         where = "%s: world '%s'" % (path, world)
         if not isinstance(entry, dict):
-            sys.exit("%s is not a mapping" % where)
+            sys.exit("grid_pf_study: %s is not a mapping" % where)
         for key in ("series", "seeds", "wall_s_mean", "peak_rss_mb_max"):
             if key not in entry:
                 sys.exit("grid_pf_study: %s lacks '%s'" % (where, key))
+        if not isinstance(entry["seeds"], int) or isinstance(entry["seeds"], bool):
+            sys.exit("grid_pf_study: %s: 'seeds' is not a whole number" % where)
         series = entry["series"]
         if not isinstance(series, dict) or "odometry" not in series:
             sys.exit("grid_pf_study: %s: 'series' needs an 'odometry' entry" % where)

@@ -49,3 +49,10 @@ def read_tum(path, min_poses=1):
     if len(rows) < min_poses:
         raise TumError("%s: %d poses, need at least %d" % (path, len(rows), min_poses))
     return rows
+
+
+def stamps_and_xy(path, min_poses=1):
+    """(stamps, xy) numpy arrays of read_tum(path): shapes (N,) and (N, 2)."""
+    import numpy as np  # only here: read_tum needs no numpy
+    rows = np.array(read_tum(path, min_poses), dtype=float).reshape(-1, 4)
+    return rows[:, 0], rows[:, 1:3]

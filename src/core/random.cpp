@@ -1,9 +1,19 @@
 #include "rbpf_slam/core/random.h"
 
 #include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
 
 namespace rbpf_slam {
 namespace core {
+
+bool poseCovarianceUsable(const Eigen::Matrix3d& covariance) {
+  if (!covariance.allFinite()) return false;
+  const double scale = covariance.cwiseAbs().maxCoeff();
+  if (scale == 0.0) return true;  // an exact pose
+  if ((covariance - covariance.transpose()).cwiseAbs().maxCoeff() > 1e-9 * scale) return false;
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(covariance, Eigen::EigenvaluesOnly);
+  return solver.info() == Eigen::Success && solver.eigenvalues().minCoeff() >= -1e-12 * scale;
+}
 
 template <int N>
 Eigen::Matrix<double, N, 1> sampleMultivariate(Rng& rng, const Eigen::Matrix<double, N, 1>& mean,

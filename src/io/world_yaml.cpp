@@ -305,6 +305,9 @@ core::sim::WorldChange readChange(MapReader& reader) {
     item.readPoint("translate_m", &move.translate_m);
     item.read("rotate_deg", &move.rotate_deg);
     item.read("remove", &move.remove);
+    if (item.has("points") && move.points.empty()) {
+      item.fail(item.field("points") + " is empty: give the new outline, or remove: true");
+    }
     const bool rigid = item.has("translate_m") || item.has("rotate_deg");
     if (move.remove && (rigid || item.has("points"))) {
       item.fail(item.field("remove") + ": true excludes points, translate_m and rotate_deg");

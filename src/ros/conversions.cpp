@@ -252,6 +252,12 @@ int countUnusableCovariances(const core::FeatureSet& set) {
   return count;
 }
 
+std::string unusableCovarianceWarning(int count, const std::string& topic) {
+  return std::to_string(count) + " feature(s) on " + topic +
+         " carry a covariance that is not positive definite (all zero means unset and is "
+         "fine): the configured measurement noise is used for them";
+}
+
 core::FeatureSet toFeatureSet(const FeatureArray& msg, const core::Pose2& frame_in_base,
                               int* dropped, bool upside_down) {
   core::FeatureSet set;

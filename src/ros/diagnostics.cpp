@@ -109,6 +109,10 @@ diagnostic_msgs::DiagnosticArray SlamDiagnostics::report(const ros::Time& stamp,
   if (skipped_features_total_ > 0) {
     status.values.push_back(keyValue("features the filter skipped", text(skipped_features_total_)));
   }
+  if (replaced_covariances_total_ > 0) {
+    status.values.push_back(keyValue("feature covariances not positive definite (noise used)",
+                                     text(replaced_covariances_total_)));
+  }
   for (const auto& [cause, count] : drops_total_) {
     status.values.push_back(keyValue("dropped: " + cause, text(count)));
   }

@@ -65,12 +65,9 @@ void LandmarkTrackerNode::featuresCallback(const FeatureArray::ConstPtr& msg) {
   }
   const int unusable = countUnusableCovariances(features);
   if (unusable > 0 && config_.filter.measurement.use_feature_covariance) {
-    diagnostics_.recordDrop("feature covariance not positive definite (noise floors used)",
-                            unusable);
+    diagnostics_.recordReplacedCovariances(unusable);
     warnings_.warn("feature covariances",
-                   std::to_string(unusable) + " feature(s) on " + config_.ros.features_topic +
-                       " carry a covariance that is not positive definite (all zero means "
-                       "unset and is fine): the configured measurement noise is used for them");
+                   unusableCovarianceWarning(unusable, config_.ros.features_topic));
   }
   // Stamps far behind the last frame: a bag played again or a restarted driver.
   const double jump = config_.session.reset_on_time_jump_back_s;
@@ -96,7 +93,7 @@ void LandmarkTrackerNode::featuresCallback(const FeatureArray::ConstPtr& msg) {
     warnings_.warn("features rejected",
                    "The tracker skipped " + std::to_string(frontend_.lastRejected()) +
                        " feature(s) of the frame at " + std::to_string(msg->header.stamp.toSec()) +
-                       ": degenerate (e.g. a point at range 0) or of a kind it ignores");
+                       ": not finite or degenerate (e.g. a point at range 0)");
   }
   std_msgs::Header header;
   header.stamp = msg->header.stamp;

@@ -14,6 +14,7 @@
 #include <sstream>
 
 #include "rbpf_slam/core/grid/grid_map_data.h"
+#include "rbpf_slam/core/random.h"
 #include "rbpf_slam/io/grid_map_file.h"
 #include "rbpf_slam/io/landmark_file.h"
 #include "rbpf_slam/ros/conversions.h"
@@ -278,12 +279,9 @@ void SlamNode::featuresCallback(const FeatureArray::ConstPtr& msg) {
   }
   const int unusable = countUnusableCovariances(features);
   if (unusable > 0 && config_.filter.measurement.use_feature_covariance) {
-    diagnostics_.recordDrop("feature covariance not positive definite (noise floors used)",
-                            unusable);
+    diagnostics_.recordReplacedCovariances(unusable);
     warnThrottled("feature covariances",
-                  std::to_string(unusable) + " feature(s) on " + features_input_->topic() +
-                      " carry a covariance that is not positive definite (all zero means unset "
-                      "and is fine): the configured measurement noise is used for them");
+                  unusableCovarianceWarning(unusable, features_input_->topic()));
   }
   const auto t0 = std::chrono::steady_clock::now();
   const core::FrameResult result = pipeline_.processFeatures(features, odom_pose);
@@ -602,25 +600,28 @@ void SlamNode::initialPoseCallback(const geometry_msgs::PoseWithCovarianceStampe
                                  "finite");
     return;
   }
-  if (!core::poseCovarianceUsable(covariance)) {
-    // rviz sends 0.25 m^2 and 0.0685 rad^2; a zero (unset) or broken covariance gets those.
-    const bool unset = covariance.allFinite() && covariance.isZero(0.0);
-    if (!unset) {
-      std::ostringstream why;
-      why << "initialpose covariance (x, y, yaw rows of pose.covariance) ";
-      if (!covariance.allFinite()) {
-        why << "is not finite";
-      } else {
-        why << "is not symmetric positive semi-definite (smallest eigenvalue "
-            << Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(
-                   0.5 * (covariance + covariance.transpose()), Eigen::EigenvaluesOnly)
-                   .eigenvalues()
-                   .minCoeff()
-            << ")";
-      }
-      warnThrottled("initialpose covariance",
-                    why.str() + "; using rviz's 0.25 m^2, 0.25 m^2, 0.0685 rad^2 instead");
+  // rviz sends 0.25 m^2 and 0.0685 rad^2; an all-zero (unset) covariance gets those, and so
+  // does a broken one, with a warning naming what is wrong with it.
+  const bool unset = covariance.isZero(0.0);
+  if (!unset && !core::poseCovarianceUsable(covariance)) {
+    std::ostringstream why;
+    why << "initialpose covariance (x, y, yaw rows of pose.covariance) ";
+    if (!covariance.allFinite()) {
+      why << "is not finite";
+    } else if (!covariance.isApprox(covariance.transpose(), 1e-9)) {
+      why << "is not symmetric (xy " << covariance(0, 1) << " against yx " << covariance(1, 0)
+          << ", x-yaw " << covariance(0, 2) << " against yaw-x " << covariance(2, 0) << ")";
+    } else {
+      why << "is not positive semi-definite (smallest eigenvalue "
+          << Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(covariance, Eigen::EigenvaluesOnly)
+                 .eigenvalues()
+                 .minCoeff()
+          << ")";
     }
+    warnThrottled("initialpose covariance",
+                  why.str() + "; using rviz's 0.25 m^2, 0.25 m^2, 0.0685 rad^2 instead");
+  }
+  if (unset || !core::poseCovarianceUsable(covariance)) {
     covariance = Eigen::Vector3d(0.25, 0.25, 0.0685).asDiagonal();
   }
   if (!pipeline_.session().setPose(pose, covariance)) {

@@ -53,19 +53,25 @@ void SonarFeaturesNode::sonarCallback(const sensor_msgs::Range::ConstPtr& msg) {
          "Dropping a sonar reading from " + msg->header.frame_id + " with a zero stamp");
     return;
   }
-  // As the session does (slam_session.h): several readings in a row far back are a restarted
-  // clock (a looping bag) and clear the window; one late reading is dropped, the window kept.
+  // As the session does for frames (slam_session.h): stamps far back in several rings in a row
+  // are a restarted clock (a looping bag) and clear the window; a late ring is dropped and the
+  // window kept. Rings count, not readings: a ring is one message per transducer, one stamp.
   const double jump = config_.session.reset_on_time_jump_back_s;
   const bool far_back = jump > 0.0 && stamp + jump < last_stamp_;
-  readings_back_ = far_back ? readings_back_ + 1 : 0;
-  if (far_back && readings_back_ >= config_.session.reset_after_frames_back) {
+  if (!far_back) {
+    stamps_back_ = 0;
+  } else if (stamps_back_ == 0 || stamp != last_stamp_back_) {
+    ++stamps_back_;
+    last_stamp_back_ = stamp;
+  }
+  if (far_back && stamps_back_ >= config_.session.reset_after_frames_back) {
     warnings_.warn("time jump", "Sonar stamps went back by " +
                                     std::to_string(last_stamp_ - stamp) + " s in " +
-                                    std::to_string(readings_back_) +
-                                    " readings in a row: clearing the echo window");
+                                    std::to_string(stamps_back_) +
+                                    " rings in a row: clearing the echo window");
     extractor_.reset();
     diagnostics_.recordReset();
-    readings_back_ = 0;
+    stamps_back_ = 0;
   } else if (stamp < last_stamp_) {
     drop("old stamp", "old stamp " + msg->header.frame_id,
          "Dropping a sonar reading from " + msg->header.frame_id + " stamped " +

@@ -57,6 +57,9 @@ clean "grid_pf_study: not JSON" 1 'not_json.json is not JSON' \
   "$b/grid_pf_study.py" --from-json "$work/not_json.json" --output "$work/study"
 clean "grid_pf_study: a world without seeds" 1 "no_seeds.json: world 'w' lacks 'seeds'" \
   "$b/grid_pf_study.py" --from-json "$work/no_seeds.json" --output "$work/study"
+printf '{"w": {"series": {"odometry": [[0.1], [0.1]]}, "seeds": "ten", "wall_s_mean": {}, "peak_rss_mb_max": {}}}\n' >"$work/word_seeds.json"
+clean "grid_pf_study: seeds that are not a number" 1 "world 'w': 'seeds' is not a whole number" \
+  "$b/grid_pf_study.py" --from-json "$work/word_seeds.json" --output "$work/study"
 clean "grid_pf_study: an empty series" 1 "series 'odometry' is not two non-empty lists of numbers" \
   "$b/grid_pf_study.py" --from-json "$work/empty_series.json" --output "$work/study"
 

@@ -311,6 +311,14 @@ TEST(WorldYaml, RejectsObjectMovesThatIgnoreOrLackFields) {
   const std::string nothing = writeWorld("nothing.yaml", withChanges(
       "  - at_time_s: 5\n    objects:\n      - {name: crate}\n"));
   expectContains(loadError(nothing), nothing + ": changes[0].objects[0]: 'crate' changes nothing");
+  const std::string no_points = writeWorld("no_points.yaml", withChanges(
+      "  - at_time_s: 5\n    objects:\n      - {name: crate, points: []}\n"));
+  expectContains(loadError(no_points), no_points + ": changes[0].objects[0].points is empty");
+  const std::string twice = writeWorld("twice.yaml", withChanges(
+      "  - at_time_s: 5\n    objects:\n      - {name: crate, remove: true}\n"
+      "      - {name: crate, translate_m: [0, 0.1]}\n"));
+  expectContains(loadError(twice), twice + ": changes[0].objects[1]: object 'crate' was removed "
+                                           "earlier in this change");
 }
 
 /// Changes used to be checked one at a time against the world as it starts: a move after a
@@ -343,6 +351,35 @@ TEST(WorldYaml, ReplaysChangesInTheOrderTheyHappen) {
                "laps: 2"));
   expectContains(loadError(mixed), mixed + ": changes[1] and changes[0] both change object "
                                            "'crate', one after a lap and one at a time");
+  // A random displacement may draw any landmark (here every one): a time change of one of them
+  // conflicts with it too.
+  const std::string random = writeWorld("random.yaml",
+      replaced(replaced(withChanges("  - after_lap: 1\n    random_landmarks: {count: 1, sigma_m: 0.1}\n"
+                                    "  - at_time_s: 5\n    landmarks:\n      - {id: 7, x_m: 2, y_m: 2.2}\n"),
+                        "waypoints:", "landmarks:\n  - {id: 7, x_m: 2, y_m: 2.0}\nwaypoints:"),
+               "laps: 1", "laps: 2"));
+  expectContains(loadError(random), random + ": changes[1] and changes[0] both change landmark 7");
+}
+
+// Two changes due at one control step (20 Hz: 5.02 s and 5.05 s both at 5.05 s) are applied in
+// the order they were due, as validate() replays them: the move at 5.02 s, then the new outline
+// at 5.05 s. In list order the outline would have been moved.
+TEST(WorldYaml, ChangesDueAtOneStepApplyInTheOrderTheyWereDue) {
+  const std::string path = writeWorld("due.yaml", withChanges(
+      "  - at_time_s: 5.05\n    objects:\n"
+      "      - {name: crate, points: [[2, 1.5], [3, 1.5], [3, 2.5], [2, 2.5], [2, 1.5]]}\n"
+      "  - at_time_s: 5.02\n    objects:\n      - {name: crate, translate_m: [0, 0.1]}\n"));
+  core::sim::SimulatorOptions options;
+  options.max_duration_s = 6.0;
+  core::sim::Simulator simulator(loadWorld(path), options);
+  simulator.run();
+  ASSERT_EQ(simulator.appliedChanges().size(), 2u);
+  EXPECT_EQ(simulator.appliedChanges()[0].change_index, 1);
+  EXPECT_EQ(simulator.appliedChanges()[1].change_index, 0);
+  const auto crate = std::find_if(simulator.objects().begin(), simulator.objects().end(),
+                                  [](const core::sim::WorldObject& o) { return o.name == "crate"; });
+  ASSERT_NE(crate, simulator.objects().end());
+  EXPECT_EQ(crate->points.front(), Eigen::Vector2d(2, 1.5));
 }
 
 }  // namespace

@@ -21,6 +21,12 @@ inline double sampleUniform(Rng& rng) {
   return std::uniform_real_distribution<double>(0.0, 1.0)(rng);
 }
 
+/// A pose covariance (x, y, yaw) to draw particles from: finite, symmetric and positive
+/// semi-definite (zero: an exact pose). A positive diagonal is not enough: xx = yy = 0.25 with
+/// xy = 1 has a negative eigenvalue, and sampleMultivariate would then add jitter up to ~1 to
+/// every variance without a word. Every filter's resetPose checks this.
+bool poseCovarianceUsable(const Eigen::Matrix3d& covariance);
+
 /// One draw from N(mean, cov) for a 2x2 or 3x3 covariance (Cholesky; jitter when semidefinite).
 template <int N>
 Eigen::Matrix<double, N, 1> sampleMultivariate(Rng& rng, const Eigen::Matrix<double, N, 1>& mean,

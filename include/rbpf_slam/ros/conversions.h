@@ -92,6 +92,8 @@ core::FeatureSet toFeatureSet(const FeatureArray& msg, const core::Pose2& frame_
 /// filters use their configured noise for those instead (observationNoise), which a driver
 /// publishing broken covariances should hear about.
 int countUnusableCovariances(const core::FeatureSet& set);
+/// The warning for count such features arriving on topic.
+std::string unusableCovarianceWarning(int count, const std::string& topic);
 FeatureArray toMsg(const core::FeatureSet& features, const std_msgs::Header& header);
 
 /// A core grid as nav_msgs/OccupancyGrid (same cell order and values) in frame at stamp.

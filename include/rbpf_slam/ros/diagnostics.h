@@ -77,6 +77,9 @@ class SlamDiagnostics {
   /// Features of used frames that the filter skipped (a kind it ignores, degenerate):
   /// reported as a count, not as a problem (dpf on line features would warn for ever).
   void recordSkippedFeatures(long count) { skipped_features_total_ += count; }
+  /// Features used with the configured noise because their own covariance is set but not
+  /// positive definite (rosbridge::countUnusableCovariances): a count; the node warns.
+  void recordReplacedCovariances(long count) { replaced_covariances_total_ += count; }
   /// Frames at the stamp of the last frame (another input of the same instant): a count, not
   /// a problem.
   void recordSameStamp() { ++same_stamp_total_; }
@@ -109,6 +112,7 @@ class SlamDiagnostics {
   bool paused_ = false;
   long odometry_gaps_ = -1;  // -1: not reported
   long skipped_features_total_ = 0;
+  long replaced_covariances_total_ = 0;
   long same_stamp_total_ = 0;
 };
 

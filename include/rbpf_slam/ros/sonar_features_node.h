@@ -52,7 +52,8 @@ class SonarFeaturesNode {
   SlamDiagnostics diagnostics_;
   ThrottledWarnings warnings_{"sonar_features"};
   double last_stamp_ = 0.0;
-  int readings_back_ = 0;  // readings in a row stamped far before last_stamp_
+  int stamps_back_ = 0;          // distinct stamps in a row far before last_stamp_ (rings)
+  double last_stamp_back_ = 0.0;  // the last of them
   long published_ = 0;
 };
 

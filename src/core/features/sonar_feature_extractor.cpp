@@ -20,11 +20,11 @@ constexpr double kMountTolerance = 1e-3;  // m and rad: the same transducer
 constexpr double kClockJumpBackS = 1.0;   // stamps going back more than this clear the window
 constexpr size_t kMaxTransducers = 128;   // distinct mounting poses kept apart
 constexpr double kMaxOdomCoordinateM = 1e6;  // beyond: a broken odometry pose, readings dropped
-constexpr double kMaxEchoDistanceM = 100.0;  // echoes taken farther away are not extracted from
-// No sonar or infrared sensor reaches this far; a longer range is a broken driver value. With
-// no maximum range configured or given, one such echo sized the vote grids by its range (3 km:
-// 17 GB; 1e5 m: std::bad_alloc).
-constexpr double kMaxEchoRangeM = 100.0;
+// No sonar or infrared sensor reaches this far: a longer range, or a transducer mounted farther
+// from the base, is a broken driver value, and echoes taken farther away than this are not
+// extracted from. With no maximum range configured or given, one 3 km echo sized the vote grids
+// by its range (17 GB; 1e5 m: std::bad_alloc).
+constexpr double kMaxEchoDistanceM = 100.0;
 
 }  // namespace
 
@@ -138,8 +138,8 @@ int SonarFeatureExtractor::addReadings(const std::vector<ConeReading>& readings,
   for (const ConeReading& reading : readings) {
     const double cone = options_.cone_rad > 0.0 ? options_.cone_rad : reading.field_of_view;
     if (!std::isfinite(reading.range) || !reading.sensor_pose.allFinite() ||
-        !(cone > 0.0 && cone < M_PI) || reading.range > kMaxEchoRangeM ||
-        reading.sensor_pose.head<2>().norm() > kMaxEchoRangeM) {
+        !(cone > 0.0 && cone < M_PI) || reading.range > kMaxEchoDistanceM ||
+        reading.sensor_pose.head<2>().norm() > kMaxEchoDistanceM) {
       ++stats_.invalid;
       continue;
     }

@@ -5,6 +5,7 @@
 
 #include "rbpf_slam/core/filters/landmark_map.h"
 #include "rbpf_slam/core/filters/measurement_models.h"
+#include "rbpf_slam/core/random.h"
 
 namespace rbpf_slam {
 namespace core {
@@ -240,7 +241,7 @@ std::vector<WeightedPose> EkfSlam::particles() const { return {{pose(), 1.0}}; }
 FilterStats EkfSlam::stats() const { return stats_; }
 
 bool EkfSlam::resetPose(const Pose2& new_pose, const Eigen::Matrix3d& cov) {
-  if (!new_pose.allFinite() || !cov.allFinite()) return false;
+  if (!new_pose.allFinite() || !poseCovarianceUsable(cov)) return false;
   state_.head<3>() = new_pose;
   state_(2) = wrapAngle(state_(2));
   const int n = state_.size();

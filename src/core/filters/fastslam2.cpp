@@ -686,10 +686,8 @@ std::vector<WeightedPose> FastSlam2::particles() const {
 FilterStats FastSlam2::stats() const { return stats_; }
 
 bool FastSlam2::resetPose(const Pose2& pose, const Eigen::Matrix3d& covariance) {
-  if (!pose.allFinite() || !covariance.allFinite()) return false;
+  if (!pose.allFinite() || !poseCovarianceUsable(covariance)) return false;
   const Eigen::Matrix3d c = 0.5 * (covariance + covariance.transpose());
-  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(c);
-  if (eigen.info() != Eigen::Success || eigen.eigenvalues().minCoeff() < 0.0) return false;
   for (auto& p : particles_) {
     p.pose = sampleMultivariate<3>(rng_, pose, c);
     p.pose.z() = wrapAngle(p.pose.z());

@@ -339,7 +339,7 @@ std::vector<WeightedPose> MultiFilterSmc::particles() const {
 FilterStats MultiFilterSmc::stats() const { return stats_; }
 
 bool MultiFilterSmc::resetPose(const Pose2& pose, const Eigen::Matrix3d& covariance) {
-  if (!pose.allFinite() || !covariance.allFinite()) return false;
+  if (!pose.allFinite() || !poseCovarianceUsable(covariance)) return false;
   for (auto& p : robot_) {
     p = sampleMultivariate<3>(rng_, pose, covariance);
     p.z() = wrapAngle(p.z());

@@ -10,6 +10,7 @@
 
 #include "rbpf_slam/core/filters/pose_moments.h"
 #include "rbpf_slam/core/filters/resampling.h"
+#include "rbpf_slam/core/random.h"
 #include "rbpf_slam/core/require_range.h"
 
 namespace rbpf_slam {
@@ -191,6 +192,7 @@ std::vector<WeightedPose> GridParticleFilter::particles() const {
 }
 
 bool GridParticleFilter::resetPose(const Pose2& pose, const Eigen::Matrix3d& covariance) {
+  if (!pose.allFinite() || !poseCovarianceUsable(covariance)) return false;
   for (Particle& p : particles_) {
     p.pose = sampleMultivariate<3>(rng_, pose, covariance);
     p.pose.z() = wrapAngle(p.pose.z());

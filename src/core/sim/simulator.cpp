@@ -43,6 +43,7 @@ Simulator::Simulator(World world, const SimulatorOptions& options)
       sonar_poses_(ringPoses(world_.sensors.sonar)),
       infrared_poses_(ringPoses(world_.sensors.infrared)),
       change_applied_(world_.changes.size(), false),
+      change_order_(changeOrder(world_)),
       motion_rng_(makeRng(options.seed, 1)),
       laser_rng_(makeRng(options.seed, 2)),
       sonar_rng_(makeRng(options.seed, 3)),
@@ -211,7 +212,8 @@ void Simulator::rebuildGeometry() {
 }
 
 void Simulator::applyDueChanges() {
-  for (size_t i = 0; i < world_.changes.size(); ++i) {
+  // In the order validate() replayed them: at one control step, a change due earlier first.
+  for (size_t i : change_order_) {
     const WorldChange& change = world_.changes[i];
     if (change_applied_[i]) continue;
     const bool lap_due = change.after_lap > 0 && follower_.lapsCompleted() >= change.after_lap;

@@ -334,7 +334,7 @@ void checkChange(const World& world, const WorldChange& change, const std::strin
 /// The order the simulator applies changes in, when it is known before the run: by lap, or by
 /// time. A world that triggers changes both ways must not let the two kinds touch one object or
 /// landmark, whose state would then depend on the robot's speed.
-std::vector<size_t> changeOrder(const World& world) {
+std::vector<size_t> orderOfChanges(const World& world) {
   std::vector<size_t> order(world.changes.size());
   for (size_t i = 0; i < order.size(); ++i) order[i] = i;
   std::stable_sort(order.begin(), order.end(), [&world](size_t a, size_t b) {
@@ -354,6 +354,14 @@ std::vector<size_t> changeOrder(const World& world) {
     for (const LandmarkMove& move : change.landmarks) {
       targets.push_back("landmark " + std::to_string(move.id));
     }
+    const RandomDisplacement& random = change.random_landmarks;
+    if (random.count_max > 0) {  // any candidate may be drawn
+      if (random.candidate_ids.empty()) {
+        for (const Landmark& l : world.landmarks) targets.push_back("landmark " + std::to_string(l.id));
+      } else {
+        for (int id : random.candidate_ids) targets.push_back("landmark " + std::to_string(id));
+      }
+    }
     for (const std::string& target : targets) {
       const auto other = theirs.find(target);
       if (other != theirs.end()) {
@@ -367,6 +375,12 @@ std::vector<size_t> changeOrder(const World& world) {
   return order;
 }
 
+/// "by changes[j], which happens before this one", or "earlier in this change".
+std::string removedWhere(size_t by, size_t current) {
+  if (by == current) return "earlier in this change";
+  return "by changes[" + std::to_string(by) + "], which happens before this one";
+}
+
 /// Replays the changes in the order they happen on a copy of the world: an object or landmark
 /// removed earlier cannot be moved later, and every state the robot drives through keeps the
 /// route clear (outlines, waypoints, posts), moves adding up.
@@ -374,7 +388,7 @@ void checkChangeSequence(const World& world) {
   World state = world;
   std::map<std::string, size_t> removed_objects;
   std::map<int, size_t> removed_landmarks;
-  for (size_t i : changeOrder(world)) {
+  for (size_t i : orderOfChanges(world)) {
     const WorldChange& change = world.changes[i];
     const std::string p = "changes[" + std::to_string(i) + "]";
     for (size_t k = 0; k < change.objects.size(); ++k) {
@@ -382,8 +396,7 @@ void checkChangeSequence(const World& world) {
       const std::string field = p + ".objects[" + std::to_string(k) + "]";
       const auto removed = removed_objects.find(move.name);
       if (removed != removed_objects.end()) {
-        fail(field + ": object '" + move.name + "' was removed by changes[" +
-             std::to_string(removed->second) + "], which happens before this one");
+        fail(field + ": object '" + move.name + "' was removed " + removedWhere(removed->second, i));
       }
       auto object = std::find_if(state.objects.begin(), state.objects.end(),
                                  [&move](const WorldObject& o) { return o.name == move.name; });
@@ -401,8 +414,8 @@ void checkChangeSequence(const World& world) {
       const std::string field = p + ".landmarks[" + std::to_string(k) + "]";
       const auto removed = removed_landmarks.find(move.id);
       if (removed != removed_landmarks.end()) {
-        fail(field + ": landmark " + std::to_string(move.id) + " was removed by changes[" +
-             std::to_string(removed->second) + "], which happens before this one");
+        fail(field + ": landmark " + std::to_string(move.id) + " was removed " +
+             removedWhere(removed->second, i));
       }
       auto landmark = std::find_if(state.landmarks.begin(), state.landmarks.end(),
                                    [&move](const Landmark& l) { return l.id == move.id; });
@@ -511,6 +524,8 @@ std::vector<Pose2> ringPoses(const RingSensorConfig& ring) {
   }
   return poses;
 }
+
+std::vector<size_t> changeOrder(const World& world) { return orderOfChanges(world); }
 
 void validate(const World& world) {
   checkRange("laps", world.laps, 1, 1000000);

@@ -1,7 +1,6 @@
 #include "rbpf_slam/core/slam/slam_pipeline.h"
 
 #include <memory>
-#include <optional>
 #include <utility>
 
 namespace rbpf_slam {
@@ -41,6 +40,7 @@ void SlamPipeline::reset() {
   sonar_extractor_.reset();
   pending_cones_.clear();
   last_features_ = FeatureSet();
+  stale_sonar_stamps_ = 0;
 }
 
 FrameResult SlamPipeline::processScan(const RangeScan& scan, const Pose2& odom_pose) {
@@ -108,19 +108,29 @@ FrameResult SlamPipeline::processSonar(const std::vector<ConeReading>& readings,
   // on any stamp a second back, so one zero-stamped or stale reading used to wipe it. (Readings
   // a little out of order, from transducers stamped apart, still join the window.)
   if (!std::isfinite(stamp) || stamp <= 0.0) return FrameResult::kRejectedStamp;
-  std::optional<FrameResult> restarted;
+  bool restarted = false;
   if (!session_.trajectory().empty() && stamp < session_.lastStamp() &&
       sonar_extractor_.wouldClearWindow(stamp)) {
-    // The session rejects one stale frame, and starts a new map (at this frame) only after
-    // several in a row far back (a restarted clock); then the window goes too.
-    FeatureSet none;
-    none.stamp = stamp;
-    const FrameResult back = session_.process(stamp, odom_pose, none);
-    if (!usedFrame(back)) return back;
-    restarted = back;
+    // As the session decides for frames: stamps far back in several rings in a row are a
+    // restarted clock (a bag played again), and the map starts over; anything less is a stale
+    // reading, rejected. Rings, not readings, count: a ring is one message per transducer, all
+    // with its stamp, and one late ring must not end the map.
+    const SessionOptions& o = session_.options();
+    const bool far_back = o.reset_on_time_jump_back_s > 0.0 &&
+                          session_.lastStamp() - stamp > o.reset_on_time_jump_back_s;
+    if (!far_back) {
+      stale_sonar_stamps_ = 0;
+      return FrameResult::kRejectedStamp;
+    }
+    if (stale_sonar_stamps_ == 0 || stamp != last_stale_sonar_stamp_) ++stale_sonar_stamps_;
+    last_stale_sonar_stamp_ = stamp;
+    if (stale_sonar_stamps_ < o.reset_after_frames_back) return FrameResult::kRejectedStamp;
+    session_.reset();
     sonar_extractor_.reset();
     pending_cones_.clear();  // the old run's
+    restarted = true;
   }
+  stale_sonar_stamps_ = 0;
   const long clock_jumps = sonar_extractor_.stats().clock_jumps;
   sonar_extractor_.addReadings(readings, odom_pose, stamp);
   // The extractor cleared its window for stamps that went back (a restarted clock, a second
@@ -134,7 +144,6 @@ FrameResult SlamPipeline::processSonar(const std::vector<ConeReading>& readings,
                            pending_cones_.end() - static_cast<long>(kMaxPendingCones));
     }
   }
-  if (restarted) return *restarted;  // this reading waits in the window for the next frame
   FrameResult result;
   if (session_.trajectory().empty()) {
     // The first frame anchors the map; the window has nothing to extract from yet.
@@ -152,6 +161,8 @@ FrameResult SlamPipeline::processSonar(const std::vector<ConeReading>& readings,
     result = session_.process(stamp, odom_pose, last_features_);
   }
   if (usedFrame(result)) pending_cones_.clear();
+  // The session started over here (its own rule, applied to rings): said as its reset.
+  if (restarted && result == FrameResult::kFirstFrame) return FrameResult::kReset;
   return result;
 }
 

@@ -1,11 +1,10 @@
 #include "rbpf_slam/core/slam/slam_session.h"
 
-#include <Eigen/Eigenvalues>
-
 #include <cmath>
 #include <limits>
 #include <stdexcept>
 
+#include "rbpf_slam/core/random.h"
 #include "rbpf_slam/core/require_range.h"
 
 namespace rbpf_slam {
@@ -38,15 +37,6 @@ bool SlamSession::setMapping(bool enabled) {
   if (!filter_->setMapping(enabled)) return false;
   mapping_ = enabled;
   return true;
-}
-
-bool poseCovarianceUsable(const Eigen::Matrix3d& covariance) {
-  if (!covariance.allFinite()) return false;
-  const double scale = covariance.cwiseAbs().maxCoeff();
-  if (scale == 0.0) return true;  // an exact pose
-  if (((covariance - covariance.transpose()).cwiseAbs().maxCoeff() > 1e-9 * scale)) return false;
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(covariance, Eigen::EigenvaluesOnly);
-  return solver.eigenvalues().minCoeff() >= -1e-12 * scale;
 }
 
 bool SlamSession::setPose(const Pose2& pose, const Eigen::Matrix3d& covariance) {

@@ -122,6 +122,7 @@ class Simulator {
   std::vector<Pose2> sonar_poses_;
   std::vector<Pose2> infrared_poses_;
   std::vector<bool> change_applied_;
+  std::vector<size_t> change_order_;  // changeOrder(world_)
   std::vector<AppliedChange> applied_;
 
   // One generator per purpose, so that enabling a sensor or a change does not alter the

@@ -189,6 +189,13 @@ WorldObject movedObject(const WorldObject& object, const ObjectMove& move);
 /// Transducer poses in the base frame for a ring configuration.
 std::vector<Pose2> ringPoses(const RingSensorConfig& ring);
 
+/// The indices of world.changes in the order they happen: those after a lap by lap, those at a
+/// time by time, equal triggers in list order (lap changes listed first: validate() refuses a
+/// lap and a time change of one object or landmark, whose order would depend on the run). The
+/// simulator applies the changes due at a step in this order, and validate() replays them so.
+/// Throws std::invalid_argument for such a shared target.
+std::vector<size_t> changeOrder(const World& world);
+
 /// Throws std::invalid_argument naming the first offending field (e.g. "laps = 0 ...").
 void validate(const World& world);
 

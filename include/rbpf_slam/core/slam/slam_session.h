@@ -64,11 +64,6 @@ struct SessionFrame {
   FeatureSet features;   // points and lines only
 };
 
-/// A pose covariance (x, y, yaw) that can seed particles: finite, symmetric and positive
-/// semi-definite (zero: an exact pose). A positive diagonal alone is not enough: xx = yy = 0.25
-/// with xy = 1 has a negative eigenvalue, and samplers then jitter or drop it silently.
-bool poseCovarianceUsable(const Eigen::Matrix3d& covariance);
-
 class SlamSession {
  public:
   SlamSession(std::unique_ptr<SlamFilter> filter, const SessionOptions& options);
@@ -118,6 +113,7 @@ class SlamSession {
   SlamFilter& filter() { return *filter_; }
   double lastStamp() const { return last_stamp_; }
   long resets() const { return resets_; }
+  const SessionOptions& options() const { return options_; }
   /// Gaps met (max_time_gap_s, max_odometry_jump_m): one odometry silence counts once, however
   /// many frames fall inside it.
   long gaps() const { return gaps_; }

@@ -41,8 +41,8 @@ class TrackerFrontend {
   Pose2 pose() const;
   int steps() const { return step_; }
   double lastStamp() const { return last_stamp_; }
-  /// Features of the last processed frame that could not be used (degenerate, e.g. a point at
-  /// range 0, or of a kind the options turn off).
+  /// Features of the last processed frame that could not be used (not finite or degenerate,
+  /// e.g. a point at range 0; kinds the options turn off are not counted).
   int lastRejected() const { return last_rejected_; }
 
  private:
