@@ -36,13 +36,16 @@ class NodeObserver {
     return trajectory_size_;
   }
   /// The first ~pose received after `after` (wall time), if any within timeout_s.
-  bool poseAfter(const ros::WallTime& after, double timeout_s, core::Pose2* pose) {
+  /// With xx_variance, the x variance ~pose reported with it.
+  bool poseAfter(const ros::WallTime& after, double timeout_s, core::Pose2* pose,
+                 double* xx_variance = nullptr) {
     const ros::WallTime deadline = ros::WallTime::now() + ros::WallDuration(timeout_s);
     while (ros::WallTime::now() < deadline) {
       {
         std::lock_guard<std::mutex> lock(mutex_);
         if (pose_received_ > after) {
           *pose = last_pose_;
+          if (xx_variance) *xx_variance = last_xx_variance_;
           return true;
         }
       }
@@ -68,11 +71,13 @@ class NodeObserver {
   void onPose(const geometry_msgs::PoseWithCovarianceStamped& msg) {
     std::lock_guard<std::mutex> lock(mutex_);
     last_pose_ = rosbridge::toPose2(msg.pose.pose);
+    last_xx_variance_ = msg.pose.covariance[0];
     pose_received_ = ros::WallTime::now();
   }
   std::mutex mutex_;
   size_t trajectory_size_ = 0;
   core::Pose2 last_pose_ = core::Pose2::Zero();
+  double last_xx_variance_ = 0.0;
   ros::WallTime pose_received_;
   ros::Subscriber path_sub_, pose_sub_;
 };
@@ -172,6 +177,22 @@ TEST_F(ServicesTest, InitialPoseMovesTheEstimate) {
   ASSERT_TRUE(observer_->poseAfter(sent, 10.0, &pose)) << "no ~pose after initialpose";
   EXPECT_LT((pose.head<2>() - requested.head<2>()).norm(), 0.05) << pose.transpose();
   EXPECT_LT(std::fabs(core::wrapAngle(pose.z() - requested.z())), 0.02) << pose.transpose();
+  // An all-zero covariance (unset, as `rostopic pub` sends it) and an indefinite one (a
+  // positive diagonal, xy = 1) both get rviz's 0.25 m^2: the particles spread, not collapse.
+  for (const bool indefinite : {false, true}) {
+    msg.pose.covariance.fill(0.0);
+    if (indefinite) {
+      msg.pose.covariance[0] = msg.pose.covariance[7] = 0.25;
+      msg.pose.covariance[1] = msg.pose.covariance[6] = 1.0;
+      msg.pose.covariance[35] = 0.0685;
+    }
+    const ros::WallTime again = ros::WallTime::now();
+    publisher.publish(msg);
+    double xx = 0.0;
+    ASSERT_TRUE(observer_->poseAfter(again, 10.0, &pose, &xx)) << "indefinite " << indefinite;
+    EXPECT_GT(xx, 0.1) << "indefinite " << indefinite;
+    EXPECT_LT(xx, 0.5) << "indefinite " << indefinite;
+  }
   EXPECT_TRUE(call("resume"));
 }
 
