@@ -3,16 +3,35 @@
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 
+#include <sstream>
+
 namespace rbpf_slam {
 namespace core {
 
-bool poseCovarianceUsable(const Eigen::Matrix3d& covariance) {
-  if (!covariance.allFinite()) return false;
+std::string poseCovarianceProblem(const Eigen::Matrix3d& covariance) {
+  if (!covariance.allFinite()) return "is not finite";
   const double scale = covariance.cwiseAbs().maxCoeff();
-  if (scale == 0.0) return true;  // an exact pose
-  if ((covariance - covariance.transpose()).cwiseAbs().maxCoeff() > 1e-9 * scale) return false;
+  if (scale == 0.0) return "";  // an exact pose
+  const Eigen::Matrix3d asymmetry = covariance - covariance.transpose();
+  if (asymmetry.cwiseAbs().maxCoeff() > 1e-9 * scale) {
+    std::ostringstream out;
+    out << "is not symmetric (xy " << covariance(0, 1) << " / yx " << covariance(1, 0) << ", x-yaw "
+        << covariance(0, 2) << " / yaw-x " << covariance(2, 0) << ", y-yaw " << covariance(1, 2)
+        << " / yaw-y " << covariance(2, 1) << ")";
+    return out.str();
+  }
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(covariance, Eigen::EigenvaluesOnly);
-  return solver.info() == Eigen::Success && solver.eigenvalues().minCoeff() >= -1e-12 * scale;
+  const double smallest = solver.eigenvalues().minCoeff();
+  if (solver.info() != Eigen::Success || smallest < -1e-12 * scale) {
+    std::ostringstream out;
+    out << "is not positive semi-definite (smallest eigenvalue " << smallest << ")";
+    return out.str();
+  }
+  return "";
+}
+
+bool poseCovarianceUsable(const Eigen::Matrix3d& covariance) {
+  return poseCovarianceProblem(covariance).empty();
 }
 
 template <int N>

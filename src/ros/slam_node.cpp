@@ -7,8 +7,6 @@
 #include <nav_msgs/Path.h>
 #include <visualization_msgs/MarkerArray.h>
 
-#include <Eigen/Eigenvalues>
-
 #include <chrono>
 #include <cmath>
 #include <sstream>
@@ -603,27 +601,13 @@ void SlamNode::initialPoseCallback(const geometry_msgs::PoseWithCovarianceStampe
   // rviz sends 0.25 m^2 and 0.0685 rad^2; an all-zero (unset) covariance gets those, and so
   // does a broken one, with a warning naming what is wrong with it.
   const bool unset = covariance.isZero(0.0);
-  if (!unset && !core::poseCovarianceUsable(covariance)) {
-    std::ostringstream why;
-    why << "initialpose covariance (x, y, yaw rows of pose.covariance) ";
-    if (!covariance.allFinite()) {
-      why << "is not finite";
-    } else if (!covariance.isApprox(covariance.transpose(), 1e-9)) {
-      why << "is not symmetric (xy " << covariance(0, 1) << " against yx " << covariance(1, 0)
-          << ", x-yaw " << covariance(0, 2) << " against yaw-x " << covariance(2, 0) << ")";
-    } else {
-      why << "is not positive semi-definite (smallest eigenvalue "
-          << Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(covariance, Eigen::EigenvaluesOnly)
-                 .eigenvalues()
-                 .minCoeff()
-          << ")";
-    }
+  const std::string problem = core::poseCovarianceProblem(covariance);
+  if (!unset && !problem.empty()) {
     warnThrottled("initialpose covariance",
-                  why.str() + "; using rviz's 0.25 m^2, 0.25 m^2, 0.0685 rad^2 instead");
+                  "initialpose covariance (x, y, yaw rows of pose.covariance) " + problem +
+                      "; using rviz's 0.25 m^2, 0.25 m^2, 0.0685 rad^2 instead");
   }
-  if (unset || !core::poseCovarianceUsable(covariance)) {
-    covariance = Eigen::Vector3d(0.25, 0.25, 0.0685).asDiagonal();
-  }
+  if (unset || !problem.empty()) covariance = Eigen::Vector3d(0.25, 0.25, 0.0685).asDiagonal();
   if (!pipeline_.session().setPose(pose, covariance)) {
     warnThrottled("initialpose", "Ignoring an initialpose that the filter variant cannot take");
     return;

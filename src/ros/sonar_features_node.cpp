@@ -15,7 +15,8 @@ SonarFeaturesNode::SonarFeaturesNode(ros::NodeHandle nh, ros::NodeHandle private
     : config_(loadConfigFromParams(private_nh)),
       extractor_(config_.sonar),
       tf_listener_(tf_buffer_, nh),
-      diagnostics_("sonar_features", DiagnosticsOptions::withoutFilter()) {
+      diagnostics_("sonar_features", DiagnosticsOptions::withoutFilter()),
+      clock_(config_.session) {
   if (config_.ros.sonar_source != "range") {
     throw std::invalid_argument("sonar_source = '" + config_.ros.sonar_source +
                                 "': sonar_features reads sensor_msgs/Range (sonar_source: "
@@ -53,25 +54,18 @@ void SonarFeaturesNode::sonarCallback(const sensor_msgs::Range::ConstPtr& msg) {
          "Dropping a sonar reading from " + msg->header.frame_id + " with a zero stamp");
     return;
   }
-  // As the session does for frames (slam_session.h): stamps far back in several rings in a row
-  // are a restarted clock (a looping bag) and clear the window; a late ring is dropped and the
-  // window kept. Rings count, not readings: a ring is one message per transducer, one stamp.
+  // As the SLAM pipeline does (ClockRestartDetector, slam_session.h): stamps far back for long
+  // enough, with nothing in order in between, are a restarted clock (a looping bag) and clear
+  // the window; a late ring is dropped and the window kept.
   const double jump = config_.session.reset_on_time_jump_back_s;
   const bool far_back = jump > 0.0 && stamp + jump < last_stamp_;
-  if (!far_back) {
-    stamps_back_ = 0;
-  } else if (stamps_back_ == 0 || stamp != last_stamp_back_) {
-    ++stamps_back_;
-    last_stamp_back_ = stamp;
-  }
-  if (far_back && stamps_back_ >= config_.session.reset_after_frames_back) {
+  if (!far_back) clock_.inOrder();
+  if (far_back && clock_.farBack(stamp)) {
     warnings_.warn("time jump", "Sonar stamps went back by " +
-                                    std::to_string(last_stamp_ - stamp) + " s in " +
-                                    std::to_string(stamps_back_) +
-                                    " rings in a row: clearing the echo window");
+                                    std::to_string(last_stamp_ - stamp) +
+                                    " s and stayed back: clearing the echo window");
     extractor_.reset();
     diagnostics_.recordReset();
-    stamps_back_ = 0;
   } else if (stamp < last_stamp_) {
     drop("old stamp", "old stamp " + msg->header.frame_id,
          "Dropping a sonar reading from " + msg->header.frame_id + " stamped " +

@@ -307,5 +307,30 @@ TEST(SlamSession, GapOptionsAreValidated) {
   EXPECT_THROW(core::validate(options), std::invalid_argument);
 }
 
+// A late sonar ring is many messages: one stamp, or stamps milliseconds apart. Only stamps far
+// back for longer than reset_on_time_jump_back_s, in reset_after_frames_back distinct stamps
+// with nothing in order between them, are a restarted clock.
+TEST(ClockRestartDetector, ALateRingIsNotARestartedClock) {
+  core::SessionOptions options;  // 1 s, 3 stamps
+  core::ClockRestartDetector clock(options);
+  for (int i = 0; i < 16; ++i) EXPECT_FALSE(clock.farBack(5.0)) << i;  // one stamp
+  for (int i = 0; i < 16; ++i) EXPECT_FALSE(clock.farBack(5.0 + 0.01 * i)) << i;  // apart
+  clock.inOrder();
+  // A new clock: stamps go on from 1 s; the one 1 s after the first stale one restarts.
+  EXPECT_FALSE(clock.farBack(1.0));
+  EXPECT_FALSE(clock.farBack(1.5));
+  EXPECT_TRUE(clock.farBack(2.0));
+  EXPECT_EQ(clock.runLength(), 0);  // the run starts over
+  // Input in order between late stamps ends the run.
+  EXPECT_FALSE(clock.farBack(1.0));
+  EXPECT_FALSE(clock.farBack(1.6));
+  clock.inOrder();
+  EXPECT_FALSE(clock.farBack(2.2));
+  // reset_on_time_jump_back 0: never a restart.
+  options.reset_on_time_jump_back_s = 0.0;
+  core::ClockRestartDetector disabled(options);
+  for (int i = 0; i < 10; ++i) EXPECT_FALSE(disabled.farBack(1.0 + i));
+}
+
 }  // namespace
 }  // namespace rbpf_slam

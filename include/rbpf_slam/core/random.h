@@ -4,6 +4,7 @@
 #include <Eigen/Core>
 #include <cstdint>
 #include <random>
+#include <string>
 
 namespace rbpf_slam {
 namespace core {
@@ -26,6 +27,9 @@ inline double sampleUniform(Rng& rng) {
 /// xy = 1 has a negative eigenvalue, and sampleMultivariate would then add jitter up to ~1 to
 /// every variance without a word. Every filter's resetPose checks this.
 bool poseCovarianceUsable(const Eigen::Matrix3d& covariance);
+/// Why poseCovarianceUsable refuses covariance ("is not symmetric (xy ... / yx ...)", ...), or
+/// "" when it is usable.
+std::string poseCovarianceProblem(const Eigen::Matrix3d& covariance);
 
 /// One draw from N(mean, cov) for a 2x2 or 3x3 covariance (Cholesky; jitter when semidefinite).
 template <int N>

@@ -11,6 +11,7 @@
 #include <string>
 
 #include "rbpf_slam/core/features/sonar_feature_extractor.h"
+#include "rbpf_slam/core/slam/slam_session.h"
 #include "rbpf_slam/io/slam_config.h"
 #include "rbpf_slam/ros/diagnostics.h"
 #include "rbpf_slam/ros/node_support.h"
@@ -52,8 +53,7 @@ class SonarFeaturesNode {
   SlamDiagnostics diagnostics_;
   ThrottledWarnings warnings_{"sonar_features"};
   double last_stamp_ = 0.0;
-  int stamps_back_ = 0;          // distinct stamps in a row far before last_stamp_ (rings)
-  double last_stamp_back_ = 0.0;  // the last of them
+  core::ClockRestartDetector clock_;  // stamps far before last_stamp_: late, or a new clock
   long published_ = 0;
 };
 

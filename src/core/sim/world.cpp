@@ -341,7 +341,7 @@ std::vector<size_t> orderOfChanges(const World& world) {
     const WorldChange& x = world.changes[a];
     const WorldChange& y = world.changes[b];
     const bool x_lap = x.after_lap != 0, y_lap = y.after_lap != 0;
-    if (x_lap != y_lap) return x_lap;  // apart; changeTargets() refuses shared targets
+    if (x_lap != y_lap) return x_lap;  // apart: shared targets are refused below
     return x_lap ? x.after_lap < y.after_lap : x.at_time_s < y.at_time_s;
   });
   std::map<std::string, size_t> by_lap, by_time;  // target -> a change that moves it

@@ -25,13 +25,15 @@ SlamPipeline::SlamPipeline(const PipelineOptions& options)
     : extractor_(options.laser),
       matcher_(options.scan_matching),
       sonar_extractor_(options.sonar),
-      session_(createFilter(options.filter), options.session) {}
+      session_(createFilter(options.filter), options.session),
+      sonar_clock_(options.session) {}
 
 SlamPipeline::SlamPipeline(const PipelineOptions& options, std::unique_ptr<SlamFilter> filter)
     : extractor_(options.laser),
       matcher_(options.scan_matching),
       sonar_extractor_(options.sonar),
-      session_(std::move(filter), options.session) {}
+      session_(std::move(filter), options.session),
+      sonar_clock_(options.session) {}
 
 void SlamPipeline::reset() {
   session_.reset();
@@ -40,7 +42,7 @@ void SlamPipeline::reset() {
   sonar_extractor_.reset();
   pending_cones_.clear();
   last_features_ = FeatureSet();
-  stale_sonar_stamps_ = 0;
+  sonar_clock_.inOrder();
 }
 
 FrameResult SlamPipeline::processScan(const RangeScan& scan, const Pose2& odom_pose) {
@@ -108,29 +110,27 @@ FrameResult SlamPipeline::processSonar(const std::vector<ConeReading>& readings,
   // on any stamp a second back, so one zero-stamped or stale reading used to wipe it. (Readings
   // a little out of order, from transducers stamped apart, still join the window.)
   if (!std::isfinite(stamp) || stamp <= 0.0) return FrameResult::kRejectedStamp;
+  if (!odom_pose.allFinite()) return FrameResult::kRejectedPose;
   bool restarted = false;
-  if (!session_.trajectory().empty() && stamp < session_.lastStamp() &&
-      sonar_extractor_.wouldClearWindow(stamp)) {
-    // As the session decides for frames: stamps far back in several rings in a row are a
-    // restarted clock (a bag played again), and the map starts over; anything less is a stale
-    // reading, rejected. Rings, not readings, count: a ring is one message per transducer, all
-    // with its stamp, and one late ring must not end the map.
+  if (session_.lastStamp() != sonar_run_session_stamp_) sonar_clock_.inOrder();  // a frame since
+  if (!session_.trajectory().empty() && stamp < session_.lastStamp()) {
     const SessionOptions& o = session_.options();
     const bool far_back = o.reset_on_time_jump_back_s > 0.0 &&
                           session_.lastStamp() - stamp > o.reset_on_time_jump_back_s;
-    if (!far_back) {
-      stale_sonar_stamps_ = 0;
-      return FrameResult::kRejectedStamp;
+    if (far_back) {
+      // Late rings are rejected; a restarted clock (ClockRestartDetector) starts a new map, as
+      // the session does for frames far back in a row.
+      if (sonar_clock_.runLength() == 0) sonar_run_session_stamp_ = session_.lastStamp();
+      if (!sonar_clock_.farBack(stamp)) return FrameResult::kRejectedStamp;
+      session_.reset();
+      sonar_extractor_.reset();
+      pending_cones_.clear();  // the old run's
+      restarted = true;
+    } else if (sonar_extractor_.wouldClearWindow(stamp)) {
+      return FrameResult::kRejectedStamp;  // stale, but not far enough back to be a new clock
     }
-    if (stale_sonar_stamps_ == 0 || stamp != last_stale_sonar_stamp_) ++stale_sonar_stamps_;
-    last_stale_sonar_stamp_ = stamp;
-    if (stale_sonar_stamps_ < o.reset_after_frames_back) return FrameResult::kRejectedStamp;
-    session_.reset();
-    sonar_extractor_.reset();
-    pending_cones_.clear();  // the old run's
-    restarted = true;
   }
-  stale_sonar_stamps_ = 0;
+  if (!restarted) sonar_clock_.inOrder();
   const long clock_jumps = sonar_extractor_.stats().clock_jumps;
   sonar_extractor_.addReadings(readings, odom_pose, stamp);
   // The extractor cleared its window for stamps that went back (a restarted clock, a second

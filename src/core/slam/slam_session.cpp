@@ -1,5 +1,6 @@
 #include "rbpf_slam/core/slam/slam_session.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -19,6 +20,21 @@ void validate(const SessionOptions& o) {
   requireRange("gap_noise_inflation", o.gap_noise_inflation, 1.0, 1000.0);
   requireRange("reset_on_time_jump_back", o.reset_on_time_jump_back_s, 0.0, 1e6);
   requireRange("reset_after_frames_back", o.reset_after_frames_back, 1, 1000);
+}
+
+bool ClockRestartDetector::farBack(double stamp) {
+  if (count_ == 0) {
+    count_ = 1;
+    last_ = min_ = max_ = stamp;
+  } else if (stamp != last_) {
+    ++count_;
+    last_ = stamp;
+    min_ = std::min(min_, stamp);
+    max_ = std::max(max_, stamp);
+  }
+  if (span_s_ <= 0.0 || count_ < distinct_ || max_ - min_ < span_s_) return false;
+  count_ = 0;
+  return true;
 }
 
 SlamSession::SlamSession(std::unique_ptr<SlamFilter> filter, const SessionOptions& options)

@@ -83,10 +83,10 @@ class SlamPipeline {
   std::vector<ConeReading> pendingConesInBase(const Pose2& odom_pose) const;
   long scans_matched_ = 0;
   long scans_unmatched_ = 0;
-  // Sonar stamps far back that the session would reject: distinct stamps in a row (a ring of
-  // readings shares one), and the last of them.
-  int stale_sonar_stamps_ = 0;
-  double last_stale_sonar_stamp_ = 0.0;
+  // Sonar stamps far back: a restarted clock or late rings (ClockRestartDetector), and the
+  // session's last stamp when the run of them began (a frame used since ends the run).
+  ClockRestartDetector sonar_clock_;
+  double sonar_run_session_stamp_ = 0.0;
 };
 
 }  // namespace core

@@ -35,6 +35,30 @@ struct SessionOptions {
 
 void validate(const SessionOptions& options);
 
+/// Tells a restarted clock (a bag played again) from late messages, for inputs that arrive as
+/// many messages per instant: a sonar ring is one message per transducer, with one stamp or
+/// with stamps a few milliseconds apart, so counting messages (or stamps) would take one late
+/// ring for a restart. A run of stamps far back, with no input in order in between, is a
+/// restarted clock once it holds reset_after_frames_back distinct stamps spanning at least
+/// reset_on_time_jump_back_s (the new clock has run on that long); a late ring spans far less.
+class ClockRestartDetector {
+ public:
+  explicit ClockRestartDetector(const SessionOptions& options)
+      : span_s_(options.reset_on_time_jump_back_s),
+        distinct_(options.reset_after_frames_back) {}
+  /// A stamp far back. True when the run is a restarted clock (the run then starts over).
+  bool farBack(double stamp);
+  /// An input in order (or used by the session): ends the run.
+  void inOrder() { count_ = 0; }
+  int runLength() const { return count_; }
+
+ private:
+  double span_s_;
+  int distinct_;
+  int count_ = 0;  // distinct stamps in the run
+  double last_ = 0.0, min_ = 0.0, max_ = 0.0;
+};
+
 /// What became of a frame. kFirstFrame and kReset both start a map: kReset when the session
 /// itself threw the previous one away (stamps far back several times in a row, or an odometry
 /// gap with gap_action: reset), which the caller should report and follow (clear what it
