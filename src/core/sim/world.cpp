@@ -331,50 +331,6 @@ void checkChange(const World& world, const WorldChange& change, const std::strin
   nonNegative(field + ".sigma_m", random.sigma_m);
 }
 
-/// The order the simulator applies changes in, when it is known before the run: by lap, or by
-/// time. A world that triggers changes both ways must not let the two kinds touch one object or
-/// landmark, whose state would then depend on the robot's speed.
-std::vector<size_t> orderOfChanges(const World& world) {
-  std::vector<size_t> order(world.changes.size());
-  for (size_t i = 0; i < order.size(); ++i) order[i] = i;
-  std::stable_sort(order.begin(), order.end(), [&world](size_t a, size_t b) {
-    const WorldChange& x = world.changes[a];
-    const WorldChange& y = world.changes[b];
-    const bool x_lap = x.after_lap != 0, y_lap = y.after_lap != 0;
-    if (x_lap != y_lap) return x_lap;  // apart: shared targets are refused below
-    return x_lap ? x.after_lap < y.after_lap : x.at_time_s < y.at_time_s;
-  });
-  std::map<std::string, size_t> by_lap, by_time;  // target -> a change that moves it
-  for (size_t i = 0; i < world.changes.size(); ++i) {
-    const WorldChange& change = world.changes[i];
-    auto& mine = change.after_lap != 0 ? by_lap : by_time;
-    const auto& theirs = change.after_lap != 0 ? by_time : by_lap;
-    std::vector<std::string> targets;
-    for (const ObjectMove& move : change.objects) targets.push_back("object '" + move.name + "'");
-    for (const LandmarkMove& move : change.landmarks) {
-      targets.push_back("landmark " + std::to_string(move.id));
-    }
-    const RandomDisplacement& random = change.random_landmarks;
-    if (random.count_max > 0) {  // any candidate may be drawn
-      if (random.candidate_ids.empty()) {
-        for (const Landmark& l : world.landmarks) targets.push_back("landmark " + std::to_string(l.id));
-      } else {
-        for (int id : random.candidate_ids) targets.push_back("landmark " + std::to_string(id));
-      }
-    }
-    for (const std::string& target : targets) {
-      const auto other = theirs.find(target);
-      if (other != theirs.end()) {
-        fail("changes[" + std::to_string(i) + "] and changes[" + std::to_string(other->second) +
-             "] both change " + target + ", one after a lap and one at a time: their order " +
-             "depends on the run; trigger both by lap or both by time");
-      }
-      mine.emplace(target, i);
-    }
-  }
-  return order;
-}
-
 /// "by changes[j], which happens before this one", or "earlier in this change".
 std::string removedWhere(size_t by, size_t current) {
   if (by == current) return "earlier in this change";
@@ -388,7 +344,7 @@ void checkChangeSequence(const World& world) {
   World state = world;
   std::map<std::string, size_t> removed_objects;
   std::map<int, size_t> removed_landmarks;
-  for (size_t i : orderOfChanges(world)) {
+  for (size_t i : changeOrder(world)) {  // declared in world.h, defined below
     const WorldChange& change = world.changes[i];
     const std::string p = "changes[" + std::to_string(i) + "]";
     for (size_t k = 0; k < change.objects.size(); ++k) {
@@ -525,7 +481,48 @@ std::vector<Pose2> ringPoses(const RingSensorConfig& ring) {
   return poses;
 }
 
-std::vector<size_t> changeOrder(const World& world) { return orderOfChanges(world); }
+// A world that triggers changes both ways must not let the two kinds touch one object or
+// landmark, whose state would then depend on the robot's speed (world.h).
+std::vector<size_t> changeOrder(const World& world) {
+  std::vector<size_t> order(world.changes.size());
+  for (size_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::stable_sort(order.begin(), order.end(), [&world](size_t a, size_t b) {
+    const WorldChange& x = world.changes[a];
+    const WorldChange& y = world.changes[b];
+    const bool x_lap = x.after_lap != 0, y_lap = y.after_lap != 0;
+    if (x_lap != y_lap) return x_lap;  // apart: shared targets are refused below
+    return x_lap ? x.after_lap < y.after_lap : x.at_time_s < y.at_time_s;
+  });
+  std::map<std::string, size_t> by_lap, by_time;  // target -> a change that moves it
+  for (size_t i = 0; i < world.changes.size(); ++i) {
+    const WorldChange& change = world.changes[i];
+    auto& mine = change.after_lap != 0 ? by_lap : by_time;
+    const auto& theirs = change.after_lap != 0 ? by_time : by_lap;
+    std::vector<std::string> targets;
+    for (const ObjectMove& move : change.objects) targets.push_back("object '" + move.name + "'");
+    for (const LandmarkMove& move : change.landmarks) {
+      targets.push_back("landmark " + std::to_string(move.id));
+    }
+    const RandomDisplacement& random = change.random_landmarks;
+    if (random.count_max > 0) {  // any candidate may be drawn
+      if (random.candidate_ids.empty()) {
+        for (const Landmark& l : world.landmarks) targets.push_back("landmark " + std::to_string(l.id));
+      } else {
+        for (int id : random.candidate_ids) targets.push_back("landmark " + std::to_string(id));
+      }
+    }
+    for (const std::string& target : targets) {
+      const auto other = theirs.find(target);
+      if (other != theirs.end()) {
+        fail("changes[" + std::to_string(i) + "] and changes[" + std::to_string(other->second) +
+             "] both change " + target + ", one after a lap and one at a time: their order " +
+             "depends on the run; trigger both by lap or both by time");
+      }
+      mine.emplace(target, i);
+    }
+  }
+  return order;
+}
 
 void validate(const World& world) {
   checkRange("laps", world.laps, 1, 1000000);
