@@ -42,9 +42,9 @@ std::string stringParam(const ros::NodeHandle& private_nh, const char* key,
   return static_cast<std::string>(value);
 }
 
-/// True for a plain scalar that rosparam's YAML 1.1 reads as an integer in another base (010 is
-/// octal 8, 0x10 and 0b10 hex and binary), which the offline loader refuses: the node would
-/// otherwise run with another number than offline_slam on the same file.
+/// True for a plain integer with a leading zero or a 0x/0b prefix, which the offline loader
+/// refuses. rosparam's YAML 1.1 reads 010 as octal 8, 0x10 and 0b10 as hex and binary, and 09 as
+/// a string: the node would otherwise run with another value than offline_slam on the same file.
 bool nonDecimalInteger(const YAML::Node& node) {
   if (!node.IsScalar() || node.Tag() != "?") return false;  // quoted: a string
   const std::string& t = node.Scalar();
@@ -62,8 +62,9 @@ bool findRepeatedKeyOrNonDecimal(const YAML::Node& node, const std::string& wher
                                  std::string* found) {
   if (nonDecimalInteger(node)) {
     *found = (where.empty() ? std::string("the top level") : where) + " = " + node.Scalar() +
-             " is not a decimal integer (rosparam would read it as octal, hex or binary; "
-             "offline_slam refuses it): write it without the leading zero or prefix";
+             " is not a decimal integer (rosparam reads a leading zero as octal, or as a "
+             "string when it is not octal like 09, and 0x/0b as hex/binary; offline_slam "
+             "refuses it): write it without the leading zero or prefix";
     return true;
   }
   if (node.IsSequence()) {

@@ -180,7 +180,7 @@ TEST(LoadConfigFromParams, TheConfigFileIsCheckedAndNamed) {
   nh.setParam("particles", 40);
   // rosparam's YAML 1.1 reads 040 as octal 32 (the parameter the node sees); offline_slam
   // refuses it, so the node must too, from the file's text.
-  for (const char* written : {"040", "0x28", "-012"}) {
+  for (const char* written : {"040", "0x28", "-012", "09"}) {
     nh.setParam("config_text", "seed: 1\nresampling:\n  threshold: 0.5\nparticles: " +
                                    std::string(written) + "\n");
     try {

@@ -9,6 +9,8 @@
 #include <string>
 
 #include "rbpf_slam/core/filters/fastslam2.h"
+#include "rbpf_slam/core/filters/slam_filter.h"
+#include "rbpf_slam/core/random.h"
 #include "rbpf_slam/core/slam/slam_session.h"
 #include "rbpf_slam/io/landmark_file.h"
 
@@ -266,6 +268,33 @@ TEST(Localization, SessionRefusesACovarianceThatIsNotPositiveSemiDefinite) {
   EXPECT_LT(session.filter().estimate().mean.head<2>().norm(), 0.1);  // at the origin, not (1, 2)
   EXPECT_FALSE(session.setPose(Pose2(1, 2, 0), indefinite));  // after it
   EXPECT_TRUE(session.setPose(Pose2(1, 2, 0), Eigen::Vector3d(0.25, 0.25, 0.0685).asDiagonal()));
+}
+
+// Every variant that takes resetPose refuses an indefinite covariance itself (not only the
+// session and the node), and takes one whose off-diagonal pair differs by float32 rounding.
+TEST(Localization, EveryVariantRefusesAnIndefiniteCovarianceAndTakesAFloat32One) {
+  Eigen::Matrix3d indefinite = Eigen::Vector3d(0.25, 0.25, 0.0685).asDiagonal();
+  indefinite(0, 1) = indefinite(1, 0) = 1.0;
+  Eigen::Matrix3d float32 = Eigen::Vector3d(0.25, 0.25, 0.0685).asDiagonal();
+  float32(0, 1) = static_cast<float>(0.1 / 3.0);
+  float32(1, 0) = 0.1 / 3.0;  // the pair differs by ~1e-9 of 0.033: the entries' float rounding
+  ASSERT_NE(float32(0, 1), float32(1, 0));
+  EXPECT_TRUE(core::poseCovarianceUsable(float32));
+  int checked = 0;
+  for (const std::string& variant : core::availableVariants()) {
+    if (variant == "dpf") continue;  // takes no resetPose (documented)
+    core::FilterOptions options = pointFilterOptions();
+    options.variant = variant;
+    options.particles = 20;
+    std::unique_ptr<core::SlamFilter> filter = core::createFilter(options);
+    const Pose2 start = filter->estimate().mean;
+    EXPECT_FALSE(filter->resetPose(Pose2(1, 2, 0), indefinite)) << variant;
+    EXPECT_LT((filter->estimate().mean - start).norm(), 1e-9) << variant << " moved anyway";
+    EXPECT_TRUE(filter->resetPose(Pose2(1, 2, 0), float32)) << variant;
+    EXPECT_LT((filter->estimate().mean.head<2>() - Eigen::Vector2d(1, 2)).norm(), 0.6) << variant;
+    ++checked;
+  }
+  EXPECT_GE(checked, 6);
 }
 
 TEST(Localization, SessionStartsAtTheGivenPoseOnThePriorMap) {
