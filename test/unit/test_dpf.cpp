@@ -511,6 +511,32 @@ TEST(DistributedFilter, SameTrajectoryWhateverTheNumberOfThreads) {
   EXPECT_NE(runFilter(filter.get(), run).back(), results[0].back()) << "the seed must matter";
 }
 
+// A start pose with a spread (an initialpose before the first frame) draws every local
+// filter's particles from it; after the first step it declines (the feedback and maps carry
+// the old pose), so the node warns instead of reporting a pose it did not set.
+TEST(DistributedFilter, TakesAStartPoseWithItsSpreadOnlyBeforeTheFirstStep) {
+  const SyntheticRun run = makeRun(5, 7);
+  auto filter = createFilter(dpfOptions());
+  const Eigen::Matrix3d spread = Eigen::Vector3d(0.04, 0.04, 0.01).asDiagonal();
+  ASSERT_TRUE(filter->resetPose(Pose2(1.0, -2.0, 0.5), spread));
+  EXPECT_LT((filter->estimate().mean - Pose2(1.0, -2.0, 0.5)).norm(), 1e-9);
+  double sxx = 0.0, mean_x = 0.0;
+  const auto particles = filter->particles();
+  for (const auto& p : particles) mean_x += p.pose.x() / particles.size();
+  for (const auto& p : particles) sxx += std::pow(p.pose.x() - mean_x, 2) / particles.size();
+  EXPECT_NEAR(mean_x, 1.0, 0.06);
+  EXPECT_GT(sxx, 0.02) << "the particles must spread by the covariance";
+  EXPECT_LT(sxx, 0.07);
+  EXPECT_FALSE(filter->resetPose(Pose2(1.0, -2.0, 0.5), -spread));
+  filter->predict(run.motion[0]);
+  filter->update(run.features[0]);
+  const Pose2 after = filter->estimate().mean;
+  EXPECT_FALSE(filter->resetPose(Pose2(5.0, 5.0, 0.0), spread));
+  EXPECT_EQ(filter->estimate().mean, after);
+  filter->reset(Pose2::Zero());
+  EXPECT_TRUE(filter->resetPose(Pose2(5.0, 5.0, 0.0), spread));  // a new run
+}
+
 TEST(DistributedFilter, TracksAsWellAsFastSlam2AndBeatsOdometry) {
   const SyntheticRun run = makeRun(120, 11);
   FilterOptions o = dpfOptions();

@@ -37,8 +37,8 @@ DpfCoordinator::DpfCoordinator(const FilterOptions& options)
   reset(Pose2::Zero());
 }
 
-void DpfCoordinator::reset(const Pose2& initial_pose) {
-  master_.reset(initial_pose);
+void DpfCoordinator::reset(const Pose2& initial_pose, const Eigen::Matrix3d& covariance) {
+  master_.reset(initial_pose, covariance);
   injector_.reset();
   pending_ = PendingMotion();
   feedback_ = DpfFeedback();
@@ -115,6 +115,15 @@ DistributedFilter::DistributedFilter(const FilterOptions& options)
 void DistributedFilter::reset(const Pose2& initial_pose) {
   for (auto& local : locals_) local->reset(initial_pose);
   coordinator_.reset(initial_pose);
+}
+
+bool DistributedFilter::resetPose(const Pose2& pose, const Eigen::Matrix3d& covariance) {
+  if (coordinator_.step() != 0 || !pose.allFinite() || !poseCovarianceUsable(covariance)) {
+    return false;
+  }
+  for (auto& local : locals_) local->reset(pose, &covariance);
+  coordinator_.reset(pose, covariance);
+  return true;
 }
 
 void DistributedFilter::predict(const MotionInput& motion) { coordinator_.predict(motion); }

@@ -81,10 +81,13 @@ DpfLocalFilter::DpfLocalFilter(const FilterOptions& options, int index)
   reset(Pose2::Zero());
 }
 
-void DpfLocalFilter::reset(const Pose2& initial_pose) {
+void DpfLocalFilter::reset(const Pose2& initial_pose, const Eigen::Matrix3d* covariance) {
   rng_.seed(localFilterSeed(options_.seed, index_));
   particles_.assign(options_.particles, Particle());
-  for (auto& p : particles_) p.pose = initial_pose;
+  for (auto& p : particles_) {
+    p.pose = covariance ? sampleMultivariate<3>(rng_, initial_pose, *covariance) : initial_pose;
+    p.pose.z() = wrapAngle(p.pose.z());
+  }
   weights_.assign(options_.particles, 1.0 / options_.particles);
   log_weights_.assign(options_.particles, 0.0);
   resampled_best_ = -1;

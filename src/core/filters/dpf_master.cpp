@@ -99,11 +99,11 @@ std::vector<double> mixedWeights(const std::vector<double>& innovation,
 
 DpfMaster::DpfMaster(const DpfOptions& options) : options_(options) { reset(Pose2::Zero()); }
 
-void DpfMaster::reset(const Pose2& initial_pose) {
+void DpfMaster::reset(const Pose2& initial_pose, const Eigen::Matrix3d& covariance) {
   health_.assign(options_.local_filters, DpfLocalHealth());
   last_ = DpfMasterOutput();
   last_.mean = initial_pose;
-  last_.covariance.setZero();
+  last_.covariance = 0.5 * (covariance + covariance.transpose());
   last_.weights.assign(options_.local_filters, 1.0 / options_.local_filters);
 }
 

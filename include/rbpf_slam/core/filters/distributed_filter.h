@@ -21,7 +21,8 @@ namespace core {
 class DpfCoordinator {
  public:
   explicit DpfCoordinator(const FilterOptions& options);
-  void reset(const Pose2& initial_pose);
+  void reset(const Pose2& initial_pose,
+             const Eigen::Matrix3d& covariance = Eigen::Matrix3d::Zero());
   void predict(const MotionInput& motion);
   /// The next step's input; *injected gets the disturbance of each local filter.
   DpfStepInput beginStep(const FeatureSet& features, std::vector<Pose2>* injected);
@@ -51,6 +52,10 @@ class DistributedFilter : public SlamFilter {
 
   std::string variant() const override { return "dpf"; }
   void reset(const Pose2& initial_pose) override;
+  /// Only before the first update() since reset (the session's start pose, an initialpose
+  /// before the first frame): later the local filters' feedback and maps would carry the old
+  /// pose, so it declines.
+  bool resetPose(const Pose2& pose, const Eigen::Matrix3d& covariance) override;
   void predict(const MotionInput& motion) override;
   UpdateStats update(const FeatureSet& features) override;
   PoseEstimate estimate() const override;

@@ -44,7 +44,9 @@ class DpfLocalFilter {
   DpfLocalFilter(const FilterOptions& options, int index);
 
   int index() const { return index_; }
-  void reset(const Pose2& initial_pose);
+  /// Every particle at initial_pose, or drawn from N(initial_pose, covariance) when one is
+  /// given (poseCovarianceUsable); maps emptied.
+  void reset(const Pose2& initial_pose, const Eigen::Matrix3d* covariance = nullptr);
   /// Runs steps 2 of the protocol (dpf_exchange.h) for one input; `injected` is the
   /// disturbance added to this filter's odometry increment (zero when not faulted).
   DpfLocalEstimate step(const DpfStepInput& input, const Pose2& injected = Pose2::Zero());

@@ -37,7 +37,9 @@ void gainedInformation(const Eigen::Matrix3d& posterior_info, const Eigen::Matri
 class DpfMaster {
  public:
   explicit DpfMaster(const DpfOptions& options);
-  void reset(const Pose2& initial_pose);
+  /// Starts at initial_pose with this covariance (zero: exactly there).
+  void reset(const Pose2& initial_pose,
+             const Eigen::Matrix3d& covariance = Eigen::Matrix3d::Zero());
   /// Fuses one step's estimates (one per local filter, any order); `motion` is the step's
   /// odometry increment (the master's prior is its last mean moved by it). Throws
   /// std::invalid_argument when an estimate is missing, duplicated or from another step.
