@@ -5,6 +5,8 @@
 #include <cstring>
 #include <stdexcept>
 
+#include <rosbag/view.h>
+
 #include "rbpf_slam/io/output_file.h"
 
 namespace rbpf_slam {
@@ -16,6 +18,9 @@ void openBagForReading(rosbag::Bag* bag, const std::string& path) {
   } catch (const rosbag::BagException& e) {
     throw std::runtime_error(path + ": cannot open bag: " + e.what());
   }
+  // rosbag::View of an empty bag begins at TIME_MAX and ends at TIME_MIN: its duration throws
+  // "Duration is out of dual 32-bit range", naming nothing.
+  if (rosbag::View(*bag).size() == 0) throw std::runtime_error(path + ": the bag holds no messages");
 }
 
 PartialBag::PartialBag(const std::string& path)

@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "rbpf_slam/ros/bag_files.h"
+#include "rbpf_slam/ros/conversions.h"
 #include "rbpf_slam/ros/node_support.h"
 
 namespace rbpf_slam {
@@ -44,8 +45,9 @@ struct StreamState {
         return;  // measure gaps against the newest stamp
       }
       if (stamp == last) ++report.duplicates;
-      const double step = (stamp - last).toSec();
-      steps.emplace_back(step, (last - bag_begin).toSec());
+      // In seconds as doubles: a ros::Duration of a stamp near 2^32 s (a driver's -1) throws.
+      const double step = stamp.toSec() - last.toSec();
+      steps.emplace_back(step, last.toSec() - bag_begin.toSec());
       report.largest_gap_s = std::max(report.largest_gap_s, step);
     }
     last = stamp;
@@ -96,6 +98,7 @@ BagReport validateBag(const std::string& path, const BagValidationOptions& optio
   std::map<std::string, std::set<std::string>> tf_neighbours;
   std::map<std::string, std::string> range_topics;  // topics of sensor_msgs/Range
   std::set<std::string> odometry_topics;            // nav_msgs/Odometry (SLAM reads tf)
+  std::set<std::string> features_topics;            // rbpf_slam/FeatureArray
   std::map<std::string, long> undecodable;          // per topic: messages of a damaged bag
   for (const rosbag::MessageInstance& m : view) {
     const std::string topic = m.getTopic();
@@ -108,18 +111,14 @@ BagReport validateBag(const std::string& path, const BagValidationOptions& optio
           const std::string edge = "tf " + parent + " -> " + child;
           StreamState& s = streams[edge];
           s.report.name = edge;
-          const auto& q = t.transform.rotation;
-          const auto& p = t.transform.translation;
-          if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z) ||
-              !std::isfinite(q.x) || !std::isfinite(q.y) || !std::isfinite(q.z) ||
-              !std::isfinite(q.w)) {
-            ++s.report.invalid_values;
-          }
+          // What tf2 refuses (it logs and drops it): a run cannot use it.
+          const std::string problem = transformProblem(t);
+          if (!problem.empty() && s.report.invalid_values++ == 0) s.report.first_invalid = problem;
           if (!is_static)
             s.add(t.header.stamp, begin);
           else
             ++s.report.messages;
-          if (!parent.empty() && !child.empty()) {
+          if (problem.empty()) {
             tf_neighbours[parent].insert(child);
             tf_neighbours[child].insert(parent);
           }
@@ -144,6 +143,13 @@ BagReport validateBag(const std::string& path, const BagValidationOptions& optio
         header = cloud->header;
       } else if (const auto features = m.instantiate<FeatureArray>()) {
         header = features->header;
+        features_topics.insert(topic);
+        for (const auto& f : features->points) {
+          if (!std::isfinite(f.range) || !std::isfinite(f.bearing)) ++s.report.invalid_values;
+        }
+        for (const auto& f : features->lines) {
+          if (!std::isfinite(f.rho) || !std::isfinite(f.theta)) ++s.report.invalid_values;
+        }
       } else if (const auto odometry = m.instantiate<nav_msgs::Odometry>()) {
         header = odometry->header;
         odometry_topics.insert(topic);
@@ -211,8 +217,11 @@ BagReport validateBag(const std::string& path, const BagValidationOptions& optio
                                 " s, first at " + fixed(r.first_gap_at_s) + " s into the bag)");
     }
     if (r.invalid_values > 0) {
-      report.problems.push_back(name + ": " + std::to_string(r.invalid_values) +
-                                (is_tf ? " non-finite transform(s)" : " NaN or -inf value(s)"));
+      report.problems.push_back(
+          name + ": " + std::to_string(r.invalid_values) +
+          (is_tf ? " transform(s) tf2 refuses (the first: " + r.first_invalid + ")"
+                 : (features_topics.count(name) ? " non-finite feature(s)"
+                                                : " NaN or -inf value(s)")));
     }
     if (is_tf) continue;
     if (r.frames.size() > 1) {

@@ -9,6 +9,7 @@
 #include <cstring>
 
 #include "rbpf_slam/core/filters/observation.h"
+#include "rbpf_slam/ros/node_support.h"
 
 namespace rbpf_slam {
 namespace rosbridge {
@@ -35,6 +36,29 @@ core::Pose2 toPose2(const geometry_msgs::Transform& t) {
 
 core::Pose2 toPose2(const geometry_msgs::Pose& p) {
   return core::Pose2(p.position.x, p.position.y, tf2::getYaw(p.orientation));
+}
+
+std::string transformProblem(const geometry_msgs::TransformStamped& t) {
+  const std::string parent = stripSlash(t.header.frame_id), child = stripSlash(t.child_frame_id);
+  if (parent.empty()) return "no frame_id";
+  if (child.empty()) return "no child_frame_id";
+  if (parent == child) return "frame_id and child_frame_id are both '" + child + "'";
+  const auto& p = t.transform.translation;
+  const auto& q = t.transform.rotation;
+  if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) {
+    return "a translation that is not finite";
+  }
+  if (!std::isfinite(q.x) || !std::isfinite(q.y) || !std::isfinite(q.z) || !std::isfinite(q.w)) {
+    return "a rotation that is not finite";
+  }
+  const double norm2 = q.x * q.x + q.y * q.y + q.z * q.z + q.w * q.w;
+  if (std::abs(norm2 - 1.0) >= 0.01) {
+    char text[96];
+    std::snprintf(text, sizeof(text), "a quaternion that is not normalised (norm %.4g)",
+                  std::sqrt(norm2));
+    return text;
+  }
+  return "";
 }
 
 SensorMount toSensorMount(const geometry_msgs::Transform& t) {

@@ -25,7 +25,7 @@ std::vector<core::Pose2> lookupTransducers(const tf2::BufferCore& tf, const std:
     try {
       poses.push_back(
           toPose2(tf.lookupTransform(base, prefix + std::to_string(i), stamp).transform));
-    } catch (const tf2::TransformException&) {
+    } catch (const std::exception&) {  // TransformException, or tf2's time arithmetic
       break;
     }
   }

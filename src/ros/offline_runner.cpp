@@ -141,9 +141,9 @@ std::vector<OdometryArrival> readOdometry(const rosbag::Bag& bag, const std::str
     const auto msg = instantiateOrNull<tf2_msgs::TFMessage>(m);
     if (!msg) continue;
     for (const auto& t : msg->transforms) {
-      // A non-finite transform is refused by tf2: no odometry arrived with it.
+      // A transform tf2 refuses (transformProblem) is no odometry that arrived.
       if (stripSlash(t.header.frame_id) == odom_frame &&
-          stripSlash(t.child_frame_id) == base_frame && toPose2(t.transform).allFinite()) {
+          stripSlash(t.child_frame_id) == base_frame && transformProblem(t).empty()) {
         odometry.push_back({m.getTime(), t.header.stamp.toSec()});
       }
     }
@@ -177,12 +177,30 @@ std::vector<ros::Time> runStarts(const std::vector<OdometryArrival>& odometry, d
   return starts;
 }
 
+/// How long each tf buffer keeps transforms: tf2 drops those older than the newest stamp less
+/// this, so it must span the header stamps, not only the bag's record time (a converter may
+/// write a 600 s log in 6 s of bag time; stamps may jump forward). 60 s of margin, at most
+/// 1e6 s (tf2 adds it to stamps, which must stay under 2^32 s).
+ros::Duration tfCacheLength(const std::vector<OdometryArrival>& odometry, double bag_duration_s) {
+  double first = std::numeric_limits<double>::infinity();
+  double last = -first;
+  for (const OdometryArrival& a : odometry) {
+    first = std::min(first, a.stamp);
+    last = std::max(last, a.stamp);
+  }
+  const double span = odometry.empty() ? 0.0 : last - first;
+  return ros::Duration(std::clamp(std::max(span, bag_duration_s) + 60.0, 10.0, 1e6));
+}
+
 /// Loads every transform of the bag into one tf buffer per run (run_starts: bag times where a
 /// new one begins, with the static transforms seen so far), since one buffer cannot hold two
 /// runs whose stamps overlap. Repeated stamps of a child frame (common in converted logs) are
-/// skipped here instead of letting tf2 warn for each. Returns how many were skipped.
+/// skipped here instead of letting tf2 warn for each, and so are transforms tf2 would refuse
+/// (transformProblem; tf2 would log each one and drop it), counted in *malformed with the first
+/// named in *first_malformed. Returns how many were skipped, both kinds.
 long loadTransforms(const rosbag::Bag& bag, const std::vector<ros::Time>& run_starts,
-                    const ros::Duration& cache, std::vector<TfSegment>* segments) {
+                    const ros::Duration& cache, std::vector<TfSegment>* segments, long* malformed,
+                    std::string* first_malformed) {
   std::map<std::string, std::set<ros::Time>> stamps_seen;  // per frame pair, this segment
   std::vector<geometry_msgs::TransformStamped> statics;
   segments->clear();
@@ -204,6 +222,17 @@ long loadTransforms(const rosbag::Bag& bag, const std::vector<ros::Time>& run_st
     tf2::BufferCore* buffer = segments->back().buffer.get();
     const bool is_static = topicIs(m.getTopic(), "tf_static");
     for (const auto& t : msg->transforms) {
+      const std::string problem = transformProblem(t);
+      if (!problem.empty()) {
+        ++skipped;
+        if ((*malformed)++ == 0) {
+          char at[32];
+          std::snprintf(at, sizeof(at), "%.3f", t.header.stamp.toSec());
+          *first_malformed = m.getTopic() + " " + t.header.frame_id + " -> " + t.child_frame_id +
+                             " at " + at + ": " + problem;
+        }
+        continue;
+      }
       if (!is_static) {
         // A repeated stamp is skipped (tf2 would keep the first and complain); an older one
         // that arrives late is inserted in its place, as a node's tf2 does.
@@ -213,12 +242,20 @@ long loadTransforms(const rosbag::Bag& bag, const std::vector<ros::Time>& run_st
           continue;
         }
       }
+      bool taken = false;
       try {
-        buffer->setTransform(t, "bag", is_static);
-        if (is_static) statics.push_back(t);
+        taken = buffer->setTransform(t, "bag", is_static);
       } catch (const std::exception&) {
-        // malformed transform (NaN, empty frame): tf2 rejects it; nothing to keep
+        // a stamp tf2's arithmetic cannot hold (near 2^32 s): nothing to keep
+      }
+      if (taken && is_static) statics.push_back(t);
+      if (!taken) {
         ++skipped;
+        if ((*malformed)++ == 0) {
+          *first_malformed = m.getTopic() + " " + t.header.frame_id + " -> " + t.child_frame_id +
+                             ": refused by tf2 (stamp " + std::to_string(t.header.stamp.sec) +
+                             " s)";
+        }
       }
     }
   }
@@ -347,6 +384,11 @@ std::vector<std::string> describeOutcome(const OfflineSummary& s, const OfflineO
                                          const std::string& variant, bool* failed) {
   std::vector<std::string> lines;
   *failed = false;
+  // First: a refused transform is usually why frames had no tf.
+  if (s.malformed_transforms > 0) {
+    lines.push_back("skipped " + std::to_string(s.malformed_transforms) +
+                    " transform(s) tf2 cannot take; the first: " + s.first_malformed_transform);
+  }
   if (s.dropped_no_tf > 0) {
     lines.push_back("dropped " + std::to_string(s.dropped_no_tf) +
                     " frame(s) without tf; the first: " + s.first_tf_error);
@@ -354,6 +396,22 @@ std::vector<std::string> describeOutcome(const OfflineSummary& s, const OfflineO
   if (s.dropped_bad_message > 0) {
     lines.push_back("dropped " + std::to_string(s.dropped_bad_message) +
                     " malformed message(s); the first: " + s.first_bad_message);
+  }
+  if (s.rejected > 0) {
+    lines.push_back(std::to_string(s.rejected) + " frame(s) were not used: stamped before a "
+                    "frame already used (inputs stamped out of order across topics or with a "
+                    "lag, or a clock that went back without a restart) or with non-finite "
+                    "odometry; the first: " + s.first_rejected);
+  }
+  if (s.dropped_features > 0) {
+    lines.push_back("dropped " + std::to_string(s.dropped_features) +
+                    " non-finite feature(s) inside otherwise good FeatureArray messages");
+  }
+  if (s.resets > 0) {
+    lines.push_back("the session started " + std::to_string(s.resets) +
+                    " new map(s) (stamps went back, or a gap with gap_action: reset): the "
+                    "outputs hold the last run only; " + std::to_string(s.discarded_poses) +
+                    " pose(s) of the runs before are not in them");
   }
   if (s.features_rejected > 0) {
     lines.push_back("the " + variant + " filter skipped " + std::to_string(s.features_rejected) +
@@ -413,22 +471,7 @@ OfflineSummary OfflineRunner::run() {
   rosbag::View full(bag);
   const ros::Time bag_begin = full.getBeginTime(), bag_end = full.getEndTime();
   summary.bag_duration_s = (bag_end - bag_begin).toSec();
-  // The whole bag's tf fits in memory for the bags this runner is meant for (hours of 2D data).
   const io::RosOptions& ros_options = config_.ros;
-  std::vector<OdometryArrival> odometry;
-  std::vector<TfSegment> tf_segments;
-  odometry =
-      readOdometry(bag, stripSlash(ros_options.odom_frame), stripSlash(ros_options.base_frame));
-  summary.skipped_transforms =
-      loadTransforms(bag,
-                     runStarts(odometry, config_.session.reset_on_time_jump_back_s,
-                               config_.session.reset_after_frames_back),
-                     ros::Duration(std::max(summary.bag_duration_s + 60.0, 10.0)), &tf_segments);
-  summary.tf_segments = static_cast<long>(tf_segments.size());
-  std::size_t segment = 0;        // the tf segment of the current message
-  std::size_t next_odometry = 0;  // the next odometry transform to tell the session of
-  double last_odometry_fed = -std::numeric_limits<double>::infinity();    // stamp of the last fed
-  double newest_odometry_fed = -std::numeric_limits<double>::infinity();  // ... and the newest
   std::string sensor_topic;  // the raw sensor topic of the front end, if any
   if (config_.frontend == "laser") sensor_topic = ros_options.scan_topic;
   if (config_.frontend == "sonar") {
@@ -458,12 +501,29 @@ OfflineSummary OfflineRunner::run() {
     throw std::runtime_error(options_.bag_path + ": no messages on " + wanted + "; the bag has " +
                              describeTopics(bag));
   }
+  // The whole bag's tf fits in memory for the bags this runner is meant for (hours of 2D data).
+  // Read after the topics are checked: on a large bag that pass takes a while.
+  const std::vector<OdometryArrival> odometry =
+      readOdometry(bag, stripSlash(ros_options.odom_frame), stripSlash(ros_options.base_frame));
+  std::vector<TfSegment> tf_segments;
+  summary.skipped_transforms = loadTransforms(
+      bag,
+      runStarts(odometry, config_.session.reset_on_time_jump_back_s,
+                config_.session.reset_after_frames_back),
+      tfCacheLength(odometry, summary.bag_duration_s), &tf_segments,
+      &summary.malformed_transforms, &summary.first_malformed_transform);
+  summary.tf_segments = static_cast<long>(tf_segments.size());
+  std::size_t segment = 0;        // the tf segment of the current message
+  std::size_t next_odometry = 0;  // the next odometry transform to tell the session of
+  double last_odometry_fed = -std::numeric_limits<double>::infinity();    // stamp of the last fed
+  double newest_odometry_fed = -std::numeric_limits<double>::infinity();  // ... and the newest
   std::unique_ptr<ResultBag> result_bag;
   if (!options_.output_bag.empty()) {
     result_bag = std::make_unique<ResultBag>(options_.output_bag, ros_options);
   }
   std::vector<core::Pose2> transducers;  // sonar_cloud: found in tf at the first cloud
   std::set<std::string> tilted_frames;   // warned once each
+  std::set<std::string> warned_scan_headers;  // scan frames with an inconsistent header, once
   std::vector<double> update_ms;
   ProgressBar progress(options_.progress);
   for (const rosbag::MessageInstance& m : view) {
@@ -535,7 +595,9 @@ OfflineSummary OfflineRunner::run() {
       to = &frame;
       mount = toSensorMount(
           tf.lookupTransform(ros_options.base_frame, stripSlash(frame), stamp).transform);
-    } catch (const tf2::TransformException& e) {
+    } catch (const std::exception& e) {
+      // tf2::TransformException, or std::runtime_error from tf2's time arithmetic for a stamp
+      // near 2^32 s (a driver's -1): this frame is lost, not the run.
       if (summary.dropped_no_tf++ == 0) {
         char at[32];
         std::snprintf(at, sizeof(at), "%.3f", stamp.toSec());
@@ -562,13 +624,20 @@ OfflineSummary OfflineRunner::run() {
       ++next_odometry;
     }
     const auto t0 = std::chrono::steady_clock::now();
+    const std::size_t poses_before = pipeline_.session().trajectory().size();
     core::FrameResult result;
     if (scan) {
       core::RangeScan range_scan;
       std::string error;
-      if (!toRangeScan(*scan, mount.pose, &range_scan, &error, mount.upside_down)) {
+      const bool usable = toRangeScan(*scan, mount.pose, &range_scan, &error, mount.upside_down);
+      if (!usable) {
         if (summary.dropped_bad_message++ == 0) summary.first_bad_message = "scan: " + error;
         continue;
+      }
+      if (!error.empty() && warned_scan_headers.insert(frame).second) {
+        // Used, but its header is inconsistent (as the node warns): said once per frame.
+        std::fprintf(stderr, "offline_slam: %s (%s) at %.3f: %s\n", m.getTopic().c_str(),
+                     frame.c_str(), stamp.toSec(), error.c_str());
       }
       result = pipeline_.processScan(range_scan, odom_pose);
     } else if (range) {
@@ -607,10 +676,12 @@ OfflineSummary OfflineRunner::run() {
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     switch (result) {
       case core::FrameResult::kReset:
-        if (options_.verbose) {
-          std::fprintf(stderr, "t=%.2f: the session started a new map (stamps back or a gap)\n",
-                       stamp.toSec());
-        }
+        summary.discarded_poses += static_cast<long>(poses_before);
+        std::fprintf(stderr,
+                     "offline_slam: %s at %.3f: the session started a new map (stamps went back, "
+                     "or a gap with gap_action: reset); the %zu pose(s) before are not in the "
+                     "outputs\n",
+                     m.getTopic().c_str(), stamp.toSec(), poses_before);
         [[fallthrough]];
       case core::FrameResult::kUpdated:
       case core::FrameResult::kFirstFrame:
@@ -621,11 +692,24 @@ OfflineSummary OfflineRunner::run() {
       case core::FrameResult::kSkippedNoMotion:
         ++summary.skipped;
         break;
+      case core::FrameResult::kBuffered:
+        ++summary.buffered;
+        break;
       case core::FrameResult::kSkippedSameStamp:
         ++summary.same_stamp;
         break;
-      default:
-        ++summary.rejected;
+      case core::FrameResult::kRejectedStamp:
+      case core::FrameResult::kRejectedPose:
+        if (summary.rejected++ == 0) {
+          char text[160];
+          std::snprintf(text, sizeof(text), " at %.3f: %s %.3f", stamp.toSec(),
+                        result == core::FrameResult::kRejectedPose
+                            ? "odometry not finite; last frame used at"
+                            : "stamped before the last frame used, at",
+                        pipeline_.session().lastStamp());
+          summary.first_rejected = m.getTopic() + text;
+        }
+        break;
     }
     if (options_.verbose && (result == core::FrameResult::kUpdated)) {
       const core::UpdateStats& u = pipeline_.session().lastStats();
@@ -761,6 +845,7 @@ OfflineSummary OfflineRunner::writeOutputs(const OfflineSummary& in) const {
       .integer("frames", summary.frames)
       .integer("updates", summary.updates)
       .integer("skipped_no_motion", summary.skipped)
+      .integer("sonar_buffered", summary.buffered)
       .integer("rejected", summary.rejected)
       .integer("same_stamp", summary.same_stamp)
       .integer("resets", summary.resets)
@@ -768,6 +853,8 @@ OfflineSummary OfflineRunner::writeOutputs(const OfflineSummary& in) const {
       .integer("dropped_no_tf", summary.dropped_no_tf)
       .integer("dropped_bad_message", summary.dropped_bad_message)
       .integer("skipped_transforms", summary.skipped_transforms)
+      .integer("malformed_transforms", summary.malformed_transforms)
+      .integer("discarded_poses", summary.discarded_poses)
       .integer("tf_segments", summary.tf_segments)
       .integer("dropped_features", summary.dropped_features)
       .integer("tilted_frames", summary.tilted_frames)

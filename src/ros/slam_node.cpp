@@ -47,6 +47,8 @@ const char* describe(core::FrameResult result) {
       return "first frame of a new map (the session reset)";
     case core::FrameResult::kSkippedSameStamp:
       return "skipped (the stamp of the last frame: another input of that instant, or a repeat)";
+    case core::FrameResult::kBuffered:
+      return "buffered (a sonar reading joined the echo window)";
   }
   return "unknown";
 }

@@ -386,7 +386,7 @@ TEST(SlamPipeline, ConeReadingsReachTheFilterInTheBaseFrameOfTheUpdate) {
   ASSERT_EQ(pipeline.lastFeatures().cones.size(), 1u);
   // Two readings 5 cm apart (the second does not move enough), then an update 12 cm on.
   EXPECT_EQ(pipeline.processSonar({r}, Pose2(0.07, 0.0, 0.0), 1.2),
-            FrameResult::kSkippedNoMotion);
+            FrameResult::kBuffered);
   r.sensor_pose = Pose2(0.0, 0.1, M_PI / 2);
   EXPECT_EQ(pipeline.processSonar({r}, Pose2(0.14, 0.0, 0.0), 1.3), FrameResult::kUpdated);
   const std::vector<ConeReading>& cones = pipeline.lastFeatures().cones;

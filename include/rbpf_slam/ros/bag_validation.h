@@ -30,7 +30,8 @@ struct StreamReport {
   double gap_threshold_s = 0.0;  // max(max_gap_s, 5 x the median step without the largest)
   double largest_gap_s = 0.0;
   double first_gap_at_s = -1.0;  // bag-relative time of the first gap
-  long invalid_values = 0;       // NaN / -inf ranges, non-finite transforms
+  long invalid_values = 0;       // NaN / -inf ranges, non-finite features, refused transforms
+  std::string first_invalid;     // tf: why the first refused transform is (transformProblem)
   std::set<std::string> frames;  // header frames seen
 };
 

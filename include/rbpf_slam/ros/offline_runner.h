@@ -29,13 +29,18 @@ struct OfflineSummary {
   long frames = 0;
   long updates = 0;
   long skipped = 0;     // no motion since the last update (linear_update, angular_update)
+  long buffered = 0;    // sonar readings that joined the echo window (used at a later update)
   long same_stamp = 0;  // at the stamp of the frame before (another input of that instant)
   long rejected = 0;    // older stamps, non-finite odometry
+  std::string first_rejected;  // the first of them: topic, stamp, why
   long resets = 0;
+  long discarded_poses = 0;  // poses of the runs before the last reset (not in the outputs)
   long gaps = 0;  // steps across a time gap or odometry jump (max_time_gap, max_odometry_jump)
   long dropped_no_tf = 0;
   long dropped_bad_message = 0;
   long skipped_transforms = 0;  // repeated or malformed tf in the bag
+  long malformed_transforms = 0;  // of them, those tf2 refuses (transformProblem)
+  std::string first_malformed_transform;  // the first of them, with why
   long dropped_features = 0;    // non-finite features inside otherwise good messages
   long tilted_frames = 0;       // sensor frames tilted over kMaxLevelTiltRad (used as if level)
   long features_rejected = 0;   // features the filter skipped (degenerate, or a kind it ignores)
@@ -66,8 +71,9 @@ struct OfflineSummary {
   double smoothing_s = 0.0;        // wall time of the smoothing (not in wall_s)
 };
 
-/// What a finished run should tell its user, one line each: the first failed tf lookup and
-/// malformed message behind the drop counts, the features the filter skipped, and why the run
+/// What a finished run should tell its user, one line each: the first failed tf lookup,
+/// malformed message, malformed transform and rejected frame behind those counts, the features
+/// dropped or skipped, the map restarts and what they discarded, and why the run
 /// did not do its work (no frame used; a reference given but not evaluated), which also sets
 /// *failed. Empty for a clean run.
 std::vector<std::string> describeOutcome(const OfflineSummary& summary,

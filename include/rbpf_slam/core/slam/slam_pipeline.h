@@ -35,7 +35,7 @@ class SlamPipeline {
   FrameResult processScan(const RangeScan& scan, const Pose2& odom_pose);
   /// Sonar (or other cone sensor) readings taken at stamp with the robot at odom_pose: they
   /// join the echo window; the filter is updated with the window's lines and points once the
-  /// robot moved enough since the last extraction (else kSkippedNoMotion). The update's
+  /// robot moved enough since the last extraction (else kBuffered: used later). The update's
   /// FeatureSet::cones holds every reading since the previous update, re-expressed in the base
   /// frame at this odom_pose (for raw-data variants such as grid_pf). Laser scans likewise
   /// arrive in FeatureSet::scan.

@@ -74,7 +74,8 @@ enum class FrameResult {
   kRejectedStamp,
   kRejectedPose,
   kReset,
-  kSkippedSameStamp
+  kSkippedSameStamp,
+  kBuffered  // a sonar reading joined the echo window; a later frame extracts and updates
 };
 
 struct TrajectoryPoint {

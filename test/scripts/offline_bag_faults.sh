@@ -1,0 +1,211 @@
+#!/usr/bin/env bash
+# offline_slam and validate_bag on copies of a simulated bag with one fault each, as converters,
+# drivers and recorders make them. Fails unless each run ends normally and names the fault:
+#   compressed  bag (record) times squeezed 100x, header stamps jumping 200 s forward half way:
+#               every frame still has tf (the tf buffer kept bag duration + 60 s of stamps and
+#               dropped the first half)
+#   hugestamp   one scan stamped 4294967295 s (a driver's -1): that frame is lost, not the run
+#   empty       no messages: both tools say so, naming the file
+#   swap        every 5th scan stamped after the next: the rejected frames are counted and the
+#               first named (they used to be silent)
+#   denorm      odometry quaternions of norm 1.02, which tf2 refuses: named by both tools
+#   jumpback    the clock goes back 100 s half way: the restart and the poses it discards are said
+#   anglemax    angle_max inconsistent with the beams: warned once, the scans still used
+#   featnan     one NaN point per FeatureArray: counted by offline_slam, reported by validate_bag
+#   sonar       per-transducer Range readings: those that join the echo window are counted as
+#               buffered, not as skipped for lack of motion
+set -euo pipefail
+
+source "$(dirname "$0")/lib/offline.sh"
+require_tools simulate offline_slam validate_bag
+
+"$bin/simulate" --world "$root/worlds/test_small.yaml" --output "$work/clean.bag" --seed 4 >/dev/null
+/usr/bin/python3 - "$work" <<'PY'
+import copy
+import sys
+
+import rosbag
+import rospy
+
+work = sys.argv[1]
+messages = list(rosbag.Bag(work + "/clean.bag").read_messages())
+t0 = messages[0][2]
+
+
+def write(name, edit):
+    with rosbag.Bag("%s/%s.bag" % (work, name), "w") as out:
+        for i, (topic, msg, t) in enumerate(messages):
+            for topic2, msg2, t2 in edit(i, topic, copy.deepcopy(msg), t):
+                out.write(topic2, msg2, t2)
+
+
+def squeezed(i, topic, msg, t):
+    # Stamps also jump 200 s forward half way: they span 261 s in 0.6 s of bag time.
+    if t > t0 + rospy.Duration.from_sec(30.0) and topic != "/tf_static":
+        ahead = rospy.Duration.from_sec(200.0)
+        if hasattr(msg, "transforms"):
+            for tr in msg.transforms:
+                tr.header.stamp += ahead
+        elif hasattr(msg, "header"):
+            msg.header.stamp += ahead
+    yield topic, msg, t0 + rospy.Duration.from_sec((t - t0).to_sec() / 100.0)
+
+
+scans = [0]
+
+
+def hugestamp(i, topic, msg, t):
+    if topic == "/scan":
+        scans[0] += 1
+        if scans[0] == 40:
+            msg.header.stamp = rospy.Time(4294967295, 0)
+    yield topic, msg, t
+
+
+def swap(i, topic, msg, t):
+    if topic == "/scan":
+        scans[0] += 1
+        if scans[0] % 5 == 0:
+            msg.header.stamp += rospy.Duration.from_sec(0.3)  # scans are 0.2 s apart
+    yield topic, msg, t
+
+
+def denorm(i, topic, msg, t):
+    if topic == "/tf":
+        for tr in msg.transforms:
+            for k in "xyzw":
+                setattr(tr.transform.rotation, k, 1.02 * getattr(tr.transform.rotation, k))
+    yield topic, msg, t
+
+
+half = t0 + rospy.Duration.from_sec(30.0)
+
+
+def jumpback(i, topic, msg, t):
+    if t > half and topic != "/tf_static":
+        back = rospy.Duration.from_sec(100.0)
+        if hasattr(msg, "transforms"):
+            for tr in msg.transforms:
+                tr.header.stamp -= back
+        elif hasattr(msg, "header"):
+            msg.header.stamp -= back
+    yield topic, msg, t
+
+
+def anglemax(i, topic, msg, t):
+    if topic == "/scan":
+        msg.angle_max += 0.5
+    yield topic, msg, t
+
+
+def featnan(i, topic, msg, t):
+    if topic == "/features" and msg.points:
+        msg.points[0].range = float("nan")
+    yield topic, msg, t
+
+
+scans[0] = 0
+write("compressed", squeezed)
+scans[0] = 0
+write("hugestamp", hugestamp)
+scans[0] = 0
+write("swap", swap)
+write("denorm", denorm)
+write("jumpback", jumpback)
+write("anglemax", anglemax)
+write("featnan", featnan)
+rosbag.Bag(work + "/empty.bag", "w").close()
+PY
+
+failures=0
+fail() { echo "FAIL: $*"; failures=$((failures + 1)); }
+# run NAME CONFIG [--set ...]: offline_slam on NAME.bag; stderr in NAME.err, exit status in $rc.
+run() {
+  local name=$1 config=$2
+  shift 2
+  rc=0
+  "$bin/offline_slam" --bag "$work/$name.bag" --config "$root/config/$config.yaml" --no-progress \
+    --set particles=10 --output "$work/out_$name" "$@" >"$work/$name.out" 2>"$work/$name.err" || rc=$?
+}
+field() { /usr/bin/python3 -c "import json,sys; print(json.load(open(sys.argv[1]))[sys.argv[2]])" \
+  "$work/out_$1/summary.json" "$2"; }
+expect_err() {  # NAME TEXT: offline_slam's stderr for NAME holds TEXT
+  grep -qF -- "$2" "$work/$1.err" || { fail "$1: stderr lacks '$2':"; cat "$work/$1.err"; }
+}
+validate() {  # NAME TEXT: validate_bag reports NAME.bag's fault with TEXT (exit 1)
+  local vrc=0
+  "$bin/validate_bag" "$work/$1.bag" >"$work/$1.val" 2>&1 || vrc=$?
+  [ "$vrc" -eq 1 ] || { fail "validate_bag $1: exit $vrc (want 1)"; cat "$work/$1.val"; }
+  grep -qF -- "$2" "$work/$1.val" || { fail "validate_bag $1 lacks '$2':"; cat "$work/$1.val"; }
+}
+
+run clean laser_fastslam2
+[ "$rc" -eq 0 ] || fail "clean: exit $rc"
+clean_updates=$(field clean updates)
+[ "$clean_updates" -gt 200 ] || fail "clean: only $clean_updates updates"
+
+run compressed laser_fastslam2
+[ "$rc" -eq 0 ] || fail "compressed: exit $rc"
+[ "$(field compressed dropped_no_tf)" -eq 0 ] || fail "compressed: $(field compressed dropped_no_tf) frames without tf"
+[ "$(field compressed updates)" -ge $((clean_updates - 5)) ] ||
+  fail "compressed: $(field compressed updates) updates against $clean_updates"
+
+run hugestamp laser_fastslam2
+[ "$rc" -eq 0 ] || { fail "hugestamp: exit $rc"; cat "$work/hugestamp.err"; }
+[ -f "$work/out_hugestamp/summary.json" ] && [ "$(field hugestamp dropped_no_tf)" -eq 1 ] ||
+  fail "hugestamp: the far stamp's frame was not the one dropped"
+expect_err hugestamp "at 4294967295"
+
+for tool in offline_slam validate_bag; do
+  erc=0
+  if [ "$tool" = offline_slam ]; then
+    "$bin/offline_slam" --bag "$work/empty.bag" --config "$root/config/laser_fastslam2.yaml" \
+      --output "$work/out_empty" >"$work/empty.err" 2>&1 || erc=$?
+  else
+    "$bin/validate_bag" "$work/empty.bag" >"$work/empty.err" 2>&1 || erc=$?
+  fi
+  [ "$erc" -ne 0 ] || fail "empty: $tool exited 0"
+  grep -qF "$work/empty.bag: the bag holds no messages" "$work/empty.err" ||
+    { fail "empty: $tool's message:"; cat "$work/empty.err"; }
+done
+
+run swap laser_fastslam2
+[ "$(field swap rejected)" -gt 0 ] || fail "swap: nothing rejected"
+expect_err swap "frame(s) were not used"
+expect_err swap "the first: /scan at"
+
+run denorm laser_fastslam2
+expect_err denorm "transform(s) tf2 cannot take; the first: /tf odom -> base_link"
+expect_err denorm "not normalised (norm 1.02)"
+validate denorm "transform(s) tf2 refuses (the first: a quaternion that is not normalised"
+
+run jumpback laser_fastslam2
+[ "$(field jumpback resets)" -eq 1 ] || fail "jumpback: $(field jumpback resets) resets"
+discarded=$(field jumpback discarded_poses)
+[ "$discarded" -gt 50 ] || fail "jumpback: $discarded poses discarded"
+expect_err jumpback "the session started a new map"
+expect_err jumpback "$discarded pose(s) of the runs before are not in them"
+
+run anglemax laser_fastslam2
+[ "$(field anglemax updates)" -eq "$clean_updates" ] || fail "anglemax: the scans were not used"
+[ "$(grep -c "does not span angle_min..angle_max" "$work/anglemax.err")" -eq 1 ] ||
+  { fail "anglemax: not warned exactly once"; cat "$work/anglemax.err"; }
+
+run featnan landmarks_fastslam2 --set ensemble.members=1 --set smoothing.enabled=false
+[ "$(field featnan dropped_features)" -gt 200 ] || fail "featnan: $(field featnan dropped_features) dropped"
+expect_err featnan "non-finite feature(s) inside otherwise good FeatureArray messages"
+validate featnan "/features: "
+grep -qF "non-finite feature(s)" "$work/featnan.val" || fail "featnan: validate_bag's wording"
+
+cp "$work/clean.bag" "$work/sonar.bag"
+run sonar sonar_fastslam2
+buffered=$(field sonar sonar_buffered)
+[ "$buffered" -gt 1000 ] || fail "sonar: $buffered readings buffered"
+[ "$(field sonar skipped_no_motion)" -lt "$buffered" ] || fail "sonar: readings counted as skipped"
+
+if [ "$failures" -gt 0 ]; then
+  echo "FAIL: $failures check(s)"
+  exit 1
+fi
+echo "PASS: offline_slam and validate_bag name every fault (clean: $clean_updates updates;" \
+  "jumpback discarded $discarded poses; sonar buffered $buffered readings)"
