@@ -375,6 +375,13 @@ TEST(HinfAdaptive, ThetaSettlesWhereTheInnovationsAreConsistent) {
   relative.observeInnovations({0.01});
   EXPECT_DOUBLE_EQ(relative.theta(), 0.8) << "relative mode: theta as configured";
   o.mode = "absolute";
+  try {  // no theta to attenuate the weight by: it would be the marginal one without a word
+    HinfRule refused(o);
+    ADD_FAILURE() << "weight attenuated accepted with mode absolute";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("hinf.weight 'attenuated'"), std::string::npos) << e.what();
+  }
+  o.weight = "marginal";
   EXPECT_EQ(HinfRule(o).theta(), 0.0);
 }
 

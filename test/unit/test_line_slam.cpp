@@ -184,6 +184,46 @@ TEST(LineSlam, LinesCarryTheirObservedExtent) {
   }
 }
 
+// One wall, two mapped lines 0.4 m apart (both within h_similar_feature of it): only the line the
+// feature is most similar to is updated. The multi-filter used to update every landmark whose
+// most similar feature it was, so the phantom line at y = 2.4 was pulled onto the wall.
+TEST(LineSlam, AFeatureUpdatesOnlyTheLandmarkItIsMostSimilarTo) {
+  for (const std::string variant : {"multifilter_smc", "ekf_slam"}) {
+    SCOPED_TRACE(variant);
+    auto filter = createFilter(optionsFor(variant));
+    filter->reset(Pose2(2.0, 0.0, 0.0));
+    std::vector<LandmarkEstimate> map(2);
+    for (int k = 0; k < 2; ++k) {
+      map[k].id = k;
+      map[k].type = LandmarkType::kLine;
+      map[k].mean = Eigen::Vector2d(2.0 + 0.4 * k, M_PI / 2);
+      map[k].covariance = Eigen::Vector2d(0.01, 1e-4).asDiagonal();
+      map[k].start = Eigen::Vector2d(0.0, map[k].mean.x());
+      map[k].end = Eigen::Vector2d(4.0, map[k].mean.x());
+      map[k].observations = 10;
+    }
+    ASSERT_TRUE(filter->loadMap(map));
+    Rng rng(4);
+    for (int step = 0; step < 30; ++step) {
+      FeatureSet set;
+      LineFeature wall;  // y = 2 seen from (2, 0, 0)
+      wall.rho = 2.0 + sampleGaussian(rng, 0.005);
+      wall.theta = M_PI / 2 + sampleGaussian(rng, 0.002);
+      wall.covariance = Eigen::Vector2d(0.005 * 0.005, 0.002 * 0.002).asDiagonal();
+      wall.start = Eigen::Vector2d(-1.0, wall.rho);
+      wall.end = Eigen::Vector2d(1.0, wall.rho);
+      set.lines.push_back(wall);
+      filter->predict(MotionInput());
+      const UpdateStats stats = filter->update(set);
+      EXPECT_EQ(stats.associated, 1) << "step " << step;
+    }
+    const auto landmarks = filter->landmarks();
+    ASSERT_GE(landmarks.size(), 2u);
+    EXPECT_NEAR(landmarks[0].mean.x(), 2.0, 0.05);
+    EXPECT_GT(landmarks[1].mean.x(), 2.35) << "the phantom line moved onto the wall";
+  }
+}
+
 /// A line through (almost) the map origin whose estimate crosses it: its normal turns over
 /// (rho < 0 made positive), and positions along the line change sign, so the extent must turn
 /// too. Before session 12 the EKF's and the multi-filter's did not: the wall was mirrored

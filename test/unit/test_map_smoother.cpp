@@ -393,6 +393,16 @@ TEST(MapSmoother, BadInputIsRefusedByName) {
     EXPECT_NE(std::string(e.what()).find("smoothing.merge_max_cost"), std::string::npos)
         << e.what();
   }
+  options.merge_max_cost = 30.0;  // merging on, but only of points at one spot
+  options.merge_max_distance_m = 0.0;
+  try {
+    core::smoothPathAndMap(scene.truth, scene.frames, mapOf(scene.points), options);
+    ADD_FAILURE() << "merge_max_distance_m 0 with merging on was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("smoothing.merge_max_distance_m must be > 0"),
+              std::string::npos)
+        << e.what();
+  }
 }
 
 // A session keeps one frame per trajectory point only when asked to, and smoothSession then

@@ -135,7 +135,8 @@ bool EkfSlam::correct(int i, const Observation& o) {
   if (!dx.allFinite()) return false;
   state_ += dx;
   covariance_ -= gain * pht.transpose();  // P - K S K^T: the O(n^2) step
-  covariance_ = 0.5 * (covariance_ + covariance_.transpose());
+  // eval(): Eigen would read the transpose while writing it (aliasing), leaving it asymmetric.
+  covariance_ = (0.5 * (covariance_ + covariance_.transpose())).eval();
   state_(2) = wrapAngle(state_(2));
   if (o.type == LandmarkType::kLine) {
     if (state_(k) < 0.0) {  // keep rho >= 0: flip the normal, and the rho row and column

@@ -53,6 +53,13 @@ void validate(const HinfOptions& o) {
         "posterior, got mode '" + o.mode + "', gain '" + o.gain +
         "' (set hinf.proposal_covariance to ekf or hinf for those)");
   }
+  // 'attenuated' weighs at the noise scale 1 - theta; the absolute gammas have no theta, and
+  // the weight would silently be the plain marginal one.
+  if (o.weight == "attenuated" && o.mode == "absolute") {
+    throw std::invalid_argument(
+        "hinf.weight 'attenuated' needs hinf.mode relative or adaptive (absolute has no theta; "
+        "use weight marginal or pointwise with it)");
+  }
 }
 
 template <int N>

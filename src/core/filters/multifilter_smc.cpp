@@ -274,16 +274,16 @@ void MultiFilterSmc::updateMap(const std::vector<LocalFeature>& features, Update
     centroids.push_back(f.centroid());
   }
   const WadAssociation a = associateByWad(global, types, centroids, options_.line_association);
-  for (int i = 0; i < static_cast<int>(a.map_to_feature.size()); ++i) {
-    if (a.map_to_feature[i] >= 0) ++stats->associated;
-  }
-  if (!mapping_) return;
-
   // Obstacle filters matched by a feature, updated in random order (the paper's section 3.4).
+  // A feature updates only the landmark it is most similar to (as the EKF does): one wall
+  // near two mapped lines used to pull both, a phantom one onto it.
   std::vector<int> order;
   for (int i = 0; i < static_cast<int>(filters_.size()); ++i) {
-    if (a.map_to_feature[i] >= 0) order.push_back(i);
+    const int j = a.map_to_feature[i];
+    if (j >= 0 && a.feature_to_map[j] == i) order.push_back(i);
   }
+  stats->associated += static_cast<int>(order.size());
+  if (!mapping_) return;
   std::shuffle(order.begin(), order.end(), rng_);
   for (int i : order) {
     const GlobalFeature& g = global[a.map_to_feature[i]];

@@ -236,7 +236,7 @@ double RobustFastSlam2::updateCandidate(Particle* particle, const Pose2& predict
     mean += gain * v;
     mean.z() = wrapAngle(mean.z());
     cov = (Eigen::Matrix3d::Identity() - gain * h) * cov;
-    cov = 0.5 * (cov + cov.transpose());
+    cov = (0.5 * (cov + cov.transpose())).eval();  // eval(): no aliasing with the transpose
     matched.emplace_back(static_cast<int>(k), m.index);
   }
   // As a FastSLAM 2.0 step draws (proposal_sample_scale). Relocalization is not tried at a

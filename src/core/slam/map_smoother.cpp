@@ -31,6 +31,11 @@ void validate(const SmoothingOptions& o) {
   requireRange("smoothing.member_consensus_margin", o.member_consensus_margin, 0.0, 1e9);
   requireRange("smoothing.merge_max_cost", o.merge_max_cost, 0.0, 1e9);
   requireRange("smoothing.merge_max_distance_m", o.merge_max_distance_m, 0.0, 1e6);
+  if (o.merge_max_cost > 0.0 && !(o.merge_max_distance_m > 0.0)) {
+    throw std::invalid_argument(
+        "smoothing.merge_max_distance_m must be > 0 when smoothing.merge_max_cost > 0 (0 merges "
+        "only points at one spot; set merge_max_cost 0 to turn merging off)");
+  }
 }
 
 namespace {
