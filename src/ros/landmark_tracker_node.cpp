@@ -13,6 +13,7 @@ namespace rosbridge {
 LandmarkTrackerNode::LandmarkTrackerNode(ros::NodeHandle nh, ros::NodeHandle private_nh)
     : config_(loadConfigFromParams(private_nh)),
       frontend_(config_.filter),
+      clock_(config_.session),
       tf_listener_(tf_buffer_, nh),
       diagnostics_("landmark_tracker", DiagnosticsOptions::withoutFilter()) {
   using Ptr = FeatureArray::ConstPtr;
@@ -69,12 +70,26 @@ void LandmarkTrackerNode::featuresCallback(const FeatureArray::ConstPtr& msg) {
     warnings_.warn("feature covariances",
                    unusableCovarianceWarning(unusable, config_.ros.features_topic));
   }
-  // Stamps far behind the last frame: a bag played again or a restarted driver.
+  // Stamps far behind the last frame: a bag played again or a restarted driver, told from a
+  // late message as the SLAM pipeline does (ClockRestartDetector, slam_session.h): only stamps
+  // far back for long enough, with nothing in order in between, start the tracker over. One
+  // late message used to throw every tracked landmark away and raise a spurious event.
   const double jump = config_.session.reset_on_time_jump_back_s;
-  if (frontend_.steps() > 0 && jump > 0.0 && features.stamp + jump < frontend_.lastStamp()) {
+  const bool far_back =
+      frontend_.steps() > 0 && jump > 0.0 && features.stamp + jump < frontend_.lastStamp();
+  if (!far_back) clock_.inOrder();
+  if (far_back && !clock_.farBack(features.stamp)) {
+    drop("old stamp", "old stamp",
+         "Dropping a feature frame stamped " + std::to_string(features.stamp) + ", " +
+             std::to_string(frontend_.lastStamp() - features.stamp) +
+             " s before the last one (a late message; the tracker starts over only when the "
+             "stamps stay back, reset_after_frames_back / reset_on_time_jump_back)");
+    return;
+  }
+  if (far_back) {
     warnings_.warn("time jump", "Feature stamps went back by " +
                                     std::to_string(frontend_.lastStamp() - features.stamp) +
-                                    " s: the tracker starts over");
+                                    " s and stayed back: the tracker starts over");
     frontend_.reset();
     diagnostics_.recordReset();
   }

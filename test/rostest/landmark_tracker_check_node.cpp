@@ -1,10 +1,13 @@
 // landmark_tracker.test: the landmark_tracker node on a simulated lee_sim_b bag (range-bearing
 // landmarks) publishes new-landmark events with increasing steps and stamps, each starting at
 // least one landmark, and finite landmark markers in the odometry frame; /diagnostics reports
-// its updates.
+// its updates. One features message stamped 3 s before the latest event (a late message) is
+// dropped: no reset on /diagnostics, and the events' steps keep increasing (a reset used to
+// restart them at 1).
 
 #include <diagnostic_msgs/DiagnosticArray.h>
 #include <gtest/gtest.h>
+#include <rbpf_slam/FeatureArray.h>
 #include <rbpf_slam/TrackerEvent.h>
 #include <ros/ros.h>
 #include <visualization_msgs/MarkerArray.h>
@@ -25,6 +28,9 @@ struct Seen {
   double last_stamp = 0.0;
   std::set<std::pair<std::string, int>> shown;
   long updates = -1;
+  long resets = -1;
+  int events_after_late = 0;  // events after the late message went out
+  bool late_sent = false;
 };
 
 TEST(LandmarkTracker, PublishesEventsAndLandmarks) {
@@ -42,6 +48,7 @@ TEST(LandmarkTracker, PublishesEventsAndLandmarks) {
           ++seen.out_of_order;
         seen.last_step = msg->step;
         seen.last_stamp = msg->header.stamp.toSec();
+        if (seen.late_sent) ++seen.events_after_late;
       });
   ros::Subscriber markers = nh.subscribe<visualization_msgs::MarkerArray>(
       "tracker/landmarks", 10, [&seen](const visualization_msgs::MarkerArray::ConstPtr& msg) {
@@ -70,14 +77,30 @@ TEST(LandmarkTracker, PublishesEventsAndLandmarks) {
           if (status.name != "landmark_tracker") continue;
           for (const auto& kv : status.values) {
             if (kv.key == "updates") seen.updates = std::stol(kv.value);
+            if (kv.key == "resets") seen.resets = std::stol(kv.value);
           }
         }
       });
+  ros::Publisher late = nh.advertise<FeatureArray>("features", 1);
   const ros::WallTime deadline = ros::WallTime::now() + ros::WallDuration(timeout);
   while (ros::WallTime::now() < deadline) {
     {
       std::lock_guard<std::mutex> lock(seen.mutex);
-      if (seen.events >= min_events && seen.updates > 3 * min_events && !seen.shown.empty()) break;
+      if (!seen.late_sent && seen.events >= 2) {
+        FeatureArray msg;  // one post straight ahead, 3 s late (tf still covers that stamp)
+        msg.header.stamp = ros::Time(seen.last_stamp - 3.0);
+        msg.header.frame_id = "base_link";
+        PointFeature post;
+        post.range = 2.0;
+        post.id = -1;
+        msg.points.push_back(post);
+        late.publish(msg);
+        seen.late_sent = true;
+      }
+      if (seen.events >= min_events && seen.events_after_late >= 2 &&
+          seen.updates > 3 * min_events && !seen.shown.empty()) {
+        break;
+      }
     }
     ros::WallDuration(0.1).sleep();
   }
@@ -86,7 +109,10 @@ TEST(LandmarkTracker, PublishesEventsAndLandmarks) {
   EXPECT_GT(seen.updates, 3 * min_events) << "most frames bring no new landmark";
   EXPECT_FALSE(seen.shown.empty()) << "no landmark markers";
   EXPECT_EQ(seen.bad_events, 0);
-  EXPECT_EQ(seen.out_of_order, 0);
+  EXPECT_EQ(seen.out_of_order, 0) << "event steps went back: the late message reset the tracker";
+  EXPECT_TRUE(seen.late_sent);
+  EXPECT_GE(seen.events_after_late, 2);
+  EXPECT_EQ(seen.resets, 0) << "a late message is no restarted clock";
   EXPECT_EQ(seen.non_finite, 0);
   EXPECT_EQ(seen.wrong_frame, 0);
 }

@@ -14,6 +14,7 @@
 #include <memory>
 #include <string>
 
+#include "rbpf_slam/core/slam/slam_session.h"
 #include "rbpf_slam/core/tracking/tracker_frontend.h"
 #include "rbpf_slam/io/slam_config.h"
 #include "rbpf_slam/ros/diagnostics.h"
@@ -38,6 +39,7 @@ class LandmarkTrackerNode {
 
   const io::SlamConfig config_;
   core::TrackerFrontend frontend_;
+  core::ClockRestartDetector clock_;  // tells a restarted clock from late messages
   tf2_ros::Buffer tf_buffer_;
   tf2_ros::TransformListener tf_listener_;
   std::unique_ptr<TfGatedSubscriber<FeatureArray>> features_input_;
