@@ -303,6 +303,37 @@ TEST(EnsembleFilter, ConsensusReportsTheMemberWhosePathTheOthersAgreeWith) {
   EXPECT_NE(leaders[0], leaders[1]);  // the subsampled paths chose otherwise at least once
 }
 
+// The consensus rule on its own. Five straight paths, member k bent by 0.1 k m: member 1 is
+// closest to the others. A lost member (left out) or one whose path holds a NaN pose takes no
+// part: not chosen, and no longer the reason the others' comparison is given up (one NaN pose
+// used to hand the choice to the evidence for the rest of the run).
+TEST(EnsembleFilter, ConsensusLeavesOutLostMembersAndNonFinitePaths) {
+  std::vector<std::vector<Pose2>> paths(5);
+  for (int k = 0; k < 5; ++k) {
+    for (int i = 0; i < 30; ++i) paths[k].push_back(Pose2(0.2 * i, 0.1 * k * (i > 15), 0.0));
+  }
+  const std::vector<bool> none(5, false);
+  std::vector<size_t> lengths(5, 30);
+  EXPECT_EQ(core::consensusChoice(paths, lengths, none, 0, 0.0), 2);  // the middle one
+  EXPECT_EQ(core::consensusChoice(paths, lengths, none, 1, 0.2), 1);  // within the margin
+  std::vector<bool> lost = none;
+  lost[2] = true;
+  const int without_2 = core::consensusChoice(paths, lengths, lost, 0, 0.0);
+  EXPECT_NE(without_2, 2);
+  EXPECT_GE(without_2, 0);
+  EXPECT_NE(core::consensusChoice(paths, lengths, lost, 2, 1e9), 2) << "a lost leader is replaced";
+  std::vector<std::vector<Pose2>> broken = paths;
+  broken[3][7].x() = std::nan("");
+  const int with_nan = core::consensusChoice(broken, lengths, none, 0, 0.0);
+  EXPECT_GE(with_nan, 0) << "one NaN pose gave up the comparison";
+  EXPECT_NE(with_nan, 3);
+  lost.assign(5, false);
+  lost[0] = lost[1] = true;
+  EXPECT_EQ(core::consensusChoice(broken, lengths, lost, 0, 0.0), -1) << "two paths left";
+  lengths[4] = 29;
+  EXPECT_EQ(core::consensusChoice(broken, lengths, none, 0, 0.0), -1) << "lengths differ";
+}
+
 // After resetPose every member's path starts again, equally long, and the consensus goes on
 // over them at the same rhythm. A loaded map is every member's: member 0 is reported (counted
 // as a change when another led) and the next choice comes a full period after the load; a map

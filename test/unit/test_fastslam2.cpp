@@ -6,7 +6,9 @@
 #include <Eigen/LU>
 
 #include <cmath>
+#include <random>
 
+#include "rbpf_slam/core/alignment.h"
 #include "rbpf_slam/core/filters/fastslam2.h"
 #include "rbpf_slam/core/filters/measurement_models.h"
 #include "rbpf_slam/core/filters/resampling.h"
@@ -216,6 +218,13 @@ TEST(FastSlam2, BestPathIsTheBestParticlesHistory) {
     shared += n == first;
   }
   EXPECT_GT(shared, 1);
+  // bestPathSample picks evenlySpacedPoses' poses through the jump pointers, and the length.
+  for (const std::size_t max_poses : {1, 2, 3, 7, 40, 41, 100}) {
+    std::size_t length = 0;
+    const std::vector<Pose2> sample = filter.bestPathSample(max_poses, &length);
+    EXPECT_EQ(length, path.size());
+    EXPECT_EQ(sample, evenlySpacedPoses(path, max_poses)) << max_poses << " poses";
+  }
   // A new pose distribution starts new paths; a reset forgets them.
   filter.resetPose(truth, Eigen::Matrix3d::Identity() * 0.01);
   EXPECT_TRUE(filter.bestPath().empty());
@@ -223,6 +232,31 @@ TEST(FastSlam2, BestPathIsTheBestParticlesHistory) {
   EXPECT_EQ(filter.bestPath().size(), 1u);
   filter.reset(truth);
   EXPECT_TRUE(filter.bestPath().empty());
+}
+
+// ancestorAt finds every depth of a long path (and of a branch off it) from any node below it.
+TEST(FastSlam2, AncestorAtFindsEveryDepthThroughTheJumps) {
+  std::vector<std::shared_ptr<PathNode>> nodes;
+  std::shared_ptr<PathNode> tip;
+  for (int i = 0; i < 3000; ++i) {
+    tip = std::make_shared<PathNode>(Pose2(i, 0, 0), tip);
+    nodes.push_back(tip);
+  }
+  auto branch = std::make_shared<PathNode>(Pose2(-1, 0, 0), nodes[1234]);
+  for (int i = 0; i < 100; ++i) branch = std::make_shared<PathNode>(Pose2(-2 - i, 0, 0), branch);
+  EXPECT_EQ(branch->depth, 1335u);
+  Rng rng(5);
+  std::uniform_int_distribution<int> any(0, 2999);
+  for (int trial = 0; trial < 2000; ++trial) {
+    const int from = any(rng), to = any(rng) % (from + 1);
+    const PathNode* found = ancestorAt(nodes[from].get(), to);
+    ASSERT_EQ(found, nodes[to].get()) << from << " -> " << to;
+    if (to <= 1234) {
+      EXPECT_EQ(ancestorAt(branch.get(), to), nodes[to].get());
+    }
+  }
+  EXPECT_EQ(ancestorAt(branch.get(), 1335), branch.get());
+  EXPECT_EQ(ancestorAt(branch.get(), 1235)->pose.x(), -1.0);
 }
 
 // A live robot updates for hours: freeing a path of millions of poses must not recurse (the

@@ -1,6 +1,7 @@
 #include "rbpf_slam/core/filters/ensemble_filter.h"
 
 #include <algorithm>
+#include <stdexcept>
 #include <cmath>
 #include <cstdint>
 #include <utility>
@@ -101,6 +102,9 @@ class EnsembleFilter : public SlamFilter {
     return members_[leader_]->occupancyGrid(out);
   }
   std::vector<Pose2> bestPath() const override { return members_[leader_]->bestPath(); }
+  std::vector<Pose2> bestPathSample(size_t max_poses, size_t* length) const override {
+    return members_[leader_]->bestPathSample(max_poses, length);
+  }
   bool usesLandmarkFeatures() const override { return members_[0]->usesLandmarkFeatures(); }
   int members() const override { return static_cast<int>(members_.size()); }
   const SlamFilter& member(int k) const override { return *members_.at(k); }
@@ -117,31 +121,27 @@ class EnsembleFilter : public SlamFilter {
     return ranksAbove(best, leader_, switch_margin_) ? best : leader_;
   }
 
-  /// The member whose best path has the smallest median distance to the others' (at most
-  /// consensus_max_poses evenly spaced poses of each), if shorter than the leader's by more
-  /// than consensus_margin_m; the evidence's choice while paths cannot be compared (paths of
-  /// different lengths or not finite, as after a member's reset). Needs three members.
+  /// consensusChoice over the members' best paths, lost members left out; the evidence's
+  /// choice while it has none (fewer than three comparable paths, or lengths that differ).
   int consensusLeader() const {
     std::vector<std::vector<Pose2>> paths;
-    size_t length = 0;
-    for (const auto& m : members_) {
-      const std::vector<Pose2> whole = m->bestPath();
-      if (paths.empty()) length = whole.size();
-      // Compared whole lengths: two cut paths of equal size may come from unequal ones.
-      if (whole.empty() || whole.size() != length) return evidenceLeader();
-      paths.push_back(evenlySpacedPoses(whole, consensus_max_poses_));
-      const std::vector<Pose2>& p = paths.back();
-      if (!std::all_of(p.begin(), p.end(), [](const Pose2& x) { return x.allFinite(); })) {
-        return evidenceLeader();
-      }
+    std::vector<size_t> lengths(members_.size());
+    std::vector<bool> left_out;
+    for (int k = 0; k < static_cast<int>(members_.size()); ++k) {
+      paths.push_back(members_[k]->bestPathSample(consensus_max_poses_, &lengths[k]));
+      left_out.push_back(lost(k));
     }
-    const std::vector<double> d = medianDistancesToOthers(paths);
-    const int best = static_cast<int>(std::min_element(d.begin(), d.end()) - d.begin());
-    return d[best] < d[leader_] - consensus_margin_m_ ? best : leader_;
+    const int choice = consensusChoice(paths, lengths, left_out, leader_, consensus_margin_m_);
+    return choice >= 0 ? choice : evidenceLeader();
   }
 
-  /// Whether member a ranks above member b, with a's evidence ahead by more than margin.
+  /// A member whose evidence fell to -inf (an update no particle could explain): lost.
+  bool lost(int k) const { return !(log_evidence_[k] > -INFINITY); }
+
+  /// Whether member a ranks above member b, with a's evidence ahead by more than margin. A
+  /// lost member never ranks above one that is not (with rank_by new_landmarks either).
   bool ranksAbove(int a, int b, double margin) const {
+    if (lost(a) != lost(b)) return lost(b);
     const bool more_evidence = log_evidence_[a] > log_evidence_[b] + margin;
     if (!by_new_landmarks_) return more_evidence;
     return created_[a] < created_[b] || (created_[a] == created_[b] && more_evidence);
@@ -162,6 +162,31 @@ class EnsembleFilter : public SlamFilter {
 };
 
 }  // namespace
+
+int consensusChoice(const std::vector<std::vector<Pose2>>& paths,
+                    const std::vector<size_t>& lengths, const std::vector<bool>& left_out,
+                    int leader, double margin_m) {
+  if (lengths.size() != paths.size() || left_out.size() != paths.size()) {
+    throw std::invalid_argument("consensusChoice: one length and one left_out flag per path");
+  }
+  std::vector<std::vector<Pose2>> compared;
+  std::vector<int> who;  // member of each compared path
+  for (int k = 0; k < static_cast<int>(paths.size()); ++k) {
+    // Compared whole lengths: two cut paths of equal size may come from unequal ones.
+    if (paths[k].empty() || lengths[k] != lengths[0]) return -1;
+    if (left_out[k]) continue;
+    const std::vector<Pose2>& p = paths[k];
+    if (!std::all_of(p.begin(), p.end(), [](const Pose2& x) { return x.allFinite(); })) continue;
+    compared.push_back(p);
+    who.push_back(k);
+  }
+  if (compared.size() < 3) return -1;
+  const std::vector<double> d = medianDistancesToOthers(compared);
+  const int best = static_cast<int>(std::min_element(d.begin(), d.end()) - d.begin());
+  const auto current = std::find(who.begin(), who.end(), leader);
+  if (current == who.end()) return who[best];  // the leader itself was left out
+  return d[best] < d[current - who.begin()] - margin_m ? who[best] : leader;
+}
 
 double addLogEvidence(double total, double update_log_evidence) {
   return std::isfinite(update_log_evidence) ? total + update_log_evidence : -INFINITY;

@@ -2,6 +2,7 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
+#include <stdexcept>
 #include <cmath>
 #include <numeric>
 
@@ -53,6 +54,20 @@ double logSumExp(const std::vector<double>& values) {
 }
 
 }  // namespace
+
+PathNode::PathNode(const Pose2& p, std::shared_ptr<PathNode> previous)
+    : pose(p), parent(std::move(previous)) {
+  if (!parent) return;
+  depth = parent->depth + 1;
+  // Skew-binary: jump twice as far as the parent's jump when its two jumps are equally long.
+  const PathNode* j = parent->jump;
+  jump = (parent->depth - j->depth == j->depth - j->jump->depth) ? j->jump : parent.get();
+}
+
+const PathNode* ancestorAt(const PathNode* node, std::size_t depth) {
+  while (node->depth > depth) node = node->jump->depth >= depth ? node->jump : node->parent.get();
+  return node;
+}
 
 PathNode::~PathNode() {
   // Free the ancestors this node alone holds one by one instead of by recursion.
@@ -652,6 +667,24 @@ std::vector<Pose2> FastSlam2::bestPath() const {
   }
   std::reverse(path.begin(), path.end());
   return path;
+}
+
+std::vector<Pose2> FastSlam2::bestPathSample(std::size_t max_poses, std::size_t* length) const {
+  const int best = bestParticle();
+  const PathNode* tip = best < 0 ? nullptr : particles_[best].path.get();
+  if (length) *length = tip ? tip->depth + 1 : 0;
+  if (!tip || tip->depth + 1 <= max_poses) return bestPath();
+  if (max_poses < 1) throw std::invalid_argument("bestPathSample needs max_poses >= 1");
+  if (max_poses == 1) return {tip->pose};
+  // The indices evenlySpacedPoses picks, newest first, each found from the one after it.
+  std::vector<Pose2> out(max_poses);
+  const std::size_t last = tip->depth;
+  const PathNode* node = tip;
+  for (std::size_t i = max_poses; i-- > 0;) {
+    node = ancestorAt(node, i * last / (max_poses - 1));
+    out[i] = node->pose;
+  }
+  return out;
 }
 
 PoseEstimate FastSlam2::estimate() const {

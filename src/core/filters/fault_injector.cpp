@@ -41,6 +41,9 @@ class FaultInjectedFilter : public SlamFilter {
   bool setMapping(bool enabled) override { return inner_->setMapping(enabled); }
   bool occupancyGrid(GridMapData& out) const override { return inner_->occupancyGrid(out); }
   std::vector<Pose2> bestPath() const override { return inner_->bestPath(); }
+  std::vector<Pose2> bestPathSample(size_t max_poses, size_t* length) const override {
+    return inner_->bestPathSample(max_poses, length);
+  }
   bool usesLandmarkFeatures() const override { return inner_->usesLandmarkFeatures(); }
 
  private:

@@ -2,6 +2,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "rbpf_slam/core/alignment.h"
 #include "rbpf_slam/core/filters/ekf_slam.h"
 #include "rbpf_slam/core/filters/ensemble_filter.h"
 #include "rbpf_slam/core/filters/distributed_filter.h"
@@ -86,6 +87,12 @@ void validate(const FilterOptions& o) {
   validate(o.ekf);
   validate(o.grid);
   validate(o.dpf);
+}
+
+std::vector<Pose2> SlamFilter::bestPathSample(std::size_t max_poses, std::size_t* length) const {
+  const std::vector<Pose2> path = bestPath();
+  if (length) *length = path.size();
+  return evenlySpacedPoses(path, max_poses);
 }
 
 std::unique_ptr<SlamFilter> createFilter(const FilterOptions& options) {

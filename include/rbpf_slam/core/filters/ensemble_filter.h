@@ -13,6 +13,7 @@
 // Costs members x one filter's time and memory.
 
 #include <memory>
+#include <vector>
 
 #include "rbpf_slam/core/filters/slam_filter.h"
 
@@ -23,8 +24,19 @@ namespace core {
 /// well-mixed distinct seeds for the others (so that neighbouring run seeds share no member).
 unsigned long ensembleMemberSeed(unsigned long seed, int k);
 
+/// The member rank_by consensus reports, given each member's best path as
+/// SlamFilter::bestPathSample gives it (evenly spaced poses) with its whole length: the one
+/// whose path has the smallest median distance to the others' (RMS after rigid alignment), if
+/// shorter than the leader's by more than margin_m. Members left_out (lost) and paths holding
+/// a non-finite pose take no part and cannot lead; a leader left out is replaced at once. -1
+/// (no choice) with fewer than three paths to compare, or when the whole lengths differ (after
+/// a member's reset). Throws std::invalid_argument unless there is one length and one flag per
+/// path.
+int consensusChoice(const std::vector<std::vector<Pose2>>& paths,
+                    const std::vector<size_t>& lengths, const std::vector<bool>& left_out,
+                    int leader, double margin_m);
 /// A member's running log evidence after one more update's: the sum, or -inf (a lost member,
-/// which never leads again by evidence) once an update's evidence is not finite (NaN, or
+/// which never leads again, by any rank_by) once an update's evidence is not finite (NaN, or
 /// +-inf from a collapsed covariance). Never NaN, so the ranking stays a strict order.
 double addLogEvidence(double total, double update_log_evidence);
 

@@ -20,15 +20,22 @@ namespace core {
 
 /// A particle's past pose at one update, linked to the one before; particles that share an
 /// ancestor share its history (resampling copies a pointer, not the path).
+/// Each node also keeps its depth (0 at the path's first pose) and a jump to an ancestor
+/// (skew-binary jump pointers), so that the pose at any depth is found in O(log depth)
+/// (ancestorAt) instead of walking the path.
 struct PathNode {
-  PathNode(const Pose2& p, std::shared_ptr<PathNode> previous)
-      : pose(p), parent(std::move(previous)) {}
+  PathNode(const Pose2& p, std::shared_ptr<PathNode> previous);
   ~PathNode();  // unlinks iteratively: a path of a million updates must not recurse
   PathNode(const PathNode&) = delete;
   PathNode& operator=(const PathNode&) = delete;
   Pose2 pose;
   std::shared_ptr<PathNode> parent;
+  std::size_t depth = 0;
+  const PathNode* jump = this;  // an ancestor (itself at depth 0); kept alive through parent
 };
+
+/// The ancestor of node (or node itself) at depth (<= node->depth), in O(log node->depth).
+const PathNode* ancestorAt(const PathNode* node, std::size_t depth);
 
 /// One hypothesis: a pose, its own map, and the path that led to it (FastSLAM estimates the
 /// posterior over whole paths: the best particle's path is the map's trajectory).
@@ -63,6 +70,8 @@ class FastSlam2 : public SlamFilter {
   /// The pose at every update() since the last reset, oldest first, of the particle that now
   /// carries the most weight (its map is landmarks()); resetPose() starts a new path.
   std::vector<Pose2> bestPath() const override;
+  /// Picks the poses through the path's jump pointers: O(max_poses log T), not O(T).
+  std::vector<Pose2> bestPathSample(std::size_t max_poses, std::size_t* length) const override;
 
  protected:
   /// A FastSLAM 2.0 whose proposal and landmark updates follow `rule` (e.g. H-infinity).

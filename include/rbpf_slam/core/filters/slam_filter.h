@@ -3,6 +3,7 @@
 // multi-filter SMC, EKF, grid, distributed); the node and the offline runner use only this.
 
 #include <Eigen/Core>
+#include <cstddef>
 #include <memory>
 #include <string>
 #include <vector>
@@ -110,6 +111,10 @@ class SlamFilter {
   /// update() since the last reset, oldest first, which after a loop closure is the path
   /// consistent with its map, unlike the sequence of estimate()s. Default: empty (none).
   virtual std::vector<Pose2> bestPath() const { return {}; }
+  /// At most max_poses (>= 1) poses of bestPath(), evenly spaced from the first to the latest
+  /// (core::evenlySpacedPoses), and in *length (when given) bestPath()'s length. The default
+  /// builds the whole path; the FastSLAM variants pick the poses without it.
+  virtual std::vector<Pose2> bestPathSample(std::size_t max_poses, std::size_t* length) const;
   /// Ensembles of independent filters (ensemble.members > 1): how many there are, member k
   /// (0 <= k < members()), and the one whose estimate, map and path this filter reports. A
   /// single filter is an ensemble of one, itself.
