@@ -330,18 +330,6 @@ FilterOptions postOptions() {
   return o;
 }
 
-// The first sighting raises an event at step 1, whose S_0 holds empty maps: it is not kept as an
-// ancestor (its candidates would tie on every old-landmark weight, and with
-// min_old_observations 0 half the kept particles came from it at random).
-TEST(RobustFastSlam2, ASetWithNothingMappedIsNoAncestor) {
-  RobustFastSlam2 robust(postOptions());
-  drivePastPosts(&robust, 1);
-  EXPECT_GE(robust.robustStats().tracker_events, 1);
-  EXPECT_EQ(robust.memory().storedSets(), 0);
-  drivePastPosts(&robust, 40);
-  EXPECT_GT(robust.memory().storedSets(), 0);
-}
-
 TEST(RobustFastSlam2, NewPoseOrMapForgetsTheStoredSets) {
   RobustFastSlam2 robust(postOptions());
   drivePastPosts(&robust, 60);

@@ -108,11 +108,7 @@ UpdateStats RobustFastSlam2::update(const FeatureSet& features) {
     stats = FastSlam2::update(features);
     memory_.setLatestDriftTurn(last_drift_turn_);
   }
-  // A set in which nothing was mapped yet (S_0 at the first sighting) is no ancestor: its
-  // candidates know no landmark, so they tie on every old-landmark weight and are kept at random.
-  const bool mapped = std::any_of(latest.particles.begin(), latest.particles.end(),
-                                  [](const Particle& p) { return p.map && p.map->size() > 0; });
-  if (mapped && memory_.canStore(latest.step)) memory_.store(std::move(latest));
+  if (memory_.canStore(latest.step)) memory_.store(std::move(latest));
   return stats;
 }
 
