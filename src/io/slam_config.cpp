@@ -73,6 +73,7 @@ void readTracker(YamlSection section, core::LandmarkTrackerOptions* o) {
   section.read("forget_after_steps", &o->forget_after_steps);
   section.read("forget_distance_m", &o->forget_distance_m);
   section.read("max_landmarks", &o->max_landmarks);
+  section.read("line_overlap_margin_m", &o->line_overlap_margin_m);
   section.finish();
 }
 

@@ -127,6 +127,40 @@ TEST(LandmarkTracker, LinesFromLaserOrSonar) {
   EXPECT_TRUE(e.new_landmark);
 }
 
+// A line's extent counts: a collinear wall 35 m further on is another landmark (an event), and a
+// wall left behind is forgotten by its distance to the stretch seen, not to the infinite line.
+TEST(LandmarkTracker, CollinearWallsFarApartAreDifferentLandmarks) {
+  const auto segment = [](const Pose2& robot, double x0, double x1) {
+    TrackerObservation o = lineSeen(robot, Eigen::Vector2d(2.0, M_PI / 2));  // y = 2
+    o.start = transformPoint(inverse(robot), Eigen::Vector2d(x0, 2.0));
+    o.end = transformPoint(inverse(robot), Eigen::Vector2d(x1, 2.0));
+    return o;
+  };
+  for (const double margin : {1.0, -1.0}) {
+    LandmarkTrackerOptions options;
+    options.line_overlap_margin_m = margin;
+    options.forget_after_steps = 1000;
+    LandmarkTracker tracker(options);
+    int events = 0, step = 1;
+    for (; step <= 20; ++step) {  // x = 0.2 .. 4: the first wall, x in [0, 5]
+      events += tracker.update(step, kStep, kStepCov, {segment(robotAt(step), 0.0, 5.0)}).started;
+    }
+    const Pose2 far(40.0, 0.0, 0.0);  // driven on to x = 40 with nothing in view
+    for (; step <= 200; ++step) {
+      tracker.update(step, kStep, kStepCov, {});
+      if (robotAt(step).x() >= far.x()) break;
+    }
+    const TrackerEvent e = tracker.update(++step, kStep, kStepCov, {segment(robotAt(step), 38.0, 43.0)});
+    events += e.started;
+    if (margin >= 0.0) {
+      EXPECT_EQ(events, 2) << "the second wall is another landmark";
+      EXPECT_EQ(tracker.trackedLandmarks(), 1) << "the first, 35 m behind, is forgotten";
+    } else {
+      EXPECT_EQ(events, 1) << "infinite lines: the same wall";
+    }
+  }
+}
+
 TEST(LandmarkTracker, StateIsBounded) {
   LandmarkTrackerOptions options;
   options.max_landmarks = 4;

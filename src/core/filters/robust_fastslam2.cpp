@@ -108,6 +108,9 @@ UpdateStats RobustFastSlam2::update(const FeatureSet& features) {
     stats = FastSlam2::update(features);
     memory_.setLatestDriftTurn(last_drift_turn_);
   }
+  // Also S_0, in which nothing is mapped yet: it keeps robust steps off while it is in the
+  // window (no landmark is known to every set). Leaving it out was worse (docs/results.md,
+  // session 39).
   if (memory_.canStore(latest.step)) memory_.store(std::move(latest));
   return stats;
 }

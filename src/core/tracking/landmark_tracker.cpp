@@ -27,6 +27,7 @@ void validate(const LandmarkTrackerOptions& o) {
   requireRange("tracker.forget_after_steps", o.forget_after_steps, 1, 100000);
   requireRange("tracker.forget_distance_m", o.forget_distance_m, 0.1, 1e4);
   requireRange("tracker.max_landmarks", o.max_landmarks, 1, 1000);
+  requireRange("tracker.line_overlap_margin_m", o.line_overlap_margin_m, -1.0, 1e4);
 }
 
 LandmarkTracker::LandmarkTracker(const LandmarkTrackerOptions& options) : options_(options) {
@@ -94,6 +95,10 @@ int LandmarkTracker::associate(const TrackerObservation& o, double* distance2) c
   const int n = static_cast<int>(state_.size());
   for (int i = 0; i < trackedLandmarks(); ++i) {
     if (landmarks_[i].type != o.type) continue;
+    const double margin = options_.line_overlap_margin_m;  // < 0: infinite lines
+    if (o.type == LandmarkType::kLine && margin >= 0.0 && gapToExtent(i, o) > margin) {
+      continue;  // another stretch of the same infinite line
+    }
     const int j = 3 + 2 * i;
     const Prediction p = observationModel(o.type, pose, state_.segment<2>(j), o.z);
     Eigen::MatrixXd h = Eigen::MatrixXd::Zero(2, n);
@@ -181,11 +186,7 @@ int LandmarkTracker::forget(int step) {
   int forgotten = 0;
   const Pose2 pose = state_.head<3>();
   for (int i = trackedLandmarks() - 1; i >= 0; --i) {
-    const Eigen::Vector2d m = state_.segment<2>(3 + 2 * i);
-    const double distance =
-        landmarks_[i].type == LandmarkType::kLine
-            ? std::fabs(m.x() - pose.x() * std::cos(m.y()) - pose.y() * std::sin(m.y()))
-            : (m - pose.head<2>()).norm();
+    const double distance = distanceTo(i, pose.head<2>());
     if (step - landmarks_[i].last_seen_step >= options_.forget_after_steps ||
         distance > options_.forget_distance_m) {
       remove(i);
@@ -203,6 +204,30 @@ int LandmarkTracker::forget(int step) {
   // With nothing left to anchor it, the tracker's frame restarts at the robot (bounded drift).
   if (landmarks_.empty()) covariance_.setZero();
   return forgotten;
+}
+
+double LandmarkTracker::gapToExtent(int landmark, const TrackerObservation& o) const {
+  const Pose2 pose = state_.head<3>();
+  const double theta = state_(3 + 2 * landmark + 1);
+  const Eigen::Vector2d direction(-std::sin(theta), std::cos(theta));
+  const double a = direction.dot(transformPoint(pose, o.start));
+  const double b = direction.dot(transformPoint(pose, o.end));
+  // No extent given (both ends at one spot, e.g. unset in a message): as an infinite line.
+  if (!std::isfinite(a) || !std::isfinite(b) || (o.end - o.start).norm() < 1e-6) return 0.0;
+  const Tracked& t = landmarks_[landmark];
+  return std::max({0.0, std::min(a, b) - t.extent_max, t.extent_min - std::max(a, b)});
+}
+
+double LandmarkTracker::distanceTo(int landmark, const Eigen::Vector2d& at) const {
+  const Eigen::Vector2d m = state_.segment<2>(3 + 2 * landmark);
+  if (landmarks_[landmark].type != LandmarkType::kLine) return (m - at).norm();
+  const double across = std::fabs(m.x() - at.x() * std::cos(m.y()) - at.y() * std::sin(m.y()));
+  if (!(options_.line_overlap_margin_m >= 0.0)) return across;  // infinite lines
+  const Eigen::Vector2d direction(-std::sin(m.y()), std::cos(m.y()));
+  const double along = direction.dot(at);
+  const Tracked& t = landmarks_[landmark];
+  const double beyond = std::max({0.0, along - t.extent_max, t.extent_min - along});
+  return std::hypot(across, beyond);  // to the nearest point of the extent seen
 }
 
 void LandmarkTracker::extend(int landmark, const TrackerObservation& o, bool first) {

@@ -62,6 +62,11 @@ class LandmarkTracker {
     int observations = 0;
     double extent_min = 0.0, extent_max = 0.0;  // line: along its direction, tracker frame
   };
+  /// A line observation's distance along tracked line `landmark` beyond the extent seen so far
+  /// (0 when they overlap, or when the observation gives no extent).
+  double gapToExtent(int landmark, const TrackerObservation& observation) const;
+  /// From `at` (tracker frame) to a point, or to the nearest point of a line's extent.
+  double distanceTo(int landmark, const Eigen::Vector2d& at) const;
   /// Widens a line's extent by the observation's end points.
   void extend(int landmark, const TrackerObservation& observation, bool first);
   void predict(const Pose2& increment, const Eigen::Matrix3d& increment_cov);

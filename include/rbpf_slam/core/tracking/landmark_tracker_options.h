@@ -10,6 +10,11 @@ struct LandmarkTrackerOptions {
   int forget_after_steps = 25;      // a landmark unseen for this many steps is dropped
   double forget_distance_m = 25.0;  // a landmark farther than this from the robot is dropped
   int max_landmarks = 40;           // hard bound of the state (oldest-seen dropped first)
+  // A line matches a tracked one only when the observed segment comes this close to the extent
+  // seen so far (as FastSLAM's association.line_overlap_margin_m), and is forgotten by its
+  // distance to that extent: a collinear wall 35 m on is another landmark, not the same
+  // infinite line. A negative value: infinite lines (before session 39).
+  double line_overlap_margin_m = 1.0;
 };
 
 /// Throws std::invalid_argument naming the first out-of-range field (prefix "tracker.").
