@@ -145,6 +145,11 @@ TEST(TrackerFrontend, RefusesStaleStampsAndNonFinitePosesAndStartsOverOnReset) {
   ASSERT_TRUE(frontend.process(world.observe(robotAt(3), 0.5), robotAt(3), &event, &why));
   EXPECT_TRUE(event.new_landmark) << "after a reset everything in view is new";
   EXPECT_EQ(event.step, 1);
+  // A NaN first stamp (core API callers) is refused, not kept: it used to refuse every later one.
+  frontend.reset();
+  EXPECT_FALSE(frontend.process(world.observe(robotAt(0), std::nan("")), robotAt(0), &event, &why));
+  EXPECT_EQ(why, "stamp not finite or not positive");
+  EXPECT_TRUE(frontend.process(world.observe(robotAt(0), 1.0), robotAt(0), &event, &why)) << why;
 }
 
 }  // namespace

@@ -38,6 +38,11 @@ bool TrackerFrontend::process(const FeatureSet& features, const Pose2& odom_pose
     *why = "odometry pose not finite";
     return false;
   }
+  if (!std::isfinite(features.stamp) || !(features.stamp > 0.0)) {
+    // A NaN stamp kept as the last one would refuse every later frame (!(t > NaN)).
+    *why = "stamp not finite or not positive";
+    return false;
+  }
   if (anchored_ && !(features.stamp > last_stamp_)) {
     *why = "stamp not after the last";
     return false;

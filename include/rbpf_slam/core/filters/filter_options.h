@@ -67,7 +67,8 @@ struct RobustOptions {
   bool intermediate_path = true;   // estimate the skipped path and replay its observations
   int path_iterations = 10;        // iterated EKF steps of the intermediate path estimate
   // A robust step needs at least this many observations associated with landmarks older than
-  // the oldest ancestor set (by the most probable particle of S_{t-1}); with fewer, the event
+  // the oldest ancestor set (counted for the most probable particle of each candidate set,
+  // moved over the skipped steps, and the largest count taken); with fewer, the event
   // takes a plain FastSLAM 2.0 step (sparse sensors). 0 = never fall back.
   int min_old_observations = 3;
 };
