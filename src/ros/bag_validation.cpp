@@ -39,6 +39,10 @@ struct StreamState {
       ++report.zero_stamps;
       return;
     }
+    if (!farStampProblem(stamp).empty()) {
+      ++report.far_stamps;  // not the newest stamp: the gaps stay those of the real ones
+      return;
+    }
     if (has_last) {
       if (stamp < last) {
         ++report.backwards;
@@ -92,7 +96,7 @@ BagReport validateBag(const std::string& path, const BagValidationOptions& optio
   openBagForReading(&bag, path);
   rosbag::View view(bag);
   const ros::Time begin = view.getBeginTime();
-  report.duration_s = (view.getEndTime() - begin).toSec();
+  report.duration_s = view.getEndTime().toSec() - begin.toSec();  // doubles: no Duration overflow
 
   std::map<std::string, StreamState> streams;  // topic or tf edge
   std::map<std::string, std::set<std::string>> tf_neighbours;
@@ -144,12 +148,9 @@ BagReport validateBag(const std::string& path, const BagValidationOptions& optio
       } else if (const auto features = m.instantiate<FeatureArray>()) {
         header = features->header;
         features_topics.insert(topic);
-        for (const auto& f : features->points) {
-          if (!std::isfinite(f.range) || !std::isfinite(f.bearing)) ++s.report.invalid_values;
-        }
-        for (const auto& f : features->lines) {
-          if (!std::isfinite(f.rho) || !std::isfinite(f.theta)) ++s.report.invalid_values;
-        }
+        int dropped = 0;  // the features SLAM drops, by the same rule
+        toFeatureSet(*features, core::Pose2::Zero(), &dropped);
+        s.report.invalid_values += dropped;
       } else if (const auto odometry = m.instantiate<nav_msgs::Odometry>()) {
         header = odometry->header;
         odometry_topics.insert(topic);
@@ -208,6 +209,11 @@ BagReport validateBag(const std::string& path, const BagValidationOptions& optio
     } else if (r.duplicates > 0) {
       report.problems.push_back(name + ": " + std::to_string(r.duplicates) + " repeated stamp(s)");
     }
+    if (r.far_stamps > 0) {
+      report.problems.push_back(name + ": " + std::to_string(r.far_stamps) +
+                                " stamp(s) near 2^32 s (a driver's -1?), which tf2 cannot handle: "
+                                "SLAM drops those messages");
+    }
     if (r.zero_stamps > 0) {
       report.problems.push_back(name + ": " + std::to_string(r.zero_stamps) + " zero stamp(s)");
     }
@@ -219,9 +225,11 @@ BagReport validateBag(const std::string& path, const BagValidationOptions& optio
     if (r.invalid_values > 0) {
       report.problems.push_back(
           name + ": " + std::to_string(r.invalid_values) +
-          (is_tf ? " transform(s) tf2 refuses (the first: " + r.first_invalid + ")"
-                 : (features_topics.count(name) ? " non-finite feature(s)"
-                                                : " NaN or -inf value(s)")));
+          (is_tf ? " unusable transform(s) (the first: " + r.first_invalid + ")"
+                 : (features_topics.count(name)
+                        ? " unusable feature(s) (non-finite values or covariance, or a negative "
+                          "range: SLAM drops them)"
+                        : " NaN or -inf value(s)")));
     }
     if (is_tf) continue;
     if (r.frames.size() > 1) {

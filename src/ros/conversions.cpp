@@ -43,6 +43,8 @@ std::string transformProblem(const geometry_msgs::TransformStamped& t) {
   if (parent.empty()) return "no frame_id";
   if (child.empty()) return "no child_frame_id";
   if (parent == child) return "frame_id and child_frame_id are both '" + child + "'";
+  const std::string far = farStampProblem(t.header.stamp);
+  if (!far.empty()) return far;
   const auto& p = t.transform.translation;
   const auto& q = t.transform.rotation;
   if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) {

@@ -22,6 +22,10 @@ LandmarkTrackerNode::LandmarkTrackerNode(ros::NodeHandle nh, ros::NodeHandle pri
   handlers.on_failure = [this](const Ptr& msg, tf2_ros::FilterFailureReason reason) {
     messageDropped(msg, reason);
   };
+  handlers.on_bad_stamp = [this](const Ptr& msg, const std::string& why) {
+    drop("stamp tf cannot handle", "far stamp", "Dropping features in frame '" +
+                                                    msg->header.frame_id + "': " + why);
+  };
   handlers.on_unknown_frame = [this](const Ptr& msg, const std::string& error) {
     drop("frame not in tf", "frame " + msg->header.frame_id,
          "Dropping features in frame '" + msg->header.frame_id + "': tf has no transform " +

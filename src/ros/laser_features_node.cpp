@@ -17,6 +17,10 @@ LaserFeaturesNode::LaserFeaturesNode(ros::NodeHandle nh, ros::NodeHandle private
   handlers.on_failure = [this](const Ptr& msg, tf2_ros::FilterFailureReason reason) {
     messageDropped(msg, reason);
   };
+  handlers.on_bad_stamp = [this](const Ptr& msg, const std::string& why) {
+    warnings_.warn("far stamp " + msg->header.frame_id,
+                   "Dropping a scan in frame '" + msg->header.frame_id + "': " + why);
+  };
   handlers.on_unknown_frame = [this](const Ptr& msg, const std::string& error) {
     warnings_.warn("frame " + msg->header.frame_id,
                    "Dropping a scan in frame '" + msg->header.frame_id +

@@ -1,9 +1,20 @@
 #include "rbpf_slam/ros/node_support.h"
 
+#include <cstdio>
+
 #include "rbpf_slam/ros/conversions.h"
 
 namespace rbpf_slam {
 namespace rosbridge {
+
+std::string farStampProblem(const ros::Time& stamp) {
+  if (!(stamp.toSec() > kFarStampS)) return "";
+  char text[128];
+  std::snprintf(text, sizeof(text),
+                "stamp %.3f s is near 2^32 s (a driver's -1?), beyond what tf2 can handle",
+                stamp.toSec());
+  return text;
+}
 
 std::string stripSlash(const std::string& name) {
   return !name.empty() && name[0] == '/' ? name.substr(1) : name;

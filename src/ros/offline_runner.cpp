@@ -1,5 +1,6 @@
 #include "rbpf_slam/ros/offline_runner.h"
 
+#include <console_bridge/console.h>
 #include <geometry_msgs/PoseWithCovarianceStamped.h>
 #include <rosbag/bag.h>
 #include <rosbag/view.h>
@@ -179,8 +180,9 @@ std::vector<ros::Time> runStarts(const std::vector<OdometryArrival>& odometry, d
 
 /// How long each tf buffer keeps transforms: tf2 drops those older than the newest stamp less
 /// this, so it must span the header stamps, not only the bag's record time (a converter may
-/// write a 600 s log in 6 s of bag time; stamps may jump forward). 60 s of margin, at most
-/// 1e6 s (tf2 adds it to stamps, which must stay under 2^32 s).
+/// write a 600 s log in 6 s of bag time; stamps may jump forward, e.g. a clock set by NTP
+/// after boot). 60 s of margin; tf2 adds it to stamps, which must stay under 2^32 s (the
+/// odometry has no far stamps: readOdometry skips those, as transformProblem refuses them).
 ros::Duration tfCacheLength(const std::vector<OdometryArrival>& odometry, double bag_duration_s) {
   double first = std::numeric_limits<double>::infinity();
   double last = -first;
@@ -189,7 +191,10 @@ ros::Duration tfCacheLength(const std::vector<OdometryArrival>& odometry, double
     last = std::max(last, a.stamp);
   }
   const double span = odometry.empty() ? 0.0 : last - first;
-  return ros::Duration(std::clamp(std::max(span, bag_duration_s) + 60.0, 10.0, 1e6));
+  // ros::Duration holds at most 2^31 - 1 s.
+  const double headroom = std::min(2147483647.0, odometry.empty() ? 1e6 : 4294967295.0 - last - 1.0);
+  return ros::Duration(std::clamp(std::max(span, bag_duration_s) + 60.0, 10.0,
+                                  std::max(10.0, headroom)));
 }
 
 /// Loads every transform of the bag into one tf buffer per run (run_starts: bag times where a
@@ -207,6 +212,14 @@ long loadTransforms(const rosbag::Bag& bag, const std::vector<ros::Time>& run_st
   segments->push_back({ros::Time(0), std::make_unique<tf2::BufferCore>(cache)});
   size_t next_start = 0;
   long skipped = 0;
+  // tf2 warns on its own for each transform older than its buffer keeps (TF_OLD_DATA); they
+  // are counted and the first named here instead.
+  const console_bridge::LogLevel log_level = console_bridge::getLogLevel();
+  console_bridge::setLogLevel(console_bridge::CONSOLE_BRIDGE_LOG_ERROR);
+  struct RestoreLogLevel {
+    console_bridge::LogLevel level;
+    ~RestoreLogLevel() { console_bridge::setLogLevel(level); }
+  } restore{log_level};
   rosbag::View view(bag, rosbag::TopicQuery(kTfTopics));
   for (const rosbag::MessageInstance& m : view) {
     const auto msg = instantiateOrNull<tf2_msgs::TFMessage>(m);
@@ -252,9 +265,10 @@ long loadTransforms(const rosbag::Bag& bag, const std::vector<ros::Time>& run_st
       if (!taken) {
         ++skipped;
         if ((*malformed)++ == 0) {
+          char at[32];
+          std::snprintf(at, sizeof(at), "%.3f", t.header.stamp.toSec());
           *first_malformed = m.getTopic() + " " + t.header.frame_id + " -> " + t.child_frame_id +
-                             ": refused by tf2 (stamp " + std::to_string(t.header.stamp.sec) +
-                             " s)";
+                             " at " + at + ": refused by tf2 (older than its buffer keeps)";
         }
       }
     }
@@ -387,7 +401,7 @@ std::vector<std::string> describeOutcome(const OfflineSummary& s, const OfflineO
   // First: a refused transform is usually why frames had no tf.
   if (s.malformed_transforms > 0) {
     lines.push_back("skipped " + std::to_string(s.malformed_transforms) +
-                    " transform(s) tf2 cannot take; the first: " + s.first_malformed_transform);
+                    " unusable transform(s); the first: " + s.first_malformed_transform);
   }
   if (s.dropped_no_tf > 0) {
     lines.push_back("dropped " + std::to_string(s.dropped_no_tf) +
@@ -405,7 +419,8 @@ std::vector<std::string> describeOutcome(const OfflineSummary& s, const OfflineO
   }
   if (s.dropped_features > 0) {
     lines.push_back("dropped " + std::to_string(s.dropped_features) +
-                    " non-finite feature(s) inside otherwise good FeatureArray messages");
+                    " unusable feature(s) (non-finite values or covariance, or a negative range) "
+                    "inside otherwise good FeatureArray messages");
   }
   if (s.resets > 0) {
     lines.push_back("the session started " + std::to_string(s.resets) +
@@ -470,7 +485,8 @@ OfflineSummary OfflineRunner::run() {
   const std::clock_t cpu_start = std::clock();
   rosbag::View full(bag);
   const ros::Time bag_begin = full.getBeginTime(), bag_end = full.getEndTime();
-  summary.bag_duration_s = (bag_end - bag_begin).toSec();
+  // In seconds as doubles: a ros::Duration of bag times near 2^32 s throws.
+  summary.bag_duration_s = bag_end.toSec() - bag_begin.toSec();
   const io::RosOptions& ros_options = config_.ros;
   std::string sensor_topic;  // the raw sensor topic of the front end, if any
   if (config_.frontend == "laser") sensor_topic = ros_options.scan_topic;
@@ -578,6 +594,10 @@ OfflineSummary OfflineRunner::run() {
         summary.first_bad_message =
             m.getTopic() + ": " + (frame.empty() ? "no frame_id" : "a zero stamp");
       }
+      continue;
+    }
+    if (const std::string far = farStampProblem(stamp); !far.empty()) {
+      if (summary.dropped_bad_message++ == 0) summary.first_bad_message = m.getTopic() + ": " + far;
       continue;
     }
     while (segment + 1 < tf_segments.size() && m.getTime() >= tf_segments[segment + 1].starts) {
@@ -736,8 +756,8 @@ OfflineSummary OfflineRunner::run() {
     }
     const double wall =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
-    progress.show((m.getTime() - bag_begin).toSec() / std::max(summary.bag_duration_s, 1e-9),
-                  wall, (m.getTime() - bag_begin).toSec());
+    const double into_bag = m.getTime().toSec() - bag_begin.toSec();
+    progress.show(into_bag / std::max(summary.bag_duration_s, 1e-9), wall, into_bag);
   }
   progress.done();
   if (result_bag) result_bag->finish(bag, topics, pipeline_.session());

@@ -140,6 +140,11 @@ std::unique_ptr<TfGatedSubscriber<Message>> SlamNode::subscribeFiltered(
   handlers.on_unknown_frame = [this](const Ptr& msg, const std::string& error) {
     frameNotInTf(msg->header, error);
   };
+  handlers.on_bad_stamp = [this](const Ptr& msg, const std::string& why) {
+    diagnostics_.recordDrop("stamp tf cannot handle");
+    warnThrottled("far stamp " + msg->header.frame_id,
+                  "Dropping a message in " + msg->header.frame_id + ": " + why);
+  };
   return std::make_unique<TfGatedSubscriber<Message>>(
       nh_, topic, static_cast<uint32_t>(config_.ros.queue_size), &tf_buffer_, config_.ros.base_frame,
       config_.ros.odom_frame, std::move(handlers));

@@ -28,6 +28,10 @@ SonarFeaturesNode::SonarFeaturesNode(ros::NodeHandle nh, ros::NodeHandle private
   handlers.on_failure = [this](const Ptr& msg, tf2_ros::FilterFailureReason reason) {
     messageDropped(msg, reason);
   };
+  handlers.on_bad_stamp = [this](const Ptr& msg, const std::string& why) {
+    drop("stamp tf cannot handle", "far stamp " + msg->header.frame_id,
+         "Dropping a sonar reading from " + msg->header.frame_id + ": " + why);
+  };
   handlers.on_unknown_frame = [this](const Ptr& msg, const std::string& error) {
     drop("frame not in tf", "frame " + msg->header.frame_id,
          "Dropping a sonar reading in frame '" + msg->header.frame_id + "': tf has no transform " +

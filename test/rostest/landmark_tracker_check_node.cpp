@@ -1,8 +1,8 @@
 // landmark_tracker.test: the landmark_tracker node on a simulated lee_sim_b bag (range-bearing
 // landmarks) publishes new-landmark events with increasing steps and stamps, each starting at
 // least one landmark, and finite landmark markers in the odometry frame; /diagnostics reports
-// its updates. One features message stamped 3 s before the latest event (a late message) is
-// dropped: no reset on /diagnostics, and the events' steps keep increasing (a reset used to
+// its updates. One features message stamped 2 s behind the clock (a late message) is
+// dropped (counted on /diagnostics as "dropped: old stamp"): no reset on /diagnostics, and the events' steps keep increasing (a reset used to
 // restart them at 1).
 
 #include <diagnostic_msgs/DiagnosticArray.h>
@@ -29,6 +29,7 @@ struct Seen {
   std::set<std::pair<std::string, int>> shown;
   long updates = -1;
   long resets = -1;
+  long late_dropped = 0;  // /diagnostics "dropped: old stamp"
   int events_after_late = 0;  // events after the late message went out
   bool late_sent = false;
 };
@@ -78,6 +79,7 @@ TEST(LandmarkTracker, PublishesEventsAndLandmarks) {
           for (const auto& kv : status.values) {
             if (kv.key == "updates") seen.updates = std::stol(kv.value);
             if (kv.key == "resets") seen.resets = std::stol(kv.value);
+            if (kv.key == "dropped: old stamp") seen.late_dropped = std::stol(kv.value);
           }
         }
       });
@@ -86,9 +88,11 @@ TEST(LandmarkTracker, PublishesEventsAndLandmarks) {
   while (ros::WallTime::now() < deadline) {
     {
       std::lock_guard<std::mutex> lock(seen.mutex);
-      if (!seen.late_sent && seen.events >= 2) {
-        FeatureArray msg;  // one post straight ahead, 3 s late (tf still covers that stamp)
-        msg.header.stamp = ros::Time(seen.last_stamp - 3.0);
+      if (!seen.late_sent && seen.events >= 2 && late.getNumSubscribers() > 0) {
+        // One post straight ahead, 2 s behind the (simulated) clock: more than the 1 s of
+        // reset_on_time_jump_back behind the tracker's last frame, inside tf's 10 s cache.
+        FeatureArray msg;
+        msg.header.stamp = ros::Time::now() - ros::Duration(2.0);
         msg.header.frame_id = "base_link";
         PointFeature post;
         post.range = 2.0;
@@ -97,7 +101,7 @@ TEST(LandmarkTracker, PublishesEventsAndLandmarks) {
         late.publish(msg);
         seen.late_sent = true;
       }
-      if (seen.events >= min_events && seen.events_after_late >= 2 &&
+      if (seen.events >= min_events && seen.events_after_late >= 2 && seen.late_dropped > 0 &&
           seen.updates > 3 * min_events && !seen.shown.empty()) {
         break;
       }
@@ -111,6 +115,7 @@ TEST(LandmarkTracker, PublishesEventsAndLandmarks) {
   EXPECT_EQ(seen.bad_events, 0);
   EXPECT_EQ(seen.out_of_order, 0) << "event steps went back: the late message reset the tracker";
   EXPECT_TRUE(seen.late_sent);
+  EXPECT_EQ(seen.late_dropped, 1) << "the late message did not reach the tracker";
   EXPECT_GE(seen.events_after_late, 2);
   EXPECT_EQ(seen.resets, 0) << "a late message is no restarted clock";
   EXPECT_EQ(seen.non_finite, 0);

@@ -4,7 +4,9 @@
 #   compressed  bag (record) times squeezed 100x, header stamps jumping 200 s forward half way:
 #               every frame still has tf (the tf buffer kept bag duration + 60 s of stamps and
 #               dropped the first half)
-#   hugestamp   one scan stamped 4294967295 s (a driver's -1): that frame is lost, not the run
+#   hugestamp   one scan stamped 4294967295 s (a driver's -1): that frame is lost, not the run;
+#               likewise one odometry transform so stamped (no second tf segment), and a scan
+#               recorded at that bag time (offline_slam and validate_bag used to throw)
 #   empty       no messages: both tools say so, naming the file
 #   swap        every 5th scan stamped after the next: the rejected frames are counted and the
 #               first named (they used to be silent)
@@ -62,6 +64,24 @@ def hugestamp(i, topic, msg, t):
     yield topic, msg, t
 
 
+def farodom(i, topic, msg, t):
+    if topic == "/tf":
+        scans[0] += 1
+        if scans[0] == 300:  # half way
+            for tr in msg.transforms:
+                tr.header.stamp = rospy.Time(4294967295, 0)
+    yield topic, msg, t
+
+
+def farbagtime(i, topic, msg, t):
+    if topic == "/scan":
+        scans[0] += 1
+        if scans[0] == 40:
+            msg.header.stamp = rospy.Time(4294967295, 0)
+            t = msg.header.stamp
+    yield topic, msg, t
+
+
 def swap(i, topic, msg, t):
     if topic == "/scan":
         scans[0] += 1
@@ -109,6 +129,10 @@ write("compressed", squeezed)
 scans[0] = 0
 write("hugestamp", hugestamp)
 scans[0] = 0
+write("farbagtime", farbagtime)
+scans[0] = 0
+write("farodom", farodom)
+scans[0] = 0
 write("swap", swap)
 write("denorm", denorm)
 write("jumpback", jumpback)
@@ -152,9 +176,22 @@ run compressed laser_fastslam2
 
 run hugestamp laser_fastslam2
 [ "$rc" -eq 0 ] || { fail "hugestamp: exit $rc"; cat "$work/hugestamp.err"; }
-[ -f "$work/out_hugestamp/summary.json" ] && [ "$(field hugestamp dropped_no_tf)" -eq 1 ] ||
-  fail "hugestamp: the far stamp's frame was not the one dropped"
-expect_err hugestamp "at 4294967295"
+[ -f "$work/out_hugestamp/summary.json" ] && [ "$(field hugestamp dropped_bad_message)" -eq 1 ] &&
+  [ "$(field hugestamp dropped_no_tf)" -eq 0 ] || fail "hugestamp: the far stamp's frame was not the one dropped"
+expect_err hugestamp "/scan: stamp 4294967295.000 s is near 2^32 s"
+validate hugestamp "/scan: 1 stamp(s) near 2^32 s"
+# ... and the same far stamp on one odometry transform, and as the bag time of that scan (a
+# converter that records at the header stamps): still one frame lost, not the run or the tf.
+run farodom laser_fastslam2
+[ "$rc" -eq 0 ] || { fail "farodom: exit $rc"; cat "$work/farodom.err"; }
+[ "$(field farodom tf_segments)" -eq 1 ] || fail "farodom: the far odometry stamp split the tf"
+[ "$(field farodom dropped_no_tf)" -le 2 ] || fail "farodom: $(field farodom dropped_no_tf) frames without tf"
+expect_err farodom "near 2^32 s"
+run farbagtime laser_fastslam2
+[ "$rc" -eq 0 ] || { fail "farbagtime: exit $rc"; cat "$work/farbagtime.err"; }
+vrc=0
+"$bin/validate_bag" "$work/farbagtime.bag" >"$work/farbagtime.val" 2>&1 || vrc=$?
+[ "$vrc" -eq 1 ] || { fail "validate_bag farbagtime: exit $vrc"; cat "$work/farbagtime.val"; }
 
 for tool in offline_slam validate_bag; do
   erc=0
@@ -175,9 +212,9 @@ expect_err swap "frame(s) were not used"
 expect_err swap "the first: /scan at"
 
 run denorm laser_fastslam2
-expect_err denorm "transform(s) tf2 cannot take; the first: /tf odom -> base_link"
+expect_err denorm "unusable transform(s); the first: /tf odom -> base_link"
 expect_err denorm "not normalised (norm 1.02)"
-validate denorm "transform(s) tf2 refuses (the first: a quaternion that is not normalised"
+validate denorm "unusable transform(s) (the first: a quaternion that is not normalised"
 
 run jumpback laser_fastslam2
 [ "$(field jumpback resets)" -eq 1 ] || fail "jumpback: $(field jumpback resets) resets"
@@ -193,9 +230,9 @@ run anglemax laser_fastslam2
 
 run featnan landmarks_fastslam2 --set ensemble.members=1 --set smoothing.enabled=false
 [ "$(field featnan dropped_features)" -gt 200 ] || fail "featnan: $(field featnan dropped_features) dropped"
-expect_err featnan "non-finite feature(s) inside otherwise good FeatureArray messages"
+expect_err featnan "unusable feature(s) (non-finite values or covariance, or a negative range)"
 validate featnan "/features: "
-grep -qF "non-finite feature(s)" "$work/featnan.val" || fail "featnan: validate_bag's wording"
+grep -qF "unusable feature(s)" "$work/featnan.val" || fail "featnan: validate_bag's wording"
 
 cp "$work/clean.bag" "$work/sonar.bag"
 run sonar sonar_fastslam2

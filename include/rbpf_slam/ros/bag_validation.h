@@ -26,6 +26,7 @@ struct StreamReport {
   long backwards = 0;   // stamp older than the previous one of the stream
   long duplicates = 0;  // stamp equal to the previous one
   long zero_stamps = 0;
+  long far_stamps = 0;  // near 2^32 s (farStampProblem): tf2 cannot handle them
   long gaps = 0;                 // steps larger than gap_threshold_s
   double gap_threshold_s = 0.0;  // max(max_gap_s, 5 x the median step without the largest)
   double largest_gap_s = 0.0;

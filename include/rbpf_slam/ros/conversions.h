@@ -42,10 +42,11 @@ constexpr double kMaxLevelTiltRad = 5.0 * M_PI / 180.0;
 /// The mount of a sensor frame from its transform in the base frame (a non-unit quaternion
 /// is normalised; a zero one reads as level).
 SensorMount toSensorMount(const geometry_msgs::Transform& transform);
-/// Why tf2's setTransform would refuse t (it logs and returns false, never throws), in its
-/// words' order: an empty or equal frame name, a value that is not finite, a rotation whose
-/// quaternion is not normalised (|q|^2 off 1 by 0.01 or more, tf2's rule). Empty when tf2
-/// takes it.
+/// Why t cannot be used, as tf2's setTransform refuses it (it logs and returns false) or
+/// its arithmetic fails: an empty or equal frame name, a stamp near 2^32 s (farStampProblem),
+/// a value that is not finite (tf2 itself takes an infinite translation, which would put the
+/// robot at infinity), a rotation whose quaternion is not normalised (|q|^2 off 1 by 0.01 or
+/// more, tf2's rule). Empty when it can be used.
 std::string transformProblem(const geometry_msgs::TransformStamped& t);
 /// True when the mount is tilted more than kMaxLevelTiltRad: callers warn that the readings
 /// are used as if level (the filters are 2D).

@@ -25,6 +25,12 @@ namespace rosbridge {
 /// A frame or topic name without its leading '/' (tf2 frames carry none; old bags do).
 std::string stripSlash(const std::string& name);
 
+/// Stamps past this (year 2103) are a driver's -1 or garbage: tf2 adds its cache length to
+/// stamps, which must stay under 2^32 s, and throws otherwise.
+constexpr double kFarStampS = 4.2e9;
+/// Why tf2 cannot take this stamp ("stamp 4294967295.000 s is near 2^32 s ..."), or empty.
+std::string farStampProblem(const ros::Time& stamp);
+
 /// ROS_WARN at most once per period for each cause (a short key such as "no tf sonar_3").
 class ThrottledWarnings {
  public:
@@ -66,6 +72,9 @@ class TfGatedSubscriber {
   using Ptr = boost::shared_ptr<const Message>;
   struct Handlers {
     std::function<void(const Ptr&)> on_message;
+    /// A stamp tf2 cannot handle (farStampProblem: near 2^32 s, a driver's -1): its time
+    /// arithmetic throws, which used to end the node from ros::spin. The message is dropped.
+    std::function<void(const Ptr&, const std::string& why)> on_bad_stamp;
     std::function<void(const Ptr&, tf2_ros::FilterFailureReason)> on_failure;
     std::function<void(const Ptr&, const std::string& tf_error)> on_unknown_frame;
   };
@@ -111,10 +120,21 @@ class TfGatedSubscriber {
 
   /// A message into the tf gate, as if it had arrived on the topic.
   void add(const Ptr& msg) {
-    std::string error;
+    std::string error = farStampProblem(msg->header.stamp);
+    if (!error.empty()) {
+      if (handlers_.on_bad_stamp) handlers_.on_bad_stamp(msg, error);
+      return;
+    }
     if (frameInTf(*tf_, base_frame_, msg->header.frame_id, &error)) {
       order_.entered(msg->header.stamp, msg);  // before add(): the filter may answer at once
-      filter_.add(msg);
+      try {
+        filter_.add(msg);
+      } catch (const std::exception& e) {  // tf2's time arithmetic, whatever the stamp
+        bool handed_on = false;
+        std::vector<Ptr> due = order_.dropped(msg->header.stamp, msg, &handed_on);
+        if (!handed_on && handlers_.on_bad_stamp) handlers_.on_bad_stamp(msg, e.what());
+        deliver(std::move(due), clears_);
+      }
     } else if (handlers_.on_unknown_frame) {
       handlers_.on_unknown_frame(msg, error);
     }
