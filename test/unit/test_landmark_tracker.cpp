@@ -161,6 +161,25 @@ TEST(LandmarkTracker, CollinearWallsFarApartAreDifferentLandmarks) {
   }
 }
 
+// A line first seen without end points (unset in a message) has no extent yet: a later segment
+// of it 3-8 m ahead is the same landmark, not a second copy (the robot's position used to be
+// taken as its extent).
+TEST(LandmarkTracker, ALineSeenWithoutEndsGetsItsExtentLater) {
+  LandmarkTracker tracker{LandmarkTrackerOptions()};
+  const Eigen::Vector2d wall(2.0, M_PI / 2);  // y = 2
+  TrackerEvent e = tracker.update(1, kStep, kStepCov, {lineSeen(robotAt(1), wall)});
+  ASSERT_EQ(e.started, 1);
+  TrackerObservation segment = lineSeen(robotAt(2), wall);
+  segment.start = transformPoint(inverse(robotAt(2)), Eigen::Vector2d(3.0, 2.0));
+  segment.end = transformPoint(inverse(robotAt(2)), Eigen::Vector2d(8.0, 2.0));
+  e = tracker.update(2, kStep, kStepCov, {segment});
+  EXPECT_EQ(e.started, 0);
+  EXPECT_EQ(e.matched, 1);
+  EXPECT_EQ(tracker.trackedLandmarks(), 1);
+  const LandmarkEstimate l = tracker.landmarks().front();
+  EXPECT_NEAR(std::max(std::fabs(l.end.x() - l.start.x()), 0.0), 5.0, 0.1) << "the extent seen";
+}
+
 TEST(LandmarkTracker, StateIsBounded) {
   LandmarkTrackerOptions options;
   options.max_landmarks = 4;

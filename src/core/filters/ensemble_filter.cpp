@@ -57,8 +57,8 @@ class EnsembleFilter : public SlamFilter {
     int best = leader_;
     if (!by_consensus_) {
       best = evidenceLeader();
-    } else if (updates_ % consensus_period_ == 0) {
-      best = consensusLeader();
+    } else if (updates_ % consensus_period_ == 0 || lost(leader_)) {
+      best = consensusLeader();  // a lost leader is replaced at once, not at the period's end
     }
     if (best != leader_) {
       leader_ = best;

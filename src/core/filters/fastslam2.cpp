@@ -670,11 +670,11 @@ std::vector<Pose2> FastSlam2::bestPath() const {
 }
 
 std::vector<Pose2> FastSlam2::bestPathSample(std::size_t max_poses, std::size_t* length) const {
+  if (max_poses < 1) throw std::invalid_argument("bestPathSample needs max_poses >= 1");
   const int best = bestParticle();
   const PathNode* tip = best < 0 ? nullptr : particles_[best].path.get();
   if (length) *length = tip ? tip->depth + 1 : 0;
   if (!tip || tip->depth + 1 <= max_poses) return bestPath();
-  if (max_poses < 1) throw std::invalid_argument("bestPathSample needs max_poses >= 1");
   if (max_poses == 1) return {tip->pose};
   // The indices evenlySpacedPoses picks, newest first, each found from the one after it.
   std::vector<Pose2> out(max_poses);

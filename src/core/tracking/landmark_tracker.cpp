@@ -56,7 +56,7 @@ TrackerEvent LandmarkTracker::update(int step, const Pose2& increment,
       correct(index, o);
       landmarks_[index].last_seen_step = step;
       ++landmarks_[index].observations;
-      if (o.type == LandmarkType::kLine) extend(index, o, false);
+      if (o.type == LandmarkType::kLine) extend(index, o);
       ++event.matched;
     } else if (index < 0 || d2 > options_.new_landmark_chi2) {
       fresh.push_back(&o);  // started after the corrections, so that they cannot match it
@@ -164,7 +164,7 @@ void LandmarkTracker::start(const TrackerObservation& o, int step) {
   t.id = next_id_++;
   t.observations = 1;
   landmarks_.push_back(t);
-  if (o.type == LandmarkType::kLine) extend(trackedLandmarks() - 1, o, true);
+  if (o.type == LandmarkType::kLine) extend(trackedLandmarks() - 1, o);
 }
 
 void LandmarkTracker::remove(int landmark) {
@@ -212,9 +212,9 @@ double LandmarkTracker::gapToExtent(int landmark, const TrackerObservation& o) c
   const Eigen::Vector2d direction(-std::sin(theta), std::cos(theta));
   const double a = direction.dot(transformPoint(pose, o.start));
   const double b = direction.dot(transformPoint(pose, o.end));
-  // No extent given (both ends at one spot, e.g. unset in a message): as an infinite line.
-  if (!std::isfinite(a) || !std::isfinite(b) || (o.end - o.start).norm() < 1e-6) return 0.0;
+  // No extent, seen or given (both ends at one spot, e.g. unset in a message): as a line.
   const Tracked& t = landmarks_[landmark];
+  if (!t.has_extent || !usableExtent(o) || !std::isfinite(a) || !std::isfinite(b)) return 0.0;
   return std::max({0.0, std::min(a, b) - t.extent_max, t.extent_min - std::max(a, b)});
 }
 
@@ -222,15 +222,20 @@ double LandmarkTracker::distanceTo(int landmark, const Eigen::Vector2d& at) cons
   const Eigen::Vector2d m = state_.segment<2>(3 + 2 * landmark);
   if (landmarks_[landmark].type != LandmarkType::kLine) return (m - at).norm();
   const double across = std::fabs(m.x() - at.x() * std::cos(m.y()) - at.y() * std::sin(m.y()));
-  if (!(options_.line_overlap_margin_m >= 0.0)) return across;  // infinite lines
+  const Tracked& t = landmarks_[landmark];
+  if (!(options_.line_overlap_margin_m >= 0.0) || !t.has_extent) return across;  // as a line
   const Eigen::Vector2d direction(-std::sin(m.y()), std::cos(m.y()));
   const double along = direction.dot(at);
-  const Tracked& t = landmarks_[landmark];
   const double beyond = std::max({0.0, along - t.extent_max, t.extent_min - along});
   return std::hypot(across, beyond);  // to the nearest point of the extent seen
 }
 
-void LandmarkTracker::extend(int landmark, const TrackerObservation& o, bool first) {
+bool LandmarkTracker::usableExtent(const TrackerObservation& o) {
+  return o.start.allFinite() && o.end.allFinite() && (o.end - o.start).norm() >= 1e-6;
+}
+
+void LandmarkTracker::extend(int landmark, const TrackerObservation& o) {
+  if (!usableExtent(o)) return;  // no end points: nothing to widen (not the robot's position)
   const Pose2 pose = state_.head<3>();
   const double theta = state_(3 + 2 * landmark + 1);
   const Eigen::Vector2d direction(-std::sin(theta), std::cos(theta));
@@ -238,9 +243,9 @@ void LandmarkTracker::extend(int landmark, const TrackerObservation& o, bool fir
   for (const Eigen::Vector2d& end : {o.start, o.end}) {
     const double along = direction.dot(transformPoint(pose, end));
     if (!std::isfinite(along)) continue;
-    if (first) {
+    if (!t.has_extent) {
       t.extent_min = t.extent_max = along;
-      first = false;
+      t.has_extent = true;
     } else {
       t.extent_min = std::min(t.extent_min, along);
       t.extent_max = std::max(t.extent_max, along);

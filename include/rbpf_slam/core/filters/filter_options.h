@@ -129,7 +129,7 @@ struct EnsembleOptions {
   // ... and how many poses of each path it compares at most: evenly spaced, from the first to the
   // latest (core::evenlySpacedPoses). Bounds each choice's cost on long runs: the poses are
   // picked through the paths' jump pointers (SlamFilter::bestPathSample), O(max_poses log T)
-  // per member instead of a walk over the T updates (8 members at 120000 updates: 37 ms
+  // per member instead of a walk over the T updates (8 members at 120000 updates: 33.5 ms
   // against 151 ms per choice, docs/results.md Timing). One pose per update: the paths of a
   // 15-minute MRCLAM run, 1000-2300 updates, are compared whole.
   int consensus_max_poses = 4000;

@@ -75,7 +75,8 @@ enum class FrameResult {
   kRejectedPose,
   kReset,
   kSkippedSameStamp,
-  kBuffered  // a sonar reading joined the echo window; a later frame extracts and updates
+  kBuffered  // sonar readings went to the echo window (invalid ones counted there, not used);
+             // a later frame extracts and updates
 };
 
 struct TrajectoryPoint {

@@ -61,14 +61,17 @@ class LandmarkTracker {
     int id = 0;
     int observations = 0;
     double extent_min = 0.0, extent_max = 0.0;  // line: along its direction, tracker frame
+    bool has_extent = false;  // a line seen with usable end points at least once
   };
   /// A line observation's distance along tracked line `landmark` beyond the extent seen so far
   /// (0 when they overlap, or when the observation gives no extent).
   double gapToExtent(int landmark, const TrackerObservation& observation) const;
   /// From `at` (tracker frame) to a point, or to the nearest point of a line's extent.
   double distanceTo(int landmark, const Eigen::Vector2d& at) const;
-  /// Widens a line's extent by the observation's end points.
-  void extend(int landmark, const TrackerObservation& observation, bool first);
+  /// Widens a line's extent by the observation's end points, when it has usable ones.
+  void extend(int landmark, const TrackerObservation& observation);
+  /// Finite end points at least 1 um apart (unset ones in a message are both zero).
+  static bool usableExtent(const TrackerObservation& observation);
   void predict(const Pose2& increment, const Eigen::Matrix3d& increment_cov);
   /// Index of the tracked landmark nearest in Mahalanobis distance, -1 when none.
   int associate(const TrackerObservation& observation, double* distance2) const;
