@@ -132,8 +132,9 @@ class TfGatedSubscriber {
       } catch (const std::exception& e) {  // tf2's time arithmetic, whatever the stamp
         bool handed_on = false;
         std::vector<Ptr> due = order_.dropped(msg->header.stamp, msg, &handed_on);
+        const unsigned long clears = clears_;  // on_bad_stamp may reset the input
         if (!handed_on && handlers_.on_bad_stamp) handlers_.on_bad_stamp(msg, e.what());
-        deliver(std::move(due), clears_);
+        deliver(std::move(due), clears);
       }
     } else if (handlers_.on_unknown_frame) {
       handlers_.on_unknown_frame(msg, error);

@@ -57,7 +57,7 @@ class EnsembleFilter : public SlamFilter {
     int best = leader_;
     if (!by_consensus_) {
       best = evidenceLeader();
-    } else if (updates_ % consensus_period_ == 0 || lost(leader_)) {
+    } else if (updates_ % consensus_period_ == 0 || (lost(leader_) && !allLost())) {
       best = consensusLeader();  // a lost leader is replaced at once, not at the period's end
     }
     if (best != leader_) {
@@ -137,6 +137,12 @@ class EnsembleFilter : public SlamFilter {
 
   /// A member whose evidence fell to -inf (an update no particle could explain): lost.
   bool lost(int k) const { return !(log_evidence_[k] > -INFINITY); }
+  bool allLost() const {
+    for (int k = 0; k < static_cast<int>(members_.size()); ++k) {
+      if (!lost(k)) return false;
+    }
+    return true;
+  }
 
   /// Whether member a ranks above member b, with a's evidence ahead by more than margin. A
   /// lost member never ranks above one that is not (with rank_by new_landmarks either).
