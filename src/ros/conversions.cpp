@@ -9,7 +9,6 @@
 #include <cstring>
 
 #include "rbpf_slam/core/filters/observation.h"
-#include "rbpf_slam/ros/node_support.h"
 
 namespace rbpf_slam {
 namespace rosbridge {
@@ -36,6 +35,19 @@ core::Pose2 toPose2(const geometry_msgs::Transform& t) {
 
 core::Pose2 toPose2(const geometry_msgs::Pose& p) {
   return core::Pose2(p.position.x, p.position.y, tf2::getYaw(p.orientation));
+}
+
+std::string stripSlash(const std::string& name) {
+  return !name.empty() && name[0] == '/' ? name.substr(1) : name;
+}
+
+std::string farStampProblem(const ros::Time& stamp) {
+  if (!(stamp.toSec() > kFarStampS)) return "";
+  char text[128];
+  std::snprintf(text, sizeof(text),
+                "stamp %.3f s is near 2^32 s (a driver's -1?), beyond what tf2 can handle",
+                stamp.toSec());
+  return text;
 }
 
 std::string transformProblem(const geometry_msgs::TransformStamped& t) {

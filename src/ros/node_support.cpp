@@ -7,19 +7,6 @@
 namespace rbpf_slam {
 namespace rosbridge {
 
-std::string farStampProblem(const ros::Time& stamp) {
-  if (!(stamp.toSec() > kFarStampS)) return "";
-  char text[128];
-  std::snprintf(text, sizeof(text),
-                "stamp %.3f s is near 2^32 s (a driver's -1?), beyond what tf2 can handle",
-                stamp.toSec());
-  return text;
-}
-
-std::string stripSlash(const std::string& name) {
-  return !name.empty() && name[0] == '/' ? name.substr(1) : name;
-}
-
 void ThrottledWarnings::warn(const std::string& cause, const std::string& message) {
   const ros::WallTime now = ros::WallTime::now();
   auto it = last_.find(cause);

@@ -42,6 +42,15 @@ constexpr double kMaxLevelTiltRad = 5.0 * M_PI / 180.0;
 /// The mount of a sensor frame from its transform in the base frame (a non-unit quaternion
 /// is normalised; a zero one reads as level).
 SensorMount toSensorMount(const geometry_msgs::Transform& transform);
+/// A frame or topic name without its leading '/' (tf2 frames carry none; old bags do).
+std::string stripSlash(const std::string& name);
+
+/// Stamps past this (year 2103) are a driver's -1 or garbage: tf2 adds its cache length to
+/// stamps, which must stay under 2^32 s, and throws otherwise.
+constexpr double kFarStampS = 4.2e9;
+/// Why tf2 cannot take this stamp ("stamp 4294967295.000 s is near 2^32 s ..."), or empty.
+std::string farStampProblem(const ros::Time& stamp);
+
 /// Why t cannot be used, as tf2's setTransform refuses it (it logs and returns false) or
 /// its arithmetic fails: an empty or equal frame name, a stamp near 2^32 s (farStampProblem),
 /// a value that is not finite (tf2 itself takes an infinite translation, which would put the

@@ -17,19 +17,15 @@
 #include <vector>
 
 #include "rbpf_slam/core/geometry.h"
+#include "rbpf_slam/ros/conversions.h"
 #include "rbpf_slam/core/in_order_release.h"
 
 namespace rbpf_slam {
 namespace rosbridge {
 
-/// A frame or topic name without its leading '/' (tf2 frames carry none; old bags do).
-std::string stripSlash(const std::string& name);
+// stripSlash, kFarStampS and farStampProblem are in conversions.h (the fuzzed conversions
+// use them without this file's tf2_ros).
 
-/// Stamps past this (year 2103) are a driver's -1 or garbage: tf2 adds its cache length to
-/// stamps, which must stay under 2^32 s, and throws otherwise.
-constexpr double kFarStampS = 4.2e9;
-/// Why tf2 cannot take this stamp ("stamp 4294967295.000 s is near 2^32 s ..."), or empty.
-std::string farStampProblem(const ros::Time& stamp);
 
 /// ROS_WARN at most once per period for each cause (a short key such as "no tf sonar_3").
 class ThrottledWarnings {
