@@ -234,16 +234,19 @@ long loadTransforms(const rosbag::Bag& bag, const std::vector<ros::Time>& run_st
     }
     tf2::BufferCore* buffer = segments->back().buffer.get();
     const bool is_static = topicIs(m.getTopic(), "tf_static");
+    // Counts a transform that cannot be used, naming the first.
+    const auto refuse = [&](const geometry_msgs::TransformStamped& t, const std::string& why) {
+      ++skipped;
+      if ((*malformed)++ > 0) return;
+      char at[32];
+      std::snprintf(at, sizeof(at), "%.3f", t.header.stamp.toSec());
+      *first_malformed = m.getTopic() + " " + t.header.frame_id + " -> " + t.child_frame_id +
+                         " at " + at + ": " + why;
+    };
     for (const auto& t : msg->transforms) {
       const std::string problem = transformProblem(t);
       if (!problem.empty()) {
-        ++skipped;
-        if ((*malformed)++ == 0) {
-          char at[32];
-          std::snprintf(at, sizeof(at), "%.3f", t.header.stamp.toSec());
-          *first_malformed = m.getTopic() + " " + t.header.frame_id + " -> " + t.child_frame_id +
-                             " at " + at + ": " + problem;
-        }
+        refuse(t, problem);
         continue;
       }
       if (!is_static) {
@@ -262,15 +265,7 @@ long loadTransforms(const rosbag::Bag& bag, const std::vector<ros::Time>& run_st
         // a stamp tf2's arithmetic cannot hold (near 2^32 s): nothing to keep
       }
       if (taken && is_static) statics.push_back(t);
-      if (!taken) {
-        ++skipped;
-        if ((*malformed)++ == 0) {
-          char at[32];
-          std::snprintf(at, sizeof(at), "%.3f", t.header.stamp.toSec());
-          *first_malformed = m.getTopic() + " " + t.header.frame_id + " -> " + t.child_frame_id +
-                             " at " + at + ": refused by tf2 (older than its buffer keeps)";
-        }
-      }
+      if (!taken) refuse(t, "refused by tf2 (older than its buffer keeps)");
     }
   }
   return skipped;
