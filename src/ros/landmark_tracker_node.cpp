@@ -4,6 +4,7 @@
 #include <visualization_msgs/MarkerArray.h>
 
 #include <chrono>
+#include <cmath>
 
 #include "rbpf_slam/ros/conversions.h"
 #include "rbpf_slam/ros/param_loader.h"
@@ -78,11 +79,10 @@ void LandmarkTrackerNode::featuresCallback(const FeatureArray::ConstPtr& msg) {
   // late message as the SLAM pipeline does (ClockRestartDetector, slam_session.h): only stamps
   // far back for long enough, with nothing in order in between, start the tracker over. One
   // late message used to throw every tracked landmark away and raise a spurious event.
-  const double jump = config_.session.reset_on_time_jump_back_s;
-  const bool far_back =
-      frontend_.steps() > 0 && jump > 0.0 && features.stamp + jump < frontend_.lastStamp();
-  if (!far_back) clock_.inOrder();
-  if (far_back && !clock_.farBack(features.stamp)) {
+  using Verdict = core::ClockRestartDetector::Verdict;
+  const Verdict verdict = clock_.classify(
+      features.stamp, frontend_.steps() > 0 ? frontend_.lastStamp() : -INFINITY);
+  if (verdict == Verdict::kLate) {
     drop("old stamp", "old stamp",
          "Dropping a feature frame stamped " + std::to_string(features.stamp) + ", " +
              std::to_string(frontend_.lastStamp() - features.stamp) +
@@ -90,7 +90,7 @@ void LandmarkTrackerNode::featuresCallback(const FeatureArray::ConstPtr& msg) {
              "stamps stay back, reset_after_frames_back / reset_on_time_jump_back)");
     return;
   }
-  if (far_back) {
+  if (verdict == Verdict::kRestart) {
     warnings_.warn("time jump", "Feature stamps went back by " +
                                     std::to_string(frontend_.lastStamp() - features.stamp) +
                                     " s and stayed back: the tracker starts over");

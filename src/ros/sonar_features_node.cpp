@@ -61,10 +61,7 @@ void SonarFeaturesNode::sonarCallback(const sensor_msgs::Range::ConstPtr& msg) {
   // As the SLAM pipeline does (ClockRestartDetector, slam_session.h): stamps far back for long
   // enough, with nothing in order in between, are a restarted clock (a looping bag) and clear
   // the window; a late ring is dropped and the window kept.
-  const double jump = config_.session.reset_on_time_jump_back_s;
-  const bool far_back = jump > 0.0 && stamp + jump < last_stamp_;
-  if (!far_back) clock_.inOrder();
-  if (far_back && clock_.farBack(stamp)) {
+  if (clock_.classify(stamp, last_stamp_) == core::ClockRestartDetector::Verdict::kRestart) {
     warnings_.warn("time jump", "Sonar stamps went back by " +
                                     std::to_string(last_stamp_ - stamp) +
                                     " s and stayed back: clearing the echo window");

@@ -37,6 +37,14 @@ bool ClockRestartDetector::farBack(double stamp) {
   return true;
 }
 
+ClockRestartDetector::Verdict ClockRestartDetector::classify(double stamp, double last) {
+  if (!(span_s_ > 0.0 && stamp + span_s_ < last)) {
+    inOrder();
+    return Verdict::kInOrder;
+  }
+  return farBack(stamp) ? Verdict::kRestart : Verdict::kLate;
+}
+
 SlamSession::SlamSession(std::unique_ptr<SlamFilter> filter, const SessionOptions& options)
     : filter_(std::move(filter)), options_(options) {
   validate(options_);

@@ -50,6 +50,11 @@ class ClockRestartDetector {
   bool farBack(double stamp);
   /// An input in order (or used by the session): ends the run.
   void inOrder() { count_ = 0; }
+  enum class Verdict { kInOrder, kLate, kRestart };
+  /// For an input stamped `stamp` after one at `last`: not far back (by the span; also with
+  /// the span 0) is kInOrder and ends the run; far back is kRestart when farBack() says so,
+  /// else kLate (a late message, to drop).
+  Verdict classify(double stamp, double last);
   int runLength() const { return count_; }
 
  private:
