@@ -381,6 +381,7 @@ SlamConfig parseSlamConfigTree(const YAML::Node& root, const std::string& source
   top.read("gap_noise_inflation", &s.gap_noise_inflation);
   top.read("reset_on_time_jump_back", &s.reset_on_time_jump_back_s);
   top.read("reset_after_frames_back", &s.reset_after_frames_back);
+  top.read("filter_origin", &s.filter_origin);
   YamlSection smoothing = top.section("smoothing");
   smoothing.read("enabled", &config.smoothing.enabled);
   smoothing.read("rounds", &config.smoothing.rounds);

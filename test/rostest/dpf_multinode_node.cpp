@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "rbpf_slam/core/filters/anchored_filter.h"
 #include "rbpf_slam/core/filters/distributed_filter.h"
 #include "rbpf_slam/io/slam_config.h"
 #include "rbpf_slam/io/trajectory.h"
@@ -79,8 +80,12 @@ TEST(DpfMultiNode, SameTrajectoryAsTheThreadedFilter) {
   options.progress = false;
   rb::OfflineRunner runner(config, options);
   runner.run();
-  const auto* threaded =
-      dynamic_cast<const core::DistributedFilter*>(&runner.pipeline().session().filter());
+  // The session may run the filter inside an AnchoredFilter (filter_origin: start).
+  const core::SlamFilter* filter = &runner.pipeline().session().filter();
+  if (const auto* anchored = dynamic_cast<const core::AnchoredFilter*>(filter)) {
+    filter = &anchored->inner();
+  }
+  const auto* threaded = dynamic_cast<const core::DistributedFilter*>(filter);
   ASSERT_NE(threaded, nullptr);
   EXPECT_GT(threaded->master().health()[fault_local].isolations, 0)
       << "the faulty local filter was never isolated";

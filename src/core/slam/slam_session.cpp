@@ -5,6 +5,7 @@
 #include <limits>
 #include <stdexcept>
 
+#include "rbpf_slam/core/filters/anchored_filter.h"
 #include "rbpf_slam/core/random.h"
 #include "rbpf_slam/core/require_range.h"
 
@@ -20,6 +21,7 @@ void validate(const SessionOptions& o) {
   requireRange("gap_noise_inflation", o.gap_noise_inflation, 1.0, 1000.0);
   requireRange("reset_on_time_jump_back", o.reset_on_time_jump_back_s, 0.0, 1e6);
   requireRange("reset_after_frames_back", o.reset_after_frames_back, 1, 1000);
+  requireOneOf("filter_origin", o.filter_origin, {"start", "odom"});
 }
 
 bool ClockRestartDetector::farBack(double stamp) {
@@ -49,6 +51,9 @@ SlamSession::SlamSession(std::unique_ptr<SlamFilter> filter, const SessionOption
     : filter_(std::move(filter)), options_(options) {
   validate(options_);
   if (!filter_) throw std::invalid_argument("SlamSession needs a filter");
+  if (options_.filter_origin == "start") {
+    filter_ = std::make_unique<AnchoredFilter>(std::move(filter_));
+  }
 }
 
 bool SlamSession::setPriorMap(const std::vector<LandmarkEstimate>& landmarks) {

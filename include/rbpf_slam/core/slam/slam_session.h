@@ -31,6 +31,11 @@ struct SessionOptions {
   // Keep every updated frame's motion and features (points and lines, not raw scans) for the
   // smoother that runs after the run (map_smoother.h). Memory grows with the run's length.
   bool keep_frames = false;
+  // Where the filter's own coordinates are centred (anchored_filter.h): "start" (the position
+  // of the run's first pose, so results do not depend on where the odometry frame begins) or
+  // "odom" (the odometry frame's origin). Either way poses and maps are reported in the map
+  // frame, which equals the odometry frame at the first frame.
+  std::string filter_origin = "odom";
 };
 
 void validate(const SessionOptions& options);
