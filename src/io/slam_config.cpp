@@ -141,6 +141,7 @@ void readLineSlam(YamlSection& top, core::FilterOptions* f) {
   association.read("h_similar_feature", &f->line_association.h_similar_feature);
   association.read("c_w1", &f->line_association.c_w1);
   association.read("c_w2", &f->line_association.c_w2);
+  association.read("compare_at", &f->line_association.compare_at);
   association.finish();
   YamlSection multifilter = top.section("multifilter");
   multifilter.read("line_particles", &f->multifilter.line_particles);

@@ -30,6 +30,34 @@ TEST(LineAssociation, WadOnHandComputedCases) {
   EXPECT_DOUBLE_EQ(weightedAbsoluteDifference({1.2, -0.7}, {1.2, -0.7}, 1.0, 1.5), 0.0);
 }
 
+// compare_at "robot": |delta rho| is what the robot would see, whatever the origin. The wall
+// x = 1 beside a robot at (0, 100), and the same wall turned 0.02 rad about the point beside
+// the robot: in map-frame rho they are 2 m apart (the turn times the distance from the origin),
+// seen from the robot 0.0002 m.
+TEST(LineAssociation, ComparedAtTheRobotTheWadDoesNotGrowWithTheDistanceFromTheOrigin) {
+  const Eigen::Vector2d robot(0.0, 100.0);
+  const Eigen::Vector2d a(1.0, 0.0);
+  const Eigen::Vector2d b(std::cos(0.02) + 100.0 * std::sin(0.02), 0.02);
+  EXPECT_NEAR(lineSeenFrom(a, robot).x(), 1.0, 1e-12);
+  EXPECT_NEAR(lineSeenFrom(b, robot).x(), std::cos(0.02), 1e-9);
+  WadAssociationOptions at_robot = kPaper;
+  at_robot.compare_at = "robot";
+  const double seen = (1.0 - std::cos(0.02)) + 1.5 * 0.02;
+  EXPECT_NEAR(featureDissimilarity(LandmarkType::kLine, a, b, at_robot, robot), seen, 1e-9);
+  EXPECT_GT(featureDissimilarity(LandmarkType::kLine, a, b, kPaper, robot), 2.0);
+  // Moving the origin (robot and lines together) does not change it.
+  const Eigen::Vector2d shift(-37.0, 12.0);
+  const Eigen::Vector2d a2(a.x() + shift.x() * std::cos(a.y()) + shift.y() * std::sin(a.y()),
+                           a.y());
+  const Eigen::Vector2d b2(b.x() + shift.x() * std::cos(b.y()) + shift.y() * std::sin(b.y()),
+                           b.y());
+  EXPECT_NEAR(featureDissimilarity(LandmarkType::kLine, a2, b2, at_robot, robot + shift), seen,
+              1e-9);
+  // Points are compared by their distance either way.
+  EXPECT_NEAR(featureDissimilarity(LandmarkType::kPoint, {1, 1}, {4, 5}, at_robot, robot), 5.0,
+              1e-12);
+}
+
 TEST(LineAssociation, LineWadTreatsBothNormalFormsAsOneLine) {
   // y = 0.05 and y = -0.03 seen with opposite normals: (0.05, pi/2) and (0.03, -pi/2) are
   // (0.05, pi/2) and (-0.03, pi/2): 0.08 apart, where the plain WAD says 0.02 + 1.5 pi.
@@ -38,7 +66,7 @@ TEST(LineAssociation, LineWadTreatsBothNormalFormsAsOneLine) {
   EXPECT_NEAR(lineWad(a, b, 1.0, 1.5), 0.08, 1e-12);
   // Far from the origin the two agree.
   EXPECT_NEAR(lineWad({2.0, 0.3}, {1.5, 0.1}, 1.0, 1.5), 0.8, 1e-12);
-  EXPECT_NEAR(featureDissimilarity(LandmarkType::kPoint, {1.0, 1.0}, {4.0, 5.0}, kPaper), 5.0,
+  EXPECT_NEAR(featureDissimilarity(LandmarkType::kPoint, {1.0, 1.0}, {4.0, 5.0}, kPaper, {0.0, 0.0}), 5.0,
               1e-12);
 }
 
@@ -111,7 +139,7 @@ TEST(LineAssociation, AssociationAndNewObstacleDetection) {
   const std::vector<LandmarkType> types = {LandmarkType::kLine, LandmarkType::kLine,
                                            LandmarkType::kPoint};
   const std::vector<Eigen::Vector2d> map = {{2.0, 0.0}, {4.0, -1.5}, {1.3, 1.4}};
-  WadAssociation a = associateByWad(features, types, map, kPaper);
+  WadAssociation a = associateByWad(features, types, map, kPaper, Eigen::Vector2d::Zero());
   EXPECT_EQ(a.map_to_feature, (std::vector<int>{0, -1, 2}));
   EXPECT_EQ(a.feature_to_map, (std::vector<int>{0, -1, 2}));
   EXPECT_EQ(a.new_features, (std::vector<int>{1}));
@@ -120,12 +148,12 @@ TEST(LineAssociation, AssociationAndNewObstacleDetection) {
 
   // Everything explained: the Hausdorff distance stays below h and nothing is new.
   features.erase(features.begin() + 1);
-  a = associateByWad(features, types, map, kPaper);
+  a = associateByWad(features, types, map, kPaper, Eigen::Vector2d::Zero());
   EXPECT_TRUE(a.new_features.empty());
   EXPECT_LT(a.hausdorff, kPaper.h_similar_feature);
 
   // An empty map: every feature is new.
-  a = associateByWad(features, {}, {}, kPaper);
+  a = associateByWad(features, {}, {}, kPaper, Eigen::Vector2d::Zero());
   EXPECT_EQ(a.new_features.size(), features.size());
 }
 
@@ -142,7 +170,7 @@ TEST(LandmarkParticleFilter, ConvergesOnASyntheticLine) {
     for (int k = 0; k < 40; ++k) {
       const Eigen::Vector2d z =
           truth + Eigen::Vector2d(sampleGaussian(rng, 0.03), sampleGaussian(rng, 0.01));
-      ASSERT_TRUE(filter.update(z, kPaper, options, rng));
+      ASSERT_TRUE(filter.update(z, Eigen::Vector2d::Zero(), kPaper, options, rng));
     }
     const Eigen::Vector2d c = filter.centroid();
     EXPECT_NEAR(c.x(), truth.x(), 0.03) << "seed " << seed;
@@ -168,7 +196,7 @@ TEST(LandmarkParticleFilter, PlainSirSettlesNearTheLineWithoutRoughening) {
   for (int k = 0; k < 30; ++k) {
     const Eigen::Vector2d z(2.0 + sampleGaussian(rng, 0.02),
                             wrapAngle(0.3 + M_PI + sampleGaussian(rng, 0.01)));
-    ASSERT_TRUE(filter.update(z, kPaper, options, rng));
+    ASSERT_TRUE(filter.update(z, Eigen::Vector2d::Zero(), kPaper, options, rng));
   }
   const double before = lineWad(detection, truth, 1.0, 1.5);
   const double after = lineWad(filter.centroid(), truth, 1.0, 1.5);

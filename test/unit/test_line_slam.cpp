@@ -178,7 +178,8 @@ TEST(LineSlam, LinesCarryTheirObservedExtent) {
     for (size_t i = 0; i < landmarks.size(); ++i) {
       EXPECT_EQ(other->landmarks()[i].id, landmarks[i].id);
       EXPECT_LT(featureDissimilarity(landmarks[i].type, other->landmarks()[i].mean,
-                                     landmarks[i].mean, WadAssociationOptions()),
+                                     landmarks[i].mean, WadAssociationOptions(),
+                                     Eigen::Vector2d::Zero()),
                 0.05);
     }
   }

@@ -18,6 +18,7 @@ void validate(const WadAssociationOptions& o) {
   requireRange("line_association.h_similar_feature", o.h_similar_feature, 1e-6, 100.0);
   requireRange("line_association.c_w1", o.c_w1, 0.0, 1000.0);
   requireRange("line_association.c_w2", o.c_w2, 0.0, 1000.0);
+  requireOneOf("line_association.compare_at", o.compare_at, {"origin", "robot"});
   if (o.c_w1 + o.c_w2 <= 0.0) {
     throw std::invalid_argument("line_association.c_w1 and c_w2 are both 0: WAD is always 0");
   }
@@ -99,9 +100,18 @@ double hausdorffDistance(
   return worst;
 }
 
+Eigen::Vector2d lineSeenFrom(const Eigen::Vector2d& line, const Eigen::Vector2d& centre) {
+  return Eigen::Vector2d(
+      line.x() - centre.x() * std::cos(line.y()) - centre.y() * std::sin(line.y()), line.y());
+}
+
 double featureDissimilarity(LandmarkType type, const Eigen::Vector2d& a, const Eigen::Vector2d& b,
-                            const WadAssociationOptions& options) {
+                            const WadAssociationOptions& options, const Eigen::Vector2d& centre) {
   if (type == LandmarkType::kLine) {
+    if (options.compare_at == "robot") {
+      return lineWad(lineSeenFrom(a, centre), lineSeenFrom(b, centre), options.c_w1,
+                     options.c_w2);
+    }
     return lineWad(a, b, options.c_w1, options.c_w2);
   }
   return (a - b).norm();
@@ -110,7 +120,7 @@ double featureDissimilarity(LandmarkType type, const Eigen::Vector2d& a, const E
 WadAssociation associateByWad(const std::vector<GlobalFeature>& features,
                               const std::vector<LandmarkType>& map_types,
                               const std::vector<Eigen::Vector2d>& map_values,
-                              const WadAssociationOptions& options) {
+                              const WadAssociationOptions& options, const Eigen::Vector2d& centre) {
   const double inf = std::numeric_limits<double>::infinity();
   const int n_features = features.size(), n_map = map_values.size();
   WadAssociation out;
@@ -122,7 +132,7 @@ WadAssociation associateByWad(const std::vector<GlobalFeature>& features,
     for (int i = 0; i < n_map; ++i) {
       if (map_types[i] != features[j].type) continue;
       const double d =
-          featureDissimilarity(features[j].type, features[j].value, map_values[i], options);
+          featureDissimilarity(features[j].type, features[j].value, map_values[i], options, centre);
       if (d < feature_best) {
         feature_best = d;
         out.feature_to_map[j] = i;

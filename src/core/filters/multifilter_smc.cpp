@@ -42,6 +42,7 @@ LandmarkParticleFilter::LandmarkParticleFilter(int id, LandmarkType type,
 }
 
 bool LandmarkParticleFilter::update(const Eigen::Vector2d& observed,
+                                    const Eigen::Vector2d& seen_from,
                                     const WadAssociationOptions& association,
                                     const MultiFilterOptions& options, Rng& rng) {
   const int n = particles_.size();
@@ -49,7 +50,8 @@ bool LandmarkParticleFilter::update(const Eigen::Vector2d& observed,
   for (int i = 0; i < n; ++i) {
     // Laplace likelihood of the dissimilarity (the paper's perceptual model, parameter c_m2).
     log_weights[i] =
-        -featureDissimilarity(type_, particles_[i], observed, association) / options.c_m2;
+        -featureDissimilarity(type_, particles_[i], observed, association, seen_from) /
+        options.c_m2;
   }
   std::vector<double> weights;
   if (!normalizeLogWeights(log_weights, &weights)) return false;
@@ -220,8 +222,8 @@ void MultiFilterSmc::updateRobot(const std::vector<LocalFeature>& features, Upda
     std::vector<int> near;
     for (int i = 0; i < static_cast<int>(filters_.size()); ++i) {
       if (filters_[i].type() != g.type) continue;
-      if (featureDissimilarity(g.type, g.value, filters_[i].centroid(), options_.line_association) <
-          2.0 * h) {
+      if (featureDissimilarity(g.type, g.value, filters_[i].centroid(), options_.line_association,
+                               predicted.head<2>()) < 2.0 * h) {
         near.push_back(i);
       }
     }
@@ -239,7 +241,8 @@ void MultiFilterSmc::updateRobot(const std::vector<LocalFeature>& features, Upda
       double best = h;
       for (int i : candidates[k]) {
         best = std::min(best, featureDissimilarity(g.type, g.value, filters_[i].centroid(),
-                                                   options_.line_association));
+                                                   options_.line_association,
+                                                   robot_[p].head<2>()));
       }
       sum += best;
     }
@@ -273,7 +276,8 @@ void MultiFilterSmc::updateMap(const std::vector<LocalFeature>& features, Update
     types.push_back(f.type());
     centroids.push_back(f.centroid());
   }
-  const WadAssociation a = associateByWad(global, types, centroids, options_.line_association);
+  const WadAssociation a =
+      associateByWad(global, types, centroids, options_.line_association, mean.head<2>());
   // Obstacle filters matched by a feature, updated in random order (the paper's section 3.4).
   // A feature updates only the landmark it is most similar to (as the EKF does): one wall
   // near two mapped lines used to pull both, a phantom one onto it.
@@ -287,7 +291,8 @@ void MultiFilterSmc::updateMap(const std::vector<LocalFeature>& features, Update
   std::shuffle(order.begin(), order.end(), rng_);
   for (int i : order) {
     const GlobalFeature& g = global[a.map_to_feature[i]];
-    if (!filters_[i].update(g.value, options_.line_association, options_.multifilter, rng_)) {
+    if (!filters_[i].update(g.value, mean.head<2>(), options_.line_association,
+                            options_.multifilter, rng_)) {
       ++stats->weight_resets;
     }
     filters_[i].extendBy(g.start, g.end);
@@ -301,7 +306,7 @@ void MultiFilterSmc::updateMap(const std::vector<LocalFeature>& features, Update
     for (const auto& other : added) {
       duplicate = duplicate || (other.type == global[j].type &&
                                 featureDissimilarity(other.type, other.value, global[j].value,
-                                                     options_.line_association) <
+                                                     options_.line_association, mean.head<2>()) <
                                     options_.line_association.h_similar_feature);
     }
     if (duplicate) continue;

@@ -54,9 +54,14 @@ GlobalFeature globalFeature(LandmarkType type, const LineFeature& line,
 double lineWad(const Eigen::Vector2d& line1, const Eigen::Vector2d& line2, double c_w1,
                double c_w2);
 
-/// lineWad for lines, Euclidean distance for points.
+/// The line (rho, theta) with its rho measured from centre instead of the origin (signed: the
+/// normal keeps its direction).
+Eigen::Vector2d lineSeenFrom(const Eigen::Vector2d& line, const Eigen::Vector2d& centre);
+
+/// lineWad for lines, Euclidean distance for points. With options.compare_at "robot" a line's
+/// rho is measured from centre (the robot's position) on both sides (lineSeenFrom).
 double featureDissimilarity(LandmarkType type, const Eigen::Vector2d& a, const Eigen::Vector2d& b,
-                            const WadAssociationOptions& options);
+                            const WadAssociationOptions& options, const Eigen::Vector2d& centre);
 
 /// The outcome of FeatureAssociation() and FoundNewObstacle() for one scan.
 struct WadAssociation {
@@ -73,7 +78,7 @@ struct WadAssociation {
 WadAssociation associateByWad(const std::vector<GlobalFeature>& features,
                               const std::vector<LandmarkType>& map_types,
                               const std::vector<Eigen::Vector2d>& map_values,
-                              const WadAssociationOptions& options);
+                              const WadAssociationOptions& options, const Eigen::Vector2d& centre);
 
 }  // namespace core
 }  // namespace rbpf_slam

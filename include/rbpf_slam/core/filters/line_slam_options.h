@@ -2,6 +2,8 @@
 // Options of the line-based multi-filter SMC SLAM (Yuen and MacDonald) and of the EKF-SLAM
 // baseline it was compared with; both share the WAD association and its thresholds.
 
+#include <string>
+
 namespace rbpf_slam {
 namespace core {
 
@@ -12,6 +14,10 @@ struct WadAssociationOptions {
   double h_similar_feature = 1.0;  // two features are similar when their WAD is below this
   double c_w1 = 1.0;               // WAD weight of |delta rho| [1/m]
   double c_w2 = 1.5;               // WAD weight of |delta theta| [1/rad]
+  // Where |delta rho| is measured: "origin" (the paper: the map frame's (rho, theta)) or
+  // "robot" (both lines' rho measured from the robot's position, i.e. the difference the
+  // sensor would see; a heading error then does not grow with the distance from the origin).
+  std::string compare_at = "origin";
 };
 
 /// Multi-filter SMC: one SIR filter for the robot pose (FilterOptions::particles, the paper's

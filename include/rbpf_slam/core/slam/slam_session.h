@@ -35,7 +35,7 @@ struct SessionOptions {
   // of the run's first pose, so results do not depend on where the odometry frame begins) or
   // "odom" (the odometry frame's origin). Either way poses and maps are reported in the map
   // frame, which equals the odometry frame at the first frame.
-  std::string filter_origin = "odom";
+  std::string filter_origin = "start";
 };
 
 void validate(const SessionOptions& options);
