@@ -422,6 +422,15 @@ TEST(SlamConfig, HinfAndExistenceErrorsNameTheKey) {
       << errorOf("variant: hinf");
 }
 
+// Where the filter's coordinates are centred: the run's start unless told otherwise.
+TEST(SlamConfig, FilterOriginIsTheStartByDefaultAndChecked) {
+  const std::string dir = std::string(RBPF_SOURCE_DIR) + "/config/";
+  EXPECT_EQ(loadSlamConfig(dir + "laser_fastslam2.yaml").session.filter_origin, "start");
+  const std::string bad = errorOf("filter_origin: map");
+  EXPECT_NE(bad.find("filter_origin"), std::string::npos) << bad;
+  EXPECT_NE(bad.find("start"), std::string::npos) << bad;
+}
+
 TEST(SlamConfig, LineSlamConfigsCarryThePapersDefaults) {
   const std::string dir = std::string(RBPF_SOURCE_DIR) + "/config/";
   const SlamConfig smc = loadSlamConfig(dir + "laser_multifilter.yaml");
@@ -429,18 +438,23 @@ TEST(SlamConfig, LineSlamConfigsCarryThePapersDefaults) {
   EXPECT_EQ(smc.frontend, "laser");
   EXPECT_EQ(smc.filter.particles, 2000);  // Yuen and MacDonald, section 4
   EXPECT_EQ(smc.filter.multifilter.line_particles, 200);
-  EXPECT_DOUBLE_EQ(smc.filter.multifilter.c_m1, 0.2);
+  // Session 40: WAD measured from the robot, with a wider likelihood and a tighter threshold
+  // (the paper: from the map origin, c_m1 0.2, h 1.0; docs/results.md).
+  EXPECT_DOUBLE_EQ(smc.filter.multifilter.c_m1, 0.4);
   EXPECT_DOUBLE_EQ(smc.filter.multifilter.c_m2, 0.2);
-  EXPECT_DOUBLE_EQ(smc.filter.line_association.h_similar_feature, 1.0);
+  EXPECT_DOUBLE_EQ(smc.filter.line_association.h_similar_feature, 0.5);
+  EXPECT_EQ(smc.filter.line_association.compare_at, "robot");
   EXPECT_DOUBLE_EQ(smc.filter.line_association.c_w1, 1.0);
   EXPECT_DOUBLE_EQ(smc.filter.line_association.c_w2, 1.5);
   EXPECT_TRUE(smc.scan_matching.enabled);
   EXPECT_EQ(core::createFilter(smc.filter)->variant(), "multifilter_smc");
   const SlamConfig ekf = loadSlamConfig(dir + "laser_ekf.yaml");
   EXPECT_EQ(ekf.filter.variant, "ekf_slam");
-  EXPECT_DOUBLE_EQ(ekf.filter.line_association.h_similar_feature,
-                   smc.filter.line_association.h_similar_feature);
+  EXPECT_DOUBLE_EQ(ekf.filter.line_association.h_similar_feature, 1.0);  // the paper's
   EXPECT_DOUBLE_EQ(ekf.filter.line_association.c_w2, smc.filter.line_association.c_w2);
+  EXPECT_EQ(ekf.filter.line_association.compare_at, smc.filter.line_association.compare_at);
+  const std::string where = errorOf("line_association: {compare_at: sensor}");
+  EXPECT_NE(where.find("line_association.compare_at"), std::string::npos) << where;
   EXPECT_TRUE(ekf.scan_matching.enabled);
   EXPECT_EQ(core::createFilter(ekf.filter)->variant(), "ekf_slam");
   EXPECT_NE(errorOf("multifilter: {c_m3: 1}").find("in multifilter: c_m3"), std::string::npos);
