@@ -532,6 +532,7 @@ struct FixedSession {
     fixed = owned.get();
     core::SessionOptions options;
     options.keep_frames = true;
+    options.filter_origin = "odom";  // the fixed paths and maps are in the map frame already
     session = std::make_unique<core::SlamSession>(std::move(owned), options);
     for (int i = 0; i < kSteps; ++i) {
       truth.push_back(onCircle(i, kSteps));

@@ -452,7 +452,7 @@ TEST(SlamConfig, LineSlamConfigsCarryThePapersDefaults) {
   EXPECT_EQ(ekf.filter.variant, "ekf_slam");
   EXPECT_DOUBLE_EQ(ekf.filter.line_association.h_similar_feature, 1.0);  // the paper's
   EXPECT_DOUBLE_EQ(ekf.filter.line_association.c_w2, smc.filter.line_association.c_w2);
-  EXPECT_EQ(ekf.filter.line_association.compare_at, smc.filter.line_association.compare_at);
+  EXPECT_EQ(ekf.filter.line_association.compare_at, "origin");  // the paper's EKF baseline
   const std::string where = errorOf("line_association: {compare_at: sensor}");
   EXPECT_NE(where.find("line_association.compare_at"), std::string::npos) << where;
   EXPECT_TRUE(ekf.scan_matching.enabled);

@@ -51,7 +51,8 @@ class AnchoredFilter : public SlamFilter {
   bool occupancyGrid(GridMapData& out) const override;
   std::vector<Pose2> bestPath() const override;
   std::vector<Pose2> bestPathSample(std::size_t max_poses, std::size_t* length) const override;
-  /// The members of a wrapped ensemble, each reported in the map frame too.
+  /// The members of a wrapped ensemble, each reported in the map frame too (read-only views,
+  /// built on first use; like every SlamFilter, not to be called from two threads at once).
   int members() const override { return inner_->members(); }
   const SlamFilter& member(int k) const override;
   int leader() const override { return inner_->leader(); }
