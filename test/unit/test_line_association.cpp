@@ -43,8 +43,11 @@ TEST(LineAssociation, ComparedAtTheRobotTheWadDoesNotGrowWithTheDistanceFromTheO
   WadAssociationOptions at_robot = kPaper;
   at_robot.compare_at = "robot";
   const double seen = (1.0 - std::cos(0.02)) + 1.5 * 0.02;
-  EXPECT_NEAR(featureDissimilarity(LandmarkType::kLine, a, b, at_robot, robot), seen, 1e-9);
-  EXPECT_GT(featureDissimilarity(LandmarkType::kLine, a, b, kPaper, robot), 2.0);
+  EXPECT_TRUE(wadCentre(at_robot, robot).isApprox(robot));
+  EXPECT_TRUE(wadCentre(kPaper, robot).isZero());  // the paper's WAD: rho from the origin
+  EXPECT_NEAR(featureDissimilarity(LandmarkType::kLine, a, b, at_robot, wadCentre(at_robot, robot)),
+              seen, 1e-9);
+  EXPECT_GT(featureDissimilarity(LandmarkType::kLine, a, b, kPaper, wadCentre(kPaper, robot)), 2.0);
   // Moving the origin (robot and lines together) does not change it.
   const Eigen::Vector2d shift(-37.0, 12.0);
   const Eigen::Vector2d a2(a.x() + shift.x() * std::cos(a.y()) + shift.y() * std::sin(a.y()),
@@ -53,6 +56,9 @@ TEST(LineAssociation, ComparedAtTheRobotTheWadDoesNotGrowWithTheDistanceFromTheO
                            b.y());
   EXPECT_NEAR(featureDissimilarity(LandmarkType::kLine, a2, b2, at_robot, robot + shift), seen,
               1e-9);
+  // The origin given as the centre is the paper's WAD.
+  EXPECT_DOUBLE_EQ(featureDissimilarity(LandmarkType::kLine, a, b, at_robot, Eigen::Vector2d::Zero()),
+                   lineWad(a, b, 1.0, 1.5));
   // Points are compared by their distance either way.
   EXPECT_NEAR(featureDissimilarity(LandmarkType::kPoint, {1, 1}, {4, 5}, at_robot, robot), 5.0,
               1e-12);

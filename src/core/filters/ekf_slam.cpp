@@ -79,8 +79,8 @@ UpdateStats EkfSlam::update(const FeatureSet& features) {
     types.push_back(info_[i].type);
     means.push_back(state_.segment<2>(3 + 2 * i));
   }
-  const WadAssociation a =
-      associateByWad(global, types, means, options_.line_association, pose().head<2>());
+  const WadAssociation a = associateByWad(global, types, means, options_.line_association,
+                                          wadCentre(options_.line_association, pose().head<2>()));
   for (int i = 0; i < static_cast<int>(a.map_to_feature.size()); ++i) {
     // M_phi_z may give one feature to several landmarks; the EKF uses each feature once, on
     // the landmark it is most similar to, or it would count the same measurement twice.
@@ -102,7 +102,7 @@ UpdateStats EkfSlam::update(const FeatureSet& features) {
       duplicate = duplicate ||
                   (other.type == g.type &&
                    featureDissimilarity(g.type, g.value, other.value, options_.line_association,
-                                        pose().head<2>()) <
+                                        wadCentre(options_.line_association, pose().head<2>())) <
                        options_.line_association.h_similar_feature);
     }
     if (duplicate) continue;

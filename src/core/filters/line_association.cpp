@@ -105,10 +105,14 @@ Eigen::Vector2d lineSeenFrom(const Eigen::Vector2d& line, const Eigen::Vector2d&
       line.x() - centre.x() * std::cos(line.y()) - centre.y() * std::sin(line.y()), line.y());
 }
 
+Eigen::Vector2d wadCentre(const WadAssociationOptions& options, const Eigen::Vector2d& position) {
+  return options.compare_at == "robot" ? position : Eigen::Vector2d::Zero();
+}
+
 double featureDissimilarity(LandmarkType type, const Eigen::Vector2d& a, const Eigen::Vector2d& b,
                             const WadAssociationOptions& options, const Eigen::Vector2d& centre) {
   if (type == LandmarkType::kLine) {
-    if (options.compare_at == "robot") {
+    if (centre.x() != 0.0 || centre.y() != 0.0) {
       return lineWad(lineSeenFrom(a, centre), lineSeenFrom(b, centre), options.c_w1,
                      options.c_w2);
     }

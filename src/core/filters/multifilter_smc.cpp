@@ -215,6 +215,7 @@ void MultiFilterSmc::updateRobot(const std::vector<LocalFeature>& features, Upda
   // same. Only features with a candidate count (the paper's "observed line obstacles").
   const Pose2 predicted = weightedPoseMean(robot_, weights_).mean;
   const double h = options_.line_association.h_similar_feature;
+  const Eigen::Vector2d predicted_centre = wadCentre(options_.line_association, predicted.head<2>());
   std::vector<int> observed;
   std::vector<std::vector<int>> candidates;
   for (int j = 0; j < static_cast<int>(features.size()); ++j) {
@@ -223,7 +224,7 @@ void MultiFilterSmc::updateRobot(const std::vector<LocalFeature>& features, Upda
     for (int i = 0; i < static_cast<int>(filters_.size()); ++i) {
       if (filters_[i].type() != g.type) continue;
       if (featureDissimilarity(g.type, g.value, filters_[i].centroid(), options_.line_association,
-                               predicted.head<2>()) < 2.0 * h) {
+                               predicted_centre) < 2.0 * h) {
         near.push_back(i);
       }
     }
@@ -236,13 +237,13 @@ void MultiFilterSmc::updateRobot(const std::vector<LocalFeature>& features, Upda
   std::vector<double> log_weights(n);
   for (int p = 0; p < n; ++p) {
     double sum = 0.0;
+    const Eigen::Vector2d centre = wadCentre(options_.line_association, robot_[p].head<2>());
     for (size_t k = 0; k < observed.size(); ++k) {
       const GlobalFeature g = inMap(features[observed[k]], robot_[p], observed[k]);
       double best = h;
       for (int i : candidates[k]) {
         best = std::min(best, featureDissimilarity(g.type, g.value, filters_[i].centroid(),
-                                                   options_.line_association,
-                                                   robot_[p].head<2>()));
+                                                   options_.line_association, centre));
       }
       sum += best;
     }
@@ -276,8 +277,9 @@ void MultiFilterSmc::updateMap(const std::vector<LocalFeature>& features, Update
     types.push_back(f.type());
     centroids.push_back(f.centroid());
   }
+  const Eigen::Vector2d centre = wadCentre(options_.line_association, mean.head<2>());
   const WadAssociation a =
-      associateByWad(global, types, centroids, options_.line_association, mean.head<2>());
+      associateByWad(global, types, centroids, options_.line_association, centre);
   // Obstacle filters matched by a feature, updated in random order (the paper's section 3.4).
   // A feature updates only the landmark it is most similar to (as the EKF does): one wall
   // near two mapped lines used to pull both, a phantom one onto it.
@@ -291,8 +293,8 @@ void MultiFilterSmc::updateMap(const std::vector<LocalFeature>& features, Update
   std::shuffle(order.begin(), order.end(), rng_);
   for (int i : order) {
     const GlobalFeature& g = global[a.map_to_feature[i]];
-    if (!filters_[i].update(g.value, mean.head<2>(), options_.line_association,
-                            options_.multifilter, rng_)) {
+    if (!filters_[i].update(g.value, centre, options_.line_association, options_.multifilter,
+                            rng_)) {
       ++stats->weight_resets;
     }
     filters_[i].extendBy(g.start, g.end);
@@ -306,7 +308,7 @@ void MultiFilterSmc::updateMap(const std::vector<LocalFeature>& features, Update
     for (const auto& other : added) {
       duplicate = duplicate || (other.type == global[j].type &&
                                 featureDissimilarity(other.type, other.value, global[j].value,
-                                                     options_.line_association, mean.head<2>()) <
+                                                     options_.line_association, centre) <
                                     options_.line_association.h_similar_feature);
     }
     if (duplicate) continue;

@@ -58,8 +58,12 @@ double lineWad(const Eigen::Vector2d& line1, const Eigen::Vector2d& line2, doubl
 /// normal keeps its direction).
 Eigen::Vector2d lineSeenFrom(const Eigen::Vector2d& line, const Eigen::Vector2d& centre);
 
-/// lineWad for lines, Euclidean distance for points. With options.compare_at "robot" a line's
-/// rho is measured from centre (the robot's position) on both sides (lineSeenFrom).
+/// Where the WAD measures a line's rho for a robot at `position`: there with
+/// options.compare_at "robot", else the map origin (zero).
+Eigen::Vector2d wadCentre(const WadAssociationOptions& options, const Eigen::Vector2d& position);
+
+/// lineWad for lines, both rho measured from centre (lineSeenFrom; a zero centre is the map
+/// origin: the paper's WAD), Euclidean distance for points.
 double featureDissimilarity(LandmarkType type, const Eigen::Vector2d& a, const Eigen::Vector2d& b,
                             const WadAssociationOptions& options, const Eigen::Vector2d& centre);
 
@@ -75,6 +79,7 @@ struct WadAssociation {
 /// similar feature when closer than h_similar_feature; a new obstacle is detected when the
 /// Hausdorff distance from the features to the map exceeds h_similar_feature, and then every
 /// feature farther than that from every landmark is new. O(features x landmarks).
+/// centre: where lines' rho is measured (wadCentre).
 WadAssociation associateByWad(const std::vector<GlobalFeature>& features,
                               const std::vector<LandmarkType>& map_types,
                               const std::vector<Eigen::Vector2d>& map_values,

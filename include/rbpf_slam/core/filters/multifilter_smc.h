@@ -26,7 +26,7 @@ class LandmarkParticleFilter {
 
   /// One SIR step with an observation in the map frame: weight by exp(-d / c_m2), resample
   /// (low variance), roughen. Returns false (and leaves the filter as it was) when every
-  /// weight underflows. seen_from: the robot's position (WadAssociationOptions::compare_at).
+  /// weight underflows. seen_from: where lines' rho is measured (wadCentre).
   bool update(const Eigen::Vector2d& observed, const Eigen::Vector2d& seen_from,
               const WadAssociationOptions& association, const MultiFilterOptions& options,
               Rng& rng);
