@@ -11,6 +11,7 @@
 
 #include "rbpf_slam/core/filters/anchored_filter.h"
 #include "rbpf_slam/core/filters/slam_filter.h"
+#include "rbpf_slam/core/grid/grid_map_data.h"
 #include "rbpf_slam/core/slam/slam_session.h"
 #include "synthetic_world.h"
 
@@ -79,6 +80,8 @@ struct RunResult {
   std::vector<LandmarkEstimate> landmarks;
   std::vector<WeightedPose> particles;
   std::vector<std::vector<Pose2>> member_paths;
+  bool has_grid = false;  // grid variants: where cell (0, 0)'s corner is
+  Eigen::Vector2d grid_origin = Eigen::Vector2d::Zero();
 };
 
 /// A loop around SyntheticWorld with the odometry frame's origin at -offset (the robot starts
@@ -108,6 +111,11 @@ RunResult runShifted(const FilterOptions& filter, const std::string& filter_orig
   for (int m = 0; m < session.filter().members(); ++m) {
     run.member_paths.push_back(session.filter().member(m).bestPath());
   }
+  GridMapData grid;
+  if (session.filter().occupancyGrid(grid)) {
+    run.has_grid = true;
+    run.grid_origin = Eigen::Vector2d(grid.origin_x_m, grid.origin_y_m);
+  }
   return run;
 }
 
@@ -119,7 +127,8 @@ double largestDifference(const RunResult& a, const RunResult& b, const Eigen::Ve
       a.particles.size() != b.particles.size() || a.member_paths.size() != b.member_paths.size()) {
     return inf;
   }
-  double worst = 0.0;
+  if (a.has_grid != b.has_grid) return inf;
+  double worst = a.has_grid ? (a.grid_origin + shift - b.grid_origin).norm() : 0.0;
   const auto pose = [&](const Pose2& p, const Pose2& q) {
     worst = std::max(worst, (p.head<2>() + shift - q.head<2>()).norm());
     worst = std::max(worst, std::fabs(wrapAngle(p.z() - q.z())));
@@ -154,7 +163,7 @@ TEST(AnchoredFilter, ResultsDoNotDependOnWhereTheOdometryFrameBegins) {
   const Eigen::Vector2d offset(150.0, -90.0);
   std::vector<FilterOptions> cases;
   for (const char* v : {"fastslam2", "robust_fastslam2", "hinf_fastslam", "multifilter_smc",
-                        "ekf_slam", "dpf"}) {
+                        "ekf_slam", "dpf", "grid_pf"}) {
     cases.push_back(optionsFor(v));
   }
   cases.push_back(optionsFor("fastslam2"));
@@ -164,11 +173,12 @@ TEST(AnchoredFilter, ResultsDoNotDependOnWhereTheOdometryFrameBegins) {
     const RunResult near = runShifted(filter, "start", Eigen::Vector2d::Zero());
     const RunResult far = runShifted(filter, "start", offset);
     ASSERT_EQ(near.path.size(), 60u) << name;
-    if (filter.variant != "dpf") {  // dpf keeps no landmark map
+    if (filter.variant != "dpf" && filter.variant != "grid_pf") {  // no landmark map
       EXPECT_FALSE(near.landmarks.empty()) << name;
     }
     EXPECT_LT(largestDifference(near, far, offset), 1e-6) << name;
     EXPECT_EQ(far.member_paths.size(), static_cast<size_t>(filter.ensemble.members)) << name;
+    EXPECT_EQ(far.has_grid, filter.variant == "grid_pf") << name;
   }
 }
 
@@ -204,6 +214,33 @@ TEST(AnchoredFilter, GivenPosesAndMapsAreInTheMapFrame) {
   EXPECT_TRUE(anchored.estimate().mean.isApprox(Pose2(52.0, 18.0, -0.2), 1e-3))
       << anchored.estimate().mean.transpose();
   EXPECT_TRUE(anchored.inner().estimate().mean.isApprox(Pose2(2.0, -2.0, -0.2), 1e-3));
+}
+
+// Through a session: a prior map given before the first frame (loaded at the origin, then
+// again once the first frame moves the filter's origin to the start) stays where it was, and
+// a start pose puts the robot there.
+TEST(AnchoredFilter, APriorMapAndAStartPoseSurviveTheFirstFrameFarFromTheOrigin) {
+  SessionOptions options;
+  SlamSession session(createFilter(optionsFor("fastslam2")), options);
+  LandmarkEstimate post;
+  post.id = 4;
+  post.mean = Eigen::Vector2d(205.0, -48.0);
+  post.covariance = Eigen::Matrix2d::Identity() * 1e-4;
+  ASSERT_TRUE(session.setPriorMap({post, line(210.0, 0.2)}));
+  ASSERT_TRUE(session.setPose(Pose2(203.0, -50.0, 0.1), Eigen::Matrix3d::Identity() * 1e-6));
+  ASSERT_EQ(session.process(1.0, Pose2(-40.0, 70.0, 0.5), FeatureSet()),
+            FrameResult::kFirstFrame);
+  const auto* anchored = dynamic_cast<const AnchoredFilter*>(&session.filter());
+  ASSERT_NE(anchored, nullptr);
+  EXPECT_TRUE(anchored->origin().isApprox(Eigen::Vector2d(203.0, -50.0)));
+  EXPECT_TRUE(session.filter().estimate().mean.isApprox(Pose2(203.0, -50.0, 0.1), 1e-2));
+  const std::vector<LandmarkEstimate> map = session.filter().landmarks();
+  ASSERT_EQ(map.size(), 2u);
+  EXPECT_TRUE(map[0].mean.isApprox(post.mean, 1e-9)) << map[0].mean.transpose();
+  EXPECT_TRUE(map[1].mean.isApprox(Eigen::Vector2d(210.0, 0.2), 1e-9)) << map[1].mean.transpose();
+  // The odometry's own frame: map -> odom puts odometry (-40, 70) at the start pose.
+  EXPECT_TRUE(compose(session.mapToOdom(), Pose2(-40.0, 70.0, 0.5))
+                  .isApprox(session.filter().estimate().mean, 1e-9));
 }
 
 }  // namespace
