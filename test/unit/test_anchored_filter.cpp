@@ -157,7 +157,7 @@ FilterOptions optionsFor(const std::string& variant) {
   return filter;
 }
 
-// With filter_origin "start", the same run with the odometry frame's origin 150 m away gives
+// With filter_origin "start", the same run with the odometry frame's origin 175 m away gives
 // the same path, particles and map, moved by the offset: the filter sees the same numbers.
 TEST(AnchoredFilter, ResultsDoNotDependOnWhereTheOdometryFrameBegins) {
   const Eigen::Vector2d offset(150.0, -90.0);

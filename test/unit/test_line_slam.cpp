@@ -372,3 +372,41 @@ TEST(LineSlam, BothVariantsBeatOdometryOnTestSmall) {
 }  // namespace
 }  // namespace core
 }  // namespace rbpf_slam
+
+namespace rbpf_slam {
+namespace core {
+namespace {
+
+// compare_at "robot" in both line filters: a wall beside a robot 100 m from the origin, seen
+// again 0.02 rad turned (sensor noise), is 2 m away in map-frame rho (a new landmark by the
+// paper's WAD) but 0.03 in WAD measured from the robot (the same landmark).
+TEST(LineSlam, ComparedAtTheRobotAWallSeenFarFromTheOriginStaysOneLandmark) {
+  for (const std::string variant : {"ekf_slam", "multifilter_smc"}) {
+    for (const std::string compare_at : {"origin", "robot"}) {
+      FilterOptions options = optionsFor(variant);
+      options.line_association.compare_at = compare_at;
+      std::unique_ptr<SlamFilter> filter = createFilter(options);
+      filter->reset(Pose2(0.0, 100.0, 0.0));
+      for (double theta : {0.0, 0.02}) {
+        LineFeature wall;
+        wall.rho = 1.0;
+        wall.theta = theta;
+        wall.covariance = Eigen::Vector2d(1e-4, 1e-4).asDiagonal();
+        const Eigen::Vector2d normal(std::cos(theta), std::sin(theta));
+        const Eigen::Vector2d along(-normal.y(), normal.x());
+        wall.start = normal - 2.0 * along;  // the extent seen, on the line turned by theta
+        wall.end = normal + 2.0 * along;
+        FeatureSet seen;
+        seen.stamp = 1.0 + theta;
+        seen.lines = {wall};
+        filter->update(seen);
+      }
+      EXPECT_EQ(filter->landmarks().size(), compare_at == "robot" ? 1u : 2u)
+          << variant << ", compare_at " << compare_at;
+    }
+  }
+}
+
+}  // namespace
+}  // namespace core
+}  // namespace rbpf_slam

@@ -431,7 +431,7 @@ TEST(SlamConfig, FilterOriginIsTheStartByDefaultAndChecked) {
   EXPECT_NE(bad.find("start"), std::string::npos) << bad;
 }
 
-TEST(SlamConfig, LineSlamConfigsCarryThePapersDefaults) {
+TEST(SlamConfig, LineSlamConfigsCarryThePapersDefaultsOrSession40s) {
   const std::string dir = std::string(RBPF_SOURCE_DIR) + "/config/";
   const SlamConfig smc = loadSlamConfig(dir + "laser_multifilter.yaml");
   EXPECT_EQ(smc.filter.variant, "multifilter_smc");

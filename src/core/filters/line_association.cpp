@@ -106,7 +106,10 @@ Eigen::Vector2d lineSeenFrom(const Eigen::Vector2d& line, const Eigen::Vector2d&
 }
 
 Eigen::Vector2d wadCentre(const WadAssociationOptions& options, const Eigen::Vector2d& position) {
-  return options.compare_at == "robot" ? position : Eigen::Vector2d::Zero();
+  if (options.compare_at == "robot") return position;
+  if (options.compare_at == "origin") return Eigen::Vector2d::Zero();
+  throw std::invalid_argument("line_association.compare_at = '" + options.compare_at +
+                              "' is not one of: origin, robot");
 }
 
 double featureDissimilarity(LandmarkType type, const Eigen::Vector2d& a, const Eigen::Vector2d& b,
