@@ -187,6 +187,29 @@ TEST(LandmarkParticleFilter, ConvergesOnASyntheticLine) {
   }
 }
 
+// A new line filter's theta spread turns the line about the point nearest seen_from (the
+// robot), not about the map origin's foot point: seen from a robot 50 m along the wall x = 100
+// from that foot point, the spread stays the rho spread instead of 50 m x the theta spread.
+TEST(LandmarkParticleFilter, ALineSpreadIsDrawnAsSeenFromTheRobot) {
+  const Eigen::Vector2d wall(100.0, 0.0), robot(99.0, 50.0);
+  const Eigen::Vector2d sigma(0.1, 0.03);
+  const auto spreadAtRobot = [&](const Eigen::Vector2d& seen_from) {
+    Rng rng(3);
+    LandmarkParticleFilter filter(0, LandmarkType::kLine, wall, sigma, 400, rng, seen_from);
+    double sum = 0.0, sum2 = 0.0;
+    for (const Eigen::Vector2d& p : filter.particles()) {
+      const double rho = lineSeenFrom(p, robot).x();  // where the particle's line passes
+      sum += rho;
+      sum2 += rho * rho;
+    }
+    const double n = filter.particles().size();
+    EXPECT_NEAR(sum / n, 1.0, 0.1);  // the wall is 1 m from the robot
+    return std::sqrt(sum2 / n - (sum / n) * (sum / n));
+  };
+  EXPECT_LT(spreadAtRobot(robot), 0.13);
+  EXPECT_GT(spreadAtRobot(Eigen::Vector2d::Zero()), 1.0);  // 50 m x 0.03 rad, the paper's draw
+}
+
 TEST(LandmarkParticleFilter, PlainSirSettlesNearTheLineWithoutRoughening) {
   // The shipped config's plain SIR (no jitter): the particles can only be resampled, so the
   // centroid moves from the detection towards the truth within the first draws' spread.

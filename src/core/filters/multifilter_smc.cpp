@@ -30,13 +30,16 @@ PoseEstimate weightedPoseMean(const std::vector<Pose2>& poses, const std::vector
 LandmarkParticleFilter::LandmarkParticleFilter(int id, LandmarkType type,
                                                const Eigen::Vector2d& detection,
                                                const Eigen::Vector2d& sigma, int particles,
-                                               Rng& rng)
+                                               Rng& rng, const Eigen::Vector2d& seen_from)
     : id_(id), type_(type) {
   // Line particles keep the detection's normal direction (theta within pi/2 of it) and a
   // signed rho, so that a line through the origin does not split into two normal forms.
   particles_.resize(std::max(particles, 1));
+  const bool line = type == LandmarkType::kLine;
+  const Eigen::Vector2d local = line ? lineSeenFrom(detection, seen_from) : detection;
   for (auto& p : particles_) {
-    p = detection + Eigen::Vector2d(sampleGaussian(rng, sigma.x()), sampleGaussian(rng, sigma.y()));
+    p = local + Eigen::Vector2d(sampleGaussian(rng, sigma.x()), sampleGaussian(rng, sigma.y()));
+    if (line) p = lineSeenFrom(p, -seen_from);  // rho measured from the origin again
   }
   computeCentroid();
 }
@@ -312,19 +315,19 @@ void MultiFilterSmc::updateMap(const std::vector<LocalFeature>& features, Update
                                     options_.line_association.h_similar_feature);
     }
     if (duplicate) continue;
-    addFilter(global[j]);
+    addFilter(global[j], centre);
     added.push_back(global[j]);
     ++stats->new_landmarks;
   }
 }
 
-void MultiFilterSmc::addFilter(const GlobalFeature& feature) {
+void MultiFilterSmc::addFilter(const GlobalFeature& feature, const Eigen::Vector2d& centre) {
   const MultiFilterOptions& m = options_.multifilter;
   const Eigen::Vector2d sigma = feature.type == LandmarkType::kLine
                                     ? Eigen::Vector2d(m.init_sigma_m, m.init_sigma_rad)
                                     : Eigen::Vector2d(m.init_sigma_m, m.init_sigma_m);
   filters_.emplace_back(next_landmark_id_++, feature.type, feature.value, sigma, m.line_particles,
-                        rng_);
+                        rng_, centre);
   filters_.back().extendBy(feature.start, feature.end);
 }
 

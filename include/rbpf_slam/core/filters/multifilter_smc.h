@@ -20,9 +20,12 @@ namespace core {
 /// likelihood the Laplace density of the dissimilarity to the observation.
 class LandmarkParticleFilter {
  public:
-  /// Particles drawn from N(detection, diag(sigma^2)); uniform weights.
+  /// Particles drawn from N(detection, diag(sigma^2)); uniform weights. A line's spread is
+  /// drawn as seen from `seen_from` (its rho measured from there, lineSeenFrom), so that the
+  /// theta spread turns the line about the point nearest seen_from, not the map origin.
   LandmarkParticleFilter(int id, LandmarkType type, const Eigen::Vector2d& detection,
-                         const Eigen::Vector2d& sigma, int particles, Rng& rng);
+                         const Eigen::Vector2d& sigma, int particles, Rng& rng,
+                         const Eigen::Vector2d& seen_from = Eigen::Vector2d::Zero());
 
   /// One SIR step with an observation in the map frame: weight by exp(-d / c_m2), resample
   /// (low variance), roughen. Returns false (and leaves the filter as it was) when every
@@ -87,7 +90,7 @@ class MultiFilterSmc : public SlamFilter {
   void updateRobot(const std::vector<LocalFeature>& features, UpdateStats* stats);
   /// Map building at the mean pose: association, new filters, landmark filter updates.
   void updateMap(const std::vector<LocalFeature>& features, UpdateStats* stats);
-  void addFilter(const GlobalFeature& feature);
+  void addFilter(const GlobalFeature& feature, const Eigen::Vector2d& centre);
 
   const FilterOptions options_;
   std::unique_ptr<MotionModel> motion_model_;
