@@ -407,6 +407,46 @@ TEST(LineSlam, ComparedAtTheRobotAWallSeenFarFromTheOriginStaysOneLandmark) {
   }
 }
 
+// The multi-filter draws a new line filter's spread as seen from the robot with compare_at
+// "robot": a wall first seen from (99, 50), 50 m along it from the origin's foot point, has a
+// map-frame rho variance of about (50 x 0.03)^2 there (the spread turns it about the robot),
+// against the init_sigma_m^2 of the paper's draw about the origin. A saved map loads back with
+// the same mean and covariance (drawn from the whole covariance, correlations kept).
+TEST(LineSlam, TheMultiFilterDrawsANewLineAtTheRobotAndLoadsItBack) {
+  for (const std::string compare_at : {"origin", "robot"}) {
+    FilterOptions options = optionsFor("multifilter_smc");
+    options.line_association.compare_at = compare_at;
+    std::unique_ptr<SlamFilter> filter = createFilter(options);
+    filter->reset(Pose2(99.0, 50.0, 0.0));
+    LineFeature wall;  // x = 100 in the map
+    wall.rho = 1.0;
+    wall.theta = 0.0;
+    wall.covariance = Eigen::Vector2d(1e-4, 1e-4).asDiagonal();
+    wall.start = Eigen::Vector2d(1.0, -2.0);
+    wall.end = Eigen::Vector2d(1.0, 2.0);
+    FeatureSet seen;
+    seen.stamp = 1.0;
+    seen.lines = {wall};
+    filter->update(seen);
+    const std::vector<LandmarkEstimate> map = filter->landmarks();
+    ASSERT_EQ(map.size(), 1u) << compare_at;
+    const double init = options.multifilter.init_sigma_m, turn = options.multifilter.init_sigma_rad;
+    if (compare_at == "robot") {
+      EXPECT_NEAR(map[0].covariance(0, 0), init * init + std::pow(50.0 * turn, 2), 0.6);
+      EXPECT_GT(map[0].covariance(0, 1), 0.5 * 50.0 * turn * turn);  // rho and theta tied
+    } else {
+      EXPECT_LT(map[0].covariance(0, 0), 2.0 * init * init);
+    }
+    std::unique_ptr<SlamFilter> other = createFilter(options);
+    other->reset(Pose2(99.0, 50.0, 0.0));
+    ASSERT_TRUE(other->loadMap(map));
+    const LandmarkEstimate loaded = other->landmarks().at(0);
+    EXPECT_TRUE(loaded.mean.isApprox(map[0].mean, 1e-6)) << loaded.mean.transpose();
+    EXPECT_TRUE(loaded.covariance.isApprox(map[0].covariance, 0.3)) << compare_at << "\n"
+                                                                    << loaded.covariance;
+  }
+}
+
 }  // namespace
 }  // namespace core
 }  // namespace rbpf_slam

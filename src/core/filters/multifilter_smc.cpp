@@ -38,9 +38,29 @@ LandmarkParticleFilter::LandmarkParticleFilter(int id, LandmarkType type,
   const bool line = type == LandmarkType::kLine;
   const Eigen::Vector2d local = line ? lineSeenFrom(detection, seen_from) : detection;
   for (auto& p : particles_) {
-    p = local + Eigen::Vector2d(sampleGaussian(rng, sigma.x()), sampleGaussian(rng, sigma.y()));
+    // One statement per draw: the order of a constructor's arguments is the compiler's choice.
+    const double b = sampleGaussian(rng, sigma.y());
+    const double a = sampleGaussian(rng, sigma.x());
+    p = local + Eigen::Vector2d(a, b);
     if (line) p = lineSeenFrom(p, -seen_from);  // rho measured from the origin again
   }
+  computeCentroid();
+}
+
+void LandmarkParticleFilter::redraw(const Eigen::Vector2d& mean, const Eigen::Matrix2d& covariance,
+                                    Rng& rng) {
+  // A covariance that is not finite and positive semi-definite (a hand-edited map): no spread.
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eigen(covariance);
+  const bool usable = covariance.allFinite() && (covariance - covariance.transpose()).isZero(1e-9) &&
+                      eigen.eigenvalues().minCoeff() >= 0.0;
+  Eigen::Vector2d sum = Eigen::Vector2d::Zero();
+  for (auto& p : particles_) {
+    p = usable ? sampleMultivariate<2>(rng, mean, covariance) : mean;
+    sum += p;
+  }
+  // Re-centred on the mean exactly: the map saved is the map loaded.
+  const Eigen::Vector2d offset = sum / particles_.size() - mean;
+  for (auto& p : particles_) p -= offset;
   computeCentroid();
 }
 
@@ -63,8 +83,9 @@ bool LandmarkParticleFilter::update(const Eigen::Vector2d& observed,
   const double jitter_b =
       type_ == LandmarkType::kLine ? options.roughening_rad : options.roughening_m;
   for (int i = 0; i < n; ++i) {
-    next[i] = particles_[drawn[i]] + Eigen::Vector2d(sampleGaussian(rng, options.roughening_m),
-                                                     sampleGaussian(rng, jitter_b));
+    const double b = sampleGaussian(rng, jitter_b);  // one statement per draw, as above
+    const double a = sampleGaussian(rng, options.roughening_m);
+    next[i] = particles_[drawn[i]] + Eigen::Vector2d(a, b);
   }
   particles_.swap(next);
   computeCentroid();
@@ -363,10 +384,11 @@ bool MultiFilterSmc::loadMap(const std::vector<LandmarkEstimate>& landmarks) {
   filters_.clear();
   for (const auto& l : landmarks) {
     if (!l.mean.allFinite()) continue;
-    const Eigen::Vector2d sigma(std::sqrt(std::max(l.covariance(0, 0), 0.0)),
-                                std::sqrt(std::max(l.covariance(1, 1), 0.0)));
-    filters_.emplace_back(l.id, l.type, l.mean, sigma.allFinite() ? sigma : Eigen::Vector2d::Zero(),
+    // Drawn from the whole covariance (rho and theta are strongly correlated for a line seen
+    // far from the origin) and centred on the mean saved.
+    filters_.emplace_back(l.id, l.type, l.mean, Eigen::Vector2d::Zero(),
                           options_.multifilter.line_particles, rng_);
+    filters_.back().redraw(l.mean, l.covariance, rng_);
     filters_.back().extendBy(l.start, l.end);
     next_landmark_id_ = std::max(next_landmark_id_, l.id + 1);
   }
