@@ -211,6 +211,31 @@ TEST(LandmarkParticleFilter, ALineSpreadIsDrawnAsSeenFromTheRobot) {
   EXPECT_GT(spreadAtRobot(Eigen::Vector2d::Zero()), 1.0);  // 50 m x 0.03 rad, the paper's draw
 }
 
+// A loaded landmark: drawn from its whole covariance, centred on its mean; a covariance whose
+// printed digits left it slightly indefinite still gives its spread, a non-finite one none.
+TEST(LandmarkParticleFilter, RedrawKeepsTheMeanAndTheCorrelation) {
+  const Eigen::Vector2d mean(20.0, 0.4);
+  Eigen::Matrix2d tied;
+  tied << 2.25, 0.0450001, 0.0450001, 0.0009;  // rho-theta correlation just above 1
+  Rng rng(5);
+  LandmarkParticleFilter filter(0, LandmarkType::kLine, mean, Eigen::Vector2d::Zero(), 2000, rng);
+  filter.redraw(mean, tied, rng);
+  Eigen::Vector2d sum = Eigen::Vector2d::Zero();
+  for (const Eigen::Vector2d& p : filter.particles()) sum += p;
+  EXPECT_TRUE((sum / 2000.0).isApprox(mean, 1e-9));
+  double rr = 0.0, rt = 0.0;
+  for (const Eigen::Vector2d& p : filter.particles()) {
+    rr += (p.x() - mean.x()) * (p.x() - mean.x());
+    rt += (p.x() - mean.x()) * (p.y() - mean.y());
+  }
+  EXPECT_NEAR(rr / 2000.0, 2.25, 0.25);
+  EXPECT_NEAR(rt / 2000.0, 0.045, 0.006);  // the correlation kept
+  Eigen::Matrix2d broken = tied;
+  broken(0, 1) = std::numeric_limits<double>::quiet_NaN();
+  filter.redraw(mean, broken, rng);
+  for (const Eigen::Vector2d& p : filter.particles()) EXPECT_TRUE(p.isApprox(mean));
+}
+
 TEST(LandmarkParticleFilter, PlainSirSettlesNearTheLineWithoutRoughening) {
   // The shipped config's plain SIR (no jitter): the particles can only be resampled, so the
   // centroid moves from the detection towards the truth within the first draws' spread.

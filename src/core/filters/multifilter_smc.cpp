@@ -49,13 +49,19 @@ LandmarkParticleFilter::LandmarkParticleFilter(int id, LandmarkType type,
 
 void LandmarkParticleFilter::redraw(const Eigen::Vector2d& mean, const Eigen::Matrix2d& covariance,
                                     Rng& rng) {
-  // A covariance that is not finite and positive semi-definite (a hand-edited map): no spread.
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eigen(covariance);
-  const bool usable = covariance.allFinite() && (covariance - covariance.transpose()).isZero(1e-9) &&
-                      eigen.eigenvalues().minCoeff() >= 0.0;
+  // A saved covariance may be a little asymmetric or indefinite from its printed digits (a
+  // strongly correlated line's): symmetrised and its negative eigenvalues set to zero. Not
+  // finite (a hand-edited map): no spread.
+  Eigen::Matrix2d usable = Eigen::Matrix2d::Zero();
+  if (covariance.allFinite()) {
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eigen(
+        (0.5 * (covariance + covariance.transpose())).eval());
+    const Eigen::Vector2d values = eigen.eigenvalues().cwiseMax(0.0);
+    usable = eigen.eigenvectors() * values.asDiagonal() * eigen.eigenvectors().transpose();
+  }
   Eigen::Vector2d sum = Eigen::Vector2d::Zero();
   for (auto& p : particles_) {
-    p = usable ? sampleMultivariate<2>(rng, mean, covariance) : mean;
+    p = usable.isZero(0.0) ? mean : sampleMultivariate<2>(rng, mean, usable);
     sum += p;
   }
   // Re-centred on the mean exactly: the map saved is the map loaded.

@@ -27,8 +27,8 @@ class LandmarkParticleFilter {
                          const Eigen::Vector2d& sigma, int particles, Rng& rng,
                          const Eigen::Vector2d& seen_from = Eigen::Vector2d::Zero());
 
-  /// Particles drawn again from N(mean, covariance), re-centred on mean (a loaded map); no
-  /// spread when the covariance is not finite and positive semi-definite.
+  /// Particles drawn again from N(mean, covariance), re-centred on mean (a loaded map). The
+  /// covariance is symmetrised and made positive semi-definite; no spread when not finite.
   void redraw(const Eigen::Vector2d& mean, const Eigen::Matrix2d& covariance, Rng& rng);
 
   /// One SIR step with an observation in the map frame: weight by exp(-d / c_m2), resample
