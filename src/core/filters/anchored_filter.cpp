@@ -4,6 +4,7 @@
 #include <stdexcept>
 #include <utility>
 
+#include "rbpf_slam/core/filters/line_association.h"
 #include "rbpf_slam/core/grid/grid_map_data.h"
 
 namespace rbpf_slam {
@@ -19,7 +20,7 @@ LandmarkEstimate shiftLandmark(const LandmarkEstimate& landmark, const Eigen::Ve
   }
   const double theta = landmark.mean.y();
   const double c = std::cos(theta), s = std::sin(theta);
-  double rho = landmark.mean.x() + shift.x() * c + shift.y() * s;
+  double rho = lineSeenFrom(landmark.mean, -shift).x();  // rho + shift . n(theta)
   double new_theta = theta;
   Eigen::Matrix2d jacobian;  // d(rho', theta') / d(rho, theta)
   jacobian << 1.0, -shift.x() * s + shift.y() * c, 0.0, 1.0;
@@ -49,6 +50,10 @@ Pose2 AnchoredFilter::toMap(const Pose2& pose) const {
   return Pose2(pose.x() + origin_->x(), pose.y() + origin_->y(), pose.z());
 }
 
+Pose2 AnchoredFilter::toFilter(const Pose2& pose) const {
+  return Pose2(pose.x() - origin_->x(), pose.y() - origin_->y(), pose.z());
+}
+
 std::vector<Pose2> AnchoredFilter::toMap(std::vector<Pose2> path) const {
   for (Pose2& pose : path) pose = toMap(pose);
   return path;
@@ -59,8 +64,7 @@ void AnchoredFilter::reset(const Pose2& initial_pose) {
   // A non-finite start is the inner filter's to refuse or carry; the origin stays finite.
   *origin_ = initial_pose.head<2>().allFinite() ? Eigen::Vector2d(initial_pose.head<2>())
                                                 : Eigen::Vector2d::Zero();
-  inner.reset(Pose2(initial_pose.x() - origin_->x(), initial_pose.y() - origin_->y(),
-                    initial_pose.z()));
+  inner.reset(toFilter(initial_pose));
 }
 
 void AnchoredFilter::predict(const MotionInput& motion) { mutableInner().predict(motion); }
@@ -88,8 +92,7 @@ std::vector<WeightedPose> AnchoredFilter::particles() const {
 }
 
 bool AnchoredFilter::resetPose(const Pose2& pose, const Eigen::Matrix3d& covariance) {
-  return mutableInner().resetPose(
-      Pose2(pose.x() - origin_->x(), pose.y() - origin_->y(), pose.z()), covariance);
+  return mutableInner().resetPose(toFilter(pose), covariance);
 }
 
 bool AnchoredFilter::loadMap(const std::vector<LandmarkEstimate>& landmarks) {

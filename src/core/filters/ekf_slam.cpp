@@ -95,6 +95,8 @@ UpdateStats EkfSlam::update(const FeatureSet& features) {
   }
   // New obstacles, at the corrected pose; one per group of similar features of this scan.
   std::vector<GlobalFeature> added;
+  // augment() leaves the pose as it is: one centre for the whole loop.
+  const Eigen::Vector2d centre = wadCentre(options_.line_association, pose().head<2>());
   for (int j : a.new_features) {
     const GlobalFeature g = inMap(observations[j], pose(), j);
     bool duplicate = false;
@@ -102,7 +104,7 @@ UpdateStats EkfSlam::update(const FeatureSet& features) {
       duplicate = duplicate ||
                   (other.type == g.type &&
                    featureDissimilarity(g.type, g.value, other.value, options_.line_association,
-                                        wadCentre(options_.line_association, pose().head<2>())) <
+                                        centre) <
                        options_.line_association.h_similar_feature);
     }
     if (duplicate) continue;

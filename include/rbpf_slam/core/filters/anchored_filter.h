@@ -62,6 +62,7 @@ class AnchoredFilter : public SlamFilter {
   /// A read-only view of a member of the wrapped ensemble, sharing the owner's origin.
   AnchoredFilter(const SlamFilter* member, std::shared_ptr<Eigen::Vector2d> origin);
   Pose2 toMap(const Pose2& pose) const;
+  Pose2 toFilter(const Pose2& pose) const;
   std::vector<Pose2> toMap(std::vector<Pose2> path) const;
   SlamFilter& mutableInner();
 
