@@ -13,7 +13,7 @@ export PATH=/usr/bin:/bin:/usr/sbin:/sbin:$PATH
 APT_PACKAGES=(ros-base-dev libtf2-ros-dev libtf2-geometry-msgs-dev libsensor-msgs-dev
   libnav-msgs-dev libvisualization-msgs-dev libdiagnostic-msgs-dev libstd-srvs-dev librosbag-dev
   libtopic-tools-dev librostest-dev python3-rostest ros-message-generation libeigen3-dev
-  libgtest-dev
+  libgtest-dev libtf2-msgs-dev
   python3-roslaunch python3-rosmaster rosbash python3-rostopic python3-rosbag python3-sensor-msgs
   libyaml-cpp-dev
   # tf2-tools: pioneer_laser.launch's static_transform_publisher; the python messages let

@@ -15,7 +15,7 @@ LandmarkTrackerNode::LandmarkTrackerNode(ros::NodeHandle nh, ros::NodeHandle pri
     : config_(loadConfigFromParams(private_nh)),
       frontend_(config_.filter),
       clock_(config_.session),
-      tf_listener_(tf_buffer_, nh),
+      tf_listener_(tf_buffer_, nh, "landmark_tracker"),
       diagnostics_("landmark_tracker", DiagnosticsOptions::withoutFilter()) {
   using Ptr = FeatureArray::ConstPtr;
   TfGatedSubscriber<FeatureArray>::Handlers handlers;
@@ -74,6 +74,12 @@ void LandmarkTrackerNode::featuresCallback(const FeatureArray::ConstPtr& msg) {
     diagnostics_.recordReplacedCovariances(unusable);
     warnings_.warn("feature covariances",
                    unusableCovarianceWarning(unusable, config_.ros.features_topic));
+  }
+  // Another input of the same instant (e.g. a second feature source): skipped and counted,
+  // not a problem, as the SLAM pipeline does (FrameResult::kSkippedSameStamp).
+  if (frontend_.atLastStamp(features.stamp)) {
+    diagnostics_.recordSameStamp();
+    return;
   }
   // Stamps far behind the last frame: a bag played again or a restarted driver, told from a
   // late message as the SLAM pipeline does (ClockRestartDetector, slam_session.h): only stamps
@@ -151,6 +157,9 @@ void LandmarkTrackerNode::drop(const std::string& cause, const std::string& key,
 }
 
 void LandmarkTrackerNode::publishDiagnostics(const ros::WallTimerEvent&) {
+  if (const long refused = tf_listener_.takeRefused()) {
+    diagnostics_.recordDrop("refused transform", refused);
+  }
   const ros::Time now = ros::Time::now();
   diagnostics_publisher_.publish(diagnostics_.report(
       now.isZero() ? ros::Time(ros::WallTime::now().toSec()) : now, core::FilterStats(), 0));

@@ -10,7 +10,7 @@ namespace rosbridge {
 LaserFeaturesNode::LaserFeaturesNode(ros::NodeHandle nh, ros::NodeHandle private_nh)
     : config_(loadConfigFromParams(private_nh)),
       extractor_(config_.laser),
-      tf_listener_(tf_buffer_, nh) {
+      tf_listener_(tf_buffer_, nh, "laser_features") {
   using Ptr = sensor_msgs::LaserScan::ConstPtr;
   TfGatedSubscriber<sensor_msgs::LaserScan>::Handlers handlers;
   handlers.on_message = [this](const Ptr& msg) { scanCallback(msg); };

@@ -15,6 +15,59 @@ void ThrottledWarnings::warn(const std::string& cause, const std::string& messag
   ROS_WARN_STREAM(node_name_ << ": " << message);
 }
 
+CheckedTransformListener::CheckedTransformListener(tf2::BufferCore& buffer,
+                                                   const ros::NodeHandle& nh,
+                                                   std::string node_name)
+    : buffer_(buffer), nh_(nh), spinner_(1, &queue_), warnings_(std::move(node_name)) {
+  nh_.setCallbackQueue(&queue_);
+  // Absolute names, as tf2_ros: a launch file's remap of /tf still applies.
+  tf_subscriber_ = nh_.subscribe<tf2_msgs::TFMessage>(
+      "/tf", 100, [this](const ros::MessageEvent<tf2_msgs::TFMessage const>& event) {
+        handle(*event.getConstMessage(), event.getPublisherName(), false);
+      });
+  static_subscriber_ = nh_.subscribe<tf2_msgs::TFMessage>(
+      "/tf_static", 100, [this](const ros::MessageEvent<tf2_msgs::TFMessage const>& event) {
+        handle(*event.getConstMessage(), event.getPublisherName(), true);
+      });
+  spinner_.start();
+}
+
+CheckedTransformListener::~CheckedTransformListener() {
+  spinner_.stop();
+  tf_subscriber_.shutdown();
+  static_subscriber_.shutdown();
+}
+
+void CheckedTransformListener::handle(const tf2_msgs::TFMessage& msg,
+                                      const std::string& authority, bool is_static) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  const ros::Time now = ros::Time::now();
+  if (now < last_update_) {  // a bag played again (rosbag play -l) or a simulator restarted
+    ROS_WARN_STREAM("the clock went back " << (last_update_.toSec() - now.toSec())
+                                           << " s: clearing the tf buffer");
+    buffer_.clear();
+    ++clears_;
+  }
+  last_update_ = now;
+  for (const geometry_msgs::TransformStamped& t : msg.transforms) {
+    std::string problem = transformProblem(t);
+    if (problem.empty()) {
+      try {
+        // false when tf2 refuses it (it logs why); that is tf2's own check
+        buffer_.setTransform(t, authority, is_static);
+        continue;
+      } catch (const std::exception& e) {  // tf2's time arithmetic, whatever the stamp
+        problem = e.what();
+      }
+    }
+    ++refused_;
+    const std::string topic = is_static ? "/tf_static" : "/tf";
+    warnings_.warn("refused " + topic + " " + t.header.frame_id + " -> " + t.child_frame_id,
+                   "dropped a transform on " + topic + " from " + authority + ", " +
+                       t.header.frame_id + " -> " + t.child_frame_id + ": " + problem);
+  }
+}
+
 std::vector<core::Pose2> lookupTransducers(const tf2::BufferCore& tf, const std::string& base,
                                            const std::string& prefix, const ros::Time& stamp) {
   constexpr int kMaxTransducers = 64;

@@ -64,7 +64,7 @@ SlamNode::SlamNode(ros::NodeHandle nh, ros::NodeHandle private_nh,
                     ? core::SlamPipeline(config_.pipeline(), customisation.make_filter(config_))
                     : core::SlamPipeline(config_.pipeline())),
       tf_buffer_(ros::Duration(kTfCacheS)),
-      tf_listener_(tf_buffer_, nh) {
+      tf_listener_(tf_buffer_, nh, "rbpf_slam_node") {
   const io::RosOptions& ros_options = config_.ros;
   if (config_.frontend == "laser") {
     scan_input_ = subscribeFiltered(ros_options.scan_topic, &SlamNode::scanCallback);
@@ -677,6 +677,9 @@ void SlamNode::publishDiagnostics(const ros::WallTimerEvent&) {
   }
   diagnostics_.setPaused(paused_);
   diagnostics_.setOdometryGaps(pipeline_.session().gaps());
+  if (const long refused = tf_listener_.takeRefused()) {
+    diagnostics_.recordDrop("refused transform", refused);
+  }
   const ros::Time now = ros::Time::now();
   diagnostics_publisher_.publish(diagnostics_.report(
       now.isZero() ? ros::Time(ros::WallTime::now().toSec()) : now,

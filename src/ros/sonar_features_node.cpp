@@ -14,7 +14,7 @@ namespace rosbridge {
 SonarFeaturesNode::SonarFeaturesNode(ros::NodeHandle nh, ros::NodeHandle private_nh)
     : config_(loadConfigFromParams(private_nh)),
       extractor_(config_.sonar),
-      tf_listener_(tf_buffer_, nh),
+      tf_listener_(tf_buffer_, nh, "sonar_features"),
       diagnostics_("sonar_features", DiagnosticsOptions::withoutFilter()),
       clock_(config_.session) {
   if (config_.ros.sonar_source != "range") {
@@ -135,6 +135,9 @@ void SonarFeaturesNode::drop(const std::string& cause, const std::string& key,
 }
 
 void SonarFeaturesNode::publishDiagnostics(const ros::WallTimerEvent&) {
+  if (const long refused = tf_listener_.takeRefused()) {
+    diagnostics_.recordDrop("refused transform", refused);
+  }
   const ros::Time now = ros::Time::now();
   diagnostics_publisher_.publish(diagnostics_.report(
       now.isZero() ? ros::Time(ros::WallTime::now().toSec()) : now, core::FilterStats(), 0));

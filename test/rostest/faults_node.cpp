@@ -50,6 +50,7 @@ class Robot {
     clock_pub_ = nh.advertise<rosgraph_msgs::Clock>("/clock", 10);
     scan_pub_ = nh.advertise<sensor_msgs::LaserScan>("/scan", 10);
     features_pub_ = nh.advertise<FeatureArray>("/features", 10);
+    tf_pub_ = nh.advertise<tf2_msgs::TFMessage>("/tf", 10);
     geometry_msgs::TransformStamped laser =
         rosbridge::toTransformStamped(core::Pose2(0.1, 0.0, 0.0), "base_link", "laser", ros::Time(0.0));
     static_broadcaster_.sendTransform(laser);
@@ -104,6 +105,11 @@ class Robot {
       publish(scan());
     }
   }
+  /// One /tf message, as another node on the robot would send it.
+  void publishTf(const tf2_msgs::TFMessage& msg) {
+    tf_pub_.publish(msg);
+    ros::WallDuration(0.05).sleep();
+  }
   void jumpOdometry(double dx) { odom_offset_x_ += dx; }
   /// The clock goes back (rosbag play -l): the route starts over at t.
   void restartClockAt(double t) {
@@ -123,7 +129,7 @@ class Robot {
     clock.clock = ros::Time(t);
     clock_pub_.publish(clock);
   }
-  ros::Publisher clock_pub_, scan_pub_, features_pub_;
+  ros::Publisher clock_pub_, scan_pub_, features_pub_, tf_pub_;
   tf2_ros::TransformBroadcaster broadcaster_;
   tf2_ros::StaticTransformBroadcaster static_broadcaster_;
   double t_ = 1.0;
@@ -374,6 +380,30 @@ TEST_F(FaultsTest, G2_FeaturesInAnUnknownFrameOrNonFiniteAreDropped) {
   settle();
   EXPECT_EQ(observer_->nonFinite(), 0);
   expectRecovers("bad features");
+}
+
+// tf2_ros's own listener let a /tf stamp near 2^32 s (a driver's -1) throw from its thread,
+// which ended the node; the node's listener refuses such transforms and counts them.
+TEST_F(FaultsTest, G3_UnusableTransformsOnTfAreRefusedAndCounted) {
+  const long refused_before = std::max(0L, observer_->diagnostic("dropped: refused transform"));
+  robot_->tick();
+  tf2_msgs::TFMessage msg;
+  const core::Pose2 away(0.5, 0.2, 0.1);
+  geometry_msgs::TransformStamped far =
+      rosbridge::toTransformStamped(away, "odom", "base_link", ros::Time(4294967295u, 0u));
+  geometry_msgs::TransformStamped nan =
+      rosbridge::toTransformStamped(away, "odom", "base_link", ros::Time(robot_->time()));
+  nan.transform.translation.y = std::numeric_limits<double>::quiet_NaN();
+  geometry_msgs::TransformStamped unnamed =
+      rosbridge::toTransformStamped(away, "odom", "", ros::Time(robot_->time()));
+  msg.transforms = {far, nan, unnamed};
+  robot_->publishTf(msg);
+  robot_->publish(robot_->scan());
+  EXPECT_TRUE(caughtUp()) << "no update after the refused transforms";
+  settle();
+  EXPECT_EQ(observer_->diagnostic("dropped: refused transform"), refused_before + 3);
+  EXPECT_EQ(observer_->nonFinite(), 0);
+  expectRecovers("unusable transforms on /tf");
 }
 
 TEST_F(FaultsTest, H_ClockJumpBackClearsTheMapAndMappingRestarts) {

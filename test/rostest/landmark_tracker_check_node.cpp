@@ -3,13 +3,16 @@
 // least one landmark, and finite landmark markers in the odometry frame; /diagnostics reports
 // its updates. One features message stamped 2 s behind the clock (a late message) is
 // dropped (counted on /diagnostics as "dropped: old stamp"): no reset on /diagnostics, and the events' steps keep increasing (a reset used to
-// restart them at 1).
+// restart them at 1). With it, an odom -> base_link transform on /tf stamped near 2^32 s (a
+// driver's -1), which ended the node from tf2_ros's listener thread, is refused and counted
+// ("dropped: refused transform") and the events go on.
 
 #include <diagnostic_msgs/DiagnosticArray.h>
 #include <gtest/gtest.h>
 #include <rbpf_slam/FeatureArray.h>
 #include <rbpf_slam/TrackerEvent.h>
 #include <ros/ros.h>
+#include <tf2_msgs/TFMessage.h>
 #include <visualization_msgs/MarkerArray.h>
 
 #include <cmath>
@@ -26,10 +29,12 @@ struct Seen {
   int events = 0, bad_events = 0, out_of_order = 0, non_finite = 0, wrong_frame = 0;
   int last_step = 0;
   double last_stamp = 0.0;
+  double first_stamp = 0.0;  // of the first event
   std::set<std::pair<std::string, int>> shown;
   long updates = -1;
   long resets = -1;
   long late_dropped = 0;  // /diagnostics "dropped: old stamp"
+  long refused = 0;       // /diagnostics "dropped: refused transform"
   int events_after_late = 0;  // events after the late message went out
   bool late_sent = false;
 };
@@ -47,6 +52,7 @@ TEST(LandmarkTracker, PublishesEventsAndLandmarks) {
           ++seen.bad_events;
         if (msg->step <= seen.last_step || msg->header.stamp.toSec() <= seen.last_stamp)
           ++seen.out_of_order;
+        if (seen.events == 1) seen.first_stamp = msg->header.stamp.toSec();
         seen.last_step = msg->step;
         seen.last_stamp = msg->header.stamp.toSec();
         if (seen.late_sent) ++seen.events_after_late;
@@ -80,15 +86,20 @@ TEST(LandmarkTracker, PublishesEventsAndLandmarks) {
             if (kv.key == "updates") seen.updates = std::stol(kv.value);
             if (kv.key == "resets") seen.resets = std::stol(kv.value);
             if (kv.key == "dropped: old stamp") seen.late_dropped = std::stol(kv.value);
+            if (kv.key == "dropped: refused transform") seen.refused = std::stol(kv.value);
           }
         }
       });
   ros::Publisher late = nh.advertise<FeatureArray>("features", 1);
+  ros::Publisher tf = nh.advertise<tf2_msgs::TFMessage>("/tf", 1);
   const ros::WallTime deadline = ros::WallTime::now() + ros::WallDuration(timeout);
   while (ros::WallTime::now() < deadline) {
     {
       std::lock_guard<std::mutex> lock(seen.mutex);
-      if (!seen.late_sent && seen.events >= 2 && late.getNumSubscribers() > 0) {
+      // 2 s behind the clock must still be after the first frame (else it has no tf and is
+      // dropped as such): wait until the clock is 4 s past the first event.
+      if (!seen.late_sent && seen.events >= 2 && late.getNumSubscribers() > 0 &&
+          tf.getNumSubscribers() > 0 && ros::Time::now().toSec() > seen.first_stamp + 4.0) {
         // One post straight ahead, 2 s behind the (simulated) clock: more than the 1 s of
         // reset_on_time_jump_back behind the tracker's last frame, inside tf's 10 s cache.
         FeatureArray msg;
@@ -99,10 +110,18 @@ TEST(LandmarkTracker, PublishesEventsAndLandmarks) {
         post.id = -1;
         msg.points.push_back(post);
         late.publish(msg);
+        geometry_msgs::TransformStamped far;
+        far.header.stamp = ros::Time(4294967295u, 0u);
+        far.header.frame_id = "odom";
+        far.child_frame_id = "base_link";
+        far.transform.rotation.w = 1.0;
+        tf2_msgs::TFMessage far_msg;
+        far_msg.transforms.push_back(far);
+        tf.publish(far_msg);
         seen.late_sent = true;
       }
       if (seen.events >= min_events && seen.events_after_late >= 2 && seen.late_dropped > 0 &&
-          seen.updates > 3 * min_events && !seen.shown.empty()) {
+          seen.refused > 0 && seen.updates > 3 * min_events && !seen.shown.empty()) {
         break;
       }
     }
@@ -117,6 +136,7 @@ TEST(LandmarkTracker, PublishesEventsAndLandmarks) {
   EXPECT_TRUE(seen.late_sent);
   EXPECT_EQ(seen.late_dropped, 1) << "the late message did not reach the tracker";
   EXPECT_GE(seen.events_after_late, 2);
+  EXPECT_EQ(seen.refused, 1) << "the far-stamped transform was not refused and counted";
   EXPECT_EQ(seen.resets, 0) << "a late message is no restarted clock";
   EXPECT_EQ(seen.non_finite, 0);
   EXPECT_EQ(seen.wrong_frame, 0);

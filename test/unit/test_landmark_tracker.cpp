@@ -78,6 +78,25 @@ TEST(LandmarkTracker, AmbiguousObservationIsNeitherMatchedNorStarted) {
   EXPECT_EQ(e.tracked, 1);
 }
 
+// Two sightings of one new landmark in one frame start one landmark, not two; a second new
+// landmark in the same frame still starts its own.
+TEST(LandmarkTracker, OneNewLandmarkSeenTwiceInAFrameStartsOnce) {
+  LandmarkTracker tracker{LandmarkTrackerOptions()};
+  const Eigen::Vector2d a(4.0, 1.0), b(5.0, -2.0);
+  const Eigen::Vector2d a_again = a + Eigen::Vector2d(0.02, -0.01);
+  TrackerEvent e = tracker.update(
+      1, kStep, kStepCov,
+      {pointSeen(robotAt(1), a), pointSeen(robotAt(1), a_again), pointSeen(robotAt(1), b)});
+  EXPECT_TRUE(e.new_landmark);
+  EXPECT_EQ(e.started, 2);
+  EXPECT_EQ(e.matched, 1);
+  EXPECT_EQ(e.tracked, 2);
+  e = tracker.update(2, kStep, kStepCov, {pointSeen(robotAt(2), a), pointSeen(robotAt(2), b)});
+  EXPECT_FALSE(e.new_landmark);
+  EXPECT_EQ(e.matched, 2);
+  EXPECT_EQ(e.tracked, 2);
+}
+
 TEST(LandmarkTracker, ForgetsLandmarksLeftBehindAndReportsThemAgain) {
   LandmarkTrackerOptions options;
   options.forget_after_steps = 5;

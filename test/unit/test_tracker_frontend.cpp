@@ -131,7 +131,11 @@ TEST(TrackerFrontend, RefusesStaleStampsAndNonFinitePosesAndStartsOverOnReset) {
   TrackerFrontend frontend(options());
   std::string why;
   TrackerEvent event;
+  EXPECT_FALSE(frontend.atLastStamp(1.0)) << "nothing processed yet";
   ASSERT_TRUE(frontend.process(world.observe(robotAt(0), 1.0), robotAt(0), &event, &why));
+  EXPECT_TRUE(frontend.atLastStamp(1.0));  // the node skips it as another input of that instant
+  EXPECT_FALSE(frontend.atLastStamp(0.5));
+  EXPECT_FALSE(frontend.atLastStamp(1.5));
   event = TrackerEvent();
   EXPECT_FALSE(frontend.process(world.observe(robotAt(1), 1.0), robotAt(1), &event, &why));
   EXPECT_EQ(why, "stamp not after the last");

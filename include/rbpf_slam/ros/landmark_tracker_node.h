@@ -9,7 +9,6 @@
 #include <rbpf_slam/FeatureArray.h>
 #include <ros/ros.h>
 #include <tf2_ros/buffer.h>
-#include <tf2_ros/transform_listener.h>
 
 #include <memory>
 #include <string>
@@ -41,7 +40,7 @@ class LandmarkTrackerNode {
   core::TrackerFrontend frontend_;
   core::ClockRestartDetector clock_;  // tells a restarted clock from late messages
   tf2_ros::Buffer tf_buffer_;
-  tf2_ros::TransformListener tf_listener_;
+  CheckedTransformListener tf_listener_;
   std::unique_ptr<TfGatedSubscriber<FeatureArray>> features_input_;
   ros::Publisher events_publisher_, landmarks_publisher_, diagnostics_publisher_;
   ros::WallTimer diagnostics_timer_;

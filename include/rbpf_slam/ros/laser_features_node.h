@@ -4,7 +4,6 @@
 #include <ros/ros.h>
 #include <sensor_msgs/LaserScan.h>
 #include <tf2_ros/buffer.h>
-#include <tf2_ros/transform_listener.h>
 
 #include <memory>
 #include <string>
@@ -31,7 +30,7 @@ class LaserFeaturesNode {
   const io::SlamConfig config_;
   const core::LaserLineExtractor extractor_;
   tf2_ros::Buffer tf_buffer_;
-  tf2_ros::TransformListener tf_listener_;
+  CheckedTransformListener tf_listener_;
   std::unique_ptr<TfGatedSubscriber<sensor_msgs::LaserScan>> scan_input_;
   ros::Publisher features_publisher_;
   ThrottledWarnings warnings_{"laser_features"};

@@ -5,13 +5,17 @@
 // queue pushes it out.
 
 #include <message_filters/subscriber.h>
+#include <ros/callback_queue.h>
 #include <ros/ros.h>
+#include <tf2_msgs/TFMessage.h>
 #include <std_msgs/Header.h>
 #include <tf2_ros/buffer.h>
 #include <tf2_ros/message_filter.h>
 
+#include <atomic>
 #include <functional>
 #include <map>
+#include <mutex>
 #include <string>
 #include <utility>
 #include <vector>
@@ -39,6 +43,49 @@ class ThrottledWarnings {
   const std::string node_name_;
   const double period_s_;
   std::map<std::string, ros::WallTime> last_;
+};
+
+/// What tf2_ros::TransformListener does (subscribe to /tf and /tf_static, feed the buffer from
+/// a thread of its own, clear the buffer when the clock jumps back), with each transform
+/// checked first (transformProblem: empty or equal frames, a stamp near 2^32 s, a non-finite
+/// or unnormalised rotation). tf2_ros 0.7's listener catches only tf2's own exceptions: one
+/// /tf message stamped near 2^32 s (a driver's -1) threw ros::Time's range error from its
+/// thread and ended the node. A refused transform is dropped, counted and named in a warning
+/// (at most one per cause every 10 s); the rest of its message is used.
+class CheckedTransformListener {
+ public:
+  CheckedTransformListener(tf2::BufferCore& buffer, const ros::NodeHandle& nh,
+                           std::string node_name);
+  ~CheckedTransformListener();
+  CheckedTransformListener(const CheckedTransformListener&) = delete;
+  CheckedTransformListener& operator=(const CheckedTransformListener&) = delete;
+
+  /// Transforms refused since the start (any thread).
+  long refused() const { return refused_.load(); }
+  /// Transforms refused since the last call (for a diagnostics period).
+  long takeRefused() {
+    const long total = refused_.load();
+    const long fresh = total - taken_;
+    taken_ = total;
+    return fresh;
+  }
+  /// Times the buffer was cleared because the clock went back.
+  long clears() const { return clears_.load(); }
+
+  /// The listener's work on one message, for tests without a subscription.
+  void handle(const tf2_msgs::TFMessage& msg, const std::string& authority, bool is_static);
+
+ private:
+  tf2::BufferCore& buffer_;
+  ros::CallbackQueue queue_;
+  ros::NodeHandle nh_;
+  ros::Subscriber tf_subscriber_, static_subscriber_;
+  ros::AsyncSpinner spinner_;
+  std::mutex mutex_;  // last_update_ and warnings_ (the spinner has one thread; tests may call)
+  ros::Time last_update_;
+  ThrottledWarnings warnings_;
+  std::atomic<long> refused_{0}, clears_{0};
+  long taken_ = 0;  // refused_ as of the last takeRefused (the caller's thread)
 };
 
 /// False, with tf's explanation in *error, when tf knows base_frame but has no path from it to

@@ -18,7 +18,6 @@
 #include <tf2_ros/buffer.h>
 #include <tf2_ros/message_filter.h>
 #include <tf2_ros/transform_broadcaster.h>
-#include <tf2_ros/transform_listener.h>
 #include <topic_tools/shape_shifter.h>
 
 #include <functional>
@@ -117,7 +116,7 @@ class SlamNode {
   core::SlamPipeline pipeline_;
 
   tf2_ros::Buffer tf_buffer_;
-  tf2_ros::TransformListener tf_listener_;
+  CheckedTransformListener tf_listener_;
   tf2_ros::TransformBroadcaster tf_broadcaster_;
   std::unique_ptr<TfGatedSubscriber<sensor_msgs::LaserScan>> scan_input_;
   std::unique_ptr<TfGatedSubscriber<FeatureArray>> features_input_;

@@ -5,7 +5,6 @@
 #include <ros/ros.h>
 #include <sensor_msgs/Range.h>
 #include <tf2_ros/buffer.h>
-#include <tf2_ros/transform_listener.h>
 
 #include <memory>
 #include <string>
@@ -45,7 +44,7 @@ class SonarFeaturesNode {
   const io::SlamConfig config_;
   core::SonarFeatureExtractor extractor_;
   tf2_ros::Buffer tf_buffer_;
-  tf2_ros::TransformListener tf_listener_;
+  CheckedTransformListener tf_listener_;
   std::unique_ptr<TfGatedSubscriber<sensor_msgs::Range>> sonar_input_;
   ros::Publisher features_publisher_;
   ros::Publisher diagnostics_publisher_;

@@ -29,7 +29,8 @@ struct TrackerEvent {
   int step = 0;               // the step passed to update()
   bool new_landmark = false;  // at least one observation started a landmark
   int started = 0;            // landmarks started at this step
-  int matched = 0;            // observations associated with tracked landmarks
+  int matched = 0;            // observations associated with tracked landmarks (or with one
+                              // started by another observation of this step)
   int forgotten = 0;          // landmarks dropped at this step
   int tracked = 0;            // landmarks in the state after this step
 };
@@ -73,8 +74,11 @@ class LandmarkTracker {
   /// Finite end points at least 1 um apart (unset ones in a message are both zero).
   static bool usableExtent(const TrackerObservation& observation);
   void predict(const Pose2& increment, const Eigen::Matrix3d& increment_cov);
-  /// Index of the tracked landmark nearest in Mahalanobis distance, -1 when none.
-  int associate(const TrackerObservation& observation, double* distance2) const;
+  /// Index of the tracked landmark nearest in Mahalanobis distance among those from index
+  /// `first` on, -1 when none.
+  int associate(const TrackerObservation& observation, int first, double* distance2) const;
+  /// The EKF correction with an observation of `landmark`, which was seen at `step`.
+  void see(int landmark, const TrackerObservation& observation, int step);
   void correct(int landmark, const TrackerObservation& observation);
   void start(const TrackerObservation& observation, int step);
   void remove(int landmark);

@@ -40,6 +40,10 @@ class TrackerFrontend {
   std::vector<LandmarkEstimate> landmarks() const;
   Pose2 pose() const;
   int steps() const { return step_; }
+  /// A frame at exactly the last processed frame's stamp (another input of that instant): the
+  /// node skips it and counts it, as the SLAM session does (kSkippedSameStamp); process()
+  /// would refuse it as not after the last.
+  bool atLastStamp(double stamp) const { return anchored_ && stamp == last_stamp_; }
   double lastStamp() const { return last_stamp_; }
   /// Features of the last processed frame that could not be used (not finite or degenerate,
   /// e.g. a point at range 0; kinds the options turn off are not counted).
