@@ -18,7 +18,8 @@ void ThrottledWarnings::warn(const std::string& cause, const std::string& messag
 CheckedTransformListener::CheckedTransformListener(tf2::BufferCore& buffer,
                                                    const ros::NodeHandle& nh,
                                                    std::string node_name)
-    : buffer_(buffer), nh_(nh), spinner_(1, &queue_), warnings_(std::move(node_name)) {
+    : buffer_(buffer), nh_(nh), spinner_(1, &queue_), node_name_(node_name),
+      warnings_(std::move(node_name)) {
   nh_.setCallbackQueue(&queue_);
   // Absolute names, as tf2_ros: a launch file's remap of /tf still applies.
   tf_subscriber_ = nh_.subscribe<tf2_msgs::TFMessage>(
@@ -43,8 +44,8 @@ void CheckedTransformListener::handle(const tf2_msgs::TFMessage& msg,
   std::lock_guard<std::mutex> lock(mutex_);
   const ros::Time now = ros::Time::now();
   if (now < last_update_) {  // a bag played again (rosbag play -l) or a simulator restarted
-    ROS_WARN_STREAM("the clock went back " << (last_update_.toSec() - now.toSec())
-                                           << " s: clearing the tf buffer");
+    ROS_WARN_STREAM(node_name_ << ": the clock went back " << (last_update_.toSec() - now.toSec())
+                               << " s: clearing the tf buffer");
     buffer_.clear();
     ++clears_;
   }

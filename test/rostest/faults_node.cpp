@@ -398,6 +398,12 @@ TEST_F(FaultsTest, G3_UnusableTransformsOnTfAreRefusedAndCounted) {
       rosbridge::toTransformStamped(away, "odom", "", ros::Time(robot_->time()));
   msg.transforms = {far, nan, unnamed};
   robot_->publishTf(msg);
+  // A scan stamped more than 2^31 s after the tf data (under the 4.2e9 s of farStampProblem):
+  // tf2's extrapolation arithmetic overflows a ros::Duration for it.
+  sensor_msgs::LaserScan distant = robot_->scan();
+  distant.header.stamp = ros::Time(3.0e9);
+  robot_->publish(distant);
+  robot_->tick();
   robot_->publish(robot_->scan());
   EXPECT_TRUE(caughtUp()) << "no update after the refused transforms";
   settle();

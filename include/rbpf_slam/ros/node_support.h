@@ -81,6 +81,7 @@ class CheckedTransformListener {
   ros::NodeHandle nh_;
   ros::Subscriber tf_subscriber_, static_subscriber_;
   ros::AsyncSpinner spinner_;
+  const std::string node_name_;
   std::mutex mutex_;  // last_update_ and warnings_ (the spinner has one thread; tests may call)
   ros::Time last_update_;
   ThrottledWarnings warnings_;
