@@ -12,6 +12,7 @@
 #include <map>
 #include <stdexcept>
 
+#include "rbpf_slam/core/features/feature_types.h"
 #include "rbpf_slam/io/grid_map_file.h"
 
 namespace rbpf_slam {
@@ -91,6 +92,14 @@ core::LandmarkEstimate readLandmark(const YAML::Node& node, const std::string& w
   l.observations = node["observations"] ? readInteger(node, "observations", where, 0.0,
                                                       "'observations' must be an integer >= 0")
                                          : 1;
+  if (l.type == core::LandmarkType::kLine) {
+    // Normal form, as every filter keeps its lines (rho >= 0, theta in [-pi, pi)): a line
+    // written with rho < 0 (by hand, or another tool) is the same line with the normal turned
+    // by pi, and (rho, theta) -> (-rho, theta + pi) negates their covariance. Kept as given,
+    // the EKF held it until its first correction and FastSLAM's association missed it.
+    if (l.mean.x() < 0.0) l.covariance(0, 1) = l.covariance(1, 0) = -l.covariance(0, 1);
+    core::normalizeLine(l.mean.x(), l.mean.y());
+  }
   return l;
 }
 

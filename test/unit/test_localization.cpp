@@ -81,6 +81,27 @@ TEST(LandmarkFile, RoundTripKeepsPointsAndLines) {
   }
 }
 
+// A line written with rho < 0 is read in normal form (rho >= 0, theta turned by pi, the
+// covariance's correlation negated): the same line, as the filters keep their lines.
+TEST(LandmarkFile, ALineWithNegativeRhoIsReadInNormalForm) {
+  const std::string path = tempPath("negative_rho.yaml");
+  std::ofstream(path) << "landmarks:\n  - {id: 2, type: line, rho: -2.0, theta: 0.5, "
+                         "start: [1, 2], end: [3, 4], covariance: [0.01, 0.002, 0.002, 0.003]}\n";
+  const std::vector<LandmarkEstimate> back = io::loadLandmarksYaml(path);
+  ASSERT_EQ(back.size(), 1u);
+  EXPECT_NEAR(back[0].mean.x(), 2.0, 1e-12);
+  EXPECT_NEAR(back[0].mean.y(), 0.5 - M_PI, 1e-12);
+  EXPECT_NEAR(back[0].covariance(0, 1), -0.002, 1e-12);
+  EXPECT_NEAR(back[0].covariance(1, 0), -0.002, 1e-12);
+  EXPECT_NEAR(back[0].covariance(0, 0), 0.01, 1e-12);
+  EXPECT_TRUE(back[0].start.isApprox(Eigen::Vector2d(1, 2)));
+  // A theta outside [-pi, pi) is wrapped.
+  std::ofstream(path) << "landmarks:\n  - {id: 2, type: line, rho: 2.0, theta: 7.0, "
+                         "start: [1, 2], end: [3, 4], covariance: [0.01, 0.002, 0.002, 0.003]}\n";
+  EXPECT_NEAR(io::loadLandmarksYaml(path)[0].mean.y(), 7.0 - 2.0 * M_PI, 1e-12);
+  EXPECT_NEAR(io::loadLandmarksYaml(path)[0].covariance(0, 1), 0.002, 1e-12);
+}
+
 TEST(LandmarkFile, BrokenFilesAreRejectedNamingTheEntry) {
   const std::string path = tempPath("broken.yaml");
   auto expectError = [&](const std::string& text, const std::string& expected) {
