@@ -20,6 +20,7 @@ CheckedTransformListener::CheckedTransformListener(tf2::BufferCore& buffer,
                                                    std::string node_name)
     : buffer_(buffer), nh_(nh), spinner_(1, &queue_), node_name_(node_name),
       warnings_(std::move(node_name)) {
+  buffer_.setUsingDedicatedThread(true);  // as tf2_ros's: lookups may wait with a timeout
   nh_.setCallbackQueue(&queue_);
   // Absolute names, as tf2_ros: a launch file's remap of /tf still applies.
   tf_subscriber_ = nh_.subscribe<tf2_msgs::TFMessage>(
@@ -33,7 +34,9 @@ CheckedTransformListener::CheckedTransformListener(tf2::BufferCore& buffer,
   spinner_.start();
 }
 
-CheckedTransformListener::~CheckedTransformListener() {
+CheckedTransformListener::~CheckedTransformListener() { stop(); }
+
+void CheckedTransformListener::stop() {
   spinner_.stop();
   tf_subscriber_.shutdown();
   static_subscriber_.shutdown();
@@ -52,9 +55,19 @@ void CheckedTransformListener::handle(const tf2_msgs::TFMessage& msg,
   last_update_ = now;
   for (const geometry_msgs::TransformStamped& t : msg.transforms) {
     std::string problem = transformProblem(t);
+    // A stamp far ahead of the clock (a bad driver clock, garbage) would make tf2 drop every
+    // real transform of that pair as older than it, until the clock went back. Not checked
+    // before the clock runs (a simulated clock at 0) nor for static transforms.
+    if (problem.empty() && !is_static && !now.isZero() &&
+        t.header.stamp.toSec() > now.toSec() + kMaxAheadS) {
+      problem = "stamp " + std::to_string(t.header.stamp.toSec()) + " s is more than a day ahead of the clock (" +
+                std::to_string(now.toSec()) + " s)";
+    }
     if (problem.empty()) {
       try {
-        // false when tf2 refuses it (it logs why); that is tf2's own check
+        // false when tf2 refuses it itself (repeated or old data, its stricter quaternion
+        // check): tf2 logs that, and a repeated stamp is common and harmless (converted
+        // CARMEN logs repeat odometry stamps), so it is not counted here
         buffer_.setTransform(t, authority, is_static);
         continue;
       } catch (const std::exception& e) {  // tf2's time arithmetic, whatever the stamp

@@ -64,12 +64,14 @@ class Robot {
   void tick(bool with_tf = true) {
     t_ += kStep;
     publishClock(t_);
-    if (with_tf) {
-      core::Pose2 odom = truth(t_);
-      odom.x() += odom_offset_x_;
-      broadcaster_.sendTransform(rosbridge::toTransformStamped(odom, "odom", "base_link", ros::Time(t_)));
-    }
+    if (with_tf) broadcaster_.sendTransform(odometry());
     ros::WallDuration(0.03).sleep();
+  }
+  /// odom -> base_link at the current time.
+  geometry_msgs::TransformStamped odometry() const {
+    core::Pose2 odom = truth(t_);
+    odom.x() += odom_offset_x_;
+    return rosbridge::toTransformStamped(odom, "odom", "base_link", ros::Time(t_));
   }
   /// A correct scan at the current time.
   sensor_msgs::LaserScan scan() const {
@@ -383,10 +385,12 @@ TEST_F(FaultsTest, G2_FeaturesInAnUnknownFrameOrNonFiniteAreDropped) {
 }
 
 // tf2_ros's own listener let a /tf stamp near 2^32 s (a driver's -1) throw from its thread,
-// which ended the node; the node's listener refuses such transforms and counts them.
+// which ended the node; the node's listener refuses such transforms (and a NaN, an unnamed
+// frame, a stamp two days ahead of the clock, which would make tf2 drop every real one as
+// old) and counts them, and uses the good transform of the same message.
 TEST_F(FaultsTest, G3_UnusableTransformsOnTfAreRefusedAndCounted) {
   const long refused_before = std::max(0L, observer_->diagnostic("dropped: refused transform"));
-  robot_->tick();
+  robot_->tick(false);  // this step's odometry comes only in the message below, after the bad
   tf2_msgs::TFMessage msg;
   const core::Pose2 away(0.5, 0.2, 0.1);
   geometry_msgs::TransformStamped far =
@@ -396,18 +400,20 @@ TEST_F(FaultsTest, G3_UnusableTransformsOnTfAreRefusedAndCounted) {
   nan.transform.translation.y = std::numeric_limits<double>::quiet_NaN();
   geometry_msgs::TransformStamped unnamed =
       rosbridge::toTransformStamped(away, "odom", "", ros::Time(robot_->time()));
-  msg.transforms = {far, nan, unnamed};
+  geometry_msgs::TransformStamped ahead =  // two days ahead of the clock
+      rosbridge::toTransformStamped(away, "odom", "base_link", ros::Time(robot_->time() + 172800.0));
+  msg.transforms = {far, nan, unnamed, ahead, robot_->odometry()};
   robot_->publishTf(msg);
   // A scan stamped more than 2^31 s after the tf data (under the 4.2e9 s of farStampProblem):
   // tf2's extrapolation arithmetic overflows a ros::Duration for it.
   sensor_msgs::LaserScan distant = robot_->scan();
   distant.header.stamp = ros::Time(3.0e9);
   robot_->publish(distant);
-  robot_->tick();
-  robot_->publish(robot_->scan());
-  EXPECT_TRUE(caughtUp()) << "no update after the refused transforms";
+  robot_->publish(robot_->scan());  // needs the good transform of the message
+  EXPECT_TRUE(caughtUp()) << "no update after the refused transforms: the good one of their "
+                             "message was not used, or a bad one spoilt tf";
   settle();
-  EXPECT_EQ(observer_->diagnostic("dropped: refused transform"), refused_before + 3);
+  EXPECT_EQ(observer_->diagnostic("dropped: refused transform"), refused_before + 4);
   EXPECT_EQ(observer_->nonFinite(), 0);
   expectRecovers("unusable transforms on /tf");
 }

@@ -28,6 +28,9 @@ class LandmarkTrackerNode {
   /// Reads the private parameters as a full config; throws io::ConfigError or
   /// std::invalid_argument on bad parameters.
   LandmarkTrackerNode(ros::NodeHandle nh, ros::NodeHandle private_nh);
+  /// The tf listener stops first: its thread must not feed the tf queues of the subscribers
+  /// destroyed before it (members go in reverse order; it is declared before them).
+  ~LandmarkTrackerNode() { tf_listener_.stop(); }
 
  private:
   void featuresCallback(const FeatureArray::ConstPtr& msg);

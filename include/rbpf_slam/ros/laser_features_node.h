@@ -21,6 +21,9 @@ class LaserFeaturesNode {
   /// Reads the private parameters as a full config and uses its laser_features section;
   /// throws io::ConfigError or std::invalid_argument on bad parameters.
   LaserFeaturesNode(ros::NodeHandle nh, ros::NodeHandle private_nh);
+  /// The tf listener stops first: its thread must not feed the tf queues of the subscribers
+  /// destroyed before it (members go in reverse order; it is declared before them).
+  ~LaserFeaturesNode() { tf_listener_.stop(); }
 
  private:
   void scanCallback(const sensor_msgs::LaserScan::ConstPtr& msg);

@@ -48,7 +48,9 @@ class ThrottledWarnings {
 /// What tf2_ros::TransformListener does (subscribe to /tf and /tf_static, feed the buffer from
 /// a thread of its own, clear the buffer when the clock jumps back), with each transform
 /// checked first (transformProblem: empty or equal frames, a stamp near 2^32 s, a non-finite
-/// or unnormalised rotation). tf2_ros 0.7's listener catches only tf2's own exceptions: one
+/// or unnormalised rotation; and a stamp more than a day ahead of the clock, which would make
+/// tf2 drop every real transform of that pair as old). What tf2 refuses itself (repeated or
+/// old data) it logs, as before, uncounted. tf2_ros 0.7's listener catches only tf2's own exceptions: one
 /// /tf message stamped near 2^32 s (a driver's -1) threw ros::Time's range error from its
 /// thread and ended the node. A refused transform is dropped, counted and named in a warning
 /// (at most one per cause every 10 s); the rest of its message is used.
@@ -59,6 +61,11 @@ class CheckedTransformListener {
   ~CheckedTransformListener();
   CheckedTransformListener(const CheckedTransformListener&) = delete;
   CheckedTransformListener& operator=(const CheckedTransformListener&) = delete;
+
+  /// Stops the thread and the subscriptions (a node's destructor, before its tf queues go).
+  void stop();
+  /// A /tf stamp further ahead of the clock than this is refused (s).
+  static constexpr double kMaxAheadS = 86400.0;
 
   /// Transforms refused since the start (any thread).
   long refused() const { return refused_.load(); }

@@ -50,6 +50,9 @@ class SlamNode {
   /// std::invalid_argument (options the core rejects).
   SlamNode(ros::NodeHandle nh, ros::NodeHandle private_nh,
            const SlamNodeCustomisation& customisation = SlamNodeCustomisation());
+  /// The tf listener stops first: its thread must not feed the tf queues of the subscribers
+  /// destroyed before it (members go in reverse order; it is declared before them).
+  ~SlamNode() { tf_listener_.stop(); }
 
   const io::SlamConfig& config() const { return config_; }
 

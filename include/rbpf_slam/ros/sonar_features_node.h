@@ -31,6 +31,9 @@ class SonarFeaturesNode {
   /// throws io::ConfigError or std::invalid_argument on bad parameters (sonar_source must be
   /// `range`: PointCloud input goes straight to rbpf_slam_node).
   SonarFeaturesNode(ros::NodeHandle nh, ros::NodeHandle private_nh);
+  /// The tf listener stops first: its thread must not feed the tf queues of the subscribers
+  /// destroyed before it (members go in reverse order; it is declared before them).
+  ~SonarFeaturesNode() { tf_listener_.stop(); }
 
   long published() const { return published_; }
 
