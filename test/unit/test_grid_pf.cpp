@@ -174,6 +174,66 @@ TEST(InverseSensorModel, ConeAtMaxRangeOnlyFrees) {
   EXPECT_TRUE(builder.finish().empty());
 }
 
+// grid_pf_sonar.yaml's case: cone_max_range_m 3, no_echo_free_range_m 1, sonar max 5 m. An
+// echo at 4 m proves the cone free to 3 m (it used to free only 1 m, as a reading without an
+// echo); a reading without an echo frees 1 m; neither marks an arc.
+TEST(InverseSensorModel, AnEchoBeyondTheConeMaximumFreesTheConeUpToIt) {
+  GridOptions o;
+  o.resolution_m = 0.1;
+  o.cone_max_range_m = 3.0;
+  o.no_echo_free_range_m = 1.0;
+  ConeReading r;
+  r.max_range = 5.0;
+  r.field_of_view = 0.3;
+  auto farthest = [&](double range, LocalMapStats* stats) {
+    r.range = range;
+    LocalMapBuilder builder(o.resolution_m);
+    EXPECT_TRUE(addConeReading(r, o, &builder, stats));
+    double far = 0.0;
+    for (const auto& c : builder.finish()) {
+      EXPECT_FALSE(c.occupied) << range;
+      far = std::max(far, c.center.norm());
+    }
+    return far;
+  };
+  LocalMapStats stats;
+  EXPECT_NEAR(farthest(4.0, &stats), 3.0, 0.1);
+  EXPECT_NEAR(farthest(5.0, &stats), 1.0, 0.1);  // at max range: no echo
+  EXPECT_EQ(stats.no_echo, 2);
+  EXPECT_EQ(stats.echoes, 0);
+}
+
+// A reading beyond the grid's diagonal is refused: one 100 m glitch (or a driver's max_range
+// left at 0, read as unbounded) visited 25 million cells at 1 cm. No cone reaches further than
+// the diagonal either.
+TEST(InverseSensorModel, ReadingsBeyondTheGridAreRefusedAndNoConeOutgrowsIt) {
+  GridOptions o;
+  o.resolution_m = 0.01;
+  o.size_x_m = o.size_y_m = 2.0;
+  ConeReading r;
+  r.max_range = INFINITY;
+  r.field_of_view = 0.3;
+  r.range = 100.0;
+  LocalMapBuilder builder(o.resolution_m);
+  LocalMapStats stats;
+  EXPECT_FALSE(addConeReading(r, o, &builder, &stats));
+  EXPECT_EQ(stats.rejected, 1);
+  EXPECT_TRUE(builder.finish().empty());
+  // A sensor whose maximum is far beyond the grid, without an echo: freed to the diagonal.
+  r.max_range = 1e6;
+  r.range = 1e6;
+  EXPECT_TRUE(addConeReading(r, o, &builder, &stats));
+  double far = 0.0;
+  for (const auto& c : builder.finish()) far = std::max(far, c.center.norm());
+  EXPECT_LE(far, std::hypot(2.0, 2.0));
+  EXPECT_EQ(stats.no_echo, 1);
+  // An unset maximum (ConeReading's default 0) is refused, not taken as "no echo".
+  r.max_range = 0.0;
+  r.range = 0.5;
+  EXPECT_FALSE(addConeReading(r, o, &builder, &stats));
+  EXPECT_EQ(stats.rejected, 2);
+}
+
 TEST(TiledGrid, CopiesShareTilesUntilTheFirstWrite) {
   TiledLogOddsGrid a(0.05, -10.0, -10.0, 400, 400, 64);  // 20 m x 20 m, 7 x 7 tiles
   EXPECT_EQ(a.allocatedTiles(), 0);

@@ -59,24 +59,38 @@ bool addConeReading(const ConeReading& reading, const GridOptions& options,
                     LocalMapBuilder* builder, LocalMapStats* stats) {
   ++stats->readings;
   const double fov = options.cone_fov_rad > 0.0 ? options.cone_fov_rad : reading.field_of_view;
+  // max_range <= 0: unset (ConeReading's default); the ROS conversion makes it unbounded.
   if (std::isnan(reading.range) || reading.range < 0.0 || !(fov > 0.0 && fov < M_PI) ||
-      !reading.sensor_pose.allFinite() || reading.range < reading.min_range) {
+      !reading.sensor_pose.allFinite() || reading.range < reading.min_range ||
+      !(reading.max_range > 0.0)) {
+    ++stats->rejected;
+    return false;
+  }
+  // Nothing beyond the grid's diagonal can be on the grid: an echo that far (a glitch, or a
+  // driver's max_range left at 0, read as unbounded) is refused, and no cone reaches further.
+  // Without the bound one 100 m reading at 1 cm cells visited 25 million cells (15 s).
+  const double grid_reach = std::hypot(options.size_x_m, options.size_y_m);
+  const bool returned = std::isfinite(reading.range) &&
+                        reading.range < reading.max_range - options.max_range_margin_m;
+  if ((returned && reading.range > grid_reach) ||
+      !(reading.sensor_pose.head<2>().norm() <= grid_reach)) {
     ++stats->rejected;
     return false;
   }
   double max_range = reading.max_range;
   if (options.cone_max_range_m > 0.0) max_range = std::min(max_range, options.cone_max_range_m);
-  const bool echo = std::isfinite(reading.range) &&
-                    reading.range < reading.max_range - options.max_range_margin_m &&
-                    reading.range <= max_range;
+  const bool echo = returned && reading.range <= max_range;
   const double no_echo_limit = options.no_echo_free_range_m > 0.0
                                    ? options.no_echo_free_range_m
                                    : std::numeric_limits<double>::infinity();
-  const double free_to = echo ? reading.range : std::min(max_range, no_echo_limit);
+  // An echo beyond cone_max_range_m still proves the cone free up to it (no arc: too far to
+  // place); only a reading without an echo is held to no_echo_free_range_m (specular walls).
+  double free_to = echo ? reading.range : returned ? max_range : std::min(max_range, no_echo_limit);
   if (!std::isfinite(free_to)) {
     ++stats->rejected;
     return false;
   }
+  free_to = std::min(free_to, grid_reach);
   echo ? ++stats->echoes : ++stats->no_echo;
   const double resolution = options.resolution_m;
   const double thickness = std::max(resolution, options.cone_arc_thickness_m);

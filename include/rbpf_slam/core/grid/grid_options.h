@@ -20,9 +20,11 @@ struct GridOptions {
   double log_odds_clamp = 6.0;
   // Cone sensors (sonar, infrared): an arc of this thickness at the range is occupied, the
   // cone up to it free; a reading within max_range_margin_m of max_range is "no echo" and only
-  // frees the cone up to min(max_range, no_echo_free_range_m).
+  // frees the cone up to min(max_range, no_echo_free_range_m). A reading beyond the grid's
+  // diagonal is refused.
   double cone_arc_thickness_m = 0.0;  // 0: one cell
-  double cone_max_range_m = 0.0;      // ignore echoes beyond this (0: the sensor's max)
+  double cone_max_range_m = 0.0;      // an echo beyond this only frees the cone up to it, no
+                                      // arc (0: the sensor's max)
   double max_range_margin_m = 0.005;
   double no_echo_free_range_m = 0.0;  // 0: up to max_range
   double cone_fov_rad = 0.0;          // 0: each reading's field_of_view
