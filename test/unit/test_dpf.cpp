@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 #include "rbpf_slam/core/filters/distributed_filter.h"
@@ -310,6 +311,52 @@ TEST(DpfMaster, ALocalWhosePriorDisagreesWithTheMastersIsNotFusedThenIsolated) {
   EXPECT_TRUE(out.mean.isApprox(p, 1e-9)) << out.mean.transpose();
 }
 
+// One estimate with a NaN (mean, or NIS) is not fused, counted, and isolated like an
+// inconsistent one; the master stays finite and fuses the others. Before, the NaN mean entered
+// the fusion with weight 0 (0 x NaN = NaN), the master's next prediction was NaN and every
+// later local looked inconsistent: the filter stayed NaN for good; a NaN NIS stuck in the
+// local's smoothed NIS for ever.
+TEST(DpfMaster, ANonFiniteEstimateIsNotFusedAndTheMasterStaysFinite) {
+  for (const std::string fusion : {"information", "average"}) {
+    DpfOptions o;
+    o.local_filters = 3;
+    o.isolate_after_steps = 2;
+    o.fusion = fusion;
+    auto local = [](int index, long step, const Pose2& at) {
+      DpfLocalEstimate e = estimateOf(index, step, at + Pose2(0.1, 0.0, 0.0), 2.0, 0.9);
+      e.prior_mean = at;
+      e.prior_covariance = 0.01 * Eigen::Matrix3d::Identity();
+      e.covariance = 0.005 * Eigen::Matrix3d::Identity();
+      return e;
+    };
+    DpfMaster master(o);
+    DpfLocalEstimate bad = local(2, 1, Pose2::Zero());
+    bad.mean.x() = std::numeric_limits<double>::quiet_NaN();
+    auto out = master.fuse(1, MotionInput(), {local(0, 1, Pose2::Zero()), local(1, 1, Pose2::Zero()), bad});
+    ASSERT_TRUE(out.mean.allFinite()) << fusion;
+    EXPECT_TRUE(out.covariance.allFinite()) << fusion;
+    EXPECT_EQ(out.weights[2], 0.0);
+    EXPECT_TRUE(master.health()[2].inconsistent);
+    EXPECT_EQ(master.health()[2].non_finite, 1);
+    EXPECT_GT(out.mean.x(), 0.01) << fusion << ": the healthy locals were not fused";
+    // A NaN NIS the next step: the second flagged step isolates it; its smoothed NIS stays finite.
+    DpfLocalEstimate bad_nis = local(2, 2, out.mean);
+    bad_nis.nis_sum = std::numeric_limits<double>::quiet_NaN();
+    const Pose2 m = out.mean;
+    out = master.fuse(2, MotionInput(), {local(0, 2, m), local(1, 2, m), bad_nis});
+    ASSERT_TRUE(out.mean.allFinite()) << fusion;
+    EXPECT_EQ(master.health()[2].non_finite, 2);
+    EXPECT_TRUE(std::isfinite(master.health()[2].smoothed_nis));
+    ASSERT_EQ(out.feedback.reinitialise.size(), 1u);
+    EXPECT_EQ(out.feedback.reinitialise[0], 2);
+    // Clean again: fused again.
+    const Pose2 m2 = out.mean;
+    out = master.fuse(3, MotionInput(), {local(0, 3, m2), local(1, 3, m2), local(2, 3, m2)});
+    EXPECT_TRUE(out.mean.allFinite());
+    EXPECT_GT(out.weights[2], 0.1) << fusion;
+  }
+}
+
 TEST(DpfMaster, SegmentMahalanobisIsTheDistanceToTheNearestPointOfTheSegment) {
   const Eigen::Matrix3d unit = Eigen::Matrix3d::Identity();
   const Eigen::Vector3d v(4.0, 0.0, 0.0);
@@ -535,6 +582,30 @@ TEST(DistributedFilter, TakesAStartPoseWithItsSpreadOnlyBeforeTheFirstStep) {
   EXPECT_EQ(filter->estimate().mean, after);
   filter->reset(Pose2::Zero());
   EXPECT_TRUE(filter->resetPose(Pose2(5.0, 5.0, 0.0), spread));  // a new run
+}
+
+// A sighting whose range is finite but absurd (1e160 m: a float64 field of a broken driver)
+// overflowed its landmark's covariance in a local filter; the NaN spread to the master and,
+// through the feedback, to every local for the rest of the run. Now such a landmark is not
+// mapped and the filter keeps tracking.
+TEST(DistributedFilter, AnAbsurdRangeDoesNotTurnTheFilterNaN) {
+  SyntheticRun run = makeRun(80, 11);
+  for (int t : {10, 11, 30}) {
+    PointFeature absurd;
+    absurd.id = 99;
+    absurd.range = 1e160;
+    absurd.bearing = 0.3;
+    absurd.covariance = Eigen::Vector2d(0.05 * 0.05, 0.01 * 0.01).asDiagonal();
+    run.features[t].points.push_back(absurd);
+  }
+  auto dpf = createFilter(dpfOptions());
+  const std::vector<Pose2> path = runFilter(dpf.get(), run);
+  for (size_t t = 0; t < path.size(); ++t) ASSERT_TRUE(path[t].allFinite()) << "step " << t;
+  EXPECT_TRUE(dpf->estimate().covariance.allFinite());
+  std::vector<Pose2> odometry;
+  Pose2 pose = Pose2::Zero();
+  for (const auto& m : run.motion) odometry.push_back(pose = compose(pose, m.delta));
+  EXPECT_LT(rmsError(path, run.truth), rmsError(odometry, run.truth));
 }
 
 TEST(DistributedFilter, TracksAsWellAsFastSlam2AndBeatsOdometry) {

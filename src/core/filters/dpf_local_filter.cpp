@@ -250,8 +250,14 @@ DpfLocalEstimate DpfLocalFilter::step(const DpfStepInput& input, const Pose2& in
       information += pred.h_pose.transpose() * q_inv * pred.h_pose;
       correction += pred.h_pose.transpose() * q_inv * v[o][j];
     }
-    const Eigen::Matrix3d proposal_cov = information.inverse();
+    Eigen::Matrix3d proposal_cov = information.inverse();
     Pose2 proposal_mean = mu + proposal_cov * correction;
+    if (!proposal_mean.allFinite() || !proposal_cov.allFinite()) {
+      // A landmark or sighting far outside what the numbers hold (a range of 1e160 is finite
+      // but overflows the landmark's covariance): the motion prior alone, as FastSLAM 2.0.
+      proposal_mean = mu;
+      proposal_cov = sigma;
+    }
     proposal_mean.z() = wrapAngle(proposal_mean.z());
     proposal_means_[j] = proposal_mean;
     proposal_covs_[j] = 0.5 * (proposal_cov + proposal_cov.transpose());
@@ -267,7 +273,9 @@ DpfLocalEstimate DpfLocalFilter::step(const DpfStepInput& input, const Pose2& in
         lm.mean = pointFromObservation(p.pose, obs.z, &jacobian);
         lm.covariance = symmetric(jacobian * obs.noise * jacobian.transpose());
         lm.observations = 1;
-        (*map)[obs.id] = lm;
+        // Not mapped when the numbers overflow (as FastSlam2's landmark update): a NaN in one
+        // particle's map made its weight, then the local's estimate, NaN.
+        if (lm.mean.allFinite() && lm.covariance.allFinite()) (*map)[obs.id] = lm;
         continue;
       }
       Landmark& lm = it->second;
@@ -275,9 +283,12 @@ DpfLocalEstimate DpfLocalFilter::step(const DpfStepInput& input, const Pose2& in
       const Eigen::Matrix2d s =
           symmetric(landmarkInnovationCovariance(pred, lm.covariance, obs.noise));
       const Eigen::Matrix2d gain = lm.covariance * pred.h_landmark.transpose() * s.inverse();
-      lm.mean += gain * innovation(obs.z, pred.z);
-      lm.covariance = symmetric((Eigen::Matrix2d::Identity() - gain * pred.h_landmark) *
-                                lm.covariance);
+      const Eigen::Vector2d mean = lm.mean + gain * innovation(obs.z, pred.z);
+      const Eigen::Matrix2d covariance =
+          symmetric((Eigen::Matrix2d::Identity() - gain * pred.h_landmark) * lm.covariance);
+      if (!mean.allFinite() || !covariance.allFinite()) continue;  // kept as it was
+      lm.mean = mean;
+      lm.covariance = covariance;
       ++lm.observations;
     }
     p.map = map;

@@ -24,17 +24,28 @@ std::vector<double> normalised(std::vector<double> w) {
   return w;
 }
 
+/// Every value the master reads from an estimate is finite (a NaN one, fused with weight 0,
+/// still made the fusion NaN, and the master's NaN prediction then made every later local look
+/// inconsistent: the filter stayed NaN for good).
+bool finiteEstimate(const DpfLocalEstimate& e) {
+  return e.mean.allFinite() && e.covariance.allFinite() && e.prior_mean.allFinite() &&
+         e.prior_covariance.allFinite() && std::isfinite(e.nis_sum) && std::isfinite(e.neff);
+}
+
 /// The paper's fusion: x = sum_i w_i x_i (circular mean for the heading), covariance of the
-/// mixture.
+/// mixture. Locals of weight 0 are left out (0 times a NaN is NaN).
 void fuseAverage(const std::vector<const DpfLocalEstimate*>& locals,
                  const std::vector<double>& weights, DpfMasterOutput* out) {
   std::vector<Pose2> means;
   std::vector<Eigen::Matrix3d> covariances;
-  for (const DpfLocalEstimate* local : locals) {
-    means.push_back(local->mean);
-    covariances.push_back(local->covariance);
+  std::vector<double> used;
+  for (size_t i = 0; i < locals.size(); ++i) {
+    if (!(weights[i] > 0.0)) continue;
+    means.push_back(locals[i]->mean);
+    covariances.push_back(locals[i]->covariance);
+    used.push_back(weights[i]);
   }
-  const PoseEstimate fused = mixtureMoments(means, covariances, weights);
+  const PoseEstimate fused = mixtureMoments(means, covariances, used);
   out->mean = fused.mean;
   out->covariance = fused.covariance;
 }
@@ -127,9 +138,17 @@ DpfMasterOutput DpfMaster::fuse(long step, const MotionInput& motion,
     }
   }
   std::vector<double> nis(n), neff(n);
+  std::vector<bool> finite(n);
   for (int i = 0; i < n; ++i) {
     const DpfLocalEstimate& e = *by_index[i];
     DpfLocalHealth& h = health_[i];
+    finite[i] = finiteEstimate(e);
+    if (!finite[i]) {
+      ++h.non_finite;
+      nis[i] = h.smoothed_nis;
+      neff[i] = 0.0;
+      continue;
+    }
     if (e.innovations > 0) {
       const double a = options_.innovation_smoothing;
       h.smoothed_nis = (1.0 - a) * h.smoothed_nis + a * e.nis_sum / e.innovations;
@@ -176,10 +195,12 @@ DpfMasterOutput DpfMaster::fuse(long step, const MotionInput& motion,
     }
     const bool process_fault = options_.fault_prior_chi2 > 0.0 &&
                                !(h.process_nis <= options_.fault_prior_chi2);  // NaN: fault
-    h.last_mean = e.mean;
-    h.has_last_mean = true;
-    h.inconsistent = options_.fault_prior_chi2 > 0.0 &&
-                     !(h.prior_nis <= options_.fault_prior_chi2);  // NaN: inconsistent
+    if (finite[i]) {
+      h.last_mean = e.mean;
+      h.has_last_mean = true;
+    }
+    h.inconsistent = !finite[i] || (options_.fault_prior_chi2 > 0.0 &&
+                                    !(h.prior_nis <= options_.fault_prior_chi2));  // NaN too
     h.suspect = h.inconsistent || (watch_innovation && nis[i] > options_.fault_nis) ||
                 (watch_neff && neff[i] < options_.fault_neff_ratio);
     h.suspect_steps = h.suspect ? h.suspect_steps + 1 : 0;
@@ -223,6 +244,11 @@ DpfMasterOutput DpfMaster::fuse(long step, const MotionInput& motion,
              !fuseInformation(prior_mean, by_index, out.weights, trust, &out)) {
     fuseAverage(by_index, out.weights, &out);
   }
+  if (!out.mean.allFinite() || !out.covariance.allFinite()) {
+    // Never kept: the next prediction starts from last_. The master predicts only.
+    out.mean = prior_mean;
+    out.covariance = regularised(last_.covariance);
+  }
   out.feedback.mean = out.mean;
   out.feedback.covariance = out.covariance;
   last_ = out;
@@ -235,7 +261,9 @@ bool DpfMaster::fuseInformation(const Pose2& prior_mean,
                                 const std::vector<double>& trusts, DpfMasterOutput* out) const {
   const int n = static_cast<int>(locals.size());
   Eigen::Matrix3d prior_cov = Eigen::Matrix3d::Zero();
-  for (int i = 0; i < n; ++i) prior_cov += weights[i] * locals[i]->prior_covariance;
+  for (int i = 0; i < n; ++i) {
+    if (weights[i] > 0.0) prior_cov += weights[i] * locals[i]->prior_covariance;
+  }
   // Linearised at the master's prior: information and information vector relative to it.
   Eigen::Matrix3d information = regularised(prior_cov).inverse();
   Eigen::Vector3d vector = Eigen::Vector3d::Zero();
@@ -243,7 +271,7 @@ bool DpfMaster::fuseInformation(const Pose2& prior_mean,
   for (int i = 0; i < n; ++i) {
     const DpfLocalEstimate& e = *locals[i];
     const double trust = trusts[i];
-    if (e.innovations == 0 || !(trust > 0.0)) continue;  // it learned nothing this step
+    if (e.innovations == 0 || !(trust > 0.0) || !(weights[i] > 0.0)) continue;  // nothing learned
     const Eigen::Matrix3d posterior_info = regularised(e.covariance).inverse();
     const Eigen::Matrix3d prior_info = regularised(e.prior_covariance).inverse();
     // What it learned: posterior minus prior information, and the matching information

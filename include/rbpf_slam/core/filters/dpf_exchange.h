@@ -66,6 +66,7 @@ struct DpfLocalHealth {
   long isolations = 0;
   double process_nis = 0.0;   // ... of its prior against its process (see DpfMaster::fuse)
   bool has_last_mean = false;  // last_mean is the local's posterior of the previous step
+  long non_finite = 0;  // estimates with a non-finite value: not fused, counted as inconsistent
   Pose2 last_mean = Pose2::Zero();
   bool streak_process_fault = false;  // a process fault among the current flagged steps
   int probation_steps = 0;    // after an isolation: unflagged steps needed before it is fused
