@@ -592,6 +592,9 @@ TEST(HinfFastSlam, StaysAccurateWhenTheMeasurementNoiseIsOverstated) {
   EXPECT_TRUE(r.finite);
   EXPECT_LT(r.ate, 0.5) << "odometry " << r.odom_ate << ", FastSLAM 2.0 " << f.ate;
   EXPECT_LT(r.ate, 0.3 * r.odom_ate);
+  // And better than FastSLAM 2.0 told the same (0.23 against 0.35 m here): the test passed
+  // with the variant set to fastslam2 before this check.
+  EXPECT_LT(r.ate, 0.85 * f.ate);
 }
 
 // The filter feeds its innovations to the adaptive rule: told a measurement noise 10 x 25 times
