@@ -99,7 +99,7 @@ void SonarFeaturesNode::sonarCallback(const sensor_msgs::Range::ConstPtr& msg) {
   if (!std::isfinite(reading.range)) {
     warnings_.warn("sonar range " + msg->header.frame_id,
                    "Sonar " + msg->header.frame_id +
-                       " sent a non-finite range (counted as no echo)");
+                       " sent a non-finite range (no feature from it; counted as invalid)");
   }
   const auto t0 = std::chrono::steady_clock::now();
   extractor_.addReadings({reading}, odom_pose, stamp);

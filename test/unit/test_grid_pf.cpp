@@ -175,9 +175,9 @@ TEST(InverseSensorModel, ConeAtMaxRangeOnlyFrees) {
 }
 
 // grid_pf_sonar.yaml's case: cone_max_range_m 3, no_echo_free_range_m 1, sonar max 5 m. An
-// echo at 4 m proves the cone free to 3 m (it used to free only 1 m, as a reading without an
-// echo); a reading without an echo frees 1 m; neither marks an arc.
-TEST(InverseSensorModel, AnEchoBeyondTheConeMaximumFreesTheConeUpToIt) {
+// echo at 4 m counts as none: it frees 1 m of the cone, as a reading without an echo, and
+// marks no arc (freeing up to 3 m made the sonar world worse, inverse_sensor_model.cpp).
+TEST(InverseSensorModel, AnEchoBeyondTheConeMaximumCountsAsNone) {
   GridOptions o;
   o.resolution_m = 0.1;
   o.cone_max_range_m = 3.0;
@@ -197,10 +197,16 @@ TEST(InverseSensorModel, AnEchoBeyondTheConeMaximumFreesTheConeUpToIt) {
     return far;
   };
   LocalMapStats stats;
-  EXPECT_NEAR(farthest(4.0, &stats), 3.0, 0.1);
+  EXPECT_NEAR(farthest(4.0, &stats), 1.0, 0.1);
   EXPECT_NEAR(farthest(5.0, &stats), 1.0, 0.1);  // at max range: no echo
   EXPECT_EQ(stats.no_echo, 2);
   EXPECT_EQ(stats.echoes, 0);
+  // Within cone_max_range_m: an echo, its arc occupied.
+  r.range = 2.5;
+  LocalMapBuilder builder(o.resolution_m);
+  EXPECT_TRUE(addConeReading(r, o, &builder, &stats));
+  EXPECT_GT(countCells(builder.finish(), true), 0);
+  EXPECT_EQ(stats.echoes, 1);
 }
 
 // A reading beyond the grid's diagonal is refused: one 100 m glitch (or a driver's max_range

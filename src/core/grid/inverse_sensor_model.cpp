@@ -83,9 +83,13 @@ bool addConeReading(const ConeReading& reading, const GridOptions& options,
   const double no_echo_limit = options.no_echo_free_range_m > 0.0
                                    ? options.no_echo_free_range_m
                                    : std::numeric_limits<double>::infinity();
-  // An echo beyond cone_max_range_m still proves the cone free up to it (no arc: too far to
-  // place); only a reading without an echo is held to no_echo_free_range_m (specular walls).
-  double free_to = echo ? reading.range : returned ? max_range : std::min(max_range, no_echo_limit);
+  // An echo beyond cone_max_range_m counts as none: it frees the cone only up to
+  // min(cone_max_range_m, no_echo_free_range_m). A far echo says little about the nearer part
+  // of a 30 deg cone (a wall met at a slant returns nothing); freeing up to cone_max_range_m
+  // instead made the sonar world's grid_pf worse (session 41: mean RMSE x / y after step 600,
+  // 100 particles 0.41 / 0.66 m against 0.24 / 0.34 m, 500 particles 0.75 / 1.29 against
+  // 0.23 / 0.19 m, 10 seeds).
+  double free_to = echo ? reading.range : std::min(max_range, no_echo_limit);
   if (!std::isfinite(free_to)) {
     ++stats->rejected;
     return false;

@@ -23,8 +23,8 @@ struct GridOptions {
   // frees the cone up to min(max_range, no_echo_free_range_m). A reading beyond the grid's
   // diagonal is refused.
   double cone_arc_thickness_m = 0.0;  // 0: one cell
-  double cone_max_range_m = 0.0;      // an echo beyond this only frees the cone up to it, no
-                                      // arc (0: the sensor's max)
+  double cone_max_range_m = 0.0;      // an echo beyond this counts as none (0: the sensor's
+                                      // max)
   double max_range_margin_m = 0.005;
   double no_echo_free_range_m = 0.0;  // 0: up to max_range
   double cone_fov_rad = 0.0;          // 0: each reading's field_of_view
