@@ -50,25 +50,30 @@ void CheckedTransformListener::handle(const tf2_msgs::TFMessage& msg,
     ROS_WARN_STREAM(node_name_ << ": the clock went back " << (last_update_.toSec() - now.toSec())
                                << " s: clearing the tf buffer");
     buffer_.clear();
+    newest_ = ros::Time();
     ++clears_;
   }
   last_update_ = now;
   for (const geometry_msgs::TransformStamped& t : msg.transforms) {
     std::string problem = transformProblem(t);
-    // A stamp far ahead of the clock (a bad driver clock, garbage) would make tf2 drop every
-    // real transform of that pair as older than it, until the clock went back. Not checked
-    // before the clock runs (a simulated clock at 0) nor for static transforms.
-    if (problem.empty() && !is_static && !now.isZero() &&
-        t.header.stamp.toSec() > now.toSec() + kMaxAheadS) {
-      problem = "stamp " + std::to_string(t.header.stamp.toSec()) + " s is more than a day ahead of the clock (" +
-                std::to_string(now.toSec()) + " s)";
+    // A stamp far ahead of the transforms so far (a glitch, a driver's garbage) would make tf2
+    // drop every later real transform of that pair as older than it. Compared with the newest
+    // transform taken, not with this machine's clock, which may be off (a robot computer
+    // without network time) while all the transforms agree. Static transforms: any stamp.
+    if (problem.empty() && !is_static && !newest_.isZero() &&
+        t.header.stamp.toSec() > newest_.toSec() + kMaxAheadS) {
+      problem = "stamp " + std::to_string(t.header.stamp.toSec()) +
+                " s is more than a day after the newest transform so far (" +
+                std::to_string(newest_.toSec()) + " s)";
     }
     if (problem.empty()) {
       try {
         // false when tf2 refuses it itself (repeated or old data, its stricter quaternion
         // check): tf2 logs that, and a repeated stamp is common and harmless (converted
         // CARMEN logs repeat odometry stamps), so it is not counted here
-        buffer_.setTransform(t, authority, is_static);
+        if (buffer_.setTransform(t, authority, is_static) && !is_static) {
+          newest_ = std::max(newest_, t.header.stamp);
+        }
         continue;
       } catch (const std::exception& e) {  // tf2's time arithmetic, whatever the stamp
         problem = e.what();

@@ -386,8 +386,8 @@ TEST_F(FaultsTest, G2_FeaturesInAnUnknownFrameOrNonFiniteAreDropped) {
 
 // tf2_ros's own listener let a /tf stamp near 2^32 s (a driver's -1) throw from its thread,
 // which ended the node; the node's listener refuses such transforms (and a NaN, an unnamed
-// frame, a stamp two days ahead of the clock, which would make tf2 drop every real one as
-// old) and counts them, and uses the good transform of the same message.
+// frame, a stamp two days after the transforms so far, which would make tf2 drop every real
+// one as old) and counts them, and uses the good transform of the same message.
 TEST_F(FaultsTest, G3_UnusableTransformsOnTfAreRefusedAndCounted) {
   const long refused_before = std::max(0L, observer_->diagnostic("dropped: refused transform"));
   robot_->tick(false);  // this step's odometry comes only in the message below, after the bad
@@ -400,7 +400,7 @@ TEST_F(FaultsTest, G3_UnusableTransformsOnTfAreRefusedAndCounted) {
   nan.transform.translation.y = std::numeric_limits<double>::quiet_NaN();
   geometry_msgs::TransformStamped unnamed =
       rosbridge::toTransformStamped(away, "odom", "", ros::Time(robot_->time()));
-  geometry_msgs::TransformStamped ahead =  // two days ahead of the clock
+  geometry_msgs::TransformStamped ahead =  // two days after the transforms so far
       rosbridge::toTransformStamped(away, "odom", "base_link", ros::Time(robot_->time() + 172800.0));
   msg.transforms = {far, nan, unnamed, ahead, robot_->odometry()};
   robot_->publishTf(msg);

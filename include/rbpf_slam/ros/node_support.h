@@ -48,11 +48,11 @@ class ThrottledWarnings {
 /// What tf2_ros::TransformListener does (subscribe to /tf and /tf_static, feed the buffer from
 /// a thread of its own, clear the buffer when the clock jumps back), with each transform
 /// checked first (transformProblem: empty or equal frames, a stamp near 2^32 s, a non-finite
-/// or unnormalised rotation; and a stamp more than a day ahead of the clock, which would make
-/// tf2 drop every real transform of that pair as old). What tf2 refuses itself (repeated or
-/// old data) it logs, as before, uncounted. tf2_ros 0.7's listener catches only tf2's own exceptions: one
-/// /tf message stamped near 2^32 s (a driver's -1) threw ros::Time's range error from its
-/// thread and ended the node. A refused transform is dropped, counted and named in a warning
+/// or unnormalised rotation; and a stamp more than a day after the newest transform taken,
+/// which would make tf2 drop every later real transform of that pair as old). What tf2 refuses
+/// itself (repeated or old data) it logs, as before, uncounted. tf2_ros 0.7's listener catches
+/// only tf2's own exceptions: one /tf message stamped near 2^32 s (a driver's -1) threw
+/// ros::Time's range error from its thread and ended the node. A refused transform is dropped, counted and named in a warning
 /// (at most one per cause every 10 s); the rest of its message is used.
 class CheckedTransformListener {
  public:
@@ -64,7 +64,7 @@ class CheckedTransformListener {
 
   /// Stops the thread and the subscriptions (a node's destructor, before its tf queues go).
   void stop();
-  /// A /tf stamp further ahead of the clock than this is refused (s).
+  /// A /tf stamp further after the newest transform taken than this is refused (s).
   static constexpr double kMaxAheadS = 86400.0;
 
   /// Transforms refused since the start (any thread).
@@ -91,6 +91,7 @@ class CheckedTransformListener {
   const std::string node_name_;
   std::mutex mutex_;  // last_update_ and warnings_ (the spinner has one thread; tests may call)
   ros::Time last_update_;
+  ros::Time newest_;  // the newest non-static stamp taken (zero: none since the start or a clear)
   ThrottledWarnings warnings_;
   std::atomic<long> refused_{0}, clears_{0};
   long taken_ = 0;  // refused_ as of the last takeRefused (the caller's thread)
