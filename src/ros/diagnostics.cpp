@@ -99,6 +99,9 @@ diagnostic_msgs::DiagnosticArray SlamDiagnostics::report(const ros::Time& stamp,
     if (stats.leader_changes > 0) {  // an ensemble whose reported member has changed
       status.values.push_back(keyValue("ensemble leader changes", text(stats.leader_changes)));
     }
+    if (stats.outside_grid > 0) {  // grid_pf beyond its fixed extent
+      status.values.push_back(keyValue("updates outside the grid", text(stats.outside_grid)));
+    }
   }
   status.values.push_back(keyValue("resets", text(resets_total_)));
   if (odometry_gaps_ >= 0) status.values.push_back(keyValue("odometry gaps", text(odometry_gaps_)));

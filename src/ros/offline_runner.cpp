@@ -428,6 +428,12 @@ std::vector<std::string> describeOutcome(const OfflineSummary& s, const OfflineO
                     " feature(s) it cannot use (non-finite or degenerate, or of a kind it "
                     "ignores: dpf uses points with known ids only)");
   }
+  if (s.updates_outside_grid > 0) {
+    lines.push_back(std::to_string(s.updates_outside_grid) +
+                    " update(s) with the robot outside the grid (grid.size_x_m x grid.size_y_m, "
+                    "centred on the start): nothing was mapped or matched there, the pose is "
+                    "dead reckoning; enlarge the grid");
+  }
   if (s.same_stamp > 0) {
     lines.push_back(std::to_string(s.same_stamp) +
                     " frame(s) had the stamp of the frame before (another input of the same "
@@ -781,6 +787,7 @@ OfflineSummary OfflineRunner::run() {
   summary.heading_measurements = pipeline_.session().filter().stats().heading_measurements;
   summary.robust_steps = pipeline_.session().filter().stats().robust_steps;
   summary.ensemble_leader_changes = pipeline_.session().filter().stats().leader_changes;
+  summary.updates_outside_grid = pipeline_.session().filter().stats().outside_grid;
   summary.ensemble_members = pipeline_.session().filter().members();
   summary.ensemble_leader = pipeline_.session().filter().leader();
   return writeOutputs(summary);
@@ -884,6 +891,7 @@ OfflineSummary OfflineRunner::writeOutputs(const OfflineSummary& in) const {
       .integer("ensemble_members", summary.ensemble_members)
       .integer("ensemble_leader", summary.ensemble_leader)
       .integer("ensemble_leader_changes", summary.ensemble_leader_changes)
+      .integer("updates_outside_grid", summary.updates_outside_grid)
       .number("update_ms_mean", summary.update_ms_mean)
       .number("update_ms_p99", summary.update_ms_p99)
       .number("update_ms_max", summary.update_ms_max)

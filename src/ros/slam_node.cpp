@@ -677,6 +677,14 @@ void SlamNode::publishDiagnostics(const ros::WallTimerEvent&) {
   }
   diagnostics_.setPaused(paused_);
   diagnostics_.setOdometryGaps(pipeline_.session().gaps());
+  const long outside_grid = pipeline_.session().filter().stats().outside_grid;
+  if (outside_grid > outside_grid_seen_) {
+    warnThrottled("outside grid",
+                  "the robot is outside the grid (grid.size_x_m x grid.size_y_m, centred on the "
+                  "start): nothing is mapped or matched there and the pose is dead reckoning; "
+                  "enlarge the grid");
+  }
+  outside_grid_seen_ = outside_grid;
   if (const long refused = tf_listener_.takeRefused()) {
     diagnostics_.recordDrop("refused transform", refused);
   }

@@ -399,6 +399,24 @@ TEST(GridParticleFilter, WeightsFollowEquation14) {
   EXPECT_GT(map.allocatedTiles(), 0);
 }
 
+// The grid has a fixed extent: updates with the robot beyond it map and match nothing, and
+// are counted (FilterStats::outside_grid; the node warns, offline_slam says so) instead of the
+// filter silently turning into dead reckoning.
+TEST(GridParticleFilter, UpdatesOutsideTheGridAreCounted) {
+  FilterOptions o = gridOptions(5);
+  GridParticleFilter filter(o);
+  filter.reset(Pose2::Zero());
+  filter.update(roomScan(0.0, 0.0));
+  EXPECT_EQ(filter.stats().outside_grid, 0);
+  ASSERT_TRUE(filter.resetPose(Pose2(15.0, 0.0, 0.0), Eigen::Matrix3d::Zero()));  // 20 m grid
+  filter.update(roomScan(0.0, 0.0));
+  filter.update(roomScan(0.0, 0.0));
+  EXPECT_EQ(filter.stats().outside_grid, 2);
+  ASSERT_TRUE(filter.resetPose(Pose2(9.0, 0.0, 0.0), Eigen::Matrix3d::Zero()));
+  filter.update(roomScan(0.0, 0.0));
+  EXPECT_EQ(filter.stats().outside_grid, 2) << "inside again";
+}
+
 TEST(GridParticleFilter, ResampledParticlesShareTiles) {
   FilterOptions o = gridOptions(200);
   o.resample_threshold = 1.0;  // resample every update

@@ -204,7 +204,9 @@ TEST(LandmarkParticleFilter, ALineSpreadIsDrawnAsSeenFromTheRobot) {
     }
     const double n = filter.particles().size();
     // The wall is 1 m from the robot (checked where the spread is small enough to tell).
-    if (seen_from == robot) EXPECT_NEAR(sum / n, 1.0, 0.05);
+    if (seen_from == robot) {
+      EXPECT_NEAR(sum / n, 1.0, 0.05);
+    }
     return std::sqrt(sum2 / n - (sum / n) * (sum / n));
   };
   EXPECT_LT(spreadAtRobot(robot), 0.13);

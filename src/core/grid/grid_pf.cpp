@@ -152,6 +152,13 @@ UpdateStats GridParticleFilter::update(const FeatureSet& features) {
       for (Particle& p : particles_) integrateLocalMap(local, p.pose, options_.grid, &p.grid);
     }
   }
+  {
+    // The grid has a fixed extent: out of it nothing is mapped nor matched, and the filter
+    // falls back to dead reckoning without a word unless this is counted.
+    const Particle& best = particles_[bestIndex()];
+    int cx, cy;
+    if (!best.grid.cellOf(best.pose.head<2>(), &cx, &cy)) ++stats_.outside_grid;
+  }
   result.neff = effectiveSampleSize(weights_);
   stats_.last_neff = result.neff;
   if (result.neff < options_.resample_threshold * particles_.size()) {

@@ -73,6 +73,8 @@ struct FilterStats {
   int landmarks = 0;  // in the best particle
   double attenuation = 0.0;  // hinf_fastslam: the theta in use (hinf.mode relative / adaptive)
   long leader_changes = 0;   // ensemble: updates after which another member was reported
+  long outside_grid = 0;     // grid_pf: updates whose best pose lay outside the fixed grid
+                             // (nothing is mapped or matched there: the map must be larger)
 };
 
 /// A SLAM filter. Not thread-safe; time is always an argument (the core reads no clock).
