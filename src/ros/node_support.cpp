@@ -58,13 +58,16 @@ void CheckedTransformListener::handle(const tf2_msgs::TFMessage& msg,
     std::string problem = transformProblem(t);
     // A stamp far ahead of the transforms so far (a glitch, a driver's garbage) would make tf2
     // drop every later real transform of that pair as older than it. Compared with the newest
-    // transform taken, not with this machine's clock, which may be off (a robot computer
+    // transform taken, not with this machine's clock alone, which may be off (a robot computer
     // without network time) while all the transforms agree. Static transforms: any stamp.
+    // Nor is a forward jump past the clock refused (a second bag days later, a clock set by
+    // NTP): the reference is the later of the newest transform and the clock.
+    const ros::Time reference = std::max(newest_, now);
     if (problem.empty() && !is_static && !newest_.isZero() &&
-        t.header.stamp.toSec() > newest_.toSec() + kMaxAheadS) {
+        t.header.stamp.toSec() > reference.toSec() + kMaxAheadS) {
       problem = "stamp " + std::to_string(t.header.stamp.toSec()) +
-                " s is more than a day after the newest transform so far (" +
-                std::to_string(newest_.toSec()) + " s)";
+                " s is more than a day after both the newest transform so far (" +
+                std::to_string(newest_.toSec()) + " s) and the clock";
     }
     if (problem.empty()) {
       try {

@@ -707,6 +707,7 @@ void SlamNode::publishDiagnostics(const ros::WallTimerEvent&) {
 
 void SlamNode::resetAll(const std::string& why) {
   diagnostics_.recordReset();
+  outside_grid_seen_ = 0;  // the filter's counts start over
   ROS_WARN_STREAM("rbpf_slam_node: " << why << ": clearing the map, the trajectory and tf");
   pipeline_.reset();  // filter, history and the scan matcher's reference
   tf_buffer_.clear();

@@ -342,6 +342,7 @@ TEST(DpfMaster, ANonFiniteEstimateIsNotFusedAndTheMasterStaysFinite) {
     // A NaN NIS the next step: the second flagged step isolates it; its smoothed NIS stays finite.
     DpfLocalEstimate bad_nis = local(2, 2, out.mean);
     bad_nis.nis_sum = std::numeric_limits<double>::quiet_NaN();
+    bad_nis.prior_mean.y() = std::numeric_limits<double>::quiet_NaN();  // no process fault
     const Pose2 m = out.mean;
     out = master.fuse(2, MotionInput(), {local(0, 2, m), local(1, 2, m), bad_nis});
     ASSERT_TRUE(out.mean.allFinite()) << fusion;
@@ -349,7 +350,8 @@ TEST(DpfMaster, ANonFiniteEstimateIsNotFusedAndTheMasterStaysFinite) {
     EXPECT_TRUE(std::isfinite(master.health()[2].smoothed_nis));
     ASSERT_EQ(out.feedback.reinitialise.size(), 1u);
     EXPECT_EQ(out.feedback.reinitialise[0], 2);
-    // Clean again: fused again.
+    // Clean again: fused again at once (a NaN prior counted as a process fault put it on
+    // probation for readmit_after_steps).
     const Pose2 m2 = out.mean;
     out = master.fuse(3, MotionInput(), {local(0, 3, m2), local(1, 3, m2), local(2, 3, m2)});
     EXPECT_TRUE(out.mean.allFinite());
@@ -586,26 +588,31 @@ TEST(DistributedFilter, TakesAStartPoseWithItsSpreadOnlyBeforeTheFirstStep) {
 
 // A sighting whose range is finite but absurd (1e160 m: a float64 field of a broken driver)
 // overflowed its landmark's covariance in a local filter; the NaN spread to the master and,
-// through the feedback, to every local for the rest of the run. Now such a landmark is not
-// mapped and the filter keeps tracking.
+// through the feedback, to every local for the rest of the run. One at 3.4e38 m (a float32's
+// maximum) stayed finite, was mapped, and pulled the fused pose to 1e35 m. Now ranges beyond
+// 1 km are refused like other unusable features and the filter keeps tracking.
 TEST(DistributedFilter, AnAbsurdRangeDoesNotTurnTheFilterNaN) {
+  for (double range : {1e160, 1e155, 3.4e38, 1e9}) {
   SyntheticRun run = makeRun(80, 11);
   for (int t : {10, 11, 30}) {
     PointFeature absurd;
     absurd.id = 99;
-    absurd.range = 1e160;
+    absurd.range = range;
     absurd.bearing = 0.3;
     absurd.covariance = Eigen::Vector2d(0.05 * 0.05, 0.01 * 0.01).asDiagonal();
     run.features[t].points.push_back(absurd);
   }
   auto dpf = createFilter(dpfOptions());
   const std::vector<Pose2> path = runFilter(dpf.get(), run);
-  for (size_t t = 0; t < path.size(); ++t) ASSERT_TRUE(path[t].allFinite()) << "step " << t;
+  for (size_t t = 0; t < path.size(); ++t) {
+    ASSERT_TRUE(path[t].allFinite()) << "step " << t << ", range " << range;
+  }
   EXPECT_TRUE(dpf->estimate().covariance.allFinite());
   std::vector<Pose2> odometry;
   Pose2 pose = Pose2::Zero();
   for (const auto& m : run.motion) odometry.push_back(pose = compose(pose, m.delta));
-  EXPECT_LT(rmsError(path, run.truth), rmsError(odometry, run.truth));
+  EXPECT_LT(rmsError(path, run.truth), rmsError(odometry, run.truth)) << "range " << range;
+  }
 }
 
 TEST(DistributedFilter, TracksAsWellAsFastSlam2AndBeatsOdometry) {

@@ -48,8 +48,8 @@ class ThrottledWarnings {
 /// What tf2_ros::TransformListener does (subscribe to /tf and /tf_static, feed the buffer from
 /// a thread of its own, clear the buffer when the clock jumps back), with each transform
 /// checked first (transformProblem: empty or equal frames, a stamp near 2^32 s, a non-finite
-/// or unnormalised rotation; and a stamp more than a day after the newest transform taken,
-/// which would make tf2 drop every later real transform of that pair as old). What tf2 refuses
+/// or unnormalised rotation; and a stamp more than a day after both the newest transform taken
+/// and the clock, which would make tf2 drop every later real transform of that pair as old). What tf2 refuses
 /// itself (repeated or old data) it logs, as before, uncounted. tf2_ros 0.7's listener catches
 /// only tf2's own exceptions: one /tf message stamped near 2^32 s (a driver's -1) threw
 /// ros::Time's range error from its thread and ended the node. A refused transform is dropped, counted and named in a warning
@@ -64,7 +64,8 @@ class CheckedTransformListener {
 
   /// Stops the thread and the subscriptions (a node's destructor, before its tf queues go).
   void stop();
-  /// A /tf stamp further after the newest transform taken than this is refused (s).
+  /// A /tf stamp further than this after both the newest transform taken and the clock is
+  /// refused (s).
   static constexpr double kMaxAheadS = 86400.0;
 
   /// Transforms refused since the start (any thread).

@@ -103,13 +103,20 @@ int DpfLocalFilter::bestParticle() const {
   return std::max(0, mostProbable(weights_, resampled_best_));
 }
 
+namespace {
+/// Beyond this a finite range is corrupt data (a float32's maximum from a broken driver), not a
+/// measurement: as io::kMaxPlausibleRangeM for the converters. Such a landmark stayed finite,
+/// was mapped, and pulled the fused pose to 1e35 m (a review's scratch run).
+constexpr double kMaxPlausibleRangeM = 1000.0;
+}  // namespace
+
 std::vector<DpfLocalFilter::Observation> DpfLocalFilter::prepare(const FeatureSet& features,
                                                                  int* rejected) const {
   std::vector<Observation> out;
   const MeasurementOptions& m = options_.measurement;
   for (const auto& point : features.points) {
     if (point.id >= 0 && !owns(point.id)) continue;  // another local filter's block
-    if (point.id < 0 || !usablePoint(point)) {
+    if (point.id < 0 || !usablePoint(point) || !(point.range <= kMaxPlausibleRangeM)) {
       // Unknown identities: every local filter counts them (blocks need known ids).
       ++*rejected;
       continue;

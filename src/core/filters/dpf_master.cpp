@@ -193,7 +193,9 @@ DpfMasterOutput DpfMaster::fuse(long step, const MotionInput& motion,
       const Pose2 own = difference(compose(h.last_mean, motion.delta), prior_mean);
       h.process_nis = segmentMahalanobis(d, own, s);
     }
-    const bool process_fault = options_.fault_prior_chi2 > 0.0 &&
+    // A non-finite estimate is no process fault (its NaN process_nis would put the local on
+    // probation after its isolation, unfused for readmit_after_steps clean steps).
+    const bool process_fault = finite[i] && options_.fault_prior_chi2 > 0.0 &&
                                !(h.process_nis <= options_.fault_prior_chi2);  // NaN: fault
     if (finite[i]) {
       h.last_mean = e.mean;
