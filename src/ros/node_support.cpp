@@ -51,7 +51,6 @@ void CheckedTransformListener::handle(const tf2_msgs::TFMessage& msg,
                                << " s: clearing the tf buffer");
     buffer_.clear();
     newest_ = ros::Time();
-    ++clears_;
   }
   last_update_ = now;
   for (const geometry_msgs::TransformStamped& t : msg.transforms) {

@@ -68,8 +68,6 @@ class CheckedTransformListener {
   /// refused (s).
   static constexpr double kMaxAheadS = 86400.0;
 
-  /// Transforms refused since the start (any thread).
-  long refused() const { return refused_.load(); }
   /// Transforms refused since the last call (for a diagnostics period).
   long takeRefused() {
     const long total = refused_.load();
@@ -77,24 +75,21 @@ class CheckedTransformListener {
     taken_ = total;
     return fresh;
   }
-  /// Times the buffer was cleared because the clock went back.
-  long clears() const { return clears_.load(); }
-
-  /// The listener's work on one message, for tests without a subscription.
-  void handle(const tf2_msgs::TFMessage& msg, const std::string& authority, bool is_static);
 
  private:
+  void handle(const tf2_msgs::TFMessage& msg, const std::string& authority, bool is_static);
+
   tf2::BufferCore& buffer_;
   ros::CallbackQueue queue_;
   ros::NodeHandle nh_;
   ros::Subscriber tf_subscriber_, static_subscriber_;
   ros::AsyncSpinner spinner_;
   const std::string node_name_;
-  std::mutex mutex_;  // last_update_ and warnings_ (the spinner has one thread; tests may call)
+  std::mutex mutex_;  // last_update_, newest_ and warnings_ (handle's state)
   ros::Time last_update_;
   ros::Time newest_;  // the newest non-static stamp taken (zero: none since the start or a clear)
   ThrottledWarnings warnings_;
-  std::atomic<long> refused_{0}, clears_{0};
+  std::atomic<long> refused_{0};
   long taken_ = 0;  // refused_ as of the last takeRefused (the caller's thread)
 };
 

@@ -9,6 +9,7 @@
 #include "rbpf_slam/core/filters/measurement_models.h"
 #include "rbpf_slam/core/filters/observation.h"
 #include "rbpf_slam/core/filters/pose_moments.h"
+#include "rbpf_slam/core/plausibility.h"
 #include "rbpf_slam/core/filters/resampling.h"
 
 namespace rbpf_slam {
@@ -103,19 +104,14 @@ int DpfLocalFilter::bestParticle() const {
   return std::max(0, mostProbable(weights_, resampled_best_));
 }
 
-namespace {
-/// Beyond this a finite range is corrupt data (a float32's maximum from a broken driver), not a
-/// measurement: as io::kMaxPlausibleRangeM for the converters. Such a landmark stayed finite,
-/// was mapped, and pulled the fused pose to 1e35 m (a review's scratch run).
-constexpr double kMaxPlausibleRangeM = 1000.0;
-}  // namespace
-
 std::vector<DpfLocalFilter::Observation> DpfLocalFilter::prepare(const FeatureSet& features,
                                                                  int* rejected) const {
   std::vector<Observation> out;
   const MeasurementOptions& m = options_.measurement;
   for (const auto& point : features.points) {
     if (point.id >= 0 && !owns(point.id)) continue;  // another local filter's block
+    // A range beyond kMaxPlausibleRangeM is corrupt data (a float32's maximum from a broken
+    // driver): such a landmark stayed finite, was mapped, and pulled the fused pose to 1e35 m.
     if (point.id < 0 || !usablePoint(point) || !(point.range <= kMaxPlausibleRangeM)) {
       // Unknown identities: every local filter counts them (blocks need known ids).
       ++*rejected;
