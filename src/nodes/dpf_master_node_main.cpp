@@ -42,7 +42,12 @@ int runBag(ros::NodeHandle nh, ros::NodeHandle private_nh) {
   rb::OfflineSummary s;
   try {
     auto filter = std::make_unique<rb::RemoteDpfFilter>(nh, config.filter);
-    filter->waitForLocals(config.filter.dpf.step_timeout_s);
+    // At the start every local must be there (a bag run is meant to be complete); a local
+    // lost later is left out of the steps it misses (RemoteDpfFilter::update).
+    std::string problem;
+    if (!filter->waitForLocals(config.filter.dpf.step_timeout_s, &problem)) {
+      throw std::runtime_error(problem);
+    }
     rb::OfflineRunner runner(config, options, std::move(filter));
     s = runner.run();
   } catch (const std::exception& e) {

@@ -102,6 +102,9 @@ diagnostic_msgs::DiagnosticArray SlamDiagnostics::report(const ros::Time& stamp,
     if (stats.outside_grid > 0) {  // grid_pf beyond its fixed extent
       status.values.push_back(keyValue("updates outside the grid", text(stats.outside_grid)));
     }
+    if (stats.missed_answers > 0) {  // dpf_master_node: local filters that did not answer
+      status.values.push_back(keyValue("local answers missed", text(stats.missed_answers)));
+    }
   }
   status.values.push_back(keyValue("resets", text(resets_total_)));
   if (odometry_gaps_ >= 0) status.values.push_back(keyValue("odometry gaps", text(odometry_gaps_)));

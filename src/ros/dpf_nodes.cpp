@@ -170,6 +170,7 @@ RemoteDpfFilter::RemoteDpfFilter(ros::NodeHandle nh, const core::FilterOptions& 
       queue_nh.subscribe("dpf/estimate", 1000, &RemoteDpfFilter::estimateCallback, this,
                          ros::TransportHints().tcpNoDelay());
   alive_.assign(options.dpf.local_filters, false);
+  absent_.assign(options.dpf.local_filters, false);
   landmarks_.assign(options.dpf.local_filters, {});
 }
 
@@ -187,13 +188,27 @@ void RemoteDpfFilter::estimateCallback(const DpfLocalEstimate::ConstPtr& msg) {
     return;
   }
   alive_[msg->index] = true;
-  if (msg->step != waiting_step_) return;  // a hello or an old answer
-  if (answers_.count(msg->index)) {
-    duplicate_error_ = "two dpf_local_node processes answer as local filter " +
-                       std::to_string(msg->index) + " (each needs its own ~index)";
-    return;
+  if (absent_[msg->index]) {
+    // A sign of life (a restarted node's hello, a late answer): waited for again from the
+    // next step; it resynchronises itself from the master's estimate.
+    absent_[msg->index] = false;
+    ROS_INFO_STREAM("dpf_master_node: local filter " << msg->index
+                                                     << " is back; it rejoins at the next step");
   }
-  answers_[msg->index] = msg;
+  if (msg->step != waiting_step_) return;  // a hello or an old answer
+  const auto known = answers_.find(msg->index);
+  if (known == answers_.end()) {
+    answers_[msg->index] = msg;
+  } else if (!(*known->second == *msg)) {
+    // The same answer twice is a latched message delivered again on a new connection; two
+    // different ones are two processes with one index. The first is kept.
+    ROS_ERROR_STREAM_THROTTLE(5.0,
+                              "dpf_master_node: two dpf_local_node processes answer as "
+                              "local filter "
+                                  << msg->index << " (step " << msg->step
+                                  << "); each needs its own ~index. The first answer is "
+                                     "used");
+  }
 }
 
 template <typename Done>
@@ -218,7 +233,7 @@ std::string RemoteDpfFilter::missing(const std::vector<bool>& present) const {
   return out.str();
 }
 
-void RemoteDpfFilter::waitForLocals(double timeout_s) {
+bool RemoteDpfFilter::waitForLocals(double timeout_s, std::string* problem) {
   const uint32_t n = static_cast<uint32_t>(options_.dpf.local_filters);
   const bool ok = spinUntil(
       [&] {
@@ -226,45 +241,71 @@ void RemoteDpfFilter::waitForLocals(double timeout_s) {
                step_publisher_.getNumSubscribers() >= n;
       },
       timeout_s);
-  if (!ok) {
-    std::string silent = missing(alive_);
-    throw std::runtime_error(
-        "dpf_master_node: no answer from local filter(s) " +
-        (silent.empty() ? std::string("(all said hello, but fewer than ") + std::to_string(n) +
-                              " subscribe to dpf/step)"
-                        : silent) +
-        " within " + std::to_string(timeout_s) +
-        " s: start one dpf_local_node per local filter with ~index = 0.." +
-        std::to_string(n - 1) + " and the same config");
-  }
   locals_ready_ = true;
+  if (ok) return true;
+  const std::string silent = missing(alive_);
+  for (size_t i = 0; i < alive_.size(); ++i) absent_[i] = !alive_[i];
+  *problem = "dpf_master_node: no answer from local filter(s) " +
+             (silent.empty() ? std::string("(all said hello, but fewer than ") + std::to_string(n) +
+                                   " subscribe to dpf/step)"
+                             : silent) +
+             " within " + std::to_string(timeout_s) +
+             " s: start one dpf_local_node per local filter with ~index = 0.." +
+             std::to_string(n - 1) + " and the same config";
+  return false;
 }
 
 core::UpdateStats RemoteDpfFilter::update(const core::FeatureSet& features) {
-  if (!locals_ready_) waitForLocals(options_.dpf.step_timeout_s);
+  if (!locals_ready_) {
+    std::string problem;
+    if (!waitForLocals(options_.dpf.step_timeout_s, &problem)) {
+      ROS_WARN_STREAM(problem << "; going on without the silent ones until they answer");
+    }
+  }
   std::vector<core::Pose2> injected;
   const core::DpfStepInput input = coordinator_.beginStep(features, &injected);
   const int faulted = options_.dpf.fault.local_index;
   answers_.clear();
-  duplicate_error_.clear();
   waiting_step_ = input.step;
   step_publisher_.publish(toMsg(input, initial_pose_, faulted, injected[faulted]));
   const size_t n = options_.dpf.local_filters;
-  const bool ok = spinUntil([&] { return answers_.size() == n || !duplicate_error_.empty(); },
-                            options_.dpf.step_timeout_s);
-  if (!duplicate_error_.empty()) throw std::runtime_error("dpf_master_node: " + duplicate_error_);
-  if (!ok) {
-    std::vector<bool> present(n, false);
-    for (const auto& [index, msg] : answers_) present[index] = true;
-    throw std::runtime_error("dpf_master_node: step " + std::to_string(input.step) +
-                             ": no estimate from local filter(s) " + missing(present) +
-                             " within " + std::to_string(options_.dpf.step_timeout_s) +
-                             " s (dpf.step_timeout_s); is that dpf_local_node still running?");
+  // absent_ may change while spinning (a local heard from again is waited for from now on).
+  const auto all_expected_answered = [&] {
+    for (size_t i = 0; i < n; ++i) {
+      if (!absent_[i] && !answers_.count(static_cast<int>(i))) return false;
+    }
+    return true;
+  };
+  if (!spinUntil(all_expected_answered, options_.dpf.step_timeout_s)) {
+    std::vector<bool> answered(n, true);
+    for (size_t i = 0; i < n; ++i) {
+      if (absent_[i] || answers_.count(static_cast<int>(i))) continue;
+      answered[i] = false;
+      absent_[i] = true;
+    }
+    ROS_WARN_STREAM("dpf_master_node: step " << input.step << ": no estimate from local filter(s) "
+                                             << missing(answered) << " within "
+                                             << options_.dpf.step_timeout_s
+                                             << " s (dpf.step_timeout_s); the step is fused "
+                                                "without them, and they are not waited for "
+                                                "until they answer again. Is that "
+                                                "dpf_local_node still running?");
+  }
+  const bool none = std::all_of(absent_.begin(), absent_.end(), [](bool a) { return a; });
+  if (none) {
+    ROS_WARN_STREAM_THROTTLE(10.0,
+                             "dpf_master_node: no local filter answers: the master "
+                             "predicts from the odometry only");
   }
   std::vector<core::DpfLocalEstimate> estimates;
-  for (const auto& [index, msg] : answers_) {
-    estimates.push_back(fromMsg(*msg));
-    landmarks_[index] = landmarksOf(*msg);
+  for (size_t i = 0; i < n; ++i) {
+    const auto answer = answers_.find(static_cast<int>(i));
+    if (answer == answers_.end()) {
+      estimates.push_back(core::missedEstimate(static_cast<int>(i), input.step));
+      continue;
+    }
+    estimates.push_back(fromMsg(*answer->second));
+    landmarks_[i] = landmarksOf(*answer->second);
   }
   return coordinator_.finishStep(input, estimates);
 }
@@ -310,7 +351,7 @@ DpfLocalNode::DpfLocalNode(ros::NodeHandle nh, ros::NodeHandle private_nh) {
                                 " is out of range [0, " +
                                 std::to_string(options.dpf.local_filters - 1) + "]");
   }
-  local_ = std::make_unique<core::DpfLocalFilter>(options, index_);
+  stream_ = std::make_unique<core::DpfLocalStream>(options, index_);
   estimate_publisher_ = nh.advertise<DpfLocalEstimate>("dpf/estimate", 100, /*latch=*/true);
   step_subscriber_ = nh.subscribe("dpf/step", 1000, &DpfLocalNode::stepCallback, this,
                                   ros::TransportHints().tcpNoDelay());
@@ -323,21 +364,34 @@ DpfLocalNode::DpfLocalNode(ros::NodeHandle nh, ros::NodeHandle private_nh) {
 }
 
 void DpfLocalNode::stepCallback(const DpfStep::ConstPtr& msg) {
-  if (msg->step == 1) {
-    local_->reset(toPose(msg->initial_pose));
-    expected_step_ = 1;
-  }
-  if (msg->step != expected_step_) {
-    ROS_ERROR_STREAM("dpf_local_node " << index_ << ": step " << msg->step << " arrived, "
-                                       << "expected " << expected_step_
-                                       << " (a step was lost); ignored");
-    return;
-  }
+  const long expected = stream_->expected();
   const core::Pose2 injected = msg->injected_index == index_ ? toPose(msg->injected)
                                                               : core::Pose2::Zero();
-  const core::DpfLocalEstimate estimate = local_->step(fromMsg(*msg), injected);
-  estimate_publisher_.publish(toMsg(estimate, core::localLandmarks(*local_)));
-  ++expected_step_;
+  core::DpfLocalEstimate estimate;
+  switch (stream_->step(fromMsg(*msg), toPose(msg->initial_pose), injected, &estimate)) {
+    case core::DpfLocalStream::Outcome::kRepeated:
+      ROS_WARN_STREAM_THROTTLE(5.0, "dpf_local_node " << index_ << ": step " << msg->step
+                                                      << " arrived again (expected " << expected
+                                                      << "); ignored");
+      return;
+    case core::DpfLocalStream::Outcome::kNoFeedback:
+      ROS_ERROR_STREAM_THROTTLE(5.0, "dpf_local_node " << index_ << ": step " << msg->step
+                                                       << " arrived, expected " << expected
+                                                       << ", and carries no master estimate "
+                                                          "to resynchronise from; ignored");
+      return;
+    case core::DpfLocalStream::Outcome::kResynchronised:
+      ROS_WARN_STREAM("dpf_local_node " << index_ << ": step " << msg->step << " arrived, expected "
+                                        << expected
+                                        << " (steps lost, or this node started in the middle "
+                                           "of a run): resynchronised from the master's "
+                                           "estimate of step "
+                                        << msg->feedback_step);
+      break;
+    case core::DpfLocalStream::Outcome::kStepped:
+      break;
+  }
+  estimate_publisher_.publish(toMsg(estimate, core::localLandmarks(stream_->filter())));
 }
 
 }  // namespace rosbridge

@@ -434,6 +434,11 @@ std::vector<std::string> describeOutcome(const OfflineSummary& s, const OfflineO
                     "centred on the start): nothing was mapped or matched there, the pose is "
                     "dead reckoning; enlarge the grid");
   }
+  if (s.dpf_missed_answers > 0) {
+    lines.push_back(std::to_string(s.dpf_missed_answers) +
+                    " local filter answer(s) did not come within dpf.step_timeout_s: those steps "
+                    "were fused without them (a dpf_local_node stalled, died or restarted)");
+  }
   if (s.same_stamp > 0) {
     lines.push_back(std::to_string(s.same_stamp) +
                     " frame(s) had the stamp of the frame before (another input of the same "
@@ -788,6 +793,7 @@ OfflineSummary OfflineRunner::run() {
   summary.robust_steps = pipeline_.session().filter().stats().robust_steps;
   summary.ensemble_leader_changes = pipeline_.session().filter().stats().leader_changes;
   summary.updates_outside_grid = pipeline_.session().filter().stats().outside_grid;
+  summary.dpf_missed_answers = pipeline_.session().filter().stats().missed_answers;
   summary.ensemble_members = pipeline_.session().filter().members();
   summary.ensemble_leader = pipeline_.session().filter().leader();
   return writeOutputs(summary);
@@ -892,6 +898,7 @@ OfflineSummary OfflineRunner::writeOutputs(const OfflineSummary& in) const {
       .integer("ensemble_leader", summary.ensemble_leader)
       .integer("ensemble_leader_changes", summary.ensemble_leader_changes)
       .integer("updates_outside_grid", summary.updates_outside_grid)
+      .integer("dpf_missed_answers", summary.dpf_missed_answers)
       .number("update_ms_mean", summary.update_ms_mean)
       .number("update_ms_p99", summary.update_ms_p99)
       .number("update_ms_max", summary.update_ms_max)

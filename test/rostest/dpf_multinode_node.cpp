@@ -1,13 +1,22 @@
 // dpf_multinode.test: waits for dpf_master_node (with its dpf_local_node processes) to finish
 // a simulated bag, runs the threaded distributed filter on the same bag with the same seed and
 // fault, and compares the two trajectories update by update (within ~tolerance_m).
+// dpf_missing_local.test (~expect_error): the master's error naming a local that never came.
+// dpf_local_restart.test (~restart_local): this node runs that local itself, kills it in the
+// middle of the run and starts it again; the master must finish, and the local rejoin.
 
 #include <gtest/gtest.h>
+#include <rbpf_slam/DpfLocalEstimate.h>
 #include <ros/ros.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
+#include <atomic>
 #include <cmath>
 #include <fstream>
 #include <iterator>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -54,6 +63,7 @@ TEST(DpfMultiNode, MasterNamesAMissingLocalFilter) {
 TEST(DpfMultiNode, SameTrajectoryAsTheThreadedFilter) {
   ros::NodeHandle private_nh("~");
   if (private_nh.hasParam("expect_error")) GTEST_SKIP() << "the error case";
+  if (private_nh.hasParam("restart_local")) GTEST_SKIP() << "the restart case";
   std::string workdir, config_path;
   int seed = 3, fault_start = 50, fault_local = 1;
   double wait_s = 240.0, tolerance_m = 0.01;
@@ -102,6 +112,105 @@ TEST(DpfMultiNode, SameTrajectoryAsTheThreadedFilter) {
   EXPECT_LE(worst, tolerance_m) << "largest position difference over " << single.size()
                                 << " updates";
   RecordProperty("max_difference_m", std::to_string(worst));
+}
+
+/// Starts `rosrun rbpf_slam dpf_local_node __name:=NAME` (rosrun execs: the pid is the node's).
+pid_t startLocal(const std::string& name) {
+  const pid_t pid = fork();
+  if (pid == 0) {
+    const std::string remap = "__name:=" + name;
+    execlp("rosrun", "rosrun", "rbpf_slam", "dpf_local_node", remap.c_str(),
+           static_cast<char*>(nullptr));
+    _exit(127);
+  }
+  return pid;
+}
+
+void stopLocal(pid_t pid, int signal) {
+  if (pid <= 0) return;
+  kill(pid, signal);
+  int status = 0;
+  waitpid(pid, &status, 0);
+}
+
+/// The value of `"key": number` in a summary.json (NaN when missing).
+double summaryNumber(const std::string& path, const std::string& key) {
+  std::ifstream in(path);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const size_t at = text.find("\"" + key + "\":");
+  if (at == std::string::npos) return std::nan("");
+  std::istringstream value(text.substr(at + key.size() + 3));
+  double x = std::nan("");
+  value >> x;
+  return x;
+}
+
+TEST(DpfMultiNode, ALocalKilledAndStartedAgainRejoinsAndTheMasterFinishes) {
+  ros::NodeHandle nh, private_nh("~");
+  int index = -1, kill_after_step = 10, seed = 1;
+  if (!private_nh.getParam("restart_local", index)) GTEST_SKIP() << "no ~restart_local";
+  std::string workdir, config_path;
+  double wait_s = 240.0;
+  ASSERT_TRUE(private_nh.getParam("workdir", workdir));
+  ASSERT_TRUE(private_nh.getParam("config", config_path));
+  private_nh.getParam("kill_after_step", kill_after_step);
+  private_nh.getParam("seed", seed);
+  private_nh.getParam("wait", wait_s);
+
+  std::atomic<long> last_step{0};
+  std::atomic<long> first_step_after_restart{0};
+  std::atomic<bool> restarted{false};
+  ros::Subscriber sub = nh.subscribe<rbpf_slam::DpfLocalEstimate>(
+      "dpf/estimate", 1000, [&](const rbpf_slam::DpfLocalEstimate::ConstPtr& msg) {
+        if (msg->index != index || msg->step <= 0) return;
+        last_step = std::max(last_step.load(), static_cast<long>(msg->step));
+        if (restarted && first_step_after_restart == 0) first_step_after_restart = msg->step;
+      });
+  ros::AsyncSpinner spinner(1);
+  spinner.start();
+  const std::string name = "dpf_local_" + std::to_string(index);
+  const pid_t first = startLocal(name);
+  ASSERT_GT(first, 0);
+  const ros::WallTime deadline = ros::WallTime::now() + ros::WallDuration(wait_s);
+  while (last_step < kill_after_step && ros::ok() && ros::WallTime::now() < deadline) {
+    ros::WallDuration(0.002).sleep();
+  }
+  const long killed_after = last_step;
+  stopLocal(first, SIGKILL);
+  if (killed_after < kill_after_step)
+    FAIL() << "local " << index << " never reached step " << kill_after_step;
+  restarted = true;
+  const pid_t second = startLocal(name);
+
+  const std::string done = workdir + "/master/dpf_master.done";
+  const std::string error = workdir + "/master/dpf_master.error";
+  const std::string finished = waitForEither(done, error, wait_s);
+  stopLocal(second, SIGINT);
+  ASSERT_EQ(finished, done) << "dpf_master_node did not finish the bag; see " << error;
+  EXPECT_GT(first_step_after_restart.load(), killed_after + 1)
+      << "the restarted local filter answered no later step";
+  const std::string summary = workdir + "/master/summary.json";
+  EXPECT_GE(summaryNumber(summary, "dpf_missed_answers"), 1.0) << summary;
+  RecordProperty("killed_after_step", std::to_string(killed_after));
+  RecordProperty("rejoined_at_step", std::to_string(first_step_after_restart.load()));
+
+  // The run as a whole: the fault-free threaded filter on the same bag as the yardstick (the
+  // paper's criterion for a local fault: at most 1.5x the fault-free ATE).
+  const io::SlamConfig config = io::loadSlamConfig(config_path, {"seed=" + std::to_string(seed)});
+  rb::OfflineOptions options;
+  options.bag_path = workdir + "/sim.bag";
+  options.output_dir = workdir + "/threaded";
+  options.reference_path = workdir + "/reference.tum";
+  options.progress = false;
+  rb::OfflineRunner runner(config, options);
+  runner.run();
+  const double lossy = summaryNumber(summary, "ate_rmse_m");
+  const double clean = summaryNumber(workdir + "/threaded/summary.json", "ate_rmse_m");
+  ASSERT_TRUE(std::isfinite(lossy) && std::isfinite(clean)) << lossy << " " << clean;
+  EXPECT_LE(lossy, 1.5 * clean + 0.05)
+      << "ATE with the local lost " << lossy << " m against " << clean << " m fault-free";
+  RecordProperty("ate_m", std::to_string(lossy));
+  RecordProperty("fault_free_ate_m", std::to_string(clean));
 }
 
 }  // namespace

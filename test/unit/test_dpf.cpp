@@ -316,20 +316,27 @@ TEST(DpfMaster, ALocalWhosePriorDisagreesWithTheMastersIsNotFusedThenIsolated) {
 // the fusion with weight 0 (0 x NaN = NaN), the master's next prediction was NaN and every
 // later local looked inconsistent: the filter stayed NaN for good; a NaN NIS stuck in the
 // local's smoothed NIS for ever.
+/// A healthy answer: prior at `at` (the master's prediction), posterior 0.1 m ahead in x.
+DpfLocalEstimate movedEstimate(int index, long step, const Pose2& at) {
+  DpfLocalEstimate e = estimateOf(index, step, at + Pose2(0.1, 0.0, 0.0), 2.0, 0.9);
+  e.prior_mean = at;
+  e.prior_covariance = 0.01 * Eigen::Matrix3d::Identity();
+  e.covariance = 0.005 * Eigen::Matrix3d::Identity();
+  return e;
+}
+
+DpfOptions threeLocalsIsolatedAfterTwo(const std::string& fusion) {
+  DpfOptions o;
+  o.local_filters = 3;
+  o.isolate_after_steps = 2;
+  o.fusion = fusion;
+  return o;
+}
+
 TEST(DpfMaster, ANonFiniteEstimateIsNotFusedAndTheMasterStaysFinite) {
   for (const std::string fusion : {"information", "average"}) {
-    DpfOptions o;
-    o.local_filters = 3;
-    o.isolate_after_steps = 2;
-    o.fusion = fusion;
-    auto local = [](int index, long step, const Pose2& at) {
-      DpfLocalEstimate e = estimateOf(index, step, at + Pose2(0.1, 0.0, 0.0), 2.0, 0.9);
-      e.prior_mean = at;
-      e.prior_covariance = 0.01 * Eigen::Matrix3d::Identity();
-      e.covariance = 0.005 * Eigen::Matrix3d::Identity();
-      return e;
-    };
-    DpfMaster master(o);
+    DpfMaster master(threeLocalsIsolatedAfterTwo(fusion));
+    const auto local = movedEstimate;
     DpfLocalEstimate bad = local(2, 1, Pose2::Zero());
     bad.mean.x() = std::numeric_limits<double>::quiet_NaN();
     auto out = master.fuse(1, MotionInput(), {local(0, 1, Pose2::Zero()), local(1, 1, Pose2::Zero()), bad});
@@ -355,6 +362,32 @@ TEST(DpfMaster, ANonFiniteEstimateIsNotFusedAndTheMasterStaysFinite) {
     const Pose2 m2 = out.mean;
     out = master.fuse(3, MotionInput(), {local(0, 3, m2), local(1, 3, m2), local(2, 3, m2)});
     EXPECT_TRUE(out.mean.allFinite());
+    EXPECT_GT(out.weights[2], 0.1) << fusion;
+  }
+}
+
+TEST(DpfMaster, AMissedAnswerIsNotFusedCountedAndTheLocalIsFusedAgainWhenItAnswers) {
+  for (const std::string fusion : {"information", "average"}) {
+    DpfMaster master(threeLocalsIsolatedAfterTwo(fusion));
+    const auto local = movedEstimate;
+    auto out =
+        master.fuse(1, MotionInput(),
+                    {local(0, 1, Pose2::Zero()), local(1, 1, Pose2::Zero()), missedEstimate(2, 1)});
+    ASSERT_TRUE(out.mean.allFinite() && out.covariance.allFinite()) << fusion;
+    EXPECT_EQ(out.weights[2], 0.0) << fusion;
+    EXPECT_EQ(master.health()[2].missed, 1);
+    EXPECT_EQ(master.health()[2].non_finite, 0);
+    EXPECT_GT(out.mean.x(), 0.01) << fusion << ": the answers were not fused";
+    // No answer at all: the master keeps its prediction (a zero step: its last estimate).
+    const Pose2 before = out.mean;
+    out = master.fuse(2, MotionInput(),
+                      {missedEstimate(0, 2), missedEstimate(1, 2), missedEstimate(2, 2)});
+    ASSERT_TRUE(out.mean.allFinite() && out.covariance.allFinite()) << fusion;
+    EXPECT_LT((out.mean - before).norm(), 1e-12) << fusion;
+    EXPECT_EQ(master.health()[2].missed, 2);
+    // Back, redrawn from the master's estimate: fused again at once (no probation).
+    const Pose2 m = out.mean;
+    out = master.fuse(3, MotionInput(), {local(0, 3, m), local(1, 3, m), local(2, 3, m)});
     EXPECT_GT(out.weights[2], 0.1) << fusion;
   }
 }
@@ -661,6 +694,94 @@ TEST(DistributedFilter, IsolatesAndReinitialisesTheFaultyLocalFilter) {
   const double blind_error = rmsError(runFilter(&blind, run), run.truth, 40);
   EXPECT_EQ(blind.master().health()[1].isolations, 0);
   EXPECT_GT(blind_error, faulty_error) << blind_error << " vs " << faulty_error;
+}
+
+// What dpf_master_node and dpf_local_node do when a local process dies, restarts in the middle
+// of the run, or loses a step: the master fuses the steps without it (missedEstimate), the
+// local resynchronises from the master's estimate that comes with the next step it sees.
+TEST(DpfLocalStream, ALocalThatMissesStepsOrRestartsResynchronisesAndIsFusedAgain) {
+  const SyntheticRun run = makeRun(120, 5);
+  for (const bool feedback : {true, false}) {
+    SCOPED_TRACE(feedback ? "feedback on" : "feedback off");
+    FilterOptions o = dpfOptions();
+    // Without feedback only the redraw brings a restarted local to the master's pose (with it,
+    // the next feedback would move its cloud there too).
+    o.dpf.feedback = feedback;
+    const int n = o.dpf.local_filters;
+    ASSERT_EQ(n, 3);
+    auto runStreams = [&](bool with_losses, DpfCoordinator* coordinator,
+                          std::vector<std::unique_ptr<DpfLocalStream>>* streams,
+                          std::vector<DpfLocalStream::Outcome>* outcomes) {
+      std::vector<Pose2> path;
+      for (int i = 0; i < n; ++i) streams->push_back(std::make_unique<DpfLocalStream>(o, i));
+      for (size_t t = 0; t < run.motion.size(); ++t) {
+        coordinator->predict(run.motion[t]);
+        std::vector<Pose2> injected;
+        const DpfStepInput input = coordinator->beginStep(run.features[t], &injected);
+        const long k = input.step;
+        // Local 2 dies after step 30 and a new process takes over from step 41; local 0 loses
+        // step 60's message.
+        if (with_losses && k == 41) (*streams)[2] = std::make_unique<DpfLocalStream>(o, 2);
+        std::vector<DpfLocalEstimate> estimates;
+        for (int i = 0; i < n; ++i) {
+          const bool lost = with_losses && ((i == 2 && k > 30 && k < 41) || (i == 0 && k == 60));
+          if (lost) {
+            estimates.push_back(missedEstimate(i, k));
+            continue;
+          }
+          DpfLocalEstimate e;
+          const auto outcome = (*streams)[i]->step(input, Pose2::Zero(), injected[i], &e);
+          if (with_losses && ((i == 2 && k == 41) || (i == 0 && k == 61)))
+            outcomes->push_back(outcome);
+          estimates.push_back(e);
+        }
+        coordinator->finishStep(input, estimates);
+        path.push_back(coordinator->estimate().mean);
+      }
+      return path;
+    };
+    DpfCoordinator clean(o), lossy(o);
+    std::vector<std::unique_ptr<DpfLocalStream>> clean_streams, lossy_streams;
+    std::vector<DpfLocalStream::Outcome> outcomes;
+    const double clean_error =
+        rmsError(runStreams(false, &clean, &clean_streams, &outcomes), run.truth);
+    const double lossy_error =
+        rmsError(runStreams(true, &lossy, &lossy_streams, &outcomes), run.truth);
+    EXPECT_EQ(clean.stats().missed_answers, 0);
+    EXPECT_EQ(lossy.stats().missed_answers, 11);
+    EXPECT_EQ(lossy.master().health()[2].missed, 10);
+    ASSERT_EQ(outcomes.size(), 2u);
+    EXPECT_EQ(outcomes[0], DpfLocalStream::Outcome::kResynchronised);
+    EXPECT_EQ(outcomes[1], DpfLocalStream::Outcome::kResynchronised);
+    // Both are fused again at the end, the restarted one with a map of its own block.
+    EXPECT_GT(lossy.master().last().weights[2], 0.05);
+    EXPECT_GT(lossy.master().last().weights[0], 0.05);
+    EXPECT_FALSE(localLandmarks(lossy_streams[2]->filter()).empty());
+    EXPECT_LT(lossy_error, 1.5 * clean_error + 0.05) << lossy_error << " vs " << clean_error;
+  }
+  const FilterOptions o = dpfOptions();
+  // A step delivered again is ignored; a gap with no master estimate to start from too.
+  DpfLocalStream stream(o, 1);
+  DpfLocalEstimate e;
+  DpfStepInput first;
+  first.step = 1;
+  first.motion = run.motion[0];
+  first.features = run.features[0];
+  EXPECT_EQ(stream.step(first, Pose2::Zero(), Pose2::Zero(), &e),
+            DpfLocalStream::Outcome::kStepped);
+  EXPECT_EQ(stream.expected(), 2);
+  DpfStepInput second = first;
+  second.step = 2;
+  EXPECT_EQ(stream.step(second, Pose2::Zero(), Pose2::Zero(), &e),
+            DpfLocalStream::Outcome::kStepped);
+  second.step = 2;
+  EXPECT_EQ(stream.step(second, Pose2::Zero(), Pose2::Zero(), &e),
+            DpfLocalStream::Outcome::kRepeated);
+  DpfStepInput orphan = first;
+  orphan.step = 9;  // feedback.step 0: nothing to resynchronise from
+  EXPECT_EQ(stream.step(orphan, Pose2::Zero(), Pose2::Zero(), &e),
+            DpfLocalStream::Outcome::kNoFeedback);
+  EXPECT_EQ(stream.expected(), 3);
 }
 
 TEST(FaultInjector, CentralisedFilterGetsTheSameDisturbance) {

@@ -12,6 +12,7 @@
 
 #include <map>
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "rbpf_slam/core/filters/distributed_filter.h"
@@ -32,8 +33,11 @@ std::vector<core::LandmarkEstimate> landmarksOf(const DpfLocalEstimate& msg);
 
 /// The distributed filter whose local filters are dpf_local_node processes: the master's
 /// coordinator here, the local filters behind topics. update() blocks until every local filter
-/// answered the step, and throws std::runtime_error naming the missing local filter(s) after
-/// dpf.step_timeout_s.
+/// it expects answered the step, at most dpf.step_timeout_s. A local that did not answer in
+/// time is named in a warning, left out of the step (core::missedEstimate: not fused, counted
+/// in FilterStats::missed_answers) and no longer waited for, until it is heard from again (a
+/// restarted dpf_local_node's hello, or a late answer); it then resynchronises itself from the
+/// master's estimate (DpfLocalNode). With no local left the master predicts only.
 class RemoteDpfFilter : public core::SlamFilter {
  public:
   RemoteDpfFilter(ros::NodeHandle nh, const core::FilterOptions& options);
@@ -48,8 +52,9 @@ class RemoteDpfFilter : public core::SlamFilter {
   std::vector<core::WeightedPose> particles() const override;
   core::FilterStats stats() const override { return coordinator_.stats(); }
 
-  /// Waits until every local filter said it is up; throws naming the silent ones.
-  void waitForLocals(double timeout_s);
+  /// Waits until every local filter said it is up and subscribes to the steps. False (with
+  /// *problem naming the silent ones) after timeout_s; those are then not waited for.
+  bool waitForLocals(double timeout_s, std::string* problem);
 
  private:
   void estimateCallback(const DpfLocalEstimate::ConstPtr& msg);
@@ -65,15 +70,17 @@ class RemoteDpfFilter : public core::SlamFilter {
   ros::Subscriber estimate_subscriber_;
   core::DpfCoordinator coordinator_;
   core::Pose2 initial_pose_ = core::Pose2::Zero();
-  std::vector<bool> alive_;
+  std::vector<bool> alive_;   // heard from since the start
+  std::vector<bool> absent_;  // missed a step and not heard from since: not waited for
   bool locals_ready_ = false;
   long waiting_step_ = -1;
   std::map<int, DpfLocalEstimate::ConstPtr> answers_;
-  std::string duplicate_error_;
   std::vector<std::vector<core::LandmarkEstimate>> landmarks_;
 };
 
-/// dpf_local_node: one local filter answering the master's steps.
+/// dpf_local_node: one local filter answering the master's steps. After lost steps, or when
+/// started in the middle of a run, it resynchronises from the master's estimate that comes
+/// with the step (core::DpfLocalStream).
 class DpfLocalNode {
  public:
   /// Private parameters: the config (as rbpf_slam_node) plus `index` (0..N-1).
@@ -84,9 +91,8 @@ class DpfLocalNode {
 
   ros::Publisher estimate_publisher_;
   ros::Subscriber step_subscriber_;
-  std::unique_ptr<core::DpfLocalFilter> local_;
+  std::unique_ptr<core::DpfLocalStream> stream_;
   int index_ = 0;
-  long expected_step_ = 1;
 };
 
 }  // namespace rosbridge

@@ -70,8 +70,14 @@ UpdateStats DpfCoordinator::finishStep(const DpfStepInput& input,
   const DpfMasterOutput out = master_.fuse(input.step, input.motion, estimates);
   step_ = input.step;
   feedback_ = out.feedback;
+  std::vector<int> known_landmarks(options_.dpf.local_filters, 0);
+  for (const auto& e : estimates_) known_landmarks[e.index] = e.landmarks;
   estimates_.assign(options_.dpf.local_filters, DpfLocalEstimate());
-  for (auto& e : estimates) estimates_[e.index] = e;  // fuse() checked the indices
+  for (auto& e : estimates) {
+    estimates_[e.index] = e;  // fuse() checked the indices
+    // A local that did not answer keeps the map it had (RemoteDpfFilter::landmarks()).
+    if (!e.answered) estimates_[e.index].landmarks = known_landmarks[e.index];
+  }
 
   UpdateStats stats;
   const FeatureSet& features = input.features;
@@ -92,7 +98,10 @@ UpdateStats DpfCoordinator::finishStep(const DpfStepInput& input,
   ++stats_.updates;
   stats_.last_neff = neff;
   stats_.landmarks = 0;
-  for (const auto& e : estimates_) stats_.landmarks += e.landmarks;
+  for (const auto& e : estimates_) {
+    stats_.landmarks += e.landmarks;
+    if (!e.answered) ++stats_.missed_answers;
+  }
   stats_.fallbacks += stats.fallbacks;
   return stats;
 }

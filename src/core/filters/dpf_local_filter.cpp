@@ -383,5 +383,32 @@ void DpfLocalFilter::resampleIfBelow(double neff) {
   log_weights_.assign(n, 0.0);
 }
 
+DpfLocalStream::Outcome DpfLocalStream::step(const DpfStepInput& input, const Pose2& initial_pose,
+                                             const Pose2& injected, DpfLocalEstimate* estimate) {
+  if (input.step == 1) {
+    filter_.reset(initial_pose);
+    expected_ = 1;
+    started_ = true;
+  }
+  if (input.step < expected_) return Outcome::kRepeated;
+  Outcome outcome = Outcome::kStepped;
+  DpfStepInput in = input;
+  if (input.step > expected_) {
+    // What it missed is in the master's estimate of the step before, which is this step's
+    // feedback: the cloud is redrawn from it.
+    if (in.feedback.step <= 0) return Outcome::kNoFeedback;
+    if (!started_) filter_.reset(initial_pose);
+    if (std::find(in.feedback.reinitialise.begin(), in.feedback.reinitialise.end(),
+                  filter_.index()) == in.feedback.reinitialise.end()) {
+      in.feedback.reinitialise.push_back(filter_.index());
+    }
+    started_ = true;
+    outcome = Outcome::kResynchronised;
+  }
+  *estimate = filter_.step(in, injected);
+  expected_ = input.step + 1;
+  return outcome;
+}
+
 }  // namespace core
 }  // namespace rbpf_slam

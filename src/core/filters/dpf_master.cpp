@@ -142,9 +142,16 @@ DpfMasterOutput DpfMaster::fuse(long step, const MotionInput& motion,
   for (int i = 0; i < n; ++i) {
     const DpfLocalEstimate& e = *by_index[i];
     DpfLocalHealth& h = health_[i];
-    finite[i] = finiteEstimate(e);
+    finite[i] = e.answered && finiteEstimate(e);
     if (!finite[i]) {
-      ++h.non_finite;
+      if (e.answered) {
+        ++h.non_finite;
+      } else {
+        // No answer: its last posterior is stale for the process check once it is back (it
+        // comes back redrawn from the master's estimate).
+        ++h.missed;
+        h.has_last_mean = false;
+      }
       nis[i] = h.smoothed_nis;
       neff[i] = 0.0;
       continue;
@@ -239,8 +246,15 @@ DpfMasterOutput DpfMaster::fuse(long step, const MotionInput& motion,
     // weights would let the faulty ones back in); the master keeps its own prediction, with
     // the locals' prior spread.
     out.mean = prior_mean;
+    // (Only the finite answers: a placeholder's or a NaN prior would make it NaN.)
     Eigen::Matrix3d spread = Eigen::Matrix3d::Zero();
-    for (int i = 0; i < n; ++i) spread += by_index[i]->prior_covariance / n;
+    int counted = 0;
+    for (int i = 0; i < n; ++i) {
+      if (!finite[i]) continue;
+      spread += by_index[i]->prior_covariance;
+      ++counted;
+    }
+    if (counted > 0) spread /= counted;
     out.covariance = regularised(spread.trace() > 0.0 ? spread : last_.covariance);
   } else if (options_.fusion != "information" ||
              !fuseInformation(prior_mean, by_index, out.weights, trust, &out)) {

@@ -54,7 +54,19 @@ struct DpfLocalEstimate {
   int new_landmarks = 0;
   int rejected = 0;           // features of this block that were unusable
   int landmarks = 0;          // in the best particle
+  // false: no answer came (a dpf_local_node that stalled or died); a placeholder that the master
+  // does not fuse, counted in DpfLocalHealth::missed. Only the remote deployment makes them.
+  bool answered = true;
 };
+
+/// The placeholder for a local filter that did not answer step `step`.
+inline DpfLocalEstimate missedEstimate(int index, long step) {
+  DpfLocalEstimate e;
+  e.index = index;
+  e.step = step;
+  e.answered = false;
+  return e;
+}
 
 /// Per-local bookkeeping of the master (fault detection state).
 struct DpfLocalHealth {
@@ -67,6 +79,7 @@ struct DpfLocalHealth {
   double process_nis = 0.0;   // ... of its prior against its process (see DpfMaster::fuse)
   bool has_last_mean = false;  // last_mean is the local's posterior of the previous step
   long non_finite = 0;  // estimates with a non-finite value: not fused, counted as inconsistent
+  long missed = 0;      // steps it did not answer (missedEstimate): not fused, as inconsistent
   Pose2 last_mean = Pose2::Zero();
   bool streak_process_fault = false;  // a process fault among the current flagged steps
   int probation_steps = 0;    // after an isolation: unflagged steps needed before it is fused

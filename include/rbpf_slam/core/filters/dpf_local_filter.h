@@ -100,6 +100,34 @@ class DpfLocalFilter {
   Eigen::Matrix3d posterior_cov_ = Eigen::Matrix3d::Identity();
 };
 
+/// A local filter fed by the master's stream of steps as a separate process sees it
+/// (dpf_local_node): a step may arrive after lost ones, or first in the middle of a run (a
+/// restarted process), or again (a message delivered twice).
+class DpfLocalStream {
+ public:
+  enum class Outcome {
+    kStepped,         // the expected step
+    kResynchronised,  // after a gap: the particles were redrawn from the master's estimate
+                      // (the step's feedback) before the step, keeping the best map if any
+    kRepeated,        // a step already taken (not 1): ignored
+    kNoFeedback,      // a gap, but the step carries no master estimate to start from: ignored
+  };
+  DpfLocalStream(const FilterOptions& options, int index) : filter_(options, index) {}
+
+  /// Step 1 resets the filter at initial_pose (a new run). *estimate is set unless the
+  /// outcome is kRepeated or kNoFeedback.
+  Outcome step(const DpfStepInput& input, const Pose2& initial_pose, const Pose2& injected,
+               DpfLocalEstimate* estimate);
+  const DpfLocalFilter& filter() const { return filter_; }
+  /// The step it expects next (1 before its first).
+  long expected() const { return expected_; }
+
+ private:
+  DpfLocalFilter filter_;
+  long expected_ = 1;
+  bool started_ = false;  // reset at a step 1 or resynchronised
+};
+
 /// The log of the ratio N(x; target_mean, target_cov) / N(x; own_mean, own_cov) at each pose,
 /// up to a constant, keeping only the directions in which the target is the sharper (where
 /// the ratio is a Gaussian; elsewhere reweighting cannot add information and the direction is

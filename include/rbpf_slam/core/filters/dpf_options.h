@@ -59,6 +59,7 @@ struct DpfOptions {
   // unflagged step, the behaviour before dpf4).
   int readmit_after_steps = 10;
   double step_timeout_s = 10.0;    // dpf_master_node: wait this long for every local's answer
+                                   // (then the step goes on without the silent ones)
   FaultInjectorOptions fault;
 };
 

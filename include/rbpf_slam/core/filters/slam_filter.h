@@ -75,6 +75,8 @@ struct FilterStats {
   long leader_changes = 0;   // ensemble: updates after which another member was reported
   long outside_grid = 0;     // grid_pf: updates whose best pose lay outside the fixed grid
                              // (nothing is mapped or matched there: the map must be larger)
+  long missed_answers = 0;   // dpf_master_node: local filters' answers not received within
+                             // dpf.step_timeout_s (the step was fused without them)
 };
 
 /// A SLAM filter. Not thread-safe; time is always an argument (the core reads no clock).
