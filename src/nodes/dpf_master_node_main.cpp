@@ -40,8 +40,11 @@ int runBag(ros::NodeHandle nh, ros::NodeHandle private_nh) {
       rb::loadConfigFromParams(private_nh, {"bag", "output", "reference"});
   config.filter.variant = "dpf";
   rb::OfflineSummary s;
+  long conflicting = 0;
   try {
     auto filter = std::make_unique<rb::RemoteDpfFilter>(nh, config.filter);
+    filter->stopOnShutdown();
+    const rb::RemoteDpfFilter* remote = filter.get();
     // At the start every local must be there (a bag run is meant to be complete); a local
     // lost later is left out of the steps it misses (RemoteDpfFilter::update).
     std::string problem;
@@ -50,6 +53,7 @@ int runBag(ros::NodeHandle nh, ros::NodeHandle private_nh) {
     }
     rb::OfflineRunner runner(config, options, std::move(filter));
     s = runner.run();
+    conflicting = remote->conflictingAnswers();
   } catch (const std::exception& e) {
     std::ofstream(error_file) << e.what() << "\n";
     throw;
@@ -63,6 +67,15 @@ int runBag(ros::NodeHandle nh, ros::NodeHandle private_nh) {
   for (const std::string& line : rb::describeOutcome(s, options, config.filter.variant, &failed)) {
     ROS_WARN("dpf_master_node: %s", line.c_str());
     report += line + "\n";
+  }
+  if (conflicting > 0) {
+    // The run fused whichever answer came first: not reproducible, so not "done".
+    const std::string line = std::to_string(conflicting) +
+                             " step answer(s) came from a second dpf_local_node with the same "
+                             "~index: give each local filter its own ~index";
+    ROS_ERROR("dpf_master_node: %s", line.c_str());
+    report += line + "\n";
+    failed = true;
   }
   if (failed) {
     std::ofstream(error_file) << report;

@@ -1,6 +1,8 @@
 #include "rbpf_slam/ros/dpf_nodes.h"
 
 #include <algorithm>
+#include <cstdlib>
+#include <random>
 #include <set>
 #include <sstream>
 #include <stdexcept>
@@ -44,6 +46,7 @@ DpfStep toMsg(const core::DpfStepInput& input, const core::Pose2& initial_pose,
   DpfStep msg;
   msg.header.stamp.fromSec(std::max(0.0, input.motion.stamp));
   msg.step = input.step;
+  msg.run = input.run;
   fromPose(initial_pose, &msg.initial_pose);
   msg.motion_stamp = input.motion.stamp;
   msg.motion_dt = input.motion.dt;
@@ -70,6 +73,7 @@ DpfStep toMsg(const core::DpfStepInput& input, const core::Pose2& initial_pose,
 core::DpfStepInput fromMsg(const DpfStep& msg) {
   core::DpfStepInput input;
   input.step = msg.step;
+  input.run = msg.run;
   input.motion.stamp = msg.motion_stamp;
   input.motion.dt = msg.motion_dt;
   input.motion.delta = toPose(msg.motion_delta);
@@ -161,7 +165,10 @@ std::vector<core::LandmarkEstimate> landmarksOf(const DpfLocalEstimate& msg) {
 }
 
 RemoteDpfFilter::RemoteDpfFilter(ros::NodeHandle nh, const core::FilterOptions& options)
-    : options_(options), nh_(nh), coordinator_(options) {
+    : options_(options),
+      nh_(nh),
+      coordinator_(options),
+      run_(static_cast<std::uint32_t>(std::random_device{}())) {
   core::validate(options.dpf);
   ros::NodeHandle queue_nh(nh_);
   queue_nh.setCallbackQueue(&queue_);
@@ -178,6 +185,7 @@ void RemoteDpfFilter::reset(const core::Pose2& initial_pose) {
   coordinator_.reset(initial_pose);
   initial_pose_ = initial_pose;
   landmarks_.assign(options_.dpf.local_filters, {});
+  ++run_;  // the locals start over at the next step, even one that misses its step 1
 }
 
 void RemoteDpfFilter::estimateCallback(const DpfLocalEstimate::ConstPtr& msg) {
@@ -188,20 +196,24 @@ void RemoteDpfFilter::estimateCallback(const DpfLocalEstimate::ConstPtr& msg) {
     return;
   }
   alive_[msg->index] = true;
-  if (absent_[msg->index]) {
-    // A sign of life (a restarted node's hello, a late answer): waited for again from the
-    // next step; it resynchronises itself from the master's estimate.
+  if (msg->step <= 0 || msg->run != run_) return;  // a hello, or an answer of an earlier run
+  if (absent_[msg->index] && msg->step >= waiting_step_ - 1) {
+    // Answering again, and in step (a restarted process after its resynchronisation, a stalled
+    // one that caught up): waited for again from the step after the one it answered. A hello
+    // is not enough: a new process may not receive the step being waited for, and a stalled
+    // one working through old steps would cost a timeout at every step.
     absent_[msg->index] = false;
-    ROS_INFO_STREAM("dpf_master_node: local filter " << msg->index
-                                                     << " is back; it rejoins at the next step");
+    ROS_INFO_STREAM("dpf_master_node: local filter " << msg->index << " answered step " << msg->step
+                                                     << ": it is fused again");
   }
-  if (msg->step != waiting_step_) return;  // a hello or an old answer
+  if (msg->step != waiting_step_) return;  // an old answer
   const auto known = answers_.find(msg->index);
   if (known == answers_.end()) {
     answers_[msg->index] = msg;
-  } else if (!(*known->second == *msg)) {
-    // The same answer twice is a latched message delivered again on a new connection; two
-    // different ones are two processes with one index. The first is kept.
+  } else if (known->second->sender != msg->sender) {
+    // The same answer twice (a latched message delivered again on a new connection) comes
+    // from the same process; two processes with one index are a configuration error.
+    ++conflicting_answers_;
     ROS_ERROR_STREAM_THROTTLE(5.0,
                               "dpf_master_node: two dpf_local_node processes answer as "
                               "local filter "
@@ -215,7 +227,11 @@ template <typename Done>
 bool RemoteDpfFilter::spinUntil(Done done, double timeout_s) {
   const ros::WallTime deadline = ros::WallTime::now() + ros::WallDuration(timeout_s);
   while (!done()) {
-    if (!ros::ok()) throw std::runtime_error("dpf_master_node: ROS is shutting down");
+    if (!ros::ok()) {
+      // Live, the node is going down: the step goes on with what came. A bag run stops.
+      if (stop_on_shutdown_) throw std::runtime_error("dpf_master_node: ROS is shutting down");
+      return false;
+    }
     if (ros::WallTime::now() > deadline) return false;
     queue_.callAvailable(ros::WallDuration(0.01));
   }
@@ -263,7 +279,8 @@ core::UpdateStats RemoteDpfFilter::update(const core::FeatureSet& features) {
     }
   }
   std::vector<core::Pose2> injected;
-  const core::DpfStepInput input = coordinator_.beginStep(features, &injected);
+  core::DpfStepInput input = coordinator_.beginStep(features, &injected);
+  input.run = run_;
   const int faulted = options_.dpf.fault.local_index;
   answers_.clear();
   waiting_step_ = input.step;
@@ -321,8 +338,9 @@ std::vector<core::WeightedPose> RemoteDpfFilter::particles() const {
   return {{coordinator_.estimate().mean, 1.0}};
 }
 
-DpfLocalNode::DpfLocalNode(ros::NodeHandle nh, ros::NodeHandle private_nh) {
-  const io::SlamConfig config = loadConfigFromParams(private_nh, {"index"});
+DpfLocalNode::DpfLocalNode(ros::NodeHandle nh, ros::NodeHandle private_nh)
+    : sender_((static_cast<std::uint64_t>(std::random_device{}()) << 32) ^ std::random_device{}()) {
+  const io::SlamConfig config = loadConfigFromParams(private_nh, {"index", "crash_at_step"});
   core::FilterOptions options = config.filter;
   options.variant = "dpf";
   core::validate(options.dpf);
@@ -352,18 +370,27 @@ DpfLocalNode::DpfLocalNode(ros::NodeHandle nh, ros::NodeHandle private_nh) {
                                 std::to_string(options.dpf.local_filters - 1) + "]");
   }
   stream_ = std::make_unique<core::DpfLocalStream>(options, index_);
+  int crash_at_step = 0;
+  private_nh.getParam("crash_at_step", crash_at_step);
+  crash_at_step_ = crash_at_step;
   estimate_publisher_ = nh.advertise<DpfLocalEstimate>("dpf/estimate", 100, /*latch=*/true);
   step_subscriber_ = nh.subscribe("dpf/step", 1000, &DpfLocalNode::stepCallback, this,
                                   ros::TransportHints().tcpNoDelay());
   DpfLocalEstimate hello;
   hello.index = index_;
   hello.step = 0;
+  hello.sender = sender_;
   estimate_publisher_.publish(hello);
   ROS_INFO_STREAM("dpf_local_node: local filter " << index_ << " of "
                                                   << options.dpf.local_filters << " ready");
 }
 
 void DpfLocalNode::stepCallback(const DpfStep::ConstPtr& msg) {
+  if (crash_at_step_ > 0 && msg->step == crash_at_step_) {
+    ROS_ERROR_STREAM("dpf_local_node " << index_ << ": ~crash_at_step = " << crash_at_step_
+                                       << ": exiting without an answer, as a crash would");
+    std::_Exit(3);
+  }
   const long expected = stream_->expected();
   const core::Pose2 injected = msg->injected_index == index_ ? toPose(msg->injected)
                                                               : core::Pose2::Zero();
@@ -391,7 +418,10 @@ void DpfLocalNode::stepCallback(const DpfStep::ConstPtr& msg) {
     case core::DpfLocalStream::Outcome::kStepped:
       break;
   }
-  estimate_publisher_.publish(toMsg(estimate, core::localLandmarks(stream_->filter())));
+  DpfLocalEstimate answer = toMsg(estimate, core::localLandmarks(stream_->filter()));
+  answer.run = msg->run;
+  answer.sender = sender_;
+  estimate_publisher_.publish(answer);
 }
 
 }  // namespace rosbridge

@@ -58,22 +58,27 @@ void SonarFeaturesNode::sonarCallback(const sensor_msgs::Range::ConstPtr& msg) {
          "Dropping a sonar reading from " + msg->header.frame_id + " with a zero stamp");
     return;
   }
-  // As the SLAM pipeline does (ClockRestartDetector, slam_session.h): stamps far back for long
-  // enough, with nothing in order in between, are a restarted clock (a looping bag) and clear
-  // the window; a late ring is dropped and the window kept.
-  if (clock_.classify(stamp, last_stamp_) == core::ClockRestartDetector::Verdict::kRestart) {
+  // As the SLAM pipeline does (ClockRestartDetector, slam_session.h; SlamPipeline::processSonar):
+  // stamps far back for long enough, with nothing in order in between, are a restarted clock (a
+  // looping bag) and clear the window; a ring far back once is dropped and the window kept; a
+  // reading a little late (transducers stamped apart, two publishers) joins the window but
+  // extracts nothing (features at an earlier stamp than the last published would be refused).
+  const auto verdict = clock_.classify(stamp, last_stamp_);
+  if (verdict == core::ClockRestartDetector::Verdict::kRestart) {
     warnings_.warn("time jump", "Sonar stamps went back by " +
                                     std::to_string(last_stamp_ - stamp) +
                                     " s and stayed back: clearing the echo window");
     extractor_.reset();
     diagnostics_.recordReset();
-  } else if (stamp < last_stamp_) {
+  } else if (stamp < last_stamp_ && (verdict == core::ClockRestartDetector::Verdict::kLate ||
+                                     extractor_.wouldClearWindow(stamp))) {
     drop("old stamp", "old stamp " + msg->header.frame_id,
          "Dropping a sonar reading from " + msg->header.frame_id + " stamped " +
-             std::to_string(last_stamp_ - stamp) + " s before the last one");
+             std::to_string(last_stamp_ - stamp) + " s before the newest one");
     return;
   }
-  last_stamp_ = stamp;
+  const bool late = stamp < last_stamp_;
+  if (!late) last_stamp_ = stamp;
   core::Pose2 odom_pose, sensor_in_base;
   try {
     odom_pose = toPose2(tf_buffer_
@@ -103,7 +108,7 @@ void SonarFeaturesNode::sonarCallback(const sensor_msgs::Range::ConstPtr& msg) {
   }
   const auto t0 = std::chrono::steady_clock::now();
   extractor_.addReadings({reading}, odom_pose, stamp);
-  if (!extractor_.extractionDue(odom_pose)) return;
+  if (late || !extractor_.extractionDue(odom_pose)) return;
   std_msgs::Header header;
   header.stamp = msg->header.stamp;
   header.frame_id = config_.ros.base_frame;

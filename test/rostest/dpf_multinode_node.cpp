@@ -2,8 +2,9 @@
 // a simulated bag, runs the threaded distributed filter on the same bag with the same seed and
 // fault, and compares the two trajectories update by update (within ~tolerance_m).
 // dpf_missing_local.test (~expect_error): the master's error naming a local that never came.
-// dpf_local_restart.test (~restart_local): this node runs that local itself, kills it in the
-// middle of the run and starts it again; the master must finish, and the local rejoin.
+// dpf_local_restart.test (~restart_local): this node runs that local itself, which crashes in
+// the middle of the run (~crash_at_step), and starts it again; the master must finish, and the
+// local rejoin.
 
 #include <gtest/gtest.h>
 #include <rbpf_slam/DpfLocalEstimate.h>
@@ -12,10 +13,11 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
-#include <atomic>
 #include <cmath>
 #include <fstream>
 #include <iterator>
+#include <map>
+#include <mutex>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -114,23 +116,31 @@ TEST(DpfMultiNode, SameTrajectoryAsTheThreadedFilter) {
   RecordProperty("max_difference_m", std::to_string(worst));
 }
 
-/// Starts `rosrun rbpf_slam dpf_local_node __name:=NAME` (rosrun execs: the pid is the node's).
-pid_t startLocal(const std::string& name) {
+/// Starts `rosrun rbpf_slam dpf_local_node __name:=NAME _crash_at_step:=K` (rosrun execs: the
+/// pid is the node's).
+pid_t startLocal(const std::string& name, int crash_at_step) {
   const pid_t pid = fork();
   if (pid == 0) {
     const std::string remap = "__name:=" + name;
-    execlp("rosrun", "rosrun", "rbpf_slam", "dpf_local_node", remap.c_str(),
+    const std::string crash = "_crash_at_step:=" + std::to_string(crash_at_step);
+    execlp("rosrun", "rosrun", "rbpf_slam", "dpf_local_node", remap.c_str(), crash.c_str(),
            static_cast<char*>(nullptr));
     _exit(127);
   }
   return pid;
 }
 
-void stopLocal(pid_t pid, int signal) {
-  if (pid <= 0) return;
-  kill(pid, signal);
+/// The exit status of pid, waiting up to wait_s (-1: still running, then killed).
+int waitForExit(pid_t pid, double wait_s) {
+  const ros::WallTime deadline = ros::WallTime::now() + ros::WallDuration(wait_s);
   int status = 0;
+  while (ros::WallTime::now() < deadline) {
+    if (waitpid(pid, &status, WNOHANG) == pid) return WIFEXITED(status) ? WEXITSTATUS(status) : 128;
+    ros::WallDuration(0.05).sleep();
+  }
+  kill(pid, SIGKILL);
   waitpid(pid, &status, 0);
+  return -1;
 }
 
 /// The value of `"key": number` in a summary.json (NaN when missing).
@@ -145,54 +155,67 @@ double summaryNumber(const std::string& path, const std::string& key) {
   return x;
 }
 
-TEST(DpfMultiNode, ALocalKilledAndStartedAgainRejoinsAndTheMasterFinishes) {
+TEST(DpfMultiNode, ALocalThatCrashesAndIsStartedAgainRejoinsAndTheMasterFinishes) {
   ros::NodeHandle nh, private_nh("~");
-  int index = -1, kill_after_step = 10, seed = 1;
+  int index = -1, crash_at_step = 10, seed = 1;
   if (!private_nh.getParam("restart_local", index)) GTEST_SKIP() << "no ~restart_local";
   std::string workdir, config_path;
   double wait_s = 240.0;
   ASSERT_TRUE(private_nh.getParam("workdir", workdir));
   ASSERT_TRUE(private_nh.getParam("config", config_path));
-  private_nh.getParam("kill_after_step", kill_after_step);
+  private_nh.getParam("crash_at_step", crash_at_step);
   private_nh.getParam("seed", seed);
   private_nh.getParam("wait", wait_s);
 
-  std::atomic<long> last_step{0};
-  std::atomic<long> first_step_after_restart{0};
-  std::atomic<bool> restarted{false};
+  // The answers of local `index`, by process (each draws its own sender id).
+  std::mutex mutex;
+  std::map<uint64_t, std::pair<long, long>> steps_by_sender;  // first and last step answered
   ros::Subscriber sub = nh.subscribe<rbpf_slam::DpfLocalEstimate>(
-      "dpf/estimate", 1000, [&](const rbpf_slam::DpfLocalEstimate::ConstPtr& msg) {
+      "dpf/estimate", 1000,
+      [&](const rbpf_slam::DpfLocalEstimate::ConstPtr& msg) {
         if (msg->index != index || msg->step <= 0) return;
-        last_step = std::max(last_step.load(), static_cast<long>(msg->step));
-        if (restarted && first_step_after_restart == 0) first_step_after_restart = msg->step;
-      });
+        std::lock_guard<std::mutex> lock(mutex);
+        auto found = steps_by_sender.find(msg->sender);
+        if (found == steps_by_sender.end()) {
+          steps_by_sender[msg->sender] = {msg->step, msg->step};
+        } else {
+          found->second.second = std::max(found->second.second, static_cast<long>(msg->step));
+        }
+      },
+      ros::VoidConstPtr(), ros::TransportHints().tcpNoDelay());
   ros::AsyncSpinner spinner(1);
   spinner.start();
   const std::string name = "dpf_local_" + std::to_string(index);
-  const pid_t first = startLocal(name);
+  // The first process exits (status 3) when step crash_at_step arrives, without answering it.
+  const pid_t first = startLocal(name, crash_at_step);
   ASSERT_GT(first, 0);
-  const ros::WallTime deadline = ros::WallTime::now() + ros::WallDuration(wait_s);
-  while (last_step < kill_after_step && ros::ok() && ros::WallTime::now() < deadline) {
-    ros::WallDuration(0.002).sleep();
-  }
-  const long killed_after = last_step;
-  stopLocal(first, SIGKILL);
-  if (killed_after < kill_after_step)
-    FAIL() << "local " << index << " never reached step " << kill_after_step;
-  restarted = true;
-  const pid_t second = startLocal(name);
+  ASSERT_EQ(waitForExit(first, wait_s), 3)
+      << "local " << index << " did not crash at step " << crash_at_step;
+  const pid_t second = startLocal(name, 0);
 
   const std::string done = workdir + "/master/dpf_master.done";
   const std::string error = workdir + "/master/dpf_master.error";
   const std::string finished = waitForEither(done, error, wait_s);
-  stopLocal(second, SIGINT);
+  kill(second, SIGINT);
+  waitForExit(second, 10.0);
   ASSERT_EQ(finished, done) << "dpf_master_node did not finish the bag; see " << error;
-  EXPECT_GT(first_step_after_restart.load(), killed_after + 1)
-      << "the restarted local filter answered no later step";
   const std::string summary = workdir + "/master/summary.json";
+  const double updates = summaryNumber(summary, "updates");
+  {
+    std::lock_guard<std::mutex> lock(mutex);
+    ASSERT_EQ(steps_by_sender.size(), 2u)
+        << "answers from " << steps_by_sender.size() << " process(es) of local " << index;
+    for (const auto& [sender, steps] : steps_by_sender) {
+      if (steps.first == 1) {  // the first process: up to the step before its crash
+        EXPECT_EQ(steps.second, crash_at_step - 1);
+      } else {  // the second: from a later step (resynchronised) to the last one
+        EXPECT_GT(steps.first, crash_at_step);
+        EXPECT_EQ(steps.second, static_cast<long>(updates)) << "it stopped answering";
+        RecordProperty("rejoined_at_step", std::to_string(steps.first));
+      }
+    }
+  }
   EXPECT_GE(summaryNumber(summary, "dpf_missed_answers"), 1.0) << summary;
-  RecordProperty("killed_after_step", std::to_string(killed_after));
-  RecordProperty("rejoined_at_step", std::to_string(first_step_after_restart.load()));
 
   // The run as a whole: the fault-free threaded filter on the same bag as the yardstick (the
   // paper's criterion for a local fault: at most 1.5x the fault-free ATE).

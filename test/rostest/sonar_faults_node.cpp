@@ -297,7 +297,8 @@ TEST_F(SonarFaultsTest, E_OldStampsAreDropped) {
   const long resets_slam = count("resets", kSlam);
   robot_->drive(2);
   std::vector<sensor_msgs::Range> ring = robot_->ring();
-  for (auto& msg : ring) msg.header.stamp = ros::Time(robot_->time() - 2.0 * kStep);
+  // More than a second (the window's limit) before the newest reading.
+  for (auto& msg : ring) msg.header.stamp = ros::Time(robot_->time() - 6.0 * kStep);
   robot_->publish(ring);
   settle();
   EXPECT_EQ(count("dropped: old stamp", kExtractor), old_extractor + kSonars);
@@ -305,6 +306,27 @@ TEST_F(SonarFaultsTest, E_OldStampsAreDropped) {
   EXPECT_EQ(count("resets", kSlam), resets_slam);
   EXPECT_EQ(observer_->nonFinite(), 0);
   expectRecovers("old stamps");
+}
+
+TEST_F(SonarFaultsTest, E2_ReadingsALittleOutOfOrderAreUsed) {
+  // Transducers stamped 5 ms apart and published newest first (two drivers on one topic, a
+  // relay): each reading is older than the one before it, but well inside the window.
+  const long old_extractor = count("dropped: old stamp", kExtractor);
+  const long old_slam = count("dropped: stamp not after the last", kSlam);
+  robot_->drive(2);
+  for (int ring_index = 0; ring_index < 3; ++ring_index) {
+    robot_->tick();
+    std::vector<sensor_msgs::Range> ring = robot_->ring();
+    for (int i = 0; i < kSonars; ++i) {
+      ring[i].header.stamp = ros::Time(robot_->time() - 0.005 * i);
+    }
+    robot_->publish(ring);
+  }
+  settle();
+  EXPECT_EQ(count("dropped: old stamp", kExtractor), old_extractor);
+  EXPECT_EQ(count("dropped: stamp not after the last", kSlam), old_slam);
+  EXPECT_EQ(observer_->nonFinite(), 0);
+  expectRecovers("readings a little out of order");
 }
 
 TEST_F(SonarFaultsTest, F_ClockJumpBackRestartsBothNodes) {

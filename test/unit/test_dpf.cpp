@@ -380,11 +380,16 @@ TEST(DpfMaster, AMissedAnswerIsNotFusedCountedAndTheLocalIsFusedAgainWhenItAnswe
     EXPECT_GT(out.mean.x(), 0.01) << fusion << ": the answers were not fused";
     // No answer at all: the master keeps its prediction (a zero step: its last estimate).
     const Pose2 before = out.mean;
+    const Eigen::Matrix3d before_covariance = out.covariance;
     out = master.fuse(2, MotionInput(),
                       {missedEstimate(0, 2), missedEstimate(1, 2), missedEstimate(2, 2)});
     ASSERT_TRUE(out.mean.allFinite() && out.covariance.allFinite()) << fusion;
     EXPECT_LT((out.mean - before).norm(), 1e-12) << fusion;
+    EXPECT_LT((out.covariance - before_covariance).cwiseAbs().maxCoeff(), 1e-6) << fusion;
     EXPECT_EQ(master.health()[2].missed, 2);
+    // Silence is no fault: two missed steps (isolate_after_steps) isolate nothing.
+    EXPECT_EQ(master.health()[2].isolations, 0);
+    EXPECT_TRUE(out.feedback.reinitialise.empty());
     // Back, redrawn from the master's estimate: fused again at once (no probation).
     const Pose2 m = out.mean;
     out = master.fuse(3, MotionInput(), {local(0, 3, m), local(1, 3, m), local(2, 3, m)});
@@ -781,6 +786,22 @@ TEST(DpfLocalStream, ALocalThatMissesStepsOrRestartsResynchronisesAndIsFusedAgai
   orphan.step = 9;  // feedback.step 0: nothing to resynchronise from
   EXPECT_EQ(stream.step(orphan, Pose2::Zero(), Pose2::Zero(), &e),
             DpfLocalStream::Outcome::kNoFeedback);
+  EXPECT_EQ(stream.expected(), 3);
+  // The master reset (a new run) and this local missed its step 1: step 2 of the new run is no
+  // repeat. It starts over (no map from the last run) from the master's estimate.
+  ASSERT_FALSE(localLandmarks(stream.filter()).empty());
+  DpfStepInput next_run = first;
+  next_run.run = first.run + 1;
+  next_run.step = 2;
+  next_run.feedback.step = 1;
+  next_run.feedback.mean = Pose2(4.0, -2.0, 0.5);
+  next_run.feedback.covariance = 1e-4 * Eigen::Matrix3d::Identity();
+  next_run.features = FeatureSet();
+  next_run.motion = MotionInput();
+  EXPECT_EQ(stream.step(next_run, Pose2::Zero(), Pose2::Zero(), &e),
+            DpfLocalStream::Outcome::kResynchronised);
+  EXPECT_TRUE(localLandmarks(stream.filter()).empty());
+  EXPECT_LT((e.prior_mean.head<2>() - Pose2(4.0, -2.0, 0.5).head<2>()).norm(), 0.1);
   EXPECT_EQ(stream.expected(), 3);
 }
 

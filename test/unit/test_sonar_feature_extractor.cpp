@@ -120,6 +120,23 @@ TEST(SonarFeatureExtractor, WindowKeepsOnlyRecentTravel) {
   EXPECT_TRUE(extractor.extractionDue(Pose2(3.0, 0, 0.35)));
 }
 
+TEST(SonarFeatureExtractor, AReadingALittleLateJoinsTheWindowWithoutAddingTravel) {
+  // Two transducers stamped apart and published out of order: after each reading, one from
+  // 10 ms earlier, placed by the odometry at its own stamp (0.1 m back). The distance the
+  // window spans is the robot's, not the back and forth between the two.
+  SonarExtractorOptions o;
+  o.window_distance_m = 1.0;
+  SonarFeatureExtractor extractor(o);
+  const Pose2 left(0.0, 0.2, M_PI_2), right(0.0, -0.2, -M_PI_2);
+  for (int i = 0; i <= 30; ++i) {
+    extractor.addReadings({reading(1.0, left)}, Pose2(0.1 * i, 0, 0), i);
+    if (i > 0) extractor.addReadings({reading(1.0, right)}, Pose2(0.1 * i - 0.1, 0, 0), i - 0.01);
+  }
+  // 1 m of travel: 11 readings of each transducer (the late one of step 20 was taken at 1.9 m).
+  EXPECT_EQ(extractor.echoes().size(), 22u);
+  EXPECT_EQ(extractor.stats().clock_jumps, 0);
+}
+
 TEST(SonarFeatureExtractor, StampsGoingBackClearTheWindowButKeepTheCounters) {
   // A second log or a restarted driver: the held echoes were placed with another run's
   // odometry and must go; the counters of the extractor's life stay.

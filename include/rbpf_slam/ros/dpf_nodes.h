@@ -10,6 +10,7 @@
 #include <ros/callback_queue.h>
 #include <ros/ros.h>
 
+#include <cstdint>
 #include <map>
 #include <memory>
 #include <string>
@@ -55,6 +56,12 @@ class RemoteDpfFilter : public core::SlamFilter {
   /// Waits until every local filter said it is up and subscribes to the steps. False (with
   /// *problem naming the silent ones) after timeout_s; those are then not waited for.
   bool waitForLocals(double timeout_s, std::string* problem);
+  /// A bag run: update() throws when ROS shuts down during a step (live, the step goes on
+  /// with the answers that came).
+  void stopOnShutdown() { stop_on_shutdown_ = true; }
+  /// Answers to a step from a second process with the same ~index (a configuration error;
+  /// the first answer is used).
+  long conflictingAnswers() const { return conflicting_answers_; }
 
  private:
   void estimateCallback(const DpfLocalEstimate::ConstPtr& msg);
@@ -69,6 +76,9 @@ class RemoteDpfFilter : public core::SlamFilter {
   ros::Publisher step_publisher_;
   ros::Subscriber estimate_subscriber_;
   core::DpfCoordinator coordinator_;
+  std::uint32_t run_;  // DpfStep::run: drawn at start, + 1 at every reset
+  bool stop_on_shutdown_ = false;
+  long conflicting_answers_ = 0;
   core::Pose2 initial_pose_ = core::Pose2::Zero();
   std::vector<bool> alive_;   // heard from since the start
   std::vector<bool> absent_;  // missed a step and not heard from since: not waited for
@@ -83,7 +93,9 @@ class RemoteDpfFilter : public core::SlamFilter {
 /// with the step (core::DpfLocalStream).
 class DpfLocalNode {
  public:
-  /// Private parameters: the config (as rbpf_slam_node) plus `index` (0..N-1).
+  /// Private parameters: the config (as rbpf_slam_node) plus `index` (0..N-1), and for fault
+  /// tests `crash_at_step` (> 0: the process exits without answering when that step arrives,
+  /// as a crash would; 0, the default: never).
   DpfLocalNode(ros::NodeHandle nh, ros::NodeHandle private_nh);
 
  private:
@@ -93,6 +105,8 @@ class DpfLocalNode {
   ros::Subscriber step_subscriber_;
   std::unique_ptr<core::DpfLocalStream> stream_;
   int index_ = 0;
+  std::uint64_t sender_;    // DpfLocalEstimate::sender, drawn at start
+  long crash_at_step_ = 0;  // ~crash_at_step (tests): exit at once when this step arrives
 };
 
 }  // namespace rosbridge

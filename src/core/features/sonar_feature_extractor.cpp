@@ -131,9 +131,14 @@ int SonarFeatureExtractor::addReadings(const std::vector<ConeReading>& readings,
     clearWindow();
     ++stats_.clock_jumps;
   }
-  if (has_pose_) travel_ += (odom_pose.head<2>() - last_pose_.head<2>()).norm();
-  has_pose_ = true;
-  last_pose_ = odom_pose;
+  // The distance travelled follows the stamps: a reading a little out of order (transducers
+  // stamped apart, two publishers) joins the window but would add the way back and forth again.
+  if (!has_pose_ || stamp >= last_pose_stamp_) {
+    if (has_pose_) travel_ += (odom_pose.head<2>() - last_pose_.head<2>()).norm();
+    has_pose_ = true;
+    last_pose_ = odom_pose;
+    last_pose_stamp_ = stamp;
+  }
   int kept = 0;
   for (const ConeReading& reading : readings) {
     const double cone = options_.cone_rad > 0.0 ? options_.cone_rad : reading.field_of_view;

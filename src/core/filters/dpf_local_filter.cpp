@@ -385,8 +385,10 @@ void DpfLocalFilter::resampleIfBelow(double neff) {
 
 DpfLocalStream::Outcome DpfLocalStream::step(const DpfStepInput& input, const Pose2& initial_pose,
                                              const Pose2& injected, DpfLocalEstimate* estimate) {
-  if (input.step == 1) {
+  if (!started_ || input.run != run_ || input.step == 1) {
+    // A new run (the master started or reset): the last run's particles and maps go.
     filter_.reset(initial_pose);
+    run_ = input.run;
     expected_ = 1;
     started_ = true;
   }
@@ -397,12 +399,10 @@ DpfLocalStream::Outcome DpfLocalStream::step(const DpfStepInput& input, const Po
     // What it missed is in the master's estimate of the step before, which is this step's
     // feedback: the cloud is redrawn from it.
     if (in.feedback.step <= 0) return Outcome::kNoFeedback;
-    if (!started_) filter_.reset(initial_pose);
     if (std::find(in.feedback.reinitialise.begin(), in.feedback.reinitialise.end(),
                   filter_.index()) == in.feedback.reinitialise.end()) {
       in.feedback.reinitialise.push_back(filter_.index());
     }
-    started_ = true;
     outcome = Outcome::kResynchronised;
   }
   *estimate = filter_.step(in, injected);

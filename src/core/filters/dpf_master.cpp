@@ -147,8 +147,8 @@ DpfMasterOutput DpfMaster::fuse(long step, const MotionInput& motion,
       if (e.answered) {
         ++h.non_finite;
       } else {
-        // No answer: its last posterior is stale for the process check once it is back (it
-        // comes back redrawn from the master's estimate).
+        // No answer: its last posterior is stale for the process check once it is back (a
+        // restarted or resynchronised local comes back redrawn from the master's estimate).
         ++h.missed;
         h.has_last_mean = false;
       }
@@ -187,6 +187,12 @@ DpfMasterOutput DpfMaster::fuse(long step, const MotionInput& motion,
   for (int i = 0; i < n; ++i) {
     DpfLocalHealth& h = health_[i];
     const DpfLocalEstimate& e = *by_index[i];
+    if (!e.answered) {
+      // No answer: not fused, and nothing to judge it by; its health record waits for its next
+      // answer (it is neither flagged nor isolated for its silence).
+      w[i] = 0.0;
+      continue;
+    }
     const Pose2 d = difference(e.prior_mean, prior_mean);
     const Eigen::Matrix3d s = regularised(e.prior_covariance + last_.covariance);
     h.prior_nis = d.dot(s.ldlt().solve(d));

@@ -152,9 +152,10 @@ FrameResult SlamPipeline::processSonar(const std::vector<ConeReading>& readings,
     last_features_.cones = pendingConesInBase(odom_pose);
     result = session_.process(stamp, odom_pose, last_features_);
   } else {
-    // The rest of a ring stamped like the frame just processed joins the window; the next
-    // stamp extracts (the session would reject a second frame at this stamp).
-    if (stamp == session_.lastStamp()) return FrameResult::kBuffered;
+    // The rest of a ring stamped like the frame just processed, or a reading a little late,
+    // joins the window; the next later stamp extracts (the session would reject a frame at or
+    // before its last stamp, and the features extracted for it would be lost).
+    if (stamp <= session_.lastStamp()) return FrameResult::kBuffered;
     if (!sonar_extractor_.extractionDue(odom_pose)) return FrameResult::kBuffered;
     last_features_ = sonar_extractor_.extract(odom_pose, stamp);
     last_features_.cones = pendingConesInBase(odom_pose);

@@ -131,7 +131,8 @@ class SonarFeatureExtractor {
   std::vector<Pose2> mounts_;
   std::vector<SonarEcho> last_kept_;  // per transducer (range < 0: none yet)
   bool has_pose_ = false;
-  Pose2 last_pose_ = Pose2::Zero();
+  Pose2 last_pose_ = Pose2::Zero();  // at the newest stamp seen (a late reading leaves it)
+  double last_pose_stamp_ = 0.0;
   double travel_ = 0.0;
   bool has_extracted_ = false;
   Pose2 last_extraction_pose_ = Pose2::Zero();

@@ -14,6 +14,7 @@
 // depend on which thread or process runs which local filter.
 
 #include <Eigen/Core>
+#include <cstdint>
 #include <vector>
 
 #include "rbpf_slam/core/features/feature_types.h"
@@ -34,6 +35,9 @@ struct DpfFeedback {
 /// One step of input, the same for every local filter.
 struct DpfStepInput {
   long step = 0;
+  // The master's run (remote deployment): a new value at every master start and reset. A local
+  // filter that sees another run starts over, even when it missed that run's step 1.
+  std::uint32_t run = 0;
   MotionInput motion;
   FeatureSet features;  // all features: each local filter takes its own block
   DpfFeedback feedback;
@@ -79,7 +83,7 @@ struct DpfLocalHealth {
   double process_nis = 0.0;   // ... of its prior against its process (see DpfMaster::fuse)
   bool has_last_mean = false;  // last_mean is the local's posterior of the previous step
   long non_finite = 0;  // estimates with a non-finite value: not fused, counted as inconsistent
-  long missed = 0;      // steps it did not answer (missedEstimate): not fused, as inconsistent
+  long missed = 0;      // steps it did not answer (missedEstimate): not fused, not judged
   Pose2 last_mean = Pose2::Zero();
   bool streak_process_fault = false;  // a process fault among the current flagged steps
   int probation_steps = 0;    // after an isolation: unflagged steps needed before it is fused

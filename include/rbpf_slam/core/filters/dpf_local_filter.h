@@ -102,20 +102,22 @@ class DpfLocalFilter {
 
 /// A local filter fed by the master's stream of steps as a separate process sees it
 /// (dpf_local_node): a step may arrive after lost ones, or first in the middle of a run (a
-/// restarted process), or again (a message delivered twice).
+/// restarted process, or a new run whose step 1 was lost), or again (a message delivered
+/// twice).
 class DpfLocalStream {
  public:
   enum class Outcome {
     kStepped,         // the expected step
     kResynchronised,  // after a gap: the particles were redrawn from the master's estimate
-                      // (the step's feedback) before the step, keeping the best map if any
-    kRepeated,        // a step already taken (not 1): ignored
+                      // (the step's feedback) before the step, keeping the best map of the
+                      // run if any (a new run starts with none)
+    kRepeated,        // a step of this run already taken: ignored
     kNoFeedback,      // a gap, but the step carries no master estimate to start from: ignored
   };
   DpfLocalStream(const FilterOptions& options, int index) : filter_(options, index) {}
 
-  /// Step 1 resets the filter at initial_pose (a new run). *estimate is set unless the
-  /// outcome is kRepeated or kNoFeedback.
+  /// Step 1, or a step of another run (DpfStepInput::run), resets the filter at initial_pose
+  /// (a new run). *estimate is set unless the outcome is kRepeated or kNoFeedback.
   Outcome step(const DpfStepInput& input, const Pose2& initial_pose, const Pose2& injected,
                DpfLocalEstimate* estimate);
   const DpfLocalFilter& filter() const { return filter_; }
@@ -125,7 +127,8 @@ class DpfLocalStream {
  private:
   DpfLocalFilter filter_;
   long expected_ = 1;
-  bool started_ = false;  // reset at a step 1 or resynchronised
+  bool started_ = false;  // has seen a run
+  std::uint32_t run_ = 0;
 };
 
 /// The log of the ratio N(x; target_mean, target_cov) / N(x; own_mean, own_cov) at each pose,
