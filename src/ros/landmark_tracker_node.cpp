@@ -120,6 +120,15 @@ void LandmarkTrackerNode::featuresCallback(const FeatureArray::ConstPtr& msg) {
                        " feature(s) of the frame at " + std::to_string(msg->header.stamp.toSec()) +
                        ": not finite or degenerate (e.g. a point at range 0)");
   }
+  if (event.left_out_full > 0) {
+    warnings_.warn("tracker full",
+                   "The tracker holds tracker.max_landmarks = " +
+                       std::to_string(config_.filter.tracker.max_landmarks) +
+                       " landmarks, all seen in the frame at " +
+                       std::to_string(msg->header.stamp.toSec()) + ": " +
+                       std::to_string(event.left_out_full) +
+                       " new sighting(s) left out (no event for them); raise it if this lasts");
+  }
   std_msgs::Header header;
   header.stamp = msg->header.stamp;
   header.frame_id = o.odom_frame;

@@ -214,6 +214,36 @@ TEST(LandmarkTracker, StateIsBounded) {
   }
 }
 
+TEST(LandmarkTracker, MoreLandmarksInViewThanItHoldsRaiseNoEventAtEveryFrame) {
+  // Eight posts in view all the time, room for five: the first frame starts five, and later
+  // frames must not drop one seen now to start another (which would be an event per frame).
+  LandmarkTrackerOptions options;
+  options.max_landmarks = 5;
+  LandmarkTracker tracker(options);
+  int events = 0, left_out = 0;
+  for (int step = 1; step <= 20; ++step) {
+    std::vector<TrackerObservation> seen;
+    for (int k = 0; k < 8; ++k) {
+      seen.push_back(pointSeen(robotAt(step), Eigen::Vector2d(2.0 + 3.0 * k, 6.0)));
+    }
+    const TrackerEvent event = tracker.update(step, kStep, kStepCov, seen);
+    events += event.new_landmark ? 1 : 0;
+    left_out += event.left_out_full;
+    EXPECT_LE(tracker.trackedLandmarks(), 5);
+  }
+  EXPECT_EQ(events, 1);
+  EXPECT_EQ(left_out, 20 * 3);
+  // When one leaves the view, a waiting one takes its place: one event.
+  std::vector<TrackerObservation> seen;
+  for (int k = 1; k < 8; ++k) {
+    seen.push_back(pointSeen(robotAt(21), Eigen::Vector2d(2.0 + 3.0 * k, 6.0)));
+  }
+  const TrackerEvent event = tracker.update(21, kStep, kStepCov, seen);
+  EXPECT_TRUE(event.new_landmark);
+  EXPECT_EQ(event.started, 1);
+  EXPECT_EQ(tracker.trackedLandmarks(), 5);
+}
+
 TEST(LandmarkTracker, TrackedLandmarksCorrectOdometryDrift) {
   LandmarkTracker tracker{LandmarkTrackerOptions()};
   const Eigen::Vector2d a(4.0, 2.0), b(5.0, -2.0);

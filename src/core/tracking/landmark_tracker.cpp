@@ -3,6 +3,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <string>
 
@@ -67,11 +68,24 @@ TrackerEvent LandmarkTracker::update(int step, const Pose2& increment,
   }
   // Two sightings of one new landmark in a frame (a wall in two segments, a post seen by two
   // sensors) start it once: each is compared with the landmarks started so far in this frame.
-  const int before = trackedLandmarks();
+  int before = trackedLandmarks();
   for (const TrackerObservation* o : fresh) {
     double d2 = 0.0;
     const int index = associate(*o, before, &d2);
     if (index < 0 || d2 > options_.new_landmark_chi2) {
+      // Full: a landmark not seen in this frame makes room. When every tracked one was seen in
+      // this frame, the sighting is left out: dropping one seen now would start it again at the
+      // next frame, and the tracker would raise an event at every frame (thrashing).
+      if (trackedLandmarks() >= options_.max_landmarks) {
+        const int evicted = leastRecentlySeen(step);
+        if (evicted < 0) {
+          ++event.left_out_full;
+          continue;
+        }
+        remove(evicted);
+        ++event.forgotten;
+        if (evicted < before) --before;
+      }
       start(*o, step);
       ++event.started;
     } else if (d2 < options_.gate_chi2) {
@@ -80,7 +94,7 @@ TrackerEvent LandmarkTracker::update(int step, const Pose2& increment,
     }
   }
   event.new_landmark = event.started > 0;
-  event.forgotten = forget(step);
+  event.forgotten += forget(step);
   event.tracked = trackedLandmarks();
   return event;
 }
@@ -216,17 +230,31 @@ int LandmarkTracker::forget(int step) {
       ++forgotten;
     }
   }
-  while (trackedLandmarks() > options_.max_landmarks) {
-    int oldest = 0;
-    for (int i = 1; i < trackedLandmarks(); ++i) {
-      if (landmarks_[i].last_seen_step < landmarks_[oldest].last_seen_step) oldest = i;
-    }
-    remove(oldest);
+  while (trackedLandmarks() > options_.max_landmarks) {  // update() keeps it within; a guard
+    remove(leastRecentlySeen(std::numeric_limits<int>::max()));
     ++forgotten;
   }
   // With nothing left to anchor it, the tracker's frame restarts at the robot (bounded drift).
   if (landmarks_.empty()) covariance_.setZero();
   return forgotten;
+}
+
+int LandmarkTracker::leastRecentlySeen(int before_step) const {
+  // The one seen longest ago; of those, the farthest from the robot.
+  const Eigen::Vector2d robot = state_.head<2>();
+  int best = -1;
+  double best_distance = 0.0;
+  for (int i = 0; i < trackedLandmarks(); ++i) {
+    if (landmarks_[i].last_seen_step >= before_step) continue;
+    const double distance = distanceTo(i, robot);
+    if (best < 0 || landmarks_[i].last_seen_step < landmarks_[best].last_seen_step ||
+        (landmarks_[i].last_seen_step == landmarks_[best].last_seen_step &&
+         distance > best_distance)) {
+      best = i;
+      best_distance = distance;
+    }
+  }
+  return best;
 }
 
 double LandmarkTracker::gapToExtent(int landmark, const TrackerObservation& o) const {

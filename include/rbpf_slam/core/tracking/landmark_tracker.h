@@ -33,6 +33,7 @@ struct TrackerEvent {
                               // started by another observation of this step)
   int forgotten = 0;          // landmarks dropped at this step
   int tracked = 0;            // landmarks in the state after this step
+  int left_out_full = 0;      // new sightings not started: max_landmarks, all seen this step
 };
 
 class LandmarkTracker {
@@ -83,6 +84,8 @@ class LandmarkTracker {
   void start(const TrackerObservation& observation, int step);
   void remove(int landmark);
   int forget(int step);
+  /// The landmark last seen longest ago, before before_step (the farthest of equals); -1: none.
+  int leastRecentlySeen(int before_step) const;
 
   const LandmarkTrackerOptions options_;
   Eigen::VectorXd state_;  // pose (x, y, theta), then two entries per landmark
