@@ -16,6 +16,9 @@
 #   featnan     one NaN point per FeatureArray: counted by offline_slam, reported by validate_bag
 #   sonar       per-transducer Range readings: those that join the echo window are counted as
 #               buffered, not as skipped for lack of motion
+#   badindex    one chunk index entry pointing past its chunk, and one at a spot inside it where
+#               no record fits: rosbag itself read outside its buffer and the tools died by
+#               SIGSEGV; now both refuse the bag, naming the entry
 set -euo pipefail
 
 source "$(dirname "$0")/lib/offline.sh"
@@ -140,6 +143,40 @@ write("anglemax", anglemax)
 write("featnan", featnan)
 rosbag.Bag(work + "/empty.bag", "w").close()
 PY
+# Damaged chunk indexes, written byte by byte (format 2.0: records of header length, fields
+# "name=value", data length, data; index records (op 4) hold 12-byte entries: time, offset).
+/usr/bin/python3 - "$work" <<'PY'
+import struct
+import sys
+
+work = sys.argv[1]
+data = bytearray(open(work + "/clean.bag", "rb").read())
+
+
+def first_index_entry():
+    at = 13
+    while at < len(data):
+        (header_len,) = struct.unpack_from("<I", data, at)
+        header = bytes(data[at + 4:at + 4 + header_len])
+        (data_len,) = struct.unpack_from("<I", data, at + 4 + header_len)
+        fields, p = {}, 0
+        while p < header_len:
+            (n,) = struct.unpack_from("<I", header, p)
+            name, _, value = header[p + 4:p + 4 + n].partition(b"=")
+            fields[name] = value
+            p += 4 + n
+        if fields.get(b"op") == b"\x04":
+            return at + 8 + header_len + 8  # the first entry's offset field
+        at += 8 + header_len + data_len
+    raise SystemExit("no index record in clean.bag")
+
+
+offset_at = first_index_entry()
+for name, offset in (("badindex_past", 0xFFFFFFF0), ("badindex_inside", 3)):
+    broken = bytearray(data)
+    struct.pack_into("<I", broken, offset_at, offset)
+    open("%s/%s.bag" % (work, name), "wb").write(broken)
+PY
 
 failures=0
 fail() { echo "FAIL: $*"; failures=$((failures + 1)); }
@@ -204,6 +241,21 @@ for tool in offline_slam validate_bag; do
   [ "$erc" -ne 0 ] || fail "empty: $tool exited 0"
   grep -qF "$work/empty.bag: the bag holds no messages" "$work/empty.err" ||
     { fail "empty: $tool's message:"; cat "$work/empty.err"; }
+done
+
+for name in badindex_past badindex_inside; do
+  for tool in offline_slam validate_bag; do
+    erc=0
+    if [ "$tool" = offline_slam ]; then
+      "$bin/offline_slam" --bag "$work/$name.bag" --config "$root/config/laser_fastslam2.yaml" \
+        --output "$work/out_$name" >"$work/$name.err" 2>&1 || erc=$?
+    else
+      "$bin/validate_bag" "$work/$name.bag" >"$work/$name.err" 2>&1 || erc=$?
+    fi
+    { [ "$erc" -ne 0 ] && [ "$erc" -lt 128 ]; } || fail "$name: $tool exited $erc"
+    grep -qF "$work/$name.bag: the bag is damaged (index entry 1 of the record at byte" \
+      "$work/$name.err" || { fail "$name: $tool's message:"; cat "$work/$name.err"; }
+  done
 done
 
 run swap laser_fastslam2

@@ -13,7 +13,8 @@ namespace rosbridge {
 
 /// Opens PATH for reading into BAG; a missing, truncated or unindexed file throws
 /// std::runtime_error "PATH: cannot open bag: <rosbag's reason>" (rosbag's own message does not
-/// name the file).
+/// name the file). Every message is read once first in a child process: a damaged index that
+/// would crash the rosbag library (a signal, not an exception) throws, naming the message.
 void openBagForReading(rosbag::Bag* bag, const std::string& path);
 
 /// An output bag written as PATH.part and renamed to PATH by commit(), so that a run that fails
