@@ -34,10 +34,11 @@ std::size_t nearestIndex(const std::vector<StampedPose>& poses, double stamp,
   const double to_before = after > 0 ? stamp - poses[after - 1].stamp : 0.0;
   const double to_after = poses[after].stamp - stamp;
   if (after > 0 && (to_before < to_after || (prefer_earlier && to_before == to_after))) {
-    // Step back to the first of a run of equal stamps.
-    std::size_t before = after - 1;
-    while (before > 0 && poses[before - 1].stamp == poses[before].stamp) --before;
-    return before;
+    // Step back to the first of a run of equal stamps (a search: such runs can be long).
+    const double before_stamp = poses[after - 1].stamp;
+    return static_cast<std::size_t>(
+        std::lower_bound(poses.begin(), poses.begin() + after, before_stamp, stampLess) -
+        poses.begin());
   }
   return after;
 }

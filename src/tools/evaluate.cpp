@@ -4,6 +4,7 @@
 // matched pose to align (warns on stamps out of order and on few matches).
 
 #include <algorithm>
+#include <cmath>
 #include <iostream>
 #include <optional>
 #include <stdexcept>
@@ -91,6 +92,14 @@ int run(const Arguments& arguments) {
                              " matched pose(s): the alignment needs at least 2 (or --no-align)");
   }
   std::cout << io::toJson(result);
+  if (!std::isfinite(result.ate_rmse_m) || !std::isfinite(result.ate_max_m) ||
+      !std::isfinite(result.final_position_error_m)) {
+    // Coordinates near 1e154 m (a diverged run) overflow when squared: null is no figure.
+    throw std::runtime_error(
+        "the errors overflow (ate_rmse_m " + std::to_string(result.ate_rmse_m) +
+        "): the trajectories hold coordinates too large to compare (|x| or |y| above 1e150 m?); "
+        "the figures above are not usable");
+  }
   // Figures over a few poses say little about the trajectory: say so (the stamps may not line
   // up within --max-dt, e.g. another clock or another rate).
   if (2 * result.matched_poses < std::min(estimate.size(), reference.size())) {

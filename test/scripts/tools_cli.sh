@@ -114,6 +114,10 @@ expect "evaluate one matched pose" 1 "only 1 matched pose\(s\): the alignment ne
 expect "evaluate one matched pose, --no-align" 0 '"ate_rmse_m": 5' \
   "$bin/evaluate" "$work/one.tum" "$work/far.tum" --no-align
 cat "$work/six.tum" "$work/six.tum" >"$work/twice.tum"
+# A diverged estimate (1e300 m) is read, but its errors overflow: no null figures with exit 0.
+for t in 1 2 3 4 5 6; do echo "$t 1e300 1e300 0 0 0 0 1"; done >"$work/diverged.tum"
+expect "evaluate overflowing errors" 1 "the errors overflow" "$bin/evaluate" \
+  "$work/diverged.tum" "$work/six.tum" --no-align
 expect "evaluate stamps out of order" 0 \
   "twice.tum: 1 pose\(s\) stamped at or before the pose above them \(the first is pose 7\)" \
   "$bin/evaluate" "$work/twice.tum" "$work/six.tum"
