@@ -1,5 +1,7 @@
 #include "rbpf_slam/io/victoria_park.h"
 
+#include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
@@ -7,6 +9,8 @@
 #include <map>
 #include <sstream>
 #include <stdexcept>
+
+#include "rbpf_slam/io/plausibility.h"
 
 namespace rbpf_slam {
 namespace io {
@@ -38,6 +42,16 @@ long index(const std::string& token, const std::string& source, std::size_t line
 
 }  // namespace
 
+namespace {
+
+bool positiveSemidefinite(const Eigen::MatrixXd& m) {
+  if (!m.allFinite()) return false;
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(0.5 * (m + m.transpose()));
+  return eigen.eigenvalues().minCoeff() >= -1e-12 * std::max(1.0, m.cwiseAbs().maxCoeff());
+}
+
+}  // namespace
+
 VictoriaParkLog parseVictoriaPark(std::istream& in, const std::string& source) {
   VictoriaParkLog log;
   std::string text;
@@ -61,8 +75,19 @@ VictoriaParkLog parseVictoriaPark(std::istream& in, const std::string& source) {
       o.to = index(tokens[2], source, line);
       double v[9];
       for (int k = 0; k < 9; ++k) v[k] = number(tokens[3 + k], source, line);
+      // One step of a vehicle logged at a few Hz: beyond these it is corrupt data, which would be
+      // dead-reckoned into poses of 1e308 m (and inf in the bag).
+      if (std::hypot(v[0], v[1]) > kMaxPlausibleRangeM || std::fabs(v[2]) > kMaxPlausibleAngleRad) {
+        fail(source, line,
+             "ODOMETRY step (" + tokens[3] + ", " + tokens[4] + ", " + tokens[5] +
+                 ") is implausible (over " + std::to_string(kMaxPlausibleRangeM) + " m or " +
+                 std::to_string(kMaxPlausibleAngleRad) + " rad)");
+      }
       o.delta = core::Pose2(v[0], v[1], core::wrapAngle(v[2]));
       o.covariance << v[3], v[4], v[5], v[4], v[6], v[7], v[5], v[7], v[8];
+      if (!positiveSemidefinite(o.covariance)) {
+        fail(source, line, "ODOMETRY covariance is not positive semi-definite");
+      }
       if (!log.odometry.empty() && log.odometry.back().to != o.from) {
         fail(source, line, "ODOMETRY " + std::to_string(o.from) + " -> " + std::to_string(o.to) +
                                " does not continue from pose " +
@@ -85,6 +110,15 @@ VictoriaParkLog parseVictoriaPark(std::istream& in, const std::string& source) {
       l.position << v[0], v[1];
       l.covariance << v[2], v[3], v[3], v[4];
       if (l.position.norm() <= 0.0) fail(source, line, "a tree at the sensor (zero range)");
+      // Tiny ranges make the bearing's variance blow up in toRangeBearing.
+      if (l.position.norm() > kMaxPlausibleRangeM || l.position.norm() < 1e-3) {
+        fail(source, line,
+             "LANDMARK at range " + std::to_string(l.position.norm()) +
+                 " m is implausible (0.001.." + std::to_string(kMaxPlausibleRangeM) + " m)");
+      }
+      if (!positiveSemidefinite(l.covariance) || l.covariance.trace() <= 0.0) {
+        fail(source, line, "LANDMARK covariance is not positive definite");
+      }
       log.landmarks.push_back(l);
     } else {
       fail(source, line, "unknown record '" + tag + "' (expected ODOMETRY or LANDMARK)");

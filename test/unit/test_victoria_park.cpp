@@ -92,6 +92,20 @@ TEST(VictoriaPark, MalformedLinesNameTheLine) {
       << huge;
   EXPECT_NE(errorOf(std::string(kLog) + "LANDMARK 4 1 0 0 0.4 0 0.4\n").find("zero range"),
             std::string::npos);
+  // Finite but corrupt: they became inf poses and covariances in the bag (exit 0).
+  EXPECT_NE(errorOf(std::string(kLog) + "ODOMETRY 4 5 1e308 0 0 0.0001 0 0 4e-06 0 4e-06\n")
+                .find("vp.txt:8: ODOMETRY step (1e308, 0, 0) is implausible"),
+            std::string::npos);
+  EXPECT_NE(errorOf(std::string(kLog) + "ODOMETRY 4 5 1 0 0 -0.0001 0 0 4e-06 0 4e-06\n")
+                .find("vp.txt:8: ODOMETRY covariance is not positive semi-definite"),
+            std::string::npos);
+  EXPECT_NE(errorOf(std::string(kLog) + "LANDMARK 4 1 1e200 1e200 0.4 0 0.4\n").find("implausible"),
+            std::string::npos);
+  EXPECT_NE(errorOf(std::string(kLog) + "LANDMARK 4 1 1e-160 0 0.4 0 0.4\n").find("implausible"),
+            std::string::npos);
+  EXPECT_NE(errorOf(std::string(kLog) + "LANDMARK 4 1 3 4 -0.4 0 0.4\n")
+                .find("vp.txt:8: LANDMARK covariance is not positive definite"),
+            std::string::npos);
 }
 
 TEST(VictoriaPark, TheShippedFileParses) {
