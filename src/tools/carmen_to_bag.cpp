@@ -222,7 +222,15 @@ int run(const Arguments& arguments) {
   ros::Time::init();
   const io::CarmenLog log = io::readCarmenLog(arguments.log_path);
   if (log.lasers.empty()) {
-    throw std::runtime_error(arguments.log_path + ": no FLASER scan in the log");
+    // Why: every FLASER line may have been malformed (a NaN beam rejects its scan).
+    std::string why;
+    if (log.malformed_lines > 0) {
+      why = " that could be used (" + std::to_string(log.malformed_lines) +
+            " malformed line(s); the first: " +
+            (log.malformed_examples.empty() ? std::string("?") : log.malformed_examples.front()) +
+            ")";
+    }
+    throw std::runtime_error(arguments.log_path + ": no FLASER scan in the log" + why);
   }
   io::CorrectedMotionStats motion_stats;
   const std::vector<io::StampedPose> motion = io::correctedMotion(log, &motion_stats);

@@ -13,6 +13,11 @@ missing="$work/no_such_input"
 expect "carmen_to_bag --help" 0 "usage: carmen_to_bag" "$bin/carmen_to_bag" --help
 expect "carmen_to_bag bad option" 2 "usage: carmen_to_bag" "$bin/carmen_to_bag" a b --bogus
 expect "carmen_to_bag missing log" 1 "no_such_input" "$bin/carmen_to_bag" "$missing.log" "$work/c.bag"
+# Every scan malformed (a NaN beam): the reason, not only "no FLASER scan".
+printf 'FLASER 3 nan 1 1 0 0 0 0 0 0 0 0 0 localhost 0\nFLASER 3 1 nan 1 0 0 0 0 0 0 0 0 1 localhost 1\n' \
+  >"$work/nan.log"
+expect "carmen_to_bag only malformed scans" 1 "no FLASER scan in the log that could be used \\(2 malformed" \
+  "$bin/carmen_to_bag" "$work/nan.log" "$work/c.bag"
 expect "mrclam_to_bag --help" 0 "usage: mrclam_to_bag" "$bin/mrclam_to_bag" -h
 expect "mrclam_to_bag bad robot" 2 "usage: mrclam_to_bag" "$bin/mrclam_to_bag" "$work" x "$work/m.bag"
 expect "mrclam_to_bag negative delay" 2 "--command-delay needs a non-negative number, got '-1'" \
