@@ -303,6 +303,22 @@ int run(const Arguments& arguments) {
         " of robots, " + std::to_string(unknown) +
         " of barcodes not in Barcodes.dat); the bag would have no /features");
   }
+  // Sightings with no odometry around them have no pose to be seen from (a file of another
+  // run, a shifted clock): all of them is an error, some a warning.
+  std::size_t outside = 0;
+  const double odometry_begin = odometry.front().stamp, odometry_end = odometry.back().stamp;
+  for (const io::MrclamMeasurementGroup& g : groups) {
+    if (g.stamp < odometry_begin - 1.0 || g.stamp > odometry_end + 1.0) ++outside;
+  }
+  if (outside > 0) {
+    std::ostringstream why;
+    why << std::fixed << std::setprecision(3) << robot_files << "Measurement.dat: " << outside
+        << " of " << groups.size() << " sighting time(s) lie more than 1 s outside the odometry ("
+        << odometry_begin << " .. " << odometry_end << " s; sightings " << groups.front().stamp
+        << " .. " << groups.back().stamp << " s)";
+    if (outside == groups.size()) throw std::runtime_error(why.str() + ": is it the same run?");
+    std::cerr << "mrclam_to_bag: warning: " << why.str() << "\n";
+  }
 
   // The side files first: the bag appears only when complete, so a bag on disk means a whole
   // conversion (benchmarks/run_mrclam reuses one it finds); an older bag there goes first.

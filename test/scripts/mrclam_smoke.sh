@@ -31,6 +31,19 @@ for f in robot1.bag robot1.ref.tum robot1.odom.tum robot1.landmarks.yaml; do
   [ -s "$work/$f" ] || { echo "FAIL: mrclam_to_bag wrote no $f"; exit 1; }
 done
 
+# Sightings of another run (every stamp 1e6 s later): refused, not a bag of unseeable features.
+mkdir "$work/shifted"
+cp "$data"/*.dat "$work/shifted/"
+awk '/^[ \t]*#/ || NF == 0 {print; next} {$1 = sprintf("%.3f", $1 + 1e6); print}' \
+  "$data/Robot1_Measurement.dat" >"$work/shifted/Robot1_Measurement.dat"
+rc=0
+"$bin/mrclam_to_bag" "$work/shifted" 1 "$work/shifted.bag" 2>"$work/shifted.err" || rc=$?
+if [ "$rc" -ne 1 ] || ! grep -q "sighting time(s) lie more than 1 s outside the odometry" "$work/shifted.err"; then
+  echo "FAIL: sightings outside the odometry: exit $rc"
+  cat "$work/shifted.err"
+  exit 1
+fi
+
 "$bin/offline_slam" --bag "$work/robot1.bag" --config "$root/config/landmarks_fastslam2.yaml" \
   --output "$work/out" --reference "$work/robot1.ref.tum" --no-progress
 
