@@ -74,6 +74,20 @@ Arguments parseArguments(int argc, char** argv) {
       positional.push_back(cursor.arg());
     }
   }
+  // Beyond these the simulated odometry is nonsense (1e307 gave NaN odometry).
+  const auto shown = [](double x) {
+    char text[32];
+    std::snprintf(text, sizeof(text), "%g", x);
+    return std::string(text);
+  };
+  if (!(arguments.noise.scale_bias > -0.99 && arguments.noise.scale_bias <= 1.0)) {
+    throw std::invalid_argument("--odom-bias " + shown(arguments.noise.scale_bias) +
+                                " is outside (-0.99, 1] (a scale error: 0.02 is 2 %)");
+  }
+  if (arguments.noise.noise_per_unit > 10.0) {
+    throw std::invalid_argument("--odom-noise " + shown(arguments.noise.noise_per_unit) +
+                                " is above 10 (a sigma per unit travelled)");
+  }
   if (positional.size() != 2) {
     throw std::invalid_argument("expected LOG and OUT.bag, got " +
                                 std::to_string(positional.size()) + " file argument(s)");

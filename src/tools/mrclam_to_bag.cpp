@@ -17,8 +17,9 @@
 
 #include <algorithm>
 #include <cmath>
-#include <filesystem>
+#include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <iomanip>
 #include <iostream>
@@ -121,6 +122,22 @@ Arguments parseArguments(int argc, char** argv) {
   if (arguments.sigma_range_m + arguments.sigma_range_per_m <= 0.0 ||
       arguments.sigma_bearing_rad <= 0.0) {
     throw std::invalid_argument("feature sigmas must be positive");
+  }
+  // Beyond these the features' covariances are meaningless (1e300 gave inf in the bag), and a
+  // command delay of hours pushes stamps past what ros::Time holds.
+  const struct {
+    const char* option;
+    double value, max;
+  } limits[] = {{"--sigma-range-m", arguments.sigma_range_m, 100.0},
+                {"--sigma-range-per-m", arguments.sigma_range_per_m, 10.0},
+                {"--sigma-bearing-rad", arguments.sigma_bearing_rad, M_PI},
+                {"--command-delay", arguments.command_delay_s, 60.0}};
+  for (const auto& limit : limits) {
+    if (limit.value > limit.max) {
+      char text[96];
+      std::snprintf(text, sizeof(text), " %g is above %g", limit.value, limit.max);
+      throw std::invalid_argument(limit.option + std::string(text));
+    }
   }
   return arguments;
 }

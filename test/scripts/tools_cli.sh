@@ -16,12 +16,16 @@ expect "carmen_to_bag missing log" 1 "no_such_input" "$bin/carmen_to_bag" "$miss
 # Every scan malformed (a NaN beam): the reason, not only "no FLASER scan".
 printf 'FLASER 3 nan 1 1 0 0 0 0 0 0 0 0 0 localhost 0\nFLASER 3 1 nan 1 0 0 0 0 0 0 0 0 1 localhost 1\n' \
   >"$work/nan.log"
+expect "carmen_to_bag absurd bias" 2 "--odom-bias 1e\\+307 is outside" \
+  "$bin/carmen_to_bag" "$work/nan.log" "$work/c.bag" --odom-bias 1e307
 expect "carmen_to_bag only malformed scans" 1 "no FLASER scan in the log that could be used \\(2 malformed" \
   "$bin/carmen_to_bag" "$work/nan.log" "$work/c.bag"
 expect "mrclam_to_bag --help" 0 "usage: mrclam_to_bag" "$bin/mrclam_to_bag" -h
 expect "mrclam_to_bag bad robot" 2 "usage: mrclam_to_bag" "$bin/mrclam_to_bag" "$work" x "$work/m.bag"
 expect "mrclam_to_bag negative delay" 2 "--command-delay needs a non-negative number, got '-1'" \
   "$bin/mrclam_to_bag" "$work" 1 "$work/m.bag" --command-delay -1
+expect "mrclam_to_bag absurd sigma" 2 "--sigma-bearing-rad 1e\\+300 is above 3.14159" \
+  "$bin/mrclam_to_bag" "$work" 1 "$work/m.bag" --sigma-bearing-rad 1e300
 expect "mrclam_to_bag negative start" 2 "--start needs a non-negative number, got '-5'" \
   "$bin/mrclam_to_bag" "$work" 1 "$work/m.bag" --start -5
 expect "mrclam_to_bag missing dataset" 1 "no_such_input" "$bin/mrclam_to_bag" "$missing" 1 "$work/m.bag"
