@@ -240,6 +240,31 @@ TEST(InverseSensorModel, ReadingsBeyondTheGridAreRefusedAndNoConeOutgrowsIt) {
   EXPECT_EQ(stats.rejected, 2);
 }
 
+TEST(InverseSensorModel, NoLaserBeamIsTracedBeyondTheGrid) {
+  // laser_no_return_free_m = 1000 m at 1 cm: 100000 cells a beam before; the grid is 2 m.
+  GridOptions o;
+  o.resolution_m = 0.01;
+  o.size_x_m = o.size_y_m = 2.0;
+  o.laser_no_return_free_m = 1000.0;
+  o.laser_max_range_m = 1000.0;
+  RangeScan scan;
+  scan.angle_min = -1.0;
+  scan.angle_increment = 0.5;
+  scan.range_min = 0.1;
+  scan.range_max = 2000.0;
+  scan.ranges = {INFINITY, 2000.0, 900.0, 1.0, INFINITY};  // none, max, far echo, echo, none
+  LocalMapBuilder builder(o.resolution_m);
+  LocalMapStats stats;
+  addRangeScan(scan, o, &builder, &stats);
+  const auto cells = builder.finish();
+  double far = 0.0;
+  for (const auto& c : cells) far = std::max(far, c.center.norm());
+  EXPECT_LE(far, std::hypot(2.0, 2.0) + o.resolution_m);
+  EXPECT_LT(cells.size(), 5u * 300u);
+  EXPECT_EQ(stats.echoes, 1);
+  EXPECT_EQ(stats.no_echo, 4);
+}
+
 TEST(TiledGrid, CopiesShareTilesUntilTheFirstWrite) {
   TiledLogOddsGrid a(0.05, -10.0, -10.0, 400, 400, 64);  // 20 m x 20 m, 7 x 7 tiles
   EXPECT_EQ(a.allocatedTiles(), 0);
