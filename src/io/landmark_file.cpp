@@ -3,7 +3,6 @@
 #include <yaml-cpp/yaml.h>
 
 #include <Eigen/Dense>
-
 #include <algorithm>
 #include <cmath>
 #include <fstream>
@@ -14,6 +13,7 @@
 
 #include "rbpf_slam/core/features/feature_types.h"
 #include "rbpf_slam/io/grid_map_file.h"
+#include "rbpf_slam/io/plausibility.h"
 
 namespace rbpf_slam {
 namespace io {
@@ -77,6 +77,15 @@ core::LandmarkEstimate readLandmark(const YAML::Node& node, const std::string& w
                              "map is written by offline_slam (landmarks.yaml) or ~save_map");
   } else {
     throw std::runtime_error(where + ": type = '" + type + "' is not point or line");
+  }
+  // A map's coordinates are metres from its origin: beyond a thousand kilometres they are
+  // corrupt (a line from -1e300 to 1e300 made the map index file it in 2^29 cells).
+  for (const Eigen::Vector2d& v : {l.mean, l.start, l.end}) {
+    if (v.cwiseAbs().maxCoeff() > kMaxPlausibleCoordinateM) {
+      throw std::runtime_error(where + ": a coordinate beyond " +
+                               std::to_string(static_cast<long>(kMaxPlausibleCoordinateM)) +
+                               " m (corrupt data)");
+    }
   }
   const YAML::Node c = node["covariance"];
   if (!c || !c.IsSequence() || c.size() != 4) {

@@ -121,6 +121,11 @@ TEST(LandmarkFile, BrokenFilesAreRejectedNamingTheEntry) {
               "'x' is not finite");
   expectError("landmarks:\n  - {id: 1, type: point, x: 1, y: 2, covariance: [1, 0, 0, -1]}\n",
               "not symmetric positive definite");
+  // A line from -1e300 to 1e300 m hung the map's index (filed in 2^29 cells).
+  expectError(
+      "landmarks:\n  - {id: 2, type: line, rho: 0, theta: 1.57, start: [-1e300, 0], "
+      "end: [1e300, 1], covariance: [0.01, 0, 0, 0.01]}\n",
+      "landmarks[0]: a coordinate beyond 1000000 m");
   expectError("other: 1\n", "'landmarks' (a list) is missing");
   // The ground truth that mrclam_to_bag and simulate write beside their bags has the same
   // file name pattern: say what it is (it used to give "type = '' is not point or line").

@@ -93,8 +93,13 @@ LandmarkMap::CellBox LandmarkMap::cellsOf(const Landmark& landmark) {
   box.tag = kLineTag;
   box.bin = angleBinOf(f.angle);
   box.first_a = box.last_a = cellOf(f.rho, kLineRhoCellM, kLineLimit);
-  box.first_b = cellOf(f.extent_min, kLineAlongCellM, kLineLimit);
-  box.last_b = cellOf(f.extent_max, kLineAlongCellM, kLineLimit);
+  // A line is filed in every cell along its extent: a corrupt extent (1e300 m) would be 2^29
+  // cells. Beyond a thousand kilometres nothing is filed (nor looked up in practice).
+  constexpr double kMaxAlongM = 1e6;
+  box.first_b =
+      cellOf(std::clamp(f.extent_min, -kMaxAlongM, kMaxAlongM), kLineAlongCellM, kLineLimit);
+  box.last_b =
+      cellOf(std::clamp(f.extent_max, -kMaxAlongM, kMaxAlongM), kLineAlongCellM, kLineLimit);
   return box;
 }
 
