@@ -124,6 +124,10 @@ TEST(SlamConfig, ErrorsNameTheKeyValueAndRange) {
   EXPECT_NE(errorOf("motion: 3").find("must be a map"), std::string::npos);
   EXPECT_NE(errorOf("use_points: false\nuse_lines: false").find("nothing to map"),
             std::string::npos);
+  // Each within its range, together too many (8 GB, then a bad_alloc naming nothing).
+  const std::string total = errorOf("particles: 100000\nensemble: {members: 64}");
+  EXPECT_NE(total.find("particles x ensemble.members = 6400000 is above 200000"), std::string::npos)
+      << total;
 }
 
 TEST(SlamConfig, FrameNamesLoseALeadingSlash) {

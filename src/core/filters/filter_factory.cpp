@@ -1,11 +1,12 @@
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
 
 #include "rbpf_slam/core/alignment.h"
+#include "rbpf_slam/core/filters/distributed_filter.h"
 #include "rbpf_slam/core/filters/ekf_slam.h"
 #include "rbpf_slam/core/filters/ensemble_filter.h"
-#include "rbpf_slam/core/filters/distributed_filter.h"
 #include "rbpf_slam/core/filters/fastslam2.h"
 #include "rbpf_slam/core/filters/fault_injector.h"
 #include "rbpf_slam/core/filters/hinf_fastslam.h"
@@ -53,6 +54,20 @@ void validate(const FilterOptions& o) {
     throw std::invalid_argument("ensemble.members > 1 is not implemented for variant '" +
                                 o.variant + "' (fastslam2, hinf_fastslam only: the members are "
                                 "ranked by the marginal likelihood these estimate)");
+  }
+  {
+    // Each bound alone let 100000 particles x 64 members through: 8 GB, then std::bad_alloc
+    // naming nothing.
+    const long members = o.ensemble.members;
+    const long locals = o.variant == "dpf" ? std::max(1, o.dpf.local_filters) : 1;
+    const long total = static_cast<long>(o.particles) * members * locals;
+    constexpr long kMaxTotalParticles = 200000;
+    if (total > kMaxTotalParticles) {
+      throw std::invalid_argument(
+          "particles x ensemble.members" + std::string(locals > 1 ? " x dpf.local_filters" : "") +
+          " = " + std::to_string(total) + " is above " + std::to_string(kMaxTotalParticles) +
+          " (each particle holds a map: gigabytes); lower one of them");
+    }
   }
   if (o.ensemble.members > 1 && o.dpf.fault.enabled) {
     throw std::invalid_argument("ensemble.members > 1 with fault.enabled is not implemented "
