@@ -82,6 +82,7 @@ std::vector<StampedPose> readTum(std::istream& in, const std::string& source_nam
 }
 
 std::vector<StampedPose> readTum(const std::string& path) {
+  requireNotADevice(path);  // /dev/zero: one endless line, gigabytes before "read error"
   std::ifstream in(path);
   if (!in) throw std::runtime_error(path + ": cannot open trajectory file");
   return readTum(in, path);

@@ -396,6 +396,11 @@ World loadWorld(const std::string& path) {
   if (std::filesystem::is_directory(path, error)) {
     throw WorldFileError(path + ": is a directory, not a world file");
   }
+  if (std::filesystem::is_character_file(path, error) ||
+      std::filesystem::is_block_file(path, error)) {
+    // /dev/zero would be read whole: gigabytes, then std::bad_alloc.
+    throw WorldFileError(path + ": is a device, not a world file");
+  }
   std::ifstream file(path);
   if (!file) throw WorldFileError(path + ": cannot be opened");
   std::stringstream text;

@@ -134,10 +134,13 @@ SimMessages toSimMessages(const sim::SimEvent& event, const sim::Simulator& simu
 
 std::string groundTruthTumLine(const sim::SimEvent& event, const SimClock& clock) {
   const Pose2& p = event.true_pose;
-  char line[160];
-  std::snprintf(line, sizeof(line), "%.6f %.6f %.6f 0 0.000000000 0.000000000 %.9f %.9f\n",
-                clock.seconds(event.stamp), p.x(), p.y(), std::sin(0.5 * p.z()),
-                std::cos(0.5 * p.z()));
+  // Sized for any double (%f of 1e300 is 300 digits): a fixed buffer cut the newline.
+  const char* format = "%.6f %.6f %.6f 0 0.000000000 0.000000000 %.9f %.9f\n";
+  const double t = clock.seconds(event.stamp), qz = std::sin(0.5 * p.z()),
+               qw = std::cos(0.5 * p.z());
+  const int n = std::snprintf(nullptr, 0, format, t, p.x(), p.y(), qz, qw);
+  std::string line(n > 0 ? n : 0, '\0');
+  if (n > 0) std::snprintf(&line[0], line.size() + 1, format, t, p.x(), p.y(), qz, qw);
   return line;
 }
 

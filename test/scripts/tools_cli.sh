@@ -125,6 +125,10 @@ expect "evaluate one matched pose, --no-align" 0 '"ate_rmse_m": 5' \
 cat "$work/six.tum" "$work/six.tum" >"$work/twice.tum"
 # A diverged estimate (1e300 m) is read, but its errors overflow: no null figures with exit 0.
 for t in 1 2 3 4 5 6; do echo "$t 1e300 1e300 0 0 0 0 1"; done >"$work/diverged.tum"
+expect "evaluate a device" 1 "/dev/zero: is a device, not a file" "$bin/evaluate" /dev/zero \
+  "$work/six.tum"
+expect "simulate a device" 1 "/dev/zero: is a device, not a world file" "$bin/simulate" \
+  --world /dev/zero --output "$work/z.bag"
 expect "evaluate overflowing errors" 1 "the errors overflow" "$bin/evaluate" \
   "$work/diverged.tum" "$work/six.tum" --no-align
 expect "evaluate stamps out of order" 0 \

@@ -202,6 +202,16 @@ TEST(WorldYaml, RejectsAbsurdBeamCountsAndControlRates) {
       "rate.yaml",
       replaced(kMinimalWorld, "radius_m: 0.2", "radius_m: 0.2\n  control_rate_hz: 1.0e9"));
   expectContains(loadError(rate), rate + ": robot.control_rate_hz = ");
+  // Each within its limit, together 2000 kHz x 100000 beams: 120 GB of bag for 30 s.
+  const std::string flood = writeWorld(
+      "flood.yaml", replaced(replaced(kMinimalWorld, "range_noise_m: 0.01",
+                                      "range_noise_m: 0.01\n    rate_hz: 2000\n    "
+                                      "resolution_deg: 0.0036"),
+                             "radius_m: 0.2", "radius_m: 0.2\n  control_rate_hz: 10000"));
+  expectContains(loadError(flood), "beams a second (at most 1000000)");
+  const std::string fast = writeWorld(
+      "fast.yaml", replaced(kMinimalWorld, "radius_m: 0.2", "radius_m: 0.2\n  speed_mps: 1.0e300"));
+  expectContains(loadError(fast), fast + ": robot.speed_mps = ");
 }
 
 TEST(WorldYaml, RejectsAnUnclosedPolygonNamingFileAndField) {

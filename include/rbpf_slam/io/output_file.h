@@ -13,5 +13,9 @@ namespace io {
 /// the device (as root), and opening a pipe blocks until someone reads it.
 void requireReplaceableFile(const std::string& path);
 
+/// Throws std::runtime_error "PATH: is a device, not a file" for a character or block device:
+/// a reader that takes the whole input (/dev/zero) would fill the memory before it failed.
+void requireNotADevice(const std::string& path);
+
 }  // namespace io
 }  // namespace rbpf_slam

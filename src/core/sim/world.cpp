@@ -90,7 +90,8 @@ void checkObjectShape(const WorldObject& object, const std::string& field) {
 void checkRobot(const RobotConfig& robot) {
   nonNegative("robot.radius_m", robot.radius_m);
   positive("robot.wheelbase_m", robot.wheelbase_m);
-  positive("robot.speed_mps", robot.speed_mps);
+  // A mobile robot, indoor or a car: 100 m/s is far beyond either (1e300 went through walls).
+  checkRange("robot.speed_mps", robot.speed_mps, 0.0, 100.0, true);
   positive("robot.max_turn_rate_deg_s", robot.max_turn_rate_deg_s);
   checkRange("robot.max_steering_deg", robot.max_steering_deg, 0.0, 90.0, true, true);
   nonNegative("robot.max_steering_rate_deg_s", robot.max_steering_rate_deg_s);
@@ -143,6 +144,12 @@ void checkLaser(const LaserConfig& laser, double control_rate_hz) {
     fail(p + ".resolution_deg = " + number(laser.resolution_deg) + " gives " +
          number(std::floor(laser.fov_deg / laser.resolution_deg)) +
          " beams a scan (at most 100000)");
+  }
+  // ... and beams a second: a 1 million beams/s laser writes about 4 MB of bag a second.
+  if (laser.resolution_deg > 0.0 && laser.rate_hz * laser.fov_deg / laser.resolution_deg > 1e6) {
+    fail(p + ": rate_hz x fov_deg / resolution_deg = " +
+         number(laser.rate_hz * laser.fov_deg / laser.resolution_deg) +
+         " beams a second (at most 1000000)");
   }
   checkRangeLimits(p, laser.min_range_m, laser.max_range_m);
   nonNegative(p + ".range_noise_m", laser.range_noise_m);
