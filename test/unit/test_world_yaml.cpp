@@ -187,7 +187,7 @@ TEST(WorldYaml, RejectsNegativeNoiseNamingFileAndField) {
   const std::string path = writeWorld(
       "negative_noise.yaml", replaced(kMinimalWorld, "range_noise_m: 0.01", "range_noise_m: -1"));
   expectContains(loadError(path),
-                 path + ": sensors.laser.range_noise_m = -1 is out of range [0, inf)");
+                 path + ": sensors.laser.range_noise_m = -1 is out of range [0, 100]");
 }
 
 /// In range but absurd: a beam every 1e-9 deg ran out of memory ("vector::_M_default_append")
@@ -212,6 +212,11 @@ TEST(WorldYaml, RejectsAbsurdBeamCountsAndControlRates) {
   const std::string fast = writeWorld(
       "fast.yaml", replaced(kMinimalWorld, "radius_m: 0.2", "radius_m: 0.2\n  speed_mps: 1.0e300"));
   expectContains(loadError(fast), fast + ": robot.speed_mps = ");
+  // A range above 3.4e38 became inf in the bag's float range_max; the filters refuse > 1 km.
+  const std::string far =
+      writeWorld("far.yaml", replaced(kMinimalWorld, "range_noise_m: 0.01",
+                                      "range_noise_m: 0.01\n    max_range_m: 1.0e39"));
+  expectContains(loadError(far), far + ": sensors.laser.max_range_m = ");
 }
 
 TEST(WorldYaml, RejectsAnUnclosedPolygonNamingFileAndField) {
@@ -265,7 +270,8 @@ std::string withChanges(const std::string& changes) {
 TEST(WorldYaml, RejectsInfiniteNoise) {
   const std::string path = writeWorld(
       "inf_noise.yaml", replaced(kMinimalWorld, "range_noise_m: 0.01", "range_noise_m: .inf"));
-  expectContains(loadError(path), path + ": sensors.laser.range_noise_m = inf is out of range [0, inf)");
+  expectContains(loadError(path),
+                 path + ": sensors.laser.range_noise_m = inf is out of range [0, 100]");
 }
 
 /// A hair's ray spacing hung the run; 1e-300 overflowed the ray count and lost most echoes.

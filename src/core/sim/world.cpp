@@ -8,6 +8,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "rbpf_slam/core/plausibility.h"
+
 namespace rbpf_slam {
 namespace core {
 namespace sim {
@@ -127,6 +129,9 @@ void checkRangeLimits(const std::string& prefix, double min_range_m, double max_
     fail(prefix + ".max_range_m = " + number(max_range_m) + " must be finite and greater than " +
          prefix + ".min_range_m = " + number(min_range_m));
   }
+  // The filters and converters take ranges beyond a kilometre as corrupt (core/plausibility.h);
+  // above 3.4e38 the bag's float range_max is inf.
+  checkRange(prefix + ".max_range_m", max_range_m, 0.0, kMaxPlausibleRangeM, true);
 }
 
 /// Readings are taken at control steps, so no sensor can be faster than the control loop.
@@ -152,7 +157,7 @@ void checkLaser(const LaserConfig& laser, double control_rate_hz) {
          " beams a second (at most 1000000)");
   }
   checkRangeLimits(p, laser.min_range_m, laser.max_range_m);
-  nonNegative(p + ".range_noise_m", laser.range_noise_m);
+  checkRange(p + ".range_noise_m", laser.range_noise_m, 0.0, 100.0);  // 1e300 gave inf covariances
   checkRange(p + ".mount_x_m", laser.mount_x_m, -kInf, kInf, true, true);
   checkRange(p + ".mount_y_m", laser.mount_y_m, -kInf, kInf, true, true);
   checkRange(p + ".mount_yaw_deg", laser.mount_yaw_deg, -360.0, 360.0);
@@ -169,7 +174,7 @@ void checkRing(const RingSensorConfig& ring, const std::string& p, double contro
   nonNegative(p + ".ring_radius_m", ring.ring_radius_m);
   checkRange(p + ".cone_deg", ring.cone_deg, 0.0, 180.0, true);
   checkRangeLimits(p, ring.min_range_m, ring.max_range_m);
-  nonNegative(p + ".range_noise_m", ring.range_noise_m);
+  checkRange(p + ".range_noise_m", ring.range_noise_m, 0.0, 100.0);  // 1e300 gave inf covariances
   checkRange(p + ".critical_angle_deg", ring.critical_angle_deg, 0.0, 90.0, true);
   checkRange(p + ".ray_spacing_deg", ring.ray_spacing_deg, 0.0, ring.cone_deg, true);
   // Every reading casts a ray per spacing over the cone; a hair's spacing made a run hang (and
@@ -188,8 +193,8 @@ void checkRangeBearing(const RangeBearingConfig& sensor, double control_rate_hz)
   checkRate(p + ".rate_hz", sensor.rate_hz, control_rate_hz);
   checkRangeLimits(p, sensor.min_range_m, sensor.max_range_m);
   checkRange(p + ".fov_deg", sensor.fov_deg, 0.0, 360.0, true);
-  nonNegative(p + ".range_noise_m", sensor.range_noise_m);
-  nonNegative(p + ".bearing_noise_deg", sensor.bearing_noise_deg);
+  checkRange(p + ".range_noise_m", sensor.range_noise_m, 0.0, 100.0);  // 1e300 gave inf covariances
+  checkRange(p + ".bearing_noise_deg", sensor.bearing_noise_deg, 0.0, 180.0);
   checkRange(p + ".detection_probability", sensor.detection_probability, 0.0, 1.0, true);
 }
 
