@@ -12,6 +12,7 @@
 #include <stdexcept>
 
 #include "rbpf_slam/core/random.h"
+#include "rbpf_slam/io/output_file.h"
 #include "rbpf_slam/io/plausibility.h"
 
 namespace rbpf_slam {
@@ -214,6 +215,7 @@ CarmenLog parseCarmenLog(std::istream& in) {
 }
 
 CarmenLog readCarmenLog(const std::string& path) {
+  requireNotADevice(path);                   // /dev/zero would be read for ever
   gzFile file = gzopen(path.c_str(), "rb");  // reads uncompressed files unchanged
   if (file == nullptr) throw std::runtime_error(path + ": cannot open CARMEN log");
   CarmenLog log;

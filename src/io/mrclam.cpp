@@ -11,6 +11,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "rbpf_slam/io/output_file.h"
 #include "rbpf_slam/io/plausibility.h"
 
 namespace rbpf_slam {
@@ -124,6 +125,7 @@ int toInteger(double value, const std::string& source, std::size_t line, const c
 }
 
 std::ifstream openFile(const std::string& path) {
+  requireNotADevice(path);
   std::ifstream in(path);
   if (!in) throw std::runtime_error(path + ": cannot be opened");
   return in;

@@ -10,6 +10,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "rbpf_slam/io/output_file.h"
 #include "rbpf_slam/io/plausibility.h"
 
 namespace rbpf_slam {
@@ -129,6 +130,7 @@ VictoriaParkLog parseVictoriaPark(std::istream& in, const std::string& source) {
 }
 
 VictoriaParkLog loadVictoriaPark(const std::string& path) {
+  requireNotADevice(path);
   std::ifstream in(path);
   if (!in) throw std::runtime_error(path + ": cannot be opened");
   return parseVictoriaPark(in, path);

@@ -1,13 +1,17 @@
 #include "rbpf_slam/ros/bag_files.h"
 
+#include <fcntl.h>
 #include <rosbag/view.h>
 #include <sys/mman.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <topic_tools/shape_shifter.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <cerrno>
+#include <chrono>
+#include <csignal>
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
@@ -95,11 +99,13 @@ class BagRecords {
 /// What is wrong with a format 2.0 bag's chunk indexes ("" when nothing is), checked before
 /// rosbag trusts them: every index entry must point into its chunk, and in an uncompressed
 /// chunk at a record that fits in it. rosbag reads outside its buffer otherwise and the process
-/// dies by a signal.
-std::string chunkIndexProblem(const std::string& path) {
+/// dies by a signal. *unchecked: a chunk is compressed, so its records could not be checked.
+std::string chunkIndexProblem(const std::string& path, bool* unchecked) {
   BagRecords bag(path);
   std::string bytes;
+  *unchecked = true;
   if (!bag.read(0, 13, &bytes) || bytes != "#ROSBAG V2.0\n") return "";  // rosbag's to judge
+  *unchecked = false;
   uint64_t at = 13, index_at = bag.size();
   bool in_chunk = false;
   uint64_t chunk_at = 0, chunk_data_at = 0, chunk_size = 0;
@@ -121,6 +127,7 @@ std::string chunkIndexProblem(const std::string& path) {
       chunk_data_at = data_at;
       chunk_size = littleEndian(fields["size"], 0, 4);
       uncompressed = fields["compression"] == "none";
+      if (!uncompressed) *unchecked = true;
       if (uncompressed && chunk_size != data_size) {
         return "an uncompressed chunk of " + std::to_string(data_size) + " bytes that says " +
                std::to_string(chunk_size) + " at byte " + std::to_string(at);
@@ -133,19 +140,20 @@ std::string chunkIndexProblem(const std::string& path) {
       }
       for (uint64_t k = 0; k < count; ++k) {
         const uint64_t offset = littleEndian(bytes, 12 * k + 8, 4);
-        const std::string where = "index entry " + std::to_string(k + 1) +
-                                  " of the record at byte " + std::to_string(at) +
-                                  " points at offset " + std::to_string(offset) +
-                                  " of the chunk at byte " + std::to_string(chunk_at) + " (" +
-                                  std::to_string(chunk_size) + " bytes)";
-        if (offset >= chunk_size) return where + ", past its end";
+        const auto where = [&] {  // built only for the message
+          return "index entry " + std::to_string(k + 1) + " of the record at byte " +
+                 std::to_string(at) + " points at offset " + std::to_string(offset) +
+                 " of the chunk at byte " + std::to_string(chunk_at) + " (" +
+                 std::to_string(chunk_size) + " bytes)";
+        };
+        if (offset >= chunk_size) return where() + ", past its end";
         if (!uncompressed) continue;
         uint64_t message_data_at = 0, message_size = 0;
         std::map<std::string, std::string> message;
         std::string why;
         if (!bag.record(chunk_data_at + offset, &message, &message_data_at, &message_size, &why) ||
             message_data_at + message_size > chunk_data_at + chunk_size) {
-          return where + ", at a record that does not fit in the chunk";
+          return where() + ", at a record that does not fit in the chunk";
         }
       }
     }
@@ -169,7 +177,15 @@ void requireReadableMessages(const std::string& path) {
     return;
   }
   if (pid == 0) {
-    // The child: its own file handle (not the parent's offsets), no destructors, no output.
+    // The child: its own file handle (not the parent's offsets), no destructors, no output,
+    // no core file.
+    const struct rlimit no_core = {0, 0};
+    setrlimit(RLIMIT_CORE, &no_core);
+    const int null = open("/dev/null", O_WRONLY);
+    if (null >= 0) {
+      dup2(null, STDOUT_FILENO);
+      dup2(null, STDERR_FILENO);
+    }
     try {
       rosbag::Bag bag;
       bag.open(path, rosbag::bagmode::Read);
@@ -185,19 +201,42 @@ void requireReadableMessages(const std::string& path) {
     }
     _exit(0);
   }
+  // Waits while the child makes progress: one stuck on a message for a minute is stopped (a
+  // damaged bag can make rosbag loop) and the bag refused.
   int status = 0;
-  while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+  long last_index = -2;
+  auto last_progress = std::chrono::steady_clock::now();
+  bool stuck = false;
+  for (;;) {
+    const pid_t done = waitpid(pid, &status, WNOHANG);
+    if (done == pid || (done < 0 && errno != EINTR)) break;
+    if (progress->index != last_index) {
+      last_index = progress->index;
+      last_progress = std::chrono::steady_clock::now();
+    } else if (std::chrono::steady_clock::now() - last_progress > std::chrono::seconds(60)) {
+      kill(pid, SIGKILL);
+      waitpid(pid, &status, 0);
+      stuck = true;
+      break;
+    }
+    usleep(2000);
   }
   const ReadProgress where = *progress;
   munmap(shared, sizeof(ReadProgress));
-  if (!WIFSIGNALED(status)) return;
+  // Only a crash of the reading says the bag is damaged (not a kill from outside, e.g. the
+  // out-of-memory killer).
+  const int signal = WIFSIGNALED(status) ? WTERMSIG(status) : 0;
+  const bool crashed = signal == SIGSEGV || signal == SIGBUS || signal == SIGABRT ||
+                       signal == SIGFPE || signal == SIGILL;
+  if (!crashed && !stuck) return;
   char at[64];
   std::snprintf(at, sizeof(at), "%.3f", where.time);
   throw std::runtime_error(
       path + ": the bag is damaged: reading message " + std::to_string(where.index + 1) +
-      " (topic " + where.topic + ", bag time " + at + ") made the rosbag library crash (" +
-      strsignal(WTERMSIG(status)) +
-      "); its index is probably broken: try `rosbag reindex` on a copy, or `rosbag filter` "
+      " (topic " + where.topic + ", bag time " + at + ") made the rosbag library " +
+      (stuck ? std::string("hang for a minute")
+             : "crash (" + std::string(strsignal(signal)) + ")") +
+      "; its index is probably broken: try `rosbag reindex` on a copy, or `rosbag filter` "
       "to leave that part out");
 }
 
@@ -212,13 +251,15 @@ void openBagForReading(rosbag::Bag* bag, const std::string& path) {
   // rosbag::View of an empty bag begins at TIME_MAX and ends at TIME_MIN: its duration throws
   // "Duration is out of dual 32-bit range", naming nothing.
   if (rosbag::View(*bag).size() == 0) throw std::runtime_error(path + ": the bag holds no messages");
-  const std::string problem = chunkIndexProblem(path);
+  bool unchecked = true;
+  const std::string problem = chunkIndexProblem(path, &unchecked);
   if (!problem.empty()) {
     throw std::runtime_error(path + ": the bag is damaged (" + problem +
                              "); try `rosbag reindex` on a copy, or `rosbag filter` to leave "
                              "that part out");
   }
-  requireReadableMessages(path);
+  // Compressed chunks (or a format the parser does not read) are read once in a child first.
+  if (unchecked) requireReadableMessages(path);
 }
 
 PartialBag::PartialBag(const std::string& path)

@@ -92,8 +92,23 @@ int run(const Arguments& arguments) {
                              " matched pose(s): the alignment needs at least 2 (or --no-align)");
   }
   std::cout << io::toJson(result);
-  if (!std::isfinite(result.ate_rmse_m) || !std::isfinite(result.ate_max_m) ||
-      !std::isfinite(result.final_position_error_m)) {
+  const double figures[] = {result.duration_s,
+                            result.reference_length_m,
+                            result.ate_rmse_m,
+                            result.ate_mean_m,
+                            result.ate_median_m,
+                            result.ate_max_m,
+                            result.rotation_rmse_deg,
+                            result.rotation_mean_deg,
+                            result.rotation_max_deg,
+                            result.rpe_translation_mean_m,
+                            result.rpe_translation_rmse_m,
+                            result.rpe_rotation_mean_deg,
+                            result.rpe_rotation_rmse_deg,
+                            result.final_position_error_m,
+                            result.final_heading_error_deg};
+  for (double figure : figures) {
+    if (std::isfinite(figure)) continue;
     // Coordinates near 1e154 m (a diverged run) overflow when squared: null is no figure.
     throw std::runtime_error(
         "the errors overflow (ate_rmse_m " + std::to_string(result.ate_rmse_m) +

@@ -324,15 +324,17 @@ int run(const Arguments& arguments) {
   // run, a shifted clock): all of them is an error, some a warning.
   std::size_t outside = 0;
   const double odometry_begin = odometry.front().stamp, odometry_end = odometry.back().stamp;
+  // --command-delay moves the odometry later: the window widens by it.
+  const double margin = 1.0 + arguments.command_delay_s;
   for (const io::MrclamMeasurementGroup& g : groups) {
-    if (g.stamp < odometry_begin - 1.0 || g.stamp > odometry_end + 1.0) ++outside;
+    if (g.stamp < odometry_begin - margin || g.stamp > odometry_end + margin) ++outside;
   }
   if (outside > 0) {
     std::ostringstream why;
     why << std::fixed << std::setprecision(3) << robot_files << "Measurement.dat: " << outside
-        << " of " << groups.size() << " sighting time(s) lie more than 1 s outside the odometry ("
-        << odometry_begin << " .. " << odometry_end << " s; sightings " << groups.front().stamp
-        << " .. " << groups.back().stamp << " s)";
+        << " of " << groups.size() << " sighting time(s) lie more than " << margin
+        << " s outside the odometry (" << odometry_begin << " .. " << odometry_end
+        << " s; sightings " << groups.front().stamp << " .. " << groups.back().stamp << " s)";
     if (outside == groups.size()) throw std::runtime_error(why.str() + ": is it the same run?");
     std::cerr << "mrclam_to_bag: warning: " << why.str() << "\n";
   }

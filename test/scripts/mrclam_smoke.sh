@@ -38,7 +38,7 @@ awk '/^[ \t]*#/ || NF == 0 {print; next} {$1 = sprintf("%.3f", $1 + 1e6); print}
   "$data/Robot1_Measurement.dat" >"$work/shifted/Robot1_Measurement.dat"
 rc=0
 "$bin/mrclam_to_bag" "$work/shifted" 1 "$work/shifted.bag" 2>"$work/shifted.err" || rc=$?
-if [ "$rc" -ne 1 ] || ! grep -q "sighting time(s) lie more than 1 s outside the odometry" "$work/shifted.err"; then
+if [ "$rc" -ne 1 ] || ! grep -q "sighting time(s) lie more than 1.000 s outside the odometry" "$work/shifted.err"; then
   echo "FAIL: sightings outside the odometry: exit $rc"
   cat "$work/shifted.err"
   exit 1

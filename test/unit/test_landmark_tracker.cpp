@@ -221,9 +221,11 @@ TEST(LandmarkTracker, MoreLandmarksInViewThanItHoldsRaiseNoEventAtEveryFrame) {
   options.max_landmarks = 5;
   LandmarkTracker tracker(options);
   int events = 0, left_out = 0;
-  for (int step = 1; step <= 20; ++step) {
+  // Detection is not perfect: post (step mod 8) is missed at each frame.
+  for (int step = 1; step <= 40; ++step) {
     std::vector<TrackerObservation> seen;
     for (int k = 0; k < 8; ++k) {
+      if (step > 1 && k == step % 8) continue;
       seen.push_back(pointSeen(robotAt(step), Eigen::Vector2d(2.0 + 3.0 * k, 6.0)));
     }
     const TrackerEvent event = tracker.update(step, kStep, kStepCov, seen);
@@ -232,15 +234,21 @@ TEST(LandmarkTracker, MoreLandmarksInViewThanItHoldsRaiseNoEventAtEveryFrame) {
     EXPECT_LE(tracker.trackedLandmarks(), 5);
   }
   EXPECT_EQ(events, 1);
-  EXPECT_EQ(left_out, 20 * 3);
-  // When one leaves the view, a waiting one takes its place: one event.
-  std::vector<TrackerObservation> seen;
-  for (int k = 1; k < 8; ++k) {
-    seen.push_back(pointSeen(robotAt(21), Eigen::Vector2d(2.0 + 3.0 * k, 6.0)));
+  EXPECT_GE(left_out, 40 * 2);
+  // When one leaves the view for good, a waiting one takes its place once it has been unseen
+  // for a fifth of forget_after_steps: one event.
+  int started = 0, at = 0;
+  for (int step = 41; step <= 41 + options.forget_after_steps; ++step) {
+    std::vector<TrackerObservation> seen;
+    for (int k = 1; k < 8; ++k) {
+      seen.push_back(pointSeen(robotAt(step), Eigen::Vector2d(2.0 + 3.0 * k, 6.0)));
+    }
+    const TrackerEvent event = tracker.update(step, kStep, kStepCov, seen);
+    if (event.new_landmark && at == 0) at = step;
+    started += event.started;
   }
-  const TrackerEvent event = tracker.update(21, kStep, kStepCov, seen);
-  EXPECT_TRUE(event.new_landmark);
-  EXPECT_EQ(event.started, 1);
+  EXPECT_EQ(started, 1);
+  EXPECT_EQ(at, 39 + options.forget_after_steps / 5);  // post 0 was last seen at step 39
   EXPECT_EQ(tracker.trackedLandmarks(), 5);
 }
 

@@ -135,6 +135,13 @@ TEST(SonarFeatureExtractor, AReadingALittleLateJoinsTheWindowWithoutAddingTravel
   // 1 m of travel: 11 readings of each transducer (the late one of step 20 was taken at 1.9 m).
   EXPECT_EQ(extractor.echoes().size(), 22u);
   EXPECT_EQ(extractor.stats().clock_jumps, 0);
+  // "A little" is measured from the newest echo: a chain of readings each 0.4 s older than the
+  // one before does not walk the window back.
+  EXPECT_FALSE(extractor.wouldClearWindow(29.6));
+  EXPECT_EQ(extractor.addReadings({reading(1.0, left)}, Pose2(2.5, 0, 0), 29.6), 1);
+  EXPECT_FALSE(extractor.wouldClearWindow(29.2));
+  EXPECT_EQ(extractor.addReadings({reading(1.0, left)}, Pose2(2.0, 0, 0), 29.2), 1);
+  EXPECT_TRUE(extractor.wouldClearWindow(28.8));
 }
 
 TEST(SonarFeatureExtractor, StampsGoingBackClearTheWindowButKeepTheCounters) {

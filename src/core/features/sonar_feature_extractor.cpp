@@ -116,7 +116,8 @@ int SonarFeatureExtractor::transducerIndex(const Pose2& mount) {
 }
 
 bool SonarFeatureExtractor::wouldClearWindow(double stamp) const {
-  return !echoes_.empty() && stamp < echoes_.back().stamp - kClockJumpBackS;
+  // Against the newest echo, not the last added: a chain of late readings must not walk back.
+  return !echoes_.empty() && stamp < newest_echo_stamp_ - kClockJumpBackS;
 }
 
 int SonarFeatureExtractor::addReadings(const std::vector<ConeReading>& readings,
@@ -174,6 +175,7 @@ int SonarFeatureExtractor::addReadings(const std::vector<ConeReading>& readings,
       continue;
     }
     last_kept_[echo.transducer] = echo;
+    newest_echo_stamp_ = echoes_.empty() ? stamp : std::max(newest_echo_stamp_, stamp);
     echoes_.push_back(echo);
     ++kept;
   }

@@ -59,14 +59,20 @@ void validate(const FilterOptions& o) {
     // Each bound alone let 100000 particles x 64 members through: 8 GB, then std::bad_alloc
     // naming nothing.
     const long members = o.ensemble.members;
-    const long locals = o.variant == "dpf" ? std::max(1, o.dpf.local_filters) : 1;
+    // dpf: one set per local filter; robust_fastslam2: M x K candidates at a robust step.
+    const long locals = o.variant == "dpf"                ? std::max(1, o.dpf.local_filters)
+                        : o.variant == "robust_fastslam2" ? std::max(1, o.robust.ancestor_sets)
+                                                          : 1;
     const long total = static_cast<long>(o.particles) * members * locals;
     constexpr long kMaxTotalParticles = 200000;
     if (total > kMaxTotalParticles) {
-      throw std::invalid_argument(
-          "particles x ensemble.members" + std::string(locals > 1 ? " x dpf.local_filters" : "") +
-          " = " + std::to_string(total) + " is above " + std::to_string(kMaxTotalParticles) +
-          " (each particle holds a map: gigabytes); lower one of them");
+      throw std::invalid_argument("particles x ensemble.members" +
+                                  std::string(locals == 1          ? ""
+                                              : o.variant == "dpf" ? " x dpf.local_filters"
+                                                                   : " x robust.ancestor_sets") +
+                                  " = " + std::to_string(total) + " is above " +
+                                  std::to_string(kMaxTotalParticles) +
+                                  " (each particle holds a map: gigabytes); lower one of them");
     }
   }
   if (o.ensemble.members > 1 && o.dpf.fault.enabled) {

@@ -73,11 +73,12 @@ TrackerEvent LandmarkTracker::update(int step, const Pose2& increment,
     double d2 = 0.0;
     const int index = associate(*o, before, &d2);
     if (index < 0 || d2 > options_.new_landmark_chi2) {
-      // Full: a landmark not seen in this frame makes room. When every tracked one was seen in
-      // this frame, the sighting is left out: dropping one seen now would start it again at the
-      // next frame, and the tracker would raise an event at every frame (thrashing).
+      // Full: a landmark unseen for a fifth of forget_after_steps makes room. Otherwise the
+      // sighting is left out: dropping one seen now (or missed for a frame or two, as detections
+      // are) would start it again soon, and the tracker would raise an event at most frames.
       if (trackedLandmarks() >= options_.max_landmarks) {
-        const int evicted = leastRecentlySeen(step);
+        const int unseen_for = std::max(1, options_.forget_after_steps / 5);
+        const int evicted = leastRecentlySeen(step - unseen_for + 1);
         if (evicted < 0) {
           ++event.left_out_full;
           continue;

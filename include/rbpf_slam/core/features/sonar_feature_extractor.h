@@ -133,6 +133,7 @@ class SonarFeatureExtractor {
   bool has_pose_ = false;
   Pose2 last_pose_ = Pose2::Zero();  // at the newest stamp seen (a late reading leaves it)
   double last_pose_stamp_ = 0.0;
+  double newest_echo_stamp_ = 0.0;  // of the echoes in the window (set with the first)
   double travel_ = 0.0;
   bool has_extracted_ = false;
   Pose2 last_extraction_pose_ = Pose2::Zero();
