@@ -9,8 +9,9 @@ struct LandmarkTrackerOptions {
   double new_landmark_chi2 = 20.0;  // beyond this from every tracked landmark: a new landmark
   int forget_after_steps = 25;      // a landmark unseen for this many steps is dropped
   double forget_distance_m = 25.0;  // a landmark farther than this from the robot is dropped
-  int max_landmarks = 40;           // hard bound of the state (oldest-seen dropped first; when
-                                    // all were seen in the frame, new sightings are left out)
+  int max_landmarks = 40;           // hard bound of the state: when full, the landmark unseen
+                                    // longest makes room if unseen for forget_after_steps / 5
+                                    // steps; otherwise new sightings are left out
   // A line matches a tracked one only when the observed segment comes this close to the extent
   // seen so far (as FastSLAM's association.line_overlap_margin_m), and is forgotten by its
   // distance to that extent: a collinear wall 35 m on is another landmark, not the same
