@@ -21,12 +21,14 @@ void requireReplaceableFile(const std::string& path) {
                            " (not a regular file); not written over");
 }
 
-void requireNotADevice(const std::string& path) {
+bool isDevice(const std::string& path) {
   std::error_code error;
   const std::filesystem::file_status status = std::filesystem::status(path, error);
-  if (std::filesystem::is_character_file(status) || std::filesystem::is_block_file(status)) {
-    throw std::runtime_error(path + ": is a device, not a file");
-  }
+  return std::filesystem::is_character_file(status) || std::filesystem::is_block_file(status);
+}
+
+void requireNotADevice(const std::string& path) {
+  if (isDevice(path)) throw std::runtime_error(path + ": is a device, not a file");
 }
 
 }  // namespace io

@@ -11,6 +11,7 @@
 #include <type_traits>
 #include <vector>
 
+#include "rbpf_slam/io/output_file.h"
 #include "rbpf_slam/io/yaml_section.h"
 
 namespace rbpf_slam {
@@ -396,11 +397,7 @@ World loadWorld(const std::string& path) {
   if (std::filesystem::is_directory(path, error)) {
     throw WorldFileError(path + ": is a directory, not a world file");
   }
-  if (std::filesystem::is_character_file(path, error) ||
-      std::filesystem::is_block_file(path, error)) {
-    // /dev/zero would be read whole: gigabytes, then std::bad_alloc.
-    throw WorldFileError(path + ": is a device, not a world file");
-  }
+  if (isDevice(path)) throw WorldFileError(path + ": is a device, not a world file");
   std::ifstream file(path);
   if (!file) throw WorldFileError(path + ": cannot be opened");
   std::stringstream text;

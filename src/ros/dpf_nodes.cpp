@@ -1,8 +1,10 @@
 #include "rbpf_slam/ros/dpf_nodes.h"
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <cstdlib>
-#include <random>
+#include <functional>
 #include <set>
 #include <sstream>
 #include <stdexcept>
@@ -37,6 +39,20 @@ void fromMatrix(const Eigen::Matrix3d& m, Array* a) {
   for (int r = 0; r < 3; ++r) {
     for (int c = 0; c < 3; ++c) (*a)[3 * r + c] = m(r, c);
   }
+}
+
+/// Tells this process from another, or from itself restarted (a DpfStep's run, a
+/// DpfLocalEstimate's sender): host, pid and start time mixed (splitmix64). An identifier, not
+/// a draw: no filter takes randomness from it.
+std::uint64_t processToken() {
+  char host[256] = {0};
+  gethostname(host, sizeof(host) - 1);
+  std::uint64_t x = std::hash<std::string>()(host) ^ (static_cast<std::uint64_t>(getpid()) << 32) ^
+                    static_cast<std::uint64_t>(ros::WallTime::now().toNSec());
+  x += 0x9E3779B97F4A7C15ull;
+  x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
+  x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
+  return x ^ (x >> 31);
 }
 
 }  // namespace
@@ -168,7 +184,7 @@ RemoteDpfFilter::RemoteDpfFilter(ros::NodeHandle nh, const core::FilterOptions& 
     : options_(options),
       nh_(nh),
       coordinator_(options),
-      run_(static_cast<std::uint32_t>(std::random_device{}())) {
+      run_(static_cast<std::uint32_t>(processToken())) {
   core::validate(options.dpf);
   ros::NodeHandle queue_nh(nh_);
   queue_nh.setCallbackQueue(&queue_);
@@ -339,7 +355,7 @@ std::vector<core::WeightedPose> RemoteDpfFilter::particles() const {
 }
 
 DpfLocalNode::DpfLocalNode(ros::NodeHandle nh, ros::NodeHandle private_nh)
-    : sender_((static_cast<std::uint64_t>(std::random_device{}()) << 32) ^ std::random_device{}()) {
+    : sender_(processToken()) {
   const io::SlamConfig config = loadConfigFromParams(private_nh, {"index", "crash_at_step"});
   core::FilterOptions options = config.filter;
   options.variant = "dpf";

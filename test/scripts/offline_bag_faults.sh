@@ -230,14 +230,19 @@ vrc=0
 "$bin/validate_bag" "$work/farbagtime.bag" >"$work/farbagtime.val" 2>&1 || vrc=$?
 [ "$vrc" -eq 1 ] || { fail "validate_bag farbagtime: exit $vrc"; cat "$work/farbagtime.val"; }
 
-for tool in offline_slam validate_bag; do
+# open_bag TOOL NAME: offline_slam or validate_bag on NAME.bag; output in NAME.err, status in $erc.
+open_bag() {
   erc=0
-  if [ "$tool" = offline_slam ]; then
-    "$bin/offline_slam" --bag "$work/empty.bag" --config "$root/config/laser_fastslam2.yaml" \
-      --output "$work/out_empty" >"$work/empty.err" 2>&1 || erc=$?
+  if [ "$1" = offline_slam ]; then
+    "$bin/offline_slam" --bag "$work/$2.bag" --config "$root/config/laser_fastslam2.yaml" \
+      --output "$work/out_$2" >"$work/$2.err" 2>&1 || erc=$?
   else
-    "$bin/validate_bag" "$work/empty.bag" >"$work/empty.err" 2>&1 || erc=$?
+    "$bin/validate_bag" "$work/$2.bag" >"$work/$2.err" 2>&1 || erc=$?
   fi
+}
+
+for tool in offline_slam validate_bag; do
+  open_bag "$tool" empty
   [ "$erc" -ne 0 ] || fail "empty: $tool exited 0"
   grep -qF "$work/empty.bag: the bag holds no messages" "$work/empty.err" ||
     { fail "empty: $tool's message:"; cat "$work/empty.err"; }
@@ -245,13 +250,7 @@ done
 
 for name in badindex_past badindex_inside; do
   for tool in offline_slam validate_bag; do
-    erc=0
-    if [ "$tool" = offline_slam ]; then
-      "$bin/offline_slam" --bag "$work/$name.bag" --config "$root/config/laser_fastslam2.yaml" \
-        --output "$work/out_$name" >"$work/$name.err" 2>&1 || erc=$?
-    else
-      "$bin/validate_bag" "$work/$name.bag" >"$work/$name.err" 2>&1 || erc=$?
-    fi
+    open_bag "$tool" "$name"
     { [ "$erc" -ne 0 ] && [ "$erc" -lt 128 ]; } || fail "$name: $tool exited $erc"
     grep -qF "$work/$name.bag: the bag is damaged (index entry 1 of the record at byte" \
       "$work/$name.err" || { fail "$name: $tool's message:"; cat "$work/$name.err"; }

@@ -1,6 +1,6 @@
 #pragma once
 // Checks every writer runs before it writes a file the user named (a trajectory, a bag, a
-// run directory's files).
+// run directory's files), and the readers' check of an input path.
 
 #include <string>
 
@@ -13,8 +13,10 @@ namespace io {
 /// the device (as root), and opening a pipe blocks until someone reads it.
 void requireReplaceableFile(const std::string& path);
 
-/// Throws std::runtime_error "PATH: is a device, not a file" for a character or block device:
-/// a reader that takes the whole input (/dev/zero) would fill the memory before it failed.
+/// True for a character or block device, which a reader taking its whole input (/dev/zero)
+/// would read until the memory is full.
+bool isDevice(const std::string& path);
+/// Throws std::runtime_error "PATH: is a device, not a file" when isDevice(PATH) (readers).
 void requireNotADevice(const std::string& path);
 
 }  // namespace io
