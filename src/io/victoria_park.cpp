@@ -10,6 +10,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "rbpf_slam/core/filters/observation.h"
 #include "rbpf_slam/io/output_file.h"
 #include "rbpf_slam/io/plausibility.h"
 
@@ -117,7 +118,7 @@ VictoriaParkLog parseVictoriaPark(std::istream& in, const std::string& source) {
              "LANDMARK at range " + std::to_string(l.position.norm()) +
                  " m is implausible (0.001.." + std::to_string(kMaxPlausibleRangeM) + " m)");
       }
-      if (!positiveSemidefinite(l.covariance) || l.covariance.trace() <= 0.0) {
+      if (!core::finitePositiveDefinite(l.covariance)) {
         fail(source, line, "LANDMARK covariance is not positive definite");
       }
       log.landmarks.push_back(l);

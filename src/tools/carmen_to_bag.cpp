@@ -25,6 +25,7 @@
 #include <vector>
 
 #include "rbpf_slam/core/geometry.h"
+#include "rbpf_slam/core/require_range.h"
 #include "rbpf_slam/io/carmen.h"
 #include "rbpf_slam/io/output_file.h"
 #include "rbpf_slam/io/tool_arguments.h"
@@ -75,17 +76,13 @@ Arguments parseArguments(int argc, char** argv) {
     }
   }
   // Beyond these the simulated odometry is nonsense (1e307 gave NaN odometry).
-  const auto shown = [](double x) {
-    char text[32];
-    std::snprintf(text, sizeof(text), "%g", x);
-    return std::string(text);
-  };
   if (!(arguments.noise.scale_bias > -0.99 && arguments.noise.scale_bias <= 1.0)) {
-    throw std::invalid_argument("--odom-bias " + shown(arguments.noise.scale_bias) +
+    throw std::invalid_argument("--odom-bias " + core::formatNumber(arguments.noise.scale_bias) +
                                 " is outside (-0.99, 1] (a scale error: 0.02 is 2 %)");
   }
   if (arguments.noise.noise_per_unit > 10.0) {
-    throw std::invalid_argument("--odom-noise " + shown(arguments.noise.noise_per_unit) +
+    throw std::invalid_argument("--odom-noise " +
+                                core::formatNumber(arguments.noise.noise_per_unit) +
                                 " is above 10 (a sigma per unit travelled)");
   }
   if (positional.size() != 2) {

@@ -30,6 +30,7 @@
 #include <vector>
 
 #include "rbpf_slam/core/geometry.h"
+#include "rbpf_slam/core/require_range.h"
 #include "rbpf_slam/io/json_writer.h"
 #include "rbpf_slam/io/mrclam.h"
 #include "rbpf_slam/io/output_file.h"
@@ -134,9 +135,9 @@ Arguments parseArguments(int argc, char** argv) {
                 {"--command-delay", arguments.command_delay_s, 60.0}};
   for (const auto& limit : limits) {
     if (limit.value > limit.max) {
-      char text[96];
-      std::snprintf(text, sizeof(text), " %g is above %g", limit.value, limit.max);
-      throw std::invalid_argument(limit.option + std::string(text));
+      throw std::invalid_argument(std::string(limit.option) + " " +
+                                  core::formatNumber(limit.value) + " is above " +
+                                  core::formatNumber(limit.max));
     }
   }
   return arguments;
