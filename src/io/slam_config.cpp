@@ -298,7 +298,7 @@ void readRos(YamlSection& top, RosOptions* o) {
   top.read("base_frame", &o->base_frame);
   top.read("scan_topic", &o->scan_topic);
   top.read("features_topic", &o->features_topic);
-  top.read("sonar_topic", &o->sonar_topic);
+  top.readNames("sonar_topic", &o->sonar_topics);
   top.read("sonar_cloud_topic", &o->sonar_cloud_topic);
   top.read("sonar_source", &o->sonar_source, {"range", "cloud"});
   top.read("sonar_frame_prefix", &o->sonar_frame_prefix);

@@ -164,6 +164,40 @@ void YamlSection::read(const std::string& key, std::vector<double>* value) {
   *value = parsed;
 }
 
+void YamlSection::readNames(const std::string& key, std::vector<std::string>* value) {
+  const YAML::Node n = child(key);
+  if (!n) return;
+  if (!n.IsScalar() && !n.IsSequence()) {
+    throw ConfigError(where(key) + " must be a name or a list of names");
+  }
+  std::vector<YAML::Node> items;
+  if (n.IsScalar()) {
+    items.push_back(n);
+  } else {
+    for (const YAML::Node& item : n) items.push_back(item);
+  }
+  std::vector<std::string> parsed;
+  for (const YAML::Node& item : items) {
+    if (!item.IsScalar()) {
+      throw ConfigError(where(key) + " contains " + describe(item) + ", not a name");
+    }
+    const std::string name = item.Scalar();
+    if (name.empty()) throw ConfigError(where(key) + " contains an empty name");
+    if (n.IsScalar() && name.front() == '[') {  // roslaunch's <param value="[a, b]"/> is a string
+      throw ConfigError(where(key) + " = '" + name +
+                        "' is one string, not a list; in a launch file give a list with "
+                        "<rosparam param=\"" +
+                        key + "\">[a, b]</rosparam>");
+    }
+    if (std::find(parsed.begin(), parsed.end(), name) != parsed.end()) {
+      throw ConfigError(where(key) + " names '" + name + "' twice");
+    }
+    parsed.push_back(name);
+  }
+  if (parsed.empty()) throw ConfigError(where(key) + " is an empty list (at least one name)");
+  *value = parsed;
+}
+
 YamlSection YamlSection::section(const std::string& key) {
   const YAML::Node n = child(key);
   if (n && !n.IsMap() && !n.IsNull()) throw ConfigError(where(key) + " must be a map");

@@ -288,7 +288,13 @@ std::string describeTopics(const rosbag::Bag& bag) {
 /// Refuses a topic of the wrong message type (e.g. scan_topic set to an odometry topic)
 /// instead of counting every message as malformed.
 void checkTopicTypes(rosbag::View& view, const std::string& bag_path, const io::RosOptions& ros,
-                     const std::string& sensor_topic) {
+                     const std::string& frontend) {
+  const auto among = [](const std::string& topic, const std::vector<std::string>& names) {
+    for (const std::string& name : names) {
+      if (topic == stripSlash(name)) return true;
+    }
+    return false;
+  };
   for (const rosbag::ConnectionInfo* c : view.getConnections()) {
     const std::string topic = stripSlash(c->topic);
     std::vector<std::string> allowed;
@@ -296,14 +302,15 @@ void checkTopicTypes(rosbag::View& view, const std::string& bag_path, const io::
     if (topic == stripSlash(ros.features_topic)) {
       allowed = {"rbpf_slam/FeatureArray"};
       key = "features_topic";
-    } else if (topic == stripSlash(sensor_topic) && sensor_topic == ros.scan_topic) {
+    } else if (frontend == "laser" && topic == stripSlash(ros.scan_topic)) {
       allowed = {"sensor_msgs/LaserScan"};
       key = "scan_topic";
-    } else if (topic == stripSlash(sensor_topic) && sensor_topic == ros.sonar_cloud_topic &&
-               ros.sonar_source == "cloud") {
+    } else if (frontend == "sonar" && ros.sonar_source == "cloud" &&
+               topic == stripSlash(ros.sonar_cloud_topic)) {
       allowed = {"sensor_msgs/PointCloud", "sensor_msgs/PointCloud2"};
       key = "sonar_cloud_topic";
-    } else if (topic == stripSlash(sensor_topic)) {
+    } else if (frontend == "sonar" && ros.sonar_source != "cloud" &&
+               among(topic, ros.sonar_topics)) {
       allowed = {"sensor_msgs/Range"};
       key = "sonar_topic";
     }
@@ -494,11 +501,12 @@ OfflineSummary OfflineRunner::run() {
   // In seconds as doubles: a ros::Duration of bag times near 2^32 s throws.
   summary.bag_duration_s = bag_end.toSec() - bag_begin.toSec();
   const io::RosOptions& ros_options = config_.ros;
-  std::string sensor_topic;  // the raw sensor topic of the front end, if any
-  if (config_.frontend == "laser") sensor_topic = ros_options.scan_topic;
+  std::vector<std::string> sensor_topics;  // the raw sensor topics of the front end, if any
+  if (config_.frontend == "laser") sensor_topics = {ros_options.scan_topic};
   if (config_.frontend == "sonar") {
-    sensor_topic = ros_options.sonar_source == "cloud" ? ros_options.sonar_cloud_topic
-                                                       : ros_options.sonar_topic;
+    sensor_topics = ros_options.sonar_source == "cloud"
+                        ? std::vector<std::string>{ros_options.sonar_cloud_topic}
+                        : ros_options.sonar_topics;
   }
   // grid_pf maps raw readings only: line and point features are of no use to it.
   const bool uses_features = pipeline_.session().filter().usesLandmarkFeatures();
@@ -506,14 +514,15 @@ OfflineSummary OfflineRunner::run() {
   if (uses_features) {
     topics = {"/" + stripSlash(ros_options.features_topic), stripSlash(ros_options.features_topic)};
   }
-  if (!sensor_topic.empty()) {
-    topics.push_back("/" + stripSlash(sensor_topic));
-    topics.push_back(stripSlash(sensor_topic));
+  std::string wanted;  // for the message when none of them has a message
+  for (const std::string& topic : sensor_topics) {
+    topics.push_back("/" + stripSlash(topic));
+    topics.push_back(stripSlash(topic));
+    wanted += (wanted.empty() ? "'" : ", '") + topic + "'";
   }
   rosbag::View view(bag, rosbag::TopicQuery(topics));
-  checkTopicTypes(view, options_.bag_path, ros_options, sensor_topic);
+  checkTopicTypes(view, options_.bag_path, ros_options, config_.frontend);
   if (view.size() == 0) {
-    std::string wanted = sensor_topic.empty() ? "" : "'" + sensor_topic + "'";
     if (uses_features) {
       wanted += (wanted.empty() ? "'" : " or '") + ros_options.features_topic + "'";
     } else {
@@ -522,6 +531,16 @@ OfflineSummary OfflineRunner::run() {
     }
     throw std::runtime_error(options_.bag_path + ": no messages on " + wanted + "; the bag has " +
                              describeTopics(bag));
+  }
+  // One of several sensor topics without a message, the others with: most likely a misspelt name.
+  for (const std::string& topic : sensor_topics) {
+    if (sensor_topics.size() < 2) break;
+    const std::vector<std::string> names{"/" + stripSlash(topic), stripSlash(topic)};
+    if (rosbag::View(bag, rosbag::TopicQuery(names)).size() > 0) continue;
+    std::fprintf(stderr,
+                 "offline_slam: no message on sonar topic '%s' (the others of sonar_topic have "
+                 "some); the bag has %s\n",
+                 topic.c_str(), describeTopics(bag).c_str());
   }
   // The whole bag's tf fits in memory for the bags this runner is meant for (hours of 2D data).
   // Read after the topics are checked: on a large bag that pass takes a while.

@@ -74,7 +74,9 @@ SlamNode::SlamNode(ros::NodeHandle nh, ros::NodeHandle private_nh,
         nh_.subscribe(ros_options.sonar_cloud_topic, static_cast<uint32_t>(ros_options.queue_size),
                       &SlamNode::sonarCloudArrived, this);
   } else if (config_.frontend == "sonar") {
-    sonar_input_ = subscribeFiltered(ros_options.sonar_topic, &SlamNode::sonarCallback);
+    for (const std::string& topic : ros_options.sonar_topics) {
+      sonar_inputs_.push_back(subscribeFiltered(topic, &SlamNode::sonarCallback));
+    }
   }
   // grid_pf maps raw readings only; as offline_slam, the node leaves features alone.
   if (pipeline_.session().filter().usesLandmarkFeatures()) {
@@ -653,7 +655,8 @@ std::string SlamNode::inputTopics() const {
   const io::RosOptions& o = config_.ros;
   std::vector<std::string> topics;
   if (scan_input_) topics.push_back(o.scan_topic);
-  if (sonar_input_) topics.push_back(o.sonar_topic);
+  if (!sonar_inputs_.empty())
+    topics.insert(topics.end(), o.sonar_topics.begin(), o.sonar_topics.end());
   if (sonar_cloud_input_) topics.push_back(o.sonar_cloud_topic);
   if (features_input_) topics.push_back(o.features_topic);
   std::string text;
@@ -674,6 +677,21 @@ void SlamNode::publishDiagnostics(const ros::WallTimerEvent&) {
         << " and tf " << o.odom_frame << " -> " << o.base_frame
         << " (check the names against `rostopic list` and the config's *_topic / *_frame keys)";
     warnThrottled("no input", why.str());
+  }
+  // One of several sonar topics silent while the others talk: most likely a misspelt name.
+  if (sonar_inputs_.size() > 1 && waited >= kSilentInputWarnS) {
+    const TfGatedSubscriber<sensor_msgs::Range>* talking = nullptr;
+    for (const auto& input : sonar_inputs_) {
+      if (input->received() > 0) talking = input.get();
+    }
+    for (const auto& input : sonar_inputs_) {
+      if (!talking || input->received() > 0) continue;
+      if (!silent_sonar_topics_.insert(input->topic()).second) continue;  // said once
+      ROS_WARN_STREAM("rbpf_slam_node: no message on sonar topic '"
+                      << input->topic() << "' in " << static_cast<int>(waited) << " s while '"
+                      << talking->topic()
+                      << "' has some: check the name in sonar_topic against `rostopic list`");
+    }
   }
   diagnostics_.setPaused(paused_);
   diagnostics_.setOdometryGaps(pipeline_.session().gaps());
@@ -712,7 +730,7 @@ void SlamNode::resetAll(const std::string& why) {
   pipeline_.reset();  // filter, history and the scan matcher's reference
   tf_buffer_.clear();
   if (scan_input_) scan_input_->clear();
-  if (sonar_input_) sonar_input_->clear();
+  for (const auto& input : sonar_inputs_) input->clear();
   if (sonar_cloud_input_) sonar_cloud_input_->clear();
   if (features_input_) features_input_->clear();
   updates_ = 0;

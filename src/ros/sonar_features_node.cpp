@@ -39,9 +39,11 @@ SonarFeaturesNode::SonarFeaturesNode(ros::NodeHandle nh, ros::NodeHandle private
              "); is the frame name right and its transform published?");
   };
   // Echoes are placed by odometry, so wait for odom -> base as well as base -> transducer.
-  sonar_input_ = std::make_unique<TfGatedSubscriber<sensor_msgs::Range>>(
-      nh, config_.ros.sonar_topic, static_cast<uint32_t>(config_.ros.queue_size), &tf_buffer_,
-      config_.ros.base_frame, config_.ros.odom_frame, std::move(handlers));
+  for (const std::string& topic : config_.ros.sonar_topics) {
+    sonar_inputs_.push_back(std::make_unique<TfGatedSubscriber<sensor_msgs::Range>>(
+        nh, topic, static_cast<uint32_t>(config_.ros.queue_size), &tf_buffer_,
+        config_.ros.base_frame, config_.ros.odom_frame, handlers));
+  }
   features_publisher_ = nh.advertise<FeatureArray>(config_.ros.features_topic, 10);
   diagnostics_publisher_ = nh.advertise<diagnostic_msgs::DiagnosticArray>("/diagnostics", 10);
   diagnostics_timer_ =

@@ -4,6 +4,7 @@
 
 #include <geometry_msgs/PoseWithCovarianceStamped.h>
 #include <gtest/gtest.h>
+#include <nav_msgs/OccupancyGrid.h>
 #include <nav_msgs/Path.h>
 #include <ros/ros.h>
 #include <std_srvs/Empty.h>
@@ -70,6 +71,7 @@ class PlaybackObserver {
     landmarks_sub_ = nh_.subscribe(prefix + "landmarks", 100, &PlaybackObserver::onLandmarks, this);
     pose_sub_ = nh_.subscribe(prefix + "pose", 100, &PlaybackObserver::onPose, this);
     path_sub_ = nh_.subscribe(prefix + "trajectory", 10, &PlaybackObserver::onPath, this);
+    map_sub_ = nh_.subscribe(prefix + "map", 2, &PlaybackObserver::onMap, this);
     tf_sub_ = nh_.subscribe("/tf", 1000, &PlaybackObserver::onTf, this);
   }
 
@@ -131,6 +133,8 @@ class PlaybackObserver {
   nav_msgs::Path last_path_;
   int map_to_odom_ = 0;
   int non_finite_map_to_odom_ = 0;
+  long max_occupied_cells_ = 0;  // the most occupied (>= 65) and free (< 20) cells of one ~map
+  long max_free_cells_ = 0;
 
  private:
   void onLandmarks(const visualization_msgs::MarkerArray& msg) {
@@ -171,6 +175,16 @@ class PlaybackObserver {
     last_pose_stamp_ = std::max(last_pose_stamp_, msg.header.stamp.toSec());
   }
 
+  void onMap(const nav_msgs::OccupancyGrid& msg) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    const long occupied = std::count_if(msg.data.begin(), msg.data.end(),
+                                        [](int8_t v) { return v >= 65 && v <= 100; });
+    const long free =
+        std::count_if(msg.data.begin(), msg.data.end(), [](int8_t v) { return v >= 0 && v < 20; });
+    max_occupied_cells_ = std::max(max_occupied_cells_, occupied);
+    max_free_cells_ = std::max(max_free_cells_, free);
+  }
+
   void onPath(const nav_msgs::Path& msg) {
     std::lock_guard<std::mutex> lock(mutex_);
     last_path_ = msg;
@@ -193,7 +207,7 @@ class PlaybackObserver {
   std::string slam_node_, map_frame_, odom_frame_, base_frame_;
   tf2_ros::Buffer tf_buffer_;
   tf2_ros::TransformListener tf_listener_;
-  ros::Subscriber landmarks_sub_, pose_sub_, path_sub_, tf_sub_;
+  ros::Subscriber landmarks_sub_, pose_sub_, path_sub_, map_sub_, tf_sub_;
 };
 
 /// Plays the bag once for all tests of the suite.
@@ -259,7 +273,8 @@ TEST_F(BagPlaybackTest, BagPlayedToTheEnd) {
                       << ros::Time::now().toSec() << ")";
 }
 
-// ~expected_markers: "lines" (laser configs), "points" (range-bearing landmarks) or "both";
+// ~expected_markers: "lines" (laser configs), "points" (range-bearing landmarks), "both" or
+// "none" (grid_pf maps cells: no landmark kind is required, the markers are still checked);
 // ~min_line_markers (default 1): the fewest line landmarks one ~landmarks message must show.
 TEST_F(BagPlaybackTest, LandmarkMarkersContainTheExpectedKinds) {
   std::string expected = "lines";
@@ -267,7 +282,9 @@ TEST_F(BagPlaybackTest, LandmarkMarkersContainTheExpectedKinds) {
   ros::NodeHandle("~").param<std::string>("expected_markers", expected, expected);
   ros::NodeHandle("~").param("min_line_markers", min_lines, min_lines);
   std::lock_guard<std::mutex> lock(observer_->mutex_);
-  EXPECT_GT(observer_->landmark_messages_, 0) << "nothing on ~landmarks";
+  if (expected != "none") {
+    EXPECT_GT(observer_->landmark_messages_, 0) << "nothing on ~landmarks";
+  }
   if (expected == "lines" || expected == "both") {
     EXPECT_GE(observer_->max_line_markers_, std::max(min_lines, 1))
         << "too few LINE_LIST markers in namespace 'lines'";
@@ -275,8 +292,9 @@ TEST_F(BagPlaybackTest, LandmarkMarkersContainTheExpectedKinds) {
   if (expected == "points" || expected == "both") {
     EXPECT_GT(observer_->max_point_markers_, 0) << "no marker in namespace 'points'";
   }
-  EXPECT_TRUE(expected == "lines" || expected == "points" || expected == "both")
-      << "~expected_markers = '" << expected << "' is not lines, points or both";
+  EXPECT_TRUE(expected == "lines" || expected == "points" || expected == "both" ||
+              expected == "none")
+      << "~expected_markers = '" << expected << "' is not lines, points, both or none";
   EXPECT_EQ(observer_->malformed_markers_, 0);
   RecordProperty("max_line_markers", observer_->max_line_markers_);
   RecordProperty("max_point_markers", observer_->max_point_markers_);
@@ -432,6 +450,22 @@ TEST_F(BagPlaybackTest, SaveMapSmoothsTheMap) {
   }
 }
 
+// ~min_occupied_cells / ~min_free_cells (grid_pf): one ~map must have held at least that many
+// occupied (>= 65) and free (< 20) cells; a node that read only some of its sensors maps less.
+TEST_F(BagPlaybackTest, GridMapHoldsEnoughCells) {
+  int min_occupied = 0, min_free = 0;
+  ros::NodeHandle("~").param("min_occupied_cells", min_occupied, 0);
+  ros::NodeHandle("~").param("min_free_cells", min_free, 0);
+  if (min_occupied <= 0 && min_free <= 0) {
+    GTEST_SKIP() << "neither ~min_occupied_cells nor ~min_free_cells set by this launch file";
+  }
+  std::lock_guard<std::mutex> lock(observer_->mutex_);
+  RecordProperty("max_occupied_cells", std::to_string(observer_->max_occupied_cells_));
+  RecordProperty("max_free_cells", std::to_string(observer_->max_free_cells_));
+  EXPECT_GE(observer_->max_occupied_cells_, min_occupied);
+  EXPECT_GE(observer_->max_free_cells_, min_free);
+}
+
 // Runs last (gtest keeps the order of definition): it clears the node's map.
 TEST_F(BagPlaybackTest, ResetServiceDeletesTheLandmarks) {
   const std::string service = "/" + observer_->slamNode() + "/reset";
@@ -439,11 +473,14 @@ TEST_F(BagPlaybackTest, ResetServiceDeletesTheLandmarks) {
   std_srvs::Empty call;
   ASSERT_TRUE(ros::service::call(service, call));
   const ros::WallTime deadline = ros::WallTime::now() + ros::WallDuration(10.0);
+  std::string expected = "lines";  // "none" (grid_pf): no landmark, so no DELETE either
+  ros::NodeHandle("~").param<std::string>("expected_markers", expected, expected);
   bool cleared = false;
   while (!cleared && ros::WallTime::now() < deadline) {
     {
       std::lock_guard<std::mutex> lock(observer_->mutex_);
-      cleared = observer_->last_adds_ == 0 && observer_->last_deletes_ > 0 &&
+      cleared = observer_->last_adds_ == 0 &&
+                (observer_->last_deletes_ > 0 || expected == "none") &&
                 observer_->last_path_.poses.empty();
     }
     ros::WallDuration(0.05).sleep();

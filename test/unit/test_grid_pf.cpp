@@ -536,12 +536,13 @@ TEST(GridConfig, ShippedGridConfigsSelectTheVariantAndItsSensors) {
   const io::SlamConfig ir = io::loadSlamConfig(dir + "grid_pf.yaml");
   EXPECT_EQ(ir.filter.variant, "grid_pf");
   EXPECT_EQ(ir.frontend, "sonar");
-  EXPECT_EQ(ir.ros.sonar_topic, "ir");  // the simulator's infrared topic
+  EXPECT_EQ(ir.ros.sonar_topics, std::vector<std::string>{"ir"});  // the simulator's infrared topic
   EXPECT_EQ(ir.filter.motion.model, "diff_drive");
   EXPECT_DOUBLE_EQ(ir.filter.motion.wheel_base_m, 0.053);
   EXPECT_DOUBLE_EQ(ir.filter.grid.resolution_m, 0.01);
   EXPECT_DOUBLE_EQ(ir.filter.grid.match_f, 100.0);
-  EXPECT_EQ(io::loadSlamConfig(dir + "grid_pf_sonar.yaml").ros.sonar_topic, "sonar");
+  EXPECT_EQ(io::loadSlamConfig(dir + "grid_pf_sonar.yaml").ros.sonar_topics,
+            std::vector<std::string>{"sonar"});
   const io::SlamConfig laser = io::loadSlamConfig(dir + "grid_pf_laser.yaml");
   EXPECT_EQ(laser.frontend, "laser");
   EXPECT_TRUE(laser.scan_matching.enabled);

@@ -1,14 +1,14 @@
 // The one config loader: every shipped config loads, partial configs take defaults, and every
 // error names the file, the key, the value and the allowed range.
 
-#include <gtest/gtest.h>
-
 #include <dirent.h>
+#include <gtest/gtest.h>
 
 #include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <string>
+#include <vector>
 
 #include "rbpf_slam/core/filters/slam_filter.h"
 #include "rbpf_slam/io/slam_config.h"
@@ -148,7 +148,7 @@ TEST(SlamConfig, SonarConfigSelectsTheSonarFrontEnd) {
   const SlamConfig c =
       loadSlamConfig(std::string(RBPF_SOURCE_DIR) + "/config/sonar_fastslam2.yaml");
   EXPECT_EQ(c.frontend, "sonar");
-  EXPECT_EQ(c.ros.sonar_topic, "sonar");
+  EXPECT_EQ(c.ros.sonar_topics, std::vector<std::string>{"sonar"});
   EXPECT_EQ(c.ros.sonar_source, "range");
   EXPECT_FALSE(c.scan_matching.enabled);
   EXPECT_DOUBLE_EQ(c.sonar.point_sigma_range_m, 0.15);
@@ -163,6 +163,29 @@ TEST(SlamConfig, SonarConfigSelectsTheSonarFrontEnd) {
 
 /// yaml-cpp keeps both copies of a repeated key and reads the first, so an edit of the second
 /// was silently ignored; an empty key got past the unknown-key check.
+// A driver may give each sensor its own topic (the e-puck's proximity0 .. proximity7): sonar_topic
+// takes one name or a list, from a file or from --set.
+TEST(SlamConfig, SonarTopicIsOneNameOrAList) {
+  EXPECT_EQ(parseSlamConfig(YAML::Load("sonar_topic: ir"), "t").ros.sonar_topics,
+            std::vector<std::string>{"ir"});
+  EXPECT_EQ(
+      parseSlamConfig(YAML::Load("sonar_topic: [proximity0, /proximity1]"), "t").ros.sonar_topics,
+      (std::vector<std::string>{"proximity0", "/proximity1"}));
+  YAML::Node root = YAML::Load("frontend: sonar");
+  applyOverride(&root, "sonar_topic=[a, b, c]");
+  EXPECT_EQ(parseSlamConfig(root, "t").ros.sonar_topics, (std::vector<std::string>{"a", "b", "c"}));
+  EXPECT_NE(errorOf("sonar_topic: []").find("test.yaml: sonar_topic is an empty list"),
+            std::string::npos)
+      << errorOf("sonar_topic: []");
+  EXPECT_NE(errorOf("sonar_topic: [a, a]").find("names 'a' twice"), std::string::npos);
+  EXPECT_NE(errorOf("sonar_topic: [a, '']").find("an empty name"), std::string::npos);
+  EXPECT_NE(errorOf("sonar_topic: [a, [b]]").find("not a name"), std::string::npos);
+  EXPECT_NE(errorOf("sonar_topic: {a: b}").find("must be a name or a list of names"),
+            std::string::npos);
+  EXPECT_NE(errorOf("sonar_topic:").find("must be a name or a list of names"), std::string::npos);
+  EXPECT_NE(errorOf("sonar_topic: '[a, b]'").find("is one string, not a list"), std::string::npos);
+}
+
 TEST(SlamConfig, RepeatedAndEmptyKeysAreErrors) {
   EXPECT_NE(errorOf("particles: 10\nparticles: 0")
                 .find("test.yaml: key 'particles' appears more than once at the top level"),

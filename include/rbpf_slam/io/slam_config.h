@@ -23,7 +23,9 @@ struct RosOptions {
   std::string base_frame = "base_link";
   std::string scan_topic = "scan";
   std::string features_topic = "features";
-  std::string sonar_topic = "sonar";              // sensor_msgs/Range, one per transducer
+  // sensor_msgs/Range, one message per transducer; config key sonar_topic, one topic or a list
+  // (drivers that give each sensor its own topic, e.g. the e-puck's proximity0 .. proximity7)
+  std::vector<std::string> sonar_topics{"sonar"};
   std::string sonar_cloud_topic = "sonar_cloud";  // sensor_msgs/PointCloud (RosAria)
   std::string sonar_source = "range";             // range | cloud: which of the two to use
   std::string sonar_frame_prefix = "sonar_";      // cloud: transducers are PREFIX0, PREFIX1...

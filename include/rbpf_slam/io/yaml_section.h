@@ -40,6 +40,9 @@ class YamlSection {
   void read(const std::string& key, std::string* value,
             const std::vector<std::string>& allowed = {});
   void read(const std::string& key, std::vector<double>* value);
+  /// Reads one name or a list of them (e.g. topics): each a non-empty string, none twice, at
+  /// least one.
+  void readNames(const std::string& key, std::vector<std::string>* value);
   /// The sub-map under key (an empty section when absent).
   YamlSection section(const std::string& key);
   /// Throws ConfigError listing every key that was present but never read.

@@ -143,8 +143,10 @@ class TfGatedSubscriber {
     // messages come in another type first, e.g. PointCloud2 converted to PointCloud).
     if (!topic.empty()) {
       subscriber_.subscribe(nh, topic, queue_size);
-      subscriber_.registerCallback(
-          boost::function<void(const Ptr&)>([this](const Ptr& msg) { add(msg); }));
+      subscriber_.registerCallback(boost::function<void(const Ptr&)>([this](const Ptr& msg) {
+        ++received_;
+        add(msg);
+      }));
     }
     filter_.registerCallback(boost::function<void(const Ptr&)>(
         [this](const Ptr& msg) { deliver(order_.left(msg->header.stamp, msg), clears_); }));
@@ -195,6 +197,8 @@ class TfGatedSubscriber {
     ++clears_;
   }
   std::string topic() const { return subscriber_.getTopic(); }
+  /// Messages that arrived on the topic (whatever became of them).
+  unsigned long received() const { return received_; }
 
  private:
   /// Hands on the messages due unless the input was reset since `clears` was read (by a
@@ -209,6 +213,7 @@ class TfGatedSubscriber {
   tf2_ros::Buffer* tf_;
   const std::string base_frame_;
   const Handlers handlers_;
+  unsigned long received_ = 0;
   message_filters::Subscriber<Message> subscriber_;
   tf2_ros::MessageFilter<Message> filter_;
   core::InOrderRelease<ros::Time, Ptr> order_;

@@ -123,7 +123,9 @@ class SlamNode {
   tf2_ros::TransformBroadcaster tf_broadcaster_;
   std::unique_ptr<TfGatedSubscriber<sensor_msgs::LaserScan>> scan_input_;
   std::unique_ptr<TfGatedSubscriber<FeatureArray>> features_input_;
-  std::unique_ptr<TfGatedSubscriber<sensor_msgs::Range>> sonar_input_;
+  std::vector<std::unique_ptr<TfGatedSubscriber<sensor_msgs::Range>>>
+      sonar_inputs_;                           // a topic each
+  std::set<std::string> silent_sonar_topics_;  // warned about once: silent while others talk
   std::unique_ptr<TfGatedSubscriber<sensor_msgs::PointCloud>> sonar_cloud_input_;
   ros::Subscriber sonar_cloud_subscriber_;      // either cloud type, into sonar_cloud_input_
   std::vector<core::Pose2> sonar_transducers_;  // sonar_cloud: from tf, found once

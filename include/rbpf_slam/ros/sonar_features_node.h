@@ -48,7 +48,8 @@ class SonarFeaturesNode {
   core::SonarFeatureExtractor extractor_;
   tf2_ros::Buffer tf_buffer_;
   CheckedTransformListener tf_listener_;
-  std::unique_ptr<TfGatedSubscriber<sensor_msgs::Range>> sonar_input_;
+  std::vector<std::unique_ptr<TfGatedSubscriber<sensor_msgs::Range>>>
+      sonar_inputs_;  // a topic each
   ros::Publisher features_publisher_;
   ros::Publisher diagnostics_publisher_;
   ros::WallTimer diagnostics_timer_;
