@@ -9,6 +9,7 @@
 #include <iomanip>
 #include <limits>
 #include <map>
+#include <set>
 #include <stdexcept>
 
 #include "rbpf_slam/core/features/feature_types.h"
@@ -58,16 +59,36 @@ int readInteger(const YAML::Node& node, const std::string& key, const std::strin
   return static_cast<int>(value);
 }
 
+/// Refuses a key that is not in `allowed` or is written twice (yaml-cpp keeps the first of two
+/// and says nothing): a misspelt key (`covarience`) or a second `x` would be silently ignored.
+void checkKeys(const YAML::Node& map, const std::set<std::string>& allowed,
+               const std::string& where) {
+  std::set<std::string> seen;
+  for (const auto& item : map) {
+    const std::string key = item.first.IsScalar() ? item.first.Scalar() : "(not a name)";
+    if (!allowed.count(key)) {
+      std::string names;
+      for (const std::string& a : allowed) names += (names.empty() ? "" : ", ") + a;
+      throw std::runtime_error(where + ": unknown key '" + key + "' (known: " + names + ")");
+    }
+    if (!seen.insert(key).second) throw std::runtime_error(where + ": '" + key + "' twice");
+  }
+}
+
 core::LandmarkEstimate readLandmark(const YAML::Node& node, const std::string& where) {
+  if (!node.IsMap()) throw std::runtime_error(where + ": not a map of keys (id, type, ...)");
   core::LandmarkEstimate l;
   l.id = readInteger(node, "id", where, -1e9, "'id' must be an integer");
   const std::string type = node["type"] ? node["type"].as<std::string>() : "";
   if (type == "line") {
+    checkKeys(node, {"id", "type", "rho", "theta", "start", "end", "covariance", "observations"},
+              where);
     l.type = core::LandmarkType::kLine;
     l.mean << readNumber(node, "rho", where), readNumber(node, "theta", where);
     l.start = readPair(node, "start", where);
     l.end = readPair(node, "end", where);
   } else if (type == "point") {
+    checkKeys(node, {"id", "type", "x", "y", "covariance", "observations"}, where);
     l.mean << readNumber(node, "x", where), readNumber(node, "y", where);
     l.start = l.end = l.mean;
   } else if (type.empty() && node["x_m"] && node["y_m"]) {
@@ -173,6 +194,8 @@ std::vector<core::LandmarkEstimate> loadLandmarksYaml(const std::string& path) {
                                " is landmarks[" + std::to_string(first->second) + "]'s too");
     }
   }
+  // After the entries: a ground-truth file (world, seed, ... at the top) is named as such there.
+  checkKeys(root, {"count", "landmarks"}, path);
   if (root["count"]) {  // written by writeLandmarksYaml: a file cut short has fewer
     long long count = -1;
     try {

@@ -144,6 +144,21 @@ TEST(LandmarkFile, BrokenFilesAreRejectedNamingTheEntry) {
   expectError("landmarks:\n  - {id: 4, type: point, x: 1, y: 2, covariance: [1, 0, 0, 1]}\n"
               "  - {id: 4, type: point, x: 8, y: 2, covariance: [1, 0, 0, 1]}\n",
               "landmarks[1]: id 4 is landmarks[0]'s too");
+  // A misspelt or repeated key, or one of the other type, was ignored (the entry loaded with
+  // what yaml-cpp kept: the first of two values, the rest defaulted).
+  expectError("landmarks:\n  - {id: 4, type: point, x: 1, y: 2, covarience: [1, 0, 0, 1]}\n",
+              "landmarks[0]: unknown key 'covarience' (known: covariance, id, observations, "
+              "type, x, y)");
+  expectError("landmarks:\n  - {id: 4, type: point, x: 1, x: 5, y: 2, covariance: [1, 0, 0, 1]}\n",
+              "landmarks[0]: 'x' twice");
+  expectError(
+      "landmarks:\n  - {id: 4, type: point, x: 1, y: 2, rho: 3, covariance: [1, 0, 0, 1]}\n",
+      "landmarks[0]: unknown key 'rho'");
+  expectError("landmarks:\n  - 5\n", "landmarks[0]: not a map of keys");
+  expectError(
+      "count: 1\nlandmark_count: 1\nlandmarks:\n  - {id: 4, type: point, x: 1, y: 2, "
+      "covariance: [1, 0, 0, 1]}\n",
+      "unknown key 'landmark_count' (known: count, landmarks)");
   // A file cut short at a line boundary still parses: the count written with it tells.
   expectError("count: 2\nlandmarks:\n  - {id: 4, type: point, x: 1, y: 2, "
               "covariance: [1, 0, 0, 1]}\n",
