@@ -145,6 +145,11 @@ BagReport validateBag(const std::string& path, const BagValidationOptions& optio
         }
       } else if (const auto cloud = m.instantiate<sensor_msgs::PointCloud>()) {
         header = cloud->header;
+        for (const auto& p : cloud->points) {
+          if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) {
+            ++s.report.invalid_values;
+          }
+        }
       } else if (const auto features = m.instantiate<FeatureArray>()) {
         header = features->header;
         features_topics.insert(topic);
@@ -154,6 +159,17 @@ BagReport validateBag(const std::string& path, const BagValidationOptions& optio
       } else if (const auto odometry = m.instantiate<nav_msgs::Odometry>()) {
         header = odometry->header;
         odometry_topics.insert(topic);
+        // SLAM reads odometry from tf, but a driver that sends NaN here is broken.
+        const auto& p = odometry->pose.pose;
+        const auto& v = odometry->twist.twist;
+        for (double value : {p.position.x, p.position.y, p.position.z, p.orientation.x,
+                             p.orientation.y, p.orientation.z, p.orientation.w, v.linear.x,
+                             v.linear.y, v.linear.z, v.angular.x, v.angular.y, v.angular.z}) {
+          if (!std::isfinite(value)) {
+            ++s.report.invalid_values;
+            break;  // one per message
+          }
+        }
       } else {
         ++s.report.messages;  // a type without a header we look at: counted only
         continue;
@@ -229,7 +245,10 @@ BagReport validateBag(const std::string& path, const BagValidationOptions& optio
                  : (features_topics.count(name)
                         ? " unusable feature(s) (non-finite values or covariance, or a negative "
                           "range: SLAM drops them)"
-                        : " NaN or -inf value(s)")));
+                        : odometry_topics.count(name)
+                              ? " message(s) with a non-finite pose or twist (SLAM reads tf, "
+                                "but the driver that sent them is suspect)"
+                              : " NaN or -inf value(s)")));
     }
     if (is_tf) continue;
     if (r.frames.size() > 1) {

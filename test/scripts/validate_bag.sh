@@ -2,7 +2,7 @@
 # validate_bag: a clean simulated bag and the bundled intel_head.bag pass (exit 0); a copy of the
 # simulated one with injected faults (a scan
 # stamped back in time, a repeated scan stamp, a scan in a frame tf does not know, NaN ranges,
-# 5 s without odometry tf) fails (exit 1) with each fault named.
+# 5 s without odometry tf, NaN poses on /odom for 1 s) fails (exit 1) with each fault named.
 set -euo pipefail
 
 source "$(dirname "$0")/lib/offline.sh"
@@ -68,6 +68,8 @@ with rosbag.Bag(source) as bag_in, rosbag.Bag(target, "w") as bag_out:
             elif scans == 80:
                 msg.ranges = [float("nan")] * len(msg.ranges)
             previous_stamp = msg.header.stamp
+        if topic == "/odom" and 30.0 <= rel < 31.0:
+            msg.pose.pose.position.x = float("nan")  # a broken driver (SLAM reads tf)
         bag_out.write(topic, msg, t)
 PY
 
@@ -76,7 +78,8 @@ status=0
 cat "$work/faulty.txt" | grep PROBLEM || true
 [ "$status" -eq 1 ] || { echo "FAIL: exit status $status for the faulty bag, expected 1"; exit 1; }
 for expected in "/scan: 1 stamp(s) older" "/scan: 1 repeated stamp" "frame 'ghost_laser' is not connected" \
-    "/scan: 181 NaN" "/scan: messages in several frames" "tf odom -> base_link: 1 gap(s)"; do
+    "/scan: 181 NaN" "/scan: messages in several frames" "tf odom -> base_link: 1 gap(s)" \
+    "/odom: " "message(s) with a non-finite pose or twist"; do
   grep -qF "$expected" "$work/faulty.txt" || { echo "FAIL: '$expected' not reported"; exit 1; }
 done
 echo "PASS"
