@@ -12,6 +12,7 @@
 #include <stdexcept>
 
 #include "rbpf_slam/core/random.h"
+#include "rbpf_slam/io/number_text.h"
 #include "rbpf_slam/io/output_file.h"
 #include "rbpf_slam/io/plausibility.h"
 
@@ -36,21 +37,12 @@ std::vector<std::string> splitFields(const std::string& line) {
   return fields;
 }
 
-// A whole field as a finite double.
-bool parseFinite(const std::string& field, double* value) {
-  char* end = nullptr;
-  errno = 0;
-  *value = std::strtod(field.c_str(), &end);
-  return !field.empty() && end == field.c_str() + field.size() && errno != ERANGE &&
-         std::isfinite(*value);
-}
-
 // Parses fields[first, first + count) into values; the index of the first bad field, or -1.
 long parseFields(const std::vector<std::string>& fields, std::size_t first, std::size_t count,
                  std::vector<double>* values) {
   values->resize(count);
   for (std::size_t i = 0; i < count; ++i) {
-    if (!parseFinite(fields[first + i], &(*values)[i])) return static_cast<long>(first + i);
+    if (!parseFiniteNumber(fields[first + i], &(*values)[i])) return static_cast<long>(first + i);
   }
   return -1;
 }
@@ -110,7 +102,7 @@ bool parseOdom(const std::vector<std::string>& fields, std::size_t line_number, 
 
 bool parseFlaser(const std::vector<std::string>& fields, std::size_t line_number, CarmenLog* log) {
   double count = 0.0;
-  if (fields.size() < 2 || !parseFinite(fields[1], &count) || count < 0.0 ||
+  if (fields.size() < 2 || !parseFiniteNumber(fields[1], &count) || count < 0.0 ||
       count != std::floor(count) || count > 100000.0) {
     return malformed(log, line_number, "FLASER needs a beam count");
   }

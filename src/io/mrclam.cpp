@@ -11,6 +11,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "rbpf_slam/io/number_text.h"
 #include "rbpf_slam/io/output_file.h"
 #include "rbpf_slam/io/plausibility.h"
 
@@ -28,15 +29,6 @@ std::runtime_error lineError(const std::string& source, std::size_t line, const 
   return std::runtime_error(source + ":" + std::to_string(line) + ": " + why);
 }
 
-// Parses a whole token as a finite double.
-bool parseDouble(const std::string& token, double* value) {
-  if (token.empty()) return false;
-  char* end = nullptr;
-  errno = 0;
-  *value = std::strtod(token.c_str(), &end);
-  return end == token.c_str() + token.size() && errno != ERANGE && std::isfinite(*value);
-}
-
 // One line's text as exactly `columns` finite numbers appended to rows (blank and '#' lines
 // are skipped); `format` names them in errors.
 void readRow(const std::string& text, std::size_t line, const std::string& source,
@@ -49,7 +41,7 @@ void readRow(const std::string& text, std::size_t line, const std::string& sourc
   row.line = line;
   while (fields >> token) {
     double value = 0.0;
-    if (!parseDouble(token, &value)) {
+    if (!parseFiniteNumber(token, &value)) {
       throw lineError(source, line,
                       "not a finite number: '" + token + "' (expected " + format + ")");
     }

@@ -8,20 +8,12 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "rbpf_slam/io/number_text.h"
 #include "rbpf_slam/io/output_file.h"
 
 namespace rbpf_slam {
 namespace io {
 namespace {
-
-// Parses a whole token as a double; false when any character is left over or on overflow.
-bool parseDouble(const std::string& token, double* value) {
-  if (token.empty()) return false;
-  char* end = nullptr;
-  errno = 0;
-  *value = std::strtod(token.c_str(), &end);
-  return end == token.c_str() + token.size() && errno != ERANGE;
-}
 
 std::runtime_error lineError(const std::string& source, int line_number, const std::string& what) {
   return std::runtime_error(source + ":" + std::to_string(line_number) + ": " + what);
@@ -55,10 +47,11 @@ std::vector<StampedPose> readTum(std::istream& in, const std::string& source_nam
         throw lineError(source_name, line_number,
                         "expected 8 numbers (t x y z qx qy qz qw), got more");
       }
-      if (!parseDouble(token, &values[count])) {
+      const NumberText parsed = parseNumberText(token, &values[count]);
+      if (parsed == NumberText::kNotNumber) {
         throw lineError(source_name, line_number, "not a number: '" + token + "'");
       }
-      if (!std::isfinite(values[count])) {
+      if (parsed == NumberText::kNotFinite) {
         throw lineError(source_name, line_number, "non-finite value: '" + token + "'");
       }
       ++count;

@@ -11,6 +11,7 @@
 #include <stdexcept>
 
 #include "rbpf_slam/core/filters/observation.h"
+#include "rbpf_slam/io/number_text.h"
 #include "rbpf_slam/io/output_file.h"
 #include "rbpf_slam/io/plausibility.h"
 
@@ -23,12 +24,10 @@ namespace {
 }
 
 double number(const std::string& token, const std::string& source, std::size_t line) {
-  char* end = nullptr;
-  const double value = std::strtod(token.c_str(), &end);
-  if (token.empty() || end != token.c_str() + token.size()) {
-    fail(source, line, "'" + token + "' is not a number");
-  }
-  if (!std::isfinite(value)) fail(source, line, "'" + token + "' is not finite");
+  double value = 0.0;
+  const NumberText parsed = parseNumberText(token, &value);
+  if (parsed == NumberText::kNotNumber) fail(source, line, "'" + token + "' is not a number");
+  if (parsed == NumberText::kNotFinite) fail(source, line, "'" + token + "' is not finite");
   return value;
 }
 

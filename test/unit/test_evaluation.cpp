@@ -13,6 +13,7 @@
 #include "rbpf_slam/core/statistics.h"
 #include "rbpf_slam/io/evaluation.h"
 #include "rbpf_slam/io/json_writer.h"
+#include "rbpf_slam/io/number_text.h"
 #include "rbpf_slam/io/trajectory.h"
 
 namespace rbpf_slam {
@@ -359,6 +360,23 @@ TEST(Tum, MalformedLinesNameFileAndLine) {
   expectReadError(good + "3 nan 0 0 0 0 0 1\n", where + ":2: non-finite");
   expectReadError(good + "3 0 0 0 0 0 0 inf\n", where + ":2: non-finite");
   expectReadError("3 0 0 0 0 0 0 0\n", where + ":1:");  // zero quaternion
+  expectReadError(good + "3 1e400 0 0 0 0 0 1\n", where + ":2: non-finite value: '1e400'");
+}
+
+// strtod reports ERANGE for an underflow too: a subnormal was refused as "not a number".
+TEST(Tum, SubnormalValuesAreNumbers) {
+  std::istringstream in("1 1e-320 -4.9e-324 0 0 0 0 1\n2 1e-400 0 0 0 0 0 1\n");
+  const std::vector<StampedPose> poses = readTum(in, "memory");
+  ASSERT_EQ(poses.size(), 2u);
+  EXPECT_EQ(poses[0].pose.x(), 1e-320);
+  EXPECT_EQ(poses[0].pose.y(), -4.9e-324);
+  EXPECT_EQ(poses[1].pose.x(), 0.0);  // below the smallest subnormal: the nearest double
+  double value = 0.0;
+  EXPECT_EQ(parseNumberText("1e-320", &value), NumberText::kFinite);
+  EXPECT_EQ(parseNumberText("-1e400", &value), NumberText::kNotFinite);
+  EXPECT_EQ(parseNumberText("nan", &value), NumberText::kNotFinite);
+  EXPECT_EQ(parseNumberText("1.5x", &value), NumberText::kNotNumber);
+  EXPECT_EQ(parseNumberText("", &value), NumberText::kNotNumber);
 }
 
 TEST(Tum, MissingFileNamesThePath) {
