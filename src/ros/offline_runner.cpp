@@ -641,12 +641,19 @@ OfflineSummary OfflineRunner::run() {
       mount = toSensorMount(
           tf.lookupTransform(ros_options.base_frame, stripSlash(frame), stamp).transform);
     } catch (const std::exception& e) {
-      // tf2::TransformException, or std::runtime_error from tf2's time arithmetic for a stamp
-      // near 2^32 s (a driver's -1): this frame is lost, not the run.
+      // tf2::TransformException, or std::runtime_error from tf2's time arithmetic (a stamp
+      // more than 2^31 s from the transforms it is compared with: a corrupt stamp): this frame
+      // is lost, not the run.
       if (summary.dropped_no_tf++ == 0) {
         char at[32];
         std::snprintf(at, sizeof(at), "%.3f", stamp.toSec());
-        summary.first_tf_error = *from + " -> " + *to + " at " + at + ": " + e.what();
+        const bool arithmetic = dynamic_cast<const tf2::TransformException*>(&e) == nullptr;
+        summary.first_tf_error =
+            *from + " -> " + *to + " at " + at + ": " +
+            (arithmetic ? std::string("the stamp is too far from the bag's transforms for tf2's "
+                                      "time arithmetic (a corrupt stamp?): ") +
+                              e.what()
+                        : std::string(e.what()));
       }
       continue;
     }

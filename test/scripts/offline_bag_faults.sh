@@ -7,6 +7,7 @@
 #   hugestamp   one scan stamped 4294967295 s (a driver's -1): that frame is lost, not the run;
 #               likewise one odometry transform so stamped (no second tf segment), and a scan
 #               recorded at that bag time (offline_slam and validate_bag used to throw)
+#   farscan     one scan stamped 3.9e9 s (over 2^31 s from the odometry): lost, and said why
 #   empty       no messages: both tools say so, naming the file
 #   swap        every 5th scan stamped after the next: the rejected frames are counted and the
 #               first named (they used to be silent)
@@ -64,6 +65,14 @@ def hugestamp(i, topic, msg, t):
         scans[0] += 1
         if scans[0] == 40:
             msg.header.stamp = rospy.Time(4294967295, 0)
+    yield topic, msg, t
+
+
+def farscan(i, topic, msg, t):
+    if topic == "/scan":
+        scans[0] += 1
+        if scans[0] == 40:  # far from the data, but not near 2^32 s
+            msg.header.stamp = rospy.Time(3900000000, 0)
     yield topic, msg, t
 
 
@@ -131,6 +140,8 @@ scans[0] = 0
 write("compressed", squeezed)
 scans[0] = 0
 write("hugestamp", hugestamp)
+scans[0] = 0
+write("farscan", farscan)
 scans[0] = 0
 write("farbagtime", farbagtime)
 scans[0] = 0
@@ -217,6 +228,12 @@ run hugestamp laser_fastslam2
   [ "$(field hugestamp dropped_no_tf)" -eq 0 ] || fail "hugestamp: the far stamp's frame was not the one dropped"
 expect_err hugestamp "/scan: stamp 4294967295.000 s is near 2^32 s"
 validate hugestamp "/scan: 1 stamp(s) near 2^32 s"
+# A scan stamped 3.9e9 s is not near 2^32 s, but more than 2^31 s from the odometry: tf2's
+# time arithmetic throws (ros::Duration). That frame is dropped without tf, and said so.
+run farscan laser_fastslam2
+[ "$rc" -eq 0 ] || { fail "farscan: exit $rc"; cat "$work/farscan.err"; }
+[ "$(field farscan dropped_no_tf)" -eq 1 ] || fail "farscan: $(field farscan dropped_no_tf) frames without tf"
+expect_err farscan "at 3900000000.000: the stamp is too far from the bag's transforms for tf2's time arithmetic"
 # ... and the same far stamp on one odometry transform, and as the bag time of that scan (a
 # converter that records at the header stamps): still one frame lost, not the run or the tf.
 run farodom laser_fastslam2
