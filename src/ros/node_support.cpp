@@ -50,23 +50,39 @@ void CheckedTransformListener::handle(const tf2_msgs::TFMessage& msg,
     ROS_WARN_STREAM(node_name_ << ": the clock went back " << (last_update_.toSec() - now.toSec())
                                << " s: clearing the tf buffer");
     buffer_.clear();
-    newest_ = ros::Time();
+    guard_.clear();
   }
   last_update_ = now;
   for (const geometry_msgs::TransformStamped& t : msg.transforms) {
     std::string problem = transformProblem(t);
-    // A stamp far ahead of the transforms so far (a glitch, a driver's garbage) would make tf2
-    // drop every later real transform of that pair as older than it. Compared with the newest
-    // transform taken, not with this machine's clock alone, which may be off (a robot computer
-    // without network time) while all the transforms agree. Static transforms: any stamp.
-    // Nor is a forward jump past the clock refused (a second bag days later, a clock set by
-    // NTP): the reference is the later of the newest transform and the clock.
-    const ros::Time reference = std::max(newest_, now);
-    if (problem.empty() && !is_static && !newest_.isZero() &&
-        t.header.stamp.toSec() > reference.toSec() + kMaxAheadS) {
-      problem = "stamp " + std::to_string(t.header.stamp.toSec()) +
-                " s is more than a day after both the newest transform so far (" +
-                std::to_string(newest_.toSec()) + " s) and the clock";
+    // A stamp far off (a glitch, a driver's garbage) would make tf2 drop every later real
+    // transform of that pair as older than it (core::StampGuard: compared with the newest
+    // transform taken and with the clock, which may be off while all the transforms agree).
+    // Static transforms: any stamp.
+    if (problem.empty() && !is_static) {
+      const double stamp = t.header.stamp.toSec();
+      switch (guard_.check(stamp, now.toSec())) {
+        case core::StampGuard::Verdict::kTake:
+          break;
+        case core::StampGuard::Verdict::kRefuseAhead:
+          problem =
+              "stamp " + std::to_string(stamp) + " s is more than a day after " +
+              (guard_.newest() > 0.0 ? "both the newest transform so far (" +
+                                           std::to_string(guard_.newest()) + " s) and the clock"
+                                     : "the clock (" + std::to_string(now.toSec()) + " s)");
+          break;
+        case core::StampGuard::Verdict::kRestart:
+          ROS_WARN_STREAM(node_name_ << ": " << t.header.frame_id << " -> " << t.child_frame_id
+                                     << " stamped " << std::to_string(stamp)
+                                     << " s agrees with the clock, but the newest transform taken ("
+                                     << std::to_string(guard_.newest())
+                                     << " s) is more than a day ahead of both: that one was "
+                                        "wrong; clearing the tf buffer");
+          buffer_.clear();
+          guard_.clear();
+          ++restarts_;
+          break;
+      }
     }
     if (problem.empty()) {
       try {
@@ -74,7 +90,7 @@ void CheckedTransformListener::handle(const tf2_msgs::TFMessage& msg,
         // check): tf2 logs that, and a repeated stamp is common and harmless (converted
         // CARMEN logs repeat odometry stamps), so it is not counted here
         if (buffer_.setTransform(t, authority, is_static) && !is_static) {
-          newest_ = std::max(newest_, t.header.stamp);
+          guard_.taken(t.header.stamp.toSec());
         }
         continue;
       } catch (const std::exception& e) {  // tf2's time arithmetic, whatever the stamp

@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 #include <ros/ros.h>
 #include <sensor_msgs/LaserScan.h>
+#include <tf2_msgs/TFMessage.h>
 #include <tf2_ros/buffer.h>
 
 #include <string>
@@ -99,6 +100,39 @@ TEST(TfGatedSubscriber, ClearDropsWhatWaitsAndUnknownFramesAreNamedAtOnce) {
   spinUntil(0.2, [] { return false; });  // a message from before clear() would come by now
   EXPECT_EQ(r.delivered, (std::vector<double>{103.0})) << "a message from before clear() left";
   EXPECT_TRUE(r.failed.empty());
+}
+
+// rosbridge::CheckedTransformListener with a first transform stamped two days ahead (a
+// driver's garbage at start-up): tf2 would refuse every real transform of that pair as older
+// than it, and nothing would move again. The first real one, which agrees with the clock, makes
+// the listener clear its buffer and take it (core::StampGuard; test_stamp_guard has the rules).
+TEST(CheckedTransformListener, AFirstTransformFarAheadDoesNotBlockTheRealOnes) {
+  ros::NodeHandle nh;
+  tf2_ros::Buffer tf;
+  rosbridge::CheckedTransformListener listener(tf, nh, "tf_gate_test");
+  ros::Publisher publisher = nh.advertise<tf2_msgs::TFMessage>("/tf", 10);
+  spinUntil(5.0, [&publisher] { return publisher.getNumSubscribers() > 0; });
+  ASSERT_GT(publisher.getNumSubscribers(), 0u);
+  const double now = ros::Time::now().toSec();
+  auto send = [&publisher](double stamp) {
+    tf2_msgs::TFMessage msg;
+    msg.transforms.push_back(odomToBase(stamp));
+    publisher.publish(msg);
+  };
+  send(now + 2 * 86400.0);
+  spinUntil(5.0, [&tf, now] {
+    return tf.canTransform("odom", "base_link", ros::Time(now + 2 * 86400.0));
+  });
+  for (int i = 1; i <= 3; ++i) send(now + 0.1 * i);
+  spinUntil(5.0, [&tf, now] { return tf.canTransform("odom", "base_link", ros::Time(now + 0.2)); });
+  EXPECT_TRUE(tf.canTransform("odom", "base_link", ros::Time(now + 0.2)))
+      << "the real transforms were refused behind the far one";
+  EXPECT_EQ(listener.restarts(), 1);
+  EXPECT_EQ(listener.takeRefused(), 0);
+  send(now + 3 * 86400.0);  // now the clock is the reference: refused, counted
+  spinUntil(5.0, [&listener] { return listener.takeRefused() > 0; });
+  EXPECT_FALSE(tf.canTransform("odom", "base_link", ros::Time(now + 3 * 86400.0)));
+  EXPECT_EQ(listener.restarts(), 1);
 }
 
 }  // namespace

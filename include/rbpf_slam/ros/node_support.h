@@ -7,8 +7,8 @@
 #include <message_filters/subscriber.h>
 #include <ros/callback_queue.h>
 #include <ros/ros.h>
-#include <tf2_msgs/TFMessage.h>
 #include <std_msgs/Header.h>
+#include <tf2_msgs/TFMessage.h>
 #include <tf2_ros/buffer.h>
 #include <tf2_ros/message_filter.h>
 
@@ -21,8 +21,9 @@
 #include <vector>
 
 #include "rbpf_slam/core/geometry.h"
-#include "rbpf_slam/ros/conversions.h"
 #include "rbpf_slam/core/in_order_release.h"
+#include "rbpf_slam/core/stamp_guard.h"
+#include "rbpf_slam/ros/conversions.h"
 
 namespace rbpf_slam {
 namespace rosbridge {
@@ -65,8 +66,11 @@ class CheckedTransformListener {
   /// Stops the thread and the subscriptions (a node's destructor, before its tf queues go).
   void stop();
   /// A /tf stamp further than this after both the newest transform taken and the clock is
-  /// refused (s).
+  /// refused (s); a newest transform this far ahead of the clock, with later ones agreeing with
+  /// the clock, was the outlier (core::StampGuard).
   static constexpr double kMaxAheadS = 86400.0;
+  /// Times the buffer was cleared because the newest transform taken was far ahead of the clock.
+  long restarts() const { return restarts_.load(); }
 
   /// Transforms refused since the last call (for a diagnostics period).
   long takeRefused() {
@@ -85,11 +89,12 @@ class CheckedTransformListener {
   ros::Subscriber tf_subscriber_, static_subscriber_;
   ros::AsyncSpinner spinner_;
   const std::string node_name_;
-  std::mutex mutex_;  // last_update_, newest_ and warnings_ (handle's state)
+  std::mutex mutex_;  // last_update_, guard_ and warnings_ (handle's state)
   ros::Time last_update_;
-  ros::Time newest_;  // the newest non-static stamp taken (zero: none since the start or a clear)
+  core::StampGuard guard_{kMaxAheadS};  // the non-static stamps taken, against far-off ones
   ThrottledWarnings warnings_;
   std::atomic<long> refused_{0};
+  std::atomic<long> restarts_{0};
   long taken_ = 0;  // refused_ as of the last takeRefused (the caller's thread)
 };
 
