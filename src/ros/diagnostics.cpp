@@ -105,6 +105,7 @@ diagnostic_msgs::DiagnosticArray SlamDiagnostics::report(const ros::Time& stamp,
     if (stats.missed_answers > 0) {  // dpf_master_node: local filters that did not answer
       status.values.push_back(keyValue("local answers missed", text(stats.missed_answers)));
     }
+    for (const auto& [name, state] : stats.details) status.values.push_back(keyValue(name, state));
   }
   status.values.push_back(keyValue("resets", text(resets_total_)));
   if (odometry_gaps_ >= 0) status.values.push_back(keyValue("odometry gaps", text(odometry_gaps_)));

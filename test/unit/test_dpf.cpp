@@ -397,6 +397,31 @@ TEST(DpfMaster, AMissedAnswerIsNotFusedCountedAndTheLocalIsFusedAgainWhenItAnswe
   }
 }
 
+// A local that does not answer a step is not judged: last step's verdict (inconsistent) does
+// not stay on it while it is silent.
+TEST(DpfMaster, ASilentLocalIsNotLeftInconsistent) {
+  DpfOptions o;
+  o.local_filters = 3;
+  o.isolate_after_steps = 5;
+  DpfMaster master(o);
+  auto local = [](int index, long step, const Pose2& prior) {
+    DpfLocalEstimate e = estimateOf(index, step, prior, 2.0, 0.9);
+    e.prior_mean = prior;
+    e.prior_covariance = 0.01 * Eigen::Matrix3d::Identity();
+    e.covariance = 0.005 * Eigen::Matrix3d::Identity();
+    return e;
+  };
+  const Pose2 off(3.0, 0.0, 0.0);
+  auto out = master.fuse(
+      1, MotionInput(), {local(0, 1, Pose2::Zero()), local(1, 1, Pose2::Zero()), local(2, 1, off)});
+  ASSERT_TRUE(master.health()[2].inconsistent);
+  EXPECT_TRUE(master.health()[2].answered);
+  const Pose2 m = out.mean;
+  master.fuse(2, MotionInput(), {local(0, 2, m), local(1, 2, m), missedEstimate(2, 2)});
+  EXPECT_FALSE(master.health()[2].inconsistent);
+  EXPECT_FALSE(master.health()[2].answered);
+}
+
 TEST(DpfMaster, SegmentMahalanobisIsTheDistanceToTheNearestPointOfTheSegment) {
   const Eigen::Matrix3d unit = Eigen::Matrix3d::Identity();
   const Eigen::Vector3d v(4.0, 0.0, 0.0);
@@ -699,6 +724,44 @@ TEST(DistributedFilter, IsolatesAndReinitialisesTheFaultyLocalFilter) {
   const double blind_error = rmsError(runFilter(&blind, run), run.truth, 40);
   EXPECT_EQ(blind.master().health()[1].isolations, 0);
   EXPECT_GT(blind_error, faulty_error) << blind_error << " vs " << faulty_error;
+}
+
+// The per-local state /diagnostics shows (FilterStats::details), for dpf_master_node's operator.
+TEST(DpfCoordinator, DetailsGiveEachLocalsStateAndCounts) {
+  const SyntheticRun run = makeRun(3, 5);
+  const FilterOptions o = dpfOptions();
+  DpfCoordinator coordinator(o);
+  std::vector<std::unique_ptr<DpfLocalStream>> streams;
+  for (int i = 0; i < o.dpf.local_filters; ++i) {
+    streams.push_back(std::make_unique<DpfLocalStream>(o, i));
+  }
+  auto details = coordinator.stats().details;
+  ASSERT_EQ(details.size(), 3u);
+  EXPECT_EQ(details[1].first, "local filter 1");
+  EXPECT_EQ(details[1].second.rfind("no step yet", 0), 0u) << details[1].second;
+  for (size_t t = 0; t < 2; ++t) {
+    coordinator.predict(run.motion[t]);
+    std::vector<Pose2> injected;
+    const DpfStepInput input = coordinator.beginStep(run.features[t], &injected);
+    std::vector<DpfLocalEstimate> estimates;
+    for (int i = 0; i < 3; ++i) {
+      if (t == 1 && i == 1) {  // local 1 misses step 2
+        estimates.push_back(missedEstimate(i, input.step));
+        continue;
+      }
+      DpfLocalEstimate e;
+      streams[i]->step(input, Pose2::Zero(), injected[i], &e);
+      estimates.push_back(e);
+    }
+    coordinator.finishStep(input, estimates);
+  }
+  details = coordinator.stats().details;
+  ASSERT_EQ(details.size(), 3u);
+  EXPECT_EQ(details[0].second.rfind("fused, weight ", 0), 0u) << details[0].second;
+  EXPECT_EQ(details[1].second.rfind("missed the last step", 0), 0u) << details[1].second;
+  EXPECT_NE(details[1].second.find("isolations 0, missed 1, non-finite 0"), std::string::npos)
+      << details[1].second;
+  EXPECT_NE(details[2].second.find("missed 0"), std::string::npos) << details[2].second;
 }
 
 // What dpf_master_node and dpf_local_node do when a local process dies, restarts in the middle

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <stdexcept>
+#include <string>
 #include <thread>
 
 #include "rbpf_slam/core/require_range.h"
@@ -103,6 +104,34 @@ UpdateStats DpfCoordinator::finishStep(const DpfStepInput& input,
     if (!e.answered) ++stats_.missed_answers;
   }
   stats_.fallbacks += stats.fallbacks;
+  return stats;
+}
+
+FilterStats DpfCoordinator::stats() const {
+  FilterStats stats = stats_;
+  const std::vector<DpfLocalHealth>& health = master_.health();
+  const std::vector<double>& weights = master_.last().weights;
+  for (size_t i = 0; i < health.size(); ++i) {
+    const DpfLocalHealth& h = health[i];
+    std::string state;
+    if (step_ == 0) {
+      state = "no step yet";
+    } else if (!h.answered) {
+      state = "missed the last step";
+    } else if (h.probation_steps > 0) {
+      state = "isolated, readmitted after " + std::to_string(h.probation_steps) + " clean steps";
+    } else if (h.inconsistent) {
+      state = "inconsistent (not fused)";
+    } else if (h.suspect) {
+      state = "suspect";
+    } else {
+      state = "fused";
+    }
+    if (i < weights.size() && step_ > 0) state += ", weight " + formatNumber(weights[i]);
+    state += "; isolations " + std::to_string(h.isolations) + ", missed " +
+             std::to_string(h.missed) + ", non-finite " + std::to_string(h.non_finite);
+    stats.details.emplace_back("local filter " + std::to_string(i), state);
+  }
   return stats;
 }
 

@@ -143,6 +143,8 @@ DpfMasterOutput DpfMaster::fuse(long step, const MotionInput& motion,
     const DpfLocalEstimate& e = *by_index[i];
     DpfLocalHealth& h = health_[i];
     finite[i] = e.answered && finiteEstimate(e);
+    h.answered = e.answered;
+    if (!e.answered) h.inconsistent = false;  // not judged this step (not last step's verdict)
     if (!finite[i]) {
       if (e.answered) {
         ++h.non_finite;

@@ -30,7 +30,8 @@ class DpfCoordinator {
   /// or unexpected local filter) and returns the step's statistics.
   UpdateStats finishStep(const DpfStepInput& input, std::vector<DpfLocalEstimate> estimates);
   PoseEstimate estimate() const;
-  FilterStats stats() const { return stats_; }
+  /// The statistics, with one `details` entry per local filter (its state at the last step).
+  FilterStats stats() const;
   const DpfMaster& master() const { return master_; }
   const std::vector<DpfLocalEstimate>& lastEstimates() const { return estimates_; }
   long step() const { return step_; }

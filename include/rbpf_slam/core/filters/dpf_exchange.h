@@ -78,7 +78,9 @@ struct DpfLocalHealth {
   int suspect_steps = 0;      // consecutive steps flagged
   bool suspect = false;
   double prior_nis = 0.0;     // this step's Mahalanobis^2 of its prior against the master's
-  bool inconsistent = false;  // prior_nis > fault_prior_chi2: not fused this step
+  bool inconsistent = false;  // prior_nis > fault_prior_chi2: not fused this step (false
+                              // when it did not answer: not judged)
+  bool answered = true;       // it answered the last step fused
   long isolations = 0;
   double process_nis = 0.0;   // ... of its prior against its process (see DpfMaster::fuse)
   bool has_last_mean = false;  // last_mean is the local's posterior of the previous step

@@ -6,6 +6,7 @@
 #include <cstddef>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "rbpf_slam/core/features/feature_types.h"
@@ -77,6 +78,8 @@ struct FilterStats {
                              // (nothing is mapped or matched there: the map must be larger)
   long missed_answers = 0;   // dpf_master_node: local filters' answers not received within
                              // dpf.step_timeout_s (the step was fused without them)
+  // Per-part state for /diagnostics, as (name, text) pairs (dpf: one per local filter).
+  std::vector<std::pair<std::string, std::string>> details;
 };
 
 /// A SLAM filter. Not thread-safe; time is always an argument (the core reads no clock).
