@@ -17,8 +17,10 @@ APT_PACKAGES=(ros-base-dev libtf2-ros-dev libtf2-geometry-msgs-dev libsensor-msg
   python3-roslaunch python3-rosmaster rosbash python3-rostopic python3-rosbag python3-sensor-msgs
   libyaml-cpp-dev
   # tf2-tools: pioneer_laser.launch's static_transform_publisher; the python messages let
-  # rostopic echo /tf and /diagnostics
-  tf2-tools python3-tf2-msgs python3-diagnostic-msgs
+  # rostopic echo /tf, /diagnostics, ~trajectory, ~landmarks, ~map and rosservice call ~pause,
+  # ~dynamic_map (README)
+  tf2-tools python3-tf2-msgs python3-diagnostic-msgs python3-std-srvs python3-nav-msgs
+  python3-visualization-msgs
   libbenchmark-dev zlib1g-dev cmake g++ make python3-numpy python3-yaml python3-matplotlib rviz
   xvfb imagemagick)
 
