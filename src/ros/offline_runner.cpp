@@ -360,6 +360,14 @@ class ResultBag {
     topics.insert(topics.end(), sensor_topics.begin(), sensor_topics.end());
     ros::Time last;
     for (const rosbag::MessageInstance& m : rosbag::View(input, rosbag::TopicQuery(topics))) {
+      if (topicIs(m.getTopic(), "tf_static")) {
+        // Latched (whatever the input's header said), so that rviz started after `rosbag play
+        // --clock OUT.bag` began still gets the sensor mounts.
+        auto header = boost::make_shared<ros::M_string>(*m.getConnectionHeader());
+        (*header)["latching"] = "1";
+        bag_.write(m.getTopic(), m.getTime(), m, header);
+        continue;
+      }
       bag_.write(m.getTopic(), m.getTime(), m);
       last = std::max(last, m.getTime());
     }

@@ -204,14 +204,8 @@ void writeBag(const Arguments& arguments, const io::CarmenLog& log,
       tf2_msgs::TFMessage tf_static;
       tf_static.transforms.push_back(
           rosbridge::toTransformStamped(laserOffset(log), "base_link", "base_laser_link", stamp));
-      // A custom connection header replaces rosbag's, so it must carry the type fields too.
-      auto header = boost::make_shared<ros::M_string>();
-      (*header)["type"] = ros::message_traits::datatype(tf_static);
-      (*header)["md5sum"] = ros::message_traits::md5sum(tf_static);
-      (*header)["message_definition"] = ros::message_traits::definition(tf_static);
-      (*header)["callerid"] = "/carmen_to_bag";
-      (*header)["latching"] = "1";  // so that rosbag play latches it like a static broadcaster
-      output.write("/tf_static", stamp, tf_static, header);
+      output.write("/tf_static", stamp, tf_static,
+                   rosbridge::latchedConnectionHeader<tf2_msgs::TFMessage>("/carmen_to_bag"));
     } else if (event.kind == 1) {
       const io::StampedPose* previous = event.index > 0 ? &odometry[event.index - 1] : nullptr;
       const nav_msgs::Odometry message =

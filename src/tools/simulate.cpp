@@ -76,7 +76,12 @@ class BagWriter {
     if (!reference_) throw std::runtime_error(ref_path + ": cannot be written");
     const tf2_msgs::TFMessage mounts =
         rosbridge::simStaticTransforms(simulator_, clock_.stamp(0.0));
-    if (!mounts.transforms.empty()) put("/tf_static", clock_.stamp(0.0), mounts);
+    if (!mounts.transforms.empty()) {
+      // Latched, so that rviz or a node started after `rosbag play` began still gets the mounts.
+      bag_.write("/tf_static", clock_.stamp(0.0), mounts,
+                 rosbridge::latchedConnectionHeader<tf2_msgs::TFMessage>("/simulate"));
+      ++counts_["/tf_static"];
+    }
   }
 
   void write(const sim::SimEvent& event) {

@@ -243,5 +243,24 @@ expect "validate_bag missing bag" 2 "no_such_input" "$bin/validate_bag" "$missin
 for bag in c.bag m.bag v.bag s.bag; do
   [ ! -e "$work/$bag" ] || { echo "FAIL: $bag written although the conversion failed"; status=1; }
 done
+# /tf_static is latched in the bags the tools write (simulate, offline_slam --output-bag; and
+# carmen_to_bag, as before), so that rviz or a node started after `rosbag play` began gets the mounts.
+"$bin/simulate" --world "$root/worlds/test_small.yaml" --output "$work/latch.bag" --seed 1 \
+  --duration 10 >/dev/null
+"$bin/offline_slam" --bag "$work/latch.bag" --config "$laser_config" --output "$work/latch" \
+  --output-bag "$work/latch_out.bag" --no-progress --set particles=5 >/dev/null 2>&1 ||
+  { echo "FAIL: offline_slam --output-bag on latch.bag"; status=1; }
+/usr/bin/python3 - "$work/latch.bag" "$work/latch_out.bag" <<'PY' || status=1
+import os, sys
+import rosbag
+for path in sys.argv[1:]:
+    if not os.path.exists(path):
+        sys.exit("FAIL: %s was not written" % path)
+    with rosbag.Bag(path) as bag:
+        latched = [c.header.get("latching") for c in bag._get_connections(topics=["/tf_static"])]
+    if not latched or any(flag != b"1" for flag in latched):
+        sys.exit("FAIL: %s: /tf_static not latched (%s)" % (path, latched))
+print("ok: /tf_static latched in the written bags")
+PY
 [ "$status" -eq 0 ] && echo PASS
 exit "$status"

@@ -2,8 +2,10 @@
 // Opening bags for the tools: errors that name the file, and output bags that appear only
 // when complete.
 
+#include <ros/message_traits.h>
 #include <rosbag/bag.h>
 
+#include <boost/make_shared.hpp>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -55,6 +57,20 @@ class PartialBag {
   std::unique_ptr<rosbag::Bag> bag_;
   bool committed_ = false;
 };
+
+/// A connection header for Message on a latched topic, from `callerid`: `rosbag play` then
+/// latches it, as a static broadcaster does, so that a node started after the bag began still
+/// gets it (/tf_static). A custom header replaces rosbag's, so it carries the type fields too.
+template <typename Message>
+boost::shared_ptr<ros::M_string> latchedConnectionHeader(const std::string& callerid) {
+  auto header = boost::make_shared<ros::M_string>();
+  (*header)["type"] = ros::message_traits::datatype<Message>();
+  (*header)["md5sum"] = ros::message_traits::md5sum<Message>();
+  (*header)["message_definition"] = ros::message_traits::definition<Message>();
+  (*header)["callerid"] = callerid;
+  (*header)["latching"] = "1";
+  return header;
+}
 
 }  // namespace rosbridge
 }  // namespace rbpf_slam
