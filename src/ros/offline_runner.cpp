@@ -882,7 +882,18 @@ OfflineSummary OfflineRunner::writeOutputs(const OfflineSummary& in) const {
       io::EvaluationOptions eval;
       eval.max_dt_s = 0.05;
       const io::EvaluationResult r = io::evaluateTrajectory(estimate, reference, eval);
-      summary.has_reference = r.matched_poses > 0;
+      summary.has_reference = r.matched_poses > 1;  // the alignment needs two
+      summary.ate_matched_poses = r.matched_poses;
+      // An ATE over a few poses says nothing (another bag's reference, another clock): as
+      // evaluate does, say so.
+      if (2 * r.matched_poses < std::min(estimate.size(), reference.size())) {
+        std::fprintf(stderr,
+                     "offline_slam: only %ld of %zu poses matched a reference pose (%zu poses, "
+                     "within 0.05 s): %s; is %s this bag's reference?\n",
+                     static_cast<long>(r.matched_poses), estimate.size(), reference.size(),
+                     summary.has_reference ? "the ATE covers those only" : "no ATE",
+                     options_.reference_path.c_str());
+      }
       summary.ate_rmse_m = r.ate_rmse_m;
       summary.final_position_error_m = r.final_position_error_m;
       summary.ate_online_rmse_m = io::evaluateTrajectory(online, reference, eval).ate_rmse_m;
@@ -970,6 +981,7 @@ OfflineSummary OfflineRunner::writeOutputs(const OfflineSummary& in) const {
       .number("peak_rss_mb", peakResidentMb());
   if (summary.has_reference) {
     json.number("ate_rmse_m", summary.ate_rmse_m)
+        .integer("ate_matched_poses", summary.ate_matched_poses)
         .number("ate_online_rmse_m", summary.ate_online_rmse_m)
         .number("final_position_error_m", summary.final_position_error_m);
   }

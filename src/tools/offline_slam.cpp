@@ -86,10 +86,11 @@ int run(const Arguments& arguments) {
       s.wall_s > 0 ? s.bag_duration_s / s.wall_s : 0.0, s.update_ms_mean, s.update_ms_p99);
   if (s.has_reference) std::printf(", ATE %.3f m", s.ate_rmse_m);
   std::printf(
-      "\noffline_slam: wrote %s/{trajectory.tum,trajectory_online.tum,landmarks.yaml,"
+      "\noffline_slam: wrote %s/{trajectory.tum,trajectory_online.tum,landmarks.yaml,%s"
       "summary.json,map.png,map.pgm,map.yaml}%s%s\n",
-      options.output_dir.c_str(), options.output_bag.empty() ? "" : " and ",
-      options.output_bag.c_str());
+      options.output_dir.c_str(),
+      config.smoothing.enabled ? "trajectory_filter.tum,landmarks_filter.yaml," : "",
+      options.output_bag.empty() ? "" : " and ", options.output_bag.c_str());
   bool failed = false;
   for (const std::string& line :
        rbpf_slam::rosbridge::describeOutcome(s, options, config.filter.variant, &failed)) {

@@ -243,6 +243,10 @@ expect "validate_bag missing bag" 2 "no_such_input" "$bin/validate_bag" "$missin
 for bag in c.bag m.bag v.bag s.bag; do
   [ ! -e "$work/$bag" ] || { echo "FAIL: $bag written although the conversion failed"; status=1; }
 done
+# Another bag's reference: few poses match, which is said (the ATE would mean nothing).
+expect "offline_slam wrong reference" 0 "only 3 of 90 poses matched a reference pose.*is .*aces_head.ref.tum this bag's reference" \
+  "$bin/offline_slam" --bag "$root/test/data/intel_head.bag" --config "$laser_config" \
+  --output "$work/wrongref" --reference "$root/test/data/aces_head.ref.tum" --no-progress
 # /tf_static is latched in the bags the tools write (simulate, offline_slam --output-bag; and
 # carmen_to_bag, as before), so that rviz or a node started after `rosbag play` began gets the mounts.
 "$bin/simulate" --world "$root/worlds/test_small.yaml" --output "$work/latch.bag" --seed 1 \

@@ -63,7 +63,8 @@ struct OfflineSummary {
   double update_ms_mean = 0.0;
   double update_ms_p99 = 0.0;
   double update_ms_max = 0.0;
-  bool has_reference = false;
+  bool has_reference = false;  // at least two poses matched the reference
+  long ate_matched_poses = 0;  // poses of trajectory.tum matched to a reference pose
   double ate_rmse_m = 0.0;
   double final_position_error_m = 0.0;
   double ate_online_rmse_m = 0.0;  // of trajectory_online.tum (the per-update estimates)
