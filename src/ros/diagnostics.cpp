@@ -77,7 +77,7 @@ diagnostic_msgs::DiagnosticArray SlamDiagnostics::report(const ros::Time& stamp,
   }
   if (problem.empty()) {
     status.level = diagnostic_msgs::DiagnosticStatus::OK;
-    status.message = updates_total_ > 0 ? "mapping" : "waiting for data";
+    status.message = updates_total_ > 0 ? options_.activity : "waiting for data";
   } else {
     status.level = diagnostic_msgs::DiagnosticStatus::WARN;
     status.message = problem;
@@ -109,7 +109,7 @@ diagnostic_msgs::DiagnosticArray SlamDiagnostics::report(const ros::Time& stamp,
   }
   status.values.push_back(keyValue("resets", text(resets_total_)));
   if (odometry_gaps_ >= 0) status.values.push_back(keyValue("odometry gaps", text(odometry_gaps_)));
-  status.values.push_back(keyValue("paused", paused_ ? "true" : "false"));
+  if (options_.pausable) status.values.push_back(keyValue("paused", paused_ ? "true" : "false"));
   if (same_stamp_total_ > 0) {
     status.values.push_back(keyValue("frames at the last frame's stamp", text(same_stamp_total_)));
   }

@@ -16,7 +16,7 @@ LandmarkTrackerNode::LandmarkTrackerNode(ros::NodeHandle nh, ros::NodeHandle pri
       frontend_(config_.filter),
       clock_(config_.session),
       tf_listener_(tf_buffer_, nh, "landmark_tracker"),
-      diagnostics_("landmark_tracker", DiagnosticsOptions::withoutFilter()) {
+      diagnostics_("landmark_tracker", DiagnosticsOptions::withoutFilter("tracking")) {
   using Ptr = FeatureArray::ConstPtr;
   TfGatedSubscriber<FeatureArray>::Handlers handlers;
   handlers.on_message = [this](const Ptr& msg) { featuresCallback(msg); };

@@ -9,6 +9,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <filesystem>
 #include <sstream>
 
 #include "rbpf_slam/core/grid/grid_map_data.h"
@@ -531,8 +532,11 @@ bool SlamNode::resumeService(std_srvs::Empty::Request&, std_srvs::Empty::Respons
 }
 
 bool SlamNode::saveMapService(MapFile::Request& request, MapFile::Response& response) {
-  const std::string prefix = request.path.empty() ? config_.ros.map_save_prefix : request.path;
+  // A relative prefix is the node's working directory (roslaunch's: $ROS_HOME, ~/.ros), not the
+  // caller's: the reply names the absolute paths written.
+  std::string prefix = request.path.empty() ? config_.ros.map_save_prefix : request.path;
   try {
+    prefix = std::filesystem::absolute(prefix).lexically_normal().string();
     std::vector<core::LandmarkEstimate> landmarks = pipeline_.session().filter().landmarks();
     std::string smoothing;
     if (config_.smoothing.enabled) {
@@ -694,6 +698,7 @@ void SlamNode::publishDiagnostics(const ros::WallTimerEvent&) {
     }
   }
   diagnostics_.setPaused(paused_);
+  diagnostics_.setActivity(pipeline_.session().mapping() ? "mapping" : "localizing (mapping off)");
   diagnostics_.setOdometryGaps(pipeline_.session().gaps());
   const long outside_grid = pipeline_.session().filter().stats().outside_grid;
   if (outside_grid > outside_grid_seen_) {

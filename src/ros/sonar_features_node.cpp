@@ -15,7 +15,7 @@ SonarFeaturesNode::SonarFeaturesNode(ros::NodeHandle nh, ros::NodeHandle private
     : config_(loadConfigFromParams(private_nh)),
       extractor_(config_.sonar),
       tf_listener_(tf_buffer_, nh, "sonar_features"),
-      diagnostics_("sonar_features", DiagnosticsOptions::withoutFilter()),
+      diagnostics_("sonar_features", DiagnosticsOptions::withoutFilter("extracting features")),
       clock_(config_.session) {
   if (config_.ros.sonar_source != "range") {
     throw std::invalid_argument("sonar_source = '" + config_.ros.sonar_source +

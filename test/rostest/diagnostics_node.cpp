@@ -161,6 +161,23 @@ TEST(Diagnostics, WaitingBeforeTheFirstUpdate) {
   EXPECT_EQ(s.message, "waiting for data");
 }
 
+// The OK message says what the node does: localizing on a loaded map, tracking, extracting
+// features (each used to say "mapping"); nodes without ~pause report no "paused" value.
+TEST(Diagnostics, TheOkMessageSaysWhatTheNodeDoes) {
+  rosbridge::SlamDiagnostics slam("rbpf_slam_node");
+  slam.recordUpdate(1.0);
+  slam.setActivity("localizing (mapping off)");
+  auto s = slam.report(ros::Time(1.0), healthy(), 100, 1.0).status[0];
+  EXPECT_EQ(s.message, "localizing (mapping off)");
+  EXPECT_EQ(value(s, "paused"), "false");
+  rosbridge::SlamDiagnostics tracker("landmark_tracker",
+                                     rosbridge::DiagnosticsOptions::withoutFilter("tracking"));
+  tracker.recordUpdate(1.0);
+  s = tracker.report(ros::Time(1.0), core::FilterStats(), 0, 1.0).status[0];
+  EXPECT_EQ(s.message, "tracking");
+  EXPECT_EQ(value(s, "paused"), "<missing paused>");
+}
+
 }  // namespace
 }  // namespace rbpf_slam
 

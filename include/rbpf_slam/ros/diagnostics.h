@@ -26,11 +26,18 @@ struct DiagnosticsOptions {
   /// false for a node without a filter (a feature extractor): the report leaves out Neff,
   /// particles, landmarks, resamples, weight resets and fallbacks.
   bool filter_fields = true;
+  /// The node has ~pause / ~resume: the report has a "paused" value.
+  bool pausable = true;
+  /// The OK message once it has worked ("mapping"; setActivity changes it).
+  std::string activity = "mapping";
 
-  /// For a node without a filter (feature extraction, the landmark tracker).
-  static DiagnosticsOptions withoutFilter() {
+  /// For a node without a filter (feature extraction, the landmark tracker), which cannot be
+  /// paused; `activity` is what it does.
+  static DiagnosticsOptions withoutFilter(const std::string& activity) {
     DiagnosticsOptions options;
     options.filter_fields = false;
+    options.pausable = false;
+    options.activity = activity;
     return options;
   }
 };
@@ -86,6 +93,8 @@ class SlamDiagnostics {
   /// Steps taken across an odometry gap so far (SlamSession::gaps); reported once set.
   void setOdometryGaps(long total) { odometry_gaps_ = total; }
   void setPaused(bool paused) { paused_ = paused; }
+  /// The OK message once it has worked, e.g. "localizing (mapping off)".
+  void setActivity(const std::string& activity) { options_.activity = activity; }
 
   /// The report for the period since the previous call (then the period counters restart),
   /// with the share of the (steady) wall time since the last busy share spent on inputs. A
@@ -101,7 +110,7 @@ class SlamDiagnostics {
 
  private:
   const std::string name_;
-  const DiagnosticsOptions options_;
+  DiagnosticsOptions options_;
   long updates_period_ = 0, updates_total_ = 0, resets_total_ = 0;
   double update_ms_sum_period_ = 0.0;
   double busy_ms_period_ = 0.0;
