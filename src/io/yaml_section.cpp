@@ -183,14 +183,22 @@ void YamlSection::readNames(const std::string& key, std::vector<std::string>* va
     }
     const std::string name = item.Scalar();
     if (name.empty()) throw ConfigError(where(key) + " contains an empty name");
-    if (n.IsScalar() && name.front() == '[') {  // roslaunch's <param value="[a, b]"/> is a string
+    // roslaunch's <param value="[a, b]"/> (or "a, b") is one string: no ROS name holds these.
+    if (name.find_first_of("[], \t") != std::string::npos) {
       throw ConfigError(where(key) + " = '" + name +
-                        "' is one string, not a list; in a launch file give a list with "
-                        "<rosparam param=\"" +
+                        "' is not a name (a list written as one string?); in a launch file give "
+                        "a list with <rosparam param=\"" +
                         key + "\">[a, b]</rosparam>");
     }
-    if (std::find(parsed.begin(), parsed.end(), name) != parsed.end()) {
-      throw ConfigError(where(key) + " names '" + name + "' twice");
+    // "a" and "/a" are one topic in the root namespace: subscribed twice, every message would
+    // count twice.
+    const auto bare = [](const std::string& text) {
+      return text.front() == '/' ? text.substr(1) : text;
+    };
+    for (const std::string& earlier : parsed) {
+      if (bare(earlier) == bare(name)) {
+        throw ConfigError(where(key) + " names '" + bare(name) + "' twice");
+      }
     }
     parsed.push_back(name);
   }

@@ -143,6 +143,7 @@ std::unique_ptr<TfGatedSubscriber<Message>> SlamNode::subscribeFiltered(
   handlers.on_unknown_frame = [this](const Ptr& msg, const std::string& error) {
     frameNotInTf(msg->header, error);
   };
+  handlers.on_before_tf = [this](const Ptr& msg) { beforeTf(msg->header); };
   handlers.on_bad_stamp = [this](const Ptr& msg, const std::string& why) {
     diagnostics_.recordDrop("stamp tf cannot handle");
     warnThrottled("far stamp " + msg->header.frame_id,
@@ -303,6 +304,9 @@ void SlamNode::odometryTfCallback(const tf2_msgs::TFMessage::ConstPtr& msg) {
   for (const auto& t : msg->transforms) {
     if (stripSlash(t.child_frame_id) == base && stripSlash(t.header.frame_id) == odom) {
       pipeline_.session().addOdometryStamp(t.header.stamp.toSec());
+      if (std::isfinite(t.header.stamp.toSec())) {
+        first_odometry_stamp_ = std::min(first_odometry_stamp_, t.header.stamp.toSec());
+      }
     }
   }
 }
@@ -314,6 +318,23 @@ void SlamNode::frameNotInTf(const std_msgs::Header& header, const std::string& t
                 "Dropping a message in frame '" + header.frame_id + "': tf has no transform " +
                     base + " -> " + header.frame_id + " (" + tf_error +
                     "); is the frame name right and its transform published?");
+}
+
+void SlamNode::beforeTf(const std_msgs::Header& header) {
+  // Stamped before the first odometry transform (a driver that publishes its readings before
+  // its odometry, every cycle; a bag recorded from such a driver): it can never be placed.
+  // Normal at start-up, so counted and said once. Otherwise it is older than what tf keeps.
+  if (!(header.stamp.toSec() < first_odometry_stamp_)) {
+    messageDropped(header, tf2_ros::filter_failure_reasons::OutTheBack);
+    return;
+  }
+  diagnostics_.recordDrop("stamped before the first odometry");
+  if (!said_before_first_odometry_) {
+    said_before_first_odometry_ = true;
+    ROS_INFO_STREAM("rbpf_slam_node: messages stamped before the first "
+                    << config_.ros.odom_frame << " -> " << config_.ros.base_frame
+                    << " transform cannot be placed and are dropped (normal at start-up)");
+  }
 }
 
 void SlamNode::messageDropped(const std_msgs::Header& header, tf2_ros::FilterFailureReason reason) {
@@ -349,9 +370,10 @@ void SlamNode::messageDropped(const std_msgs::Header& header, tf2_ros::FilterFai
       warnThrottled("no tf " + header.frame_id,
                     "Dropping a message: no transform " + odom + " -> " + header.frame_id +
                         " at its stamp " + std::to_string(header.stamp.toSec()) +
-                        " arrived before the queue (" + std::to_string(config_.ros.queue_size) +
-                        ") overflowed; is " + odom + " -> " + config_.ros.base_frame + " -> " +
-                        header.frame_id + " published?");
+                        " came in time (the topic's tf queue of " +
+                        std::to_string(config_.ros.queue_size) +
+                        " filled up, or tf's cache moved past the stamp); is " + odom + " -> " +
+                        config_.ros.base_frame + " -> " + header.frame_id + " published?");
       break;
   }
 }
@@ -682,19 +704,25 @@ void SlamNode::publishDiagnostics(const ros::WallTimerEvent&) {
         << " (check the names against `rostopic list` and the config's *_topic / *_frame keys)";
     warnThrottled("no input", why.str());
   }
-  // One of several sonar topics silent while the others talk: most likely a misspelt name.
-  if (sonar_inputs_.size() > 1 && waited >= kSilentInputWarnS) {
+  // One of several sonar topics silent for kSilentInputWarnS while another has been talking
+  // (not merely since the node started: a driver's topics come up one by one): most likely a
+  // misspelt name.
+  if (sonar_inputs_.size() > 1) {
     const TfGatedSubscriber<sensor_msgs::Range>* talking = nullptr;
     for (const auto& input : sonar_inputs_) {
-      if (input->received() > 0) talking = input.get();
+      if (input->received() > 0 &&
+          (!talking || input->firstReceived() < talking->firstReceived())) {
+        talking = input.get();
+      }
     }
+    const double talked = talking ? (ros::WallTime::now() - talking->firstReceived()).toSec() : 0.0;
     for (const auto& input : sonar_inputs_) {
-      if (!talking || input->received() > 0) continue;
+      if (!talking || talked < kSilentInputWarnS || input->received() > 0) continue;
       if (!silent_sonar_topics_.insert(input->topic()).second) continue;  // said once
       ROS_WARN_STREAM("rbpf_slam_node: no message on sonar topic '"
-                      << input->topic() << "' in " << static_cast<int>(waited) << " s while '"
-                      << talking->topic()
-                      << "' has some: check the name in sonar_topic against `rostopic list`");
+                      << input->topic() << "' while '" << talking->topic() << "' has had them for "
+                      << static_cast<int>(talked)
+                      << " s: check the name in sonar_topic against `rostopic list`");
     }
   }
   diagnostics_.setPaused(paused_);
@@ -734,6 +762,7 @@ void SlamNode::resetAll(const std::string& why) {
   ROS_WARN_STREAM("rbpf_slam_node: " << why << ": clearing the map, the trajectory and tf");
   pipeline_.reset();  // filter, history and the scan matcher's reference
   tf_buffer_.clear();
+  first_odometry_stamp_ = std::numeric_limits<double>::infinity();
   if (scan_input_) scan_input_->clear();
   for (const auto& input : sonar_inputs_) input->clear();
   if (sonar_cloud_input_) sonar_cloud_input_->clear();

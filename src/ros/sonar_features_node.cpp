@@ -38,6 +38,13 @@ SonarFeaturesNode::SonarFeaturesNode(ros::NodeHandle nh, ros::NodeHandle private
              config_.ros.base_frame + " -> " + msg->header.frame_id + " (" + error +
              "); is the frame name right and its transform published?");
   };
+  handlers.on_before_tf = [this](const Ptr& msg) {
+    // Stamped before the earliest transform tf holds (a driver that publishes its readings
+    // before its first odometry): normal at start-up, counted, not warned.
+    diagnostics_.recordDrop("stamped before tf's earliest transform");
+    ROS_DEBUG_STREAM("sonar_features: a reading from "
+                     << msg->header.frame_id << " stamped before tf's earliest transform");
+  };
   // Echoes are placed by odometry, so wait for odom -> base as well as base -> transducer.
   for (const std::string& topic : config_.ros.sonar_topics) {
     sonar_inputs_.push_back(std::make_unique<TfGatedSubscriber<sensor_msgs::Range>>(

@@ -5,17 +5,25 @@ publishes a real robot:
 
 - each proximity sensor on its own topic, /proximity0 .. /proximity7 (sensor_msgs/Range);
 - frames prefixed by the robot's name: NAME/base_link, NAME/base_prox0 .. NAME/base_prox7
-  (odom keeps its name), in /tf, /tf_static and every message header;
+  (odom keeps its name), in /tf, /tf_static and every message header (the simulator sends the
+  mounts once on /tf_static; see --driver-tf for the driver's way);
 - with --driver-ranges, the driver's Range fields: field_of_view 0.26 rad, min_range
   0.005 m, max_range 0.05 m, and the range clamped to [min_range, max_range], so that no
   obstacle reads max_range (the driver turns its raw values into metres this way).
 
-Without --driver-ranges the readings are unchanged, so a run on the rewritten bag with
-sonar_topic listing the eight topics and base_frame NAME/base_link must match a run on the
-original bag. Messages keep their stamps; the rewritten bag keeps the original order of the
-messages (a few microseconds are added to the receive times of messages received together).
+- with --driver-tf, the driver's timing: every cycle it stamps the eight readings with the
+  clock as it publishes them, then sends NAME/base_link -> NAME/base_proxN on /tf (not
+  /tf_static) and then odom -> NAME/base_link, so each reading is stamped a little before the
+  transforms that place it (here 2 ms before the cycle's odometry, 0.1 ms apart; the mounts
+  1 ms before it), and the first cycle's readings come before any odometry.
 
-  epuck_driver_bag.py IN.bag OUT.bag [--name epuck2_robot_0] [--driver-ranges]
+Without --driver-ranges and --driver-tf the readings are unchanged, so a run on the rewritten
+bag with sonar_topic listing the eight topics and base_frame NAME/base_link must match a run on
+the original bag. Otherwise messages keep their stamps; the rewritten bag keeps the original
+order of the messages (a few microseconds are added to the receive times of messages received
+together).
+
+  epuck_driver_bag.py IN.bag OUT.bag [--name epuck2_robot_0] [--driver-ranges] [--driver-tf]
 """
 import argparse
 import copy
@@ -37,6 +45,9 @@ def main():
     parser.add_argument("--name", default="epuck2_robot_0", help="the driver's epuck2_name")
     parser.add_argument("--driver-ranges", action="store_true",
                         help="the driver's field of view, range limits and clamping")
+    parser.add_argument("--driver-tf", action="store_true",
+                        help="the driver's timing: mounts on /tf every cycle, readings stamped "
+                             "before the cycle's transforms")
     args = parser.parse_args()
 
     def frame(name):
@@ -50,11 +61,31 @@ def main():
 
     counts = {}
     last_time, same = None, 0
+    mounts = []  # --driver-tf: the prox frames' transforms, sent with each cycle's odometry
     with rosbag.Bag(args.input) as bag_in, rosbag.Bag(args.output, "w") as bag_out:
         for topic, msg, t in bag_in.read_messages():
             same = same + 1 if t == last_time else 0
             last_time = t
             received = t + rospy.Duration(0, 1000 * same)
+            if args.driver_tf and topic == "/tf_static":
+                mounts = [copy.deepcopy(x) for x in msg.transforms
+                          if re.fullmatch(r"/?ir_\d+", x.child_frame_id)]
+                kept = [x for x in msg.transforms if x not in mounts and
+                        not re.fullmatch(r"/?ir_\d+", x.child_frame_id)]
+                if not kept:
+                    continue
+                msg = copy.deepcopy(msg)
+                msg.transforms = kept
+            if args.driver_tf and topic == "/tf" and mounts:
+                stamp = msg.transforms[0].header.stamp
+                sent = copy.deepcopy(msg)
+                sent.transforms = copy.deepcopy(mounts)
+                for transform in sent.transforms:
+                    transform.header.stamp = stamp - rospy.Duration(0, 1000000)
+                    transform.header.frame_id = frame(transform.header.frame_id)
+                    transform.child_frame_id = frame(transform.child_frame_id)
+                bag_out.write("/tf", sent, received - rospy.Duration(0, 1000000))
+                counts["/tf (mounts)"] = counts.get("/tf (mounts)", 0) + 1
             if topic in ("/tf", "/tf_static"):
                 msg = copy.deepcopy(msg)
                 for transform in msg.transforms:
@@ -71,6 +102,11 @@ def main():
                     sys.exit("%s: an /ir reading in frame '%s', not ir_N" %
                              (args.input, msg.header.frame_id))
                 topic = "/proximity" + sensor.group(1)
+                if args.driver_tf:
+                    index = int(sensor.group(1))
+                    early = rospy.Duration(0, 2000000 - 100000 * index)
+                    msg.header.stamp = msg.header.stamp - early
+                    received = t - early
                 if args.driver_ranges:
                     msg.field_of_view = DRIVER_FOV
                     msg.min_range = DRIVER_MIN

@@ -183,7 +183,12 @@ TEST(SlamConfig, SonarTopicIsOneNameOrAList) {
   EXPECT_NE(errorOf("sonar_topic: {a: b}").find("must be a name or a list of names"),
             std::string::npos);
   EXPECT_NE(errorOf("sonar_topic:").find("must be a name or a list of names"), std::string::npos);
-  EXPECT_NE(errorOf("sonar_topic: '[a, b]'").find("is one string, not a list"), std::string::npos);
+  EXPECT_NE(errorOf("sonar_topic: '[a, b]'").find("is not a name (a list written as one string?)"),
+            std::string::npos);
+  EXPECT_NE(errorOf("sonar_topic: 'a,b'").find("is not a name"), std::string::npos);
+  EXPECT_NE(errorOf("sonar_topic: [a, ' b']").find("is not a name"), std::string::npos);
+  EXPECT_NE(errorOf("sonar_topic: [proximity0, /proximity0]").find("names 'proximity0' twice"),
+            std::string::npos);
 }
 
 TEST(SlamConfig, RepeatedAndEmptyKeysAreErrors) {

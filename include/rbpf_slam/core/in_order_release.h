@@ -94,6 +94,12 @@ class InOrderRelease {
   }
 
   std::size_t inGate() const { return in_gate_.size(); }
+  /// The messages still in the gate, in key order.
+  std::vector<Value> inGateValues() const {
+    std::vector<Value> out;
+    for (const auto& entry : in_gate_) out.push_back(entry.second);
+    return out;
+  }
   std::size_t held() const { return held_.size(); }
 
  private:

@@ -130,6 +130,10 @@ class TfGatedSubscriber {
     std::function<void(const Ptr&, const std::string& why)> on_bad_stamp;
     std::function<void(const Ptr&, tf2_ros::FilterFailureReason)> on_failure;
     std::function<void(const Ptr&, const std::string& tf_error)> on_unknown_frame;
+    /// Stamped before the earliest transform tf holds on its way to the target frame (e.g. a
+    /// reading published before the first odometry): it can never leave (dropBeforeTf).
+    /// Without this handler such messages go to on_failure as OutTheBack.
+    std::function<void(const Ptr&)> on_before_tf;
   };
 
   TfGatedSubscriber(ros::NodeHandle nh, const std::string& topic, uint32_t queue_size,
@@ -137,25 +141,33 @@ class TfGatedSubscriber {
                     Handlers handlers)
       : tf_(tf),
         base_frame_(std::move(base_frame)),
+        target_frame_(stripSlash(target_frame)),
         handlers_(std::move(handlers)),
         filter_(*tf, target_frame, queue_size, nh),
         order_(queue_size, [this, target = stripSlash(target_frame)](const Ptr& msg) {
           // An empty frame is the filter's to refuse (tf2 would log an error for it here).
           const std::string frame = stripSlash(msg->header.frame_id);
-          return !frame.empty() && tf_->canTransform(target, frame, msg->header.stamp);
+          try {
+            return !frame.empty() && tf_->canTransform(target, frame, msg->header.stamp);
+          } catch (const std::exception&) {  // tf2's time arithmetic: the filter's to answer
+            return false;
+          }
         }) {
     // An empty topic: no subscription, the owner feeds messages with add() (a topic whose
     // messages come in another type first, e.g. PointCloud2 converted to PointCloud).
     if (!topic.empty()) {
       subscriber_.subscribe(nh, topic, queue_size);
       subscriber_.registerCallback(boost::function<void(const Ptr&)>([this](const Ptr& msg) {
-        ++received_;
+        if (received_++ == 0) first_received_ = ros::WallTime::now();
         add(msg);
       }));
     }
-    filter_.registerCallback(boost::function<void(const Ptr&)>(
-        [this](const Ptr& msg) { deliver(order_.left(msg->header.stamp, msg), clears_); }));
+    filter_.registerCallback(boost::function<void(const Ptr&)>([this](const Ptr& msg) {
+      answered(msg);
+      deliver(order_.left(msg->header.stamp, msg), clears_);
+    }));
     filter_.registerFailureCallback([this](const Ptr& msg, tf2_ros::FilterFailureReason reason) {
+      answered(msg);
       bool handed_on = false;  // then the filter gives up on a message already processed
       std::vector<Ptr> due = order_.dropped(msg->header.stamp, msg, &handed_on);
       const unsigned long clears = clears_;  // on_failure may reset the input
@@ -165,6 +177,7 @@ class TfGatedSubscriber {
     sweep_timer_ = nh.createWallTimer(ros::WallDuration(kSweepPeriodS),
                                       [this](const ros::WallTimerEvent&) {
                                         if (order_.inGate() > 0) deliver(order_.sweep(), clears_);
+                                        if (!pending_.empty()) dropBeforeTf();
                                       });
   }
   TfGatedSubscriber(const TfGatedSubscriber&) = delete;
@@ -182,9 +195,11 @@ class TfGatedSubscriber {
     }
     if (frameInTf(*tf_, base_frame_, msg->header.frame_id, &error)) {
       order_.entered(msg->header.stamp, msg);  // before add(): the filter may answer at once
+      pending_.emplace(msg->header.stamp, msg);
       try {
         filter_.add(msg);
       } catch (const std::exception& e) {  // tf2's time arithmetic, whatever the stamp
+        answered(msg);
         bool handed_on = false;
         std::vector<Ptr> due = order_.dropped(msg->header.stamp, msg, &handed_on);
         const unsigned long clears = clears_;  // on_bad_stamp may reset the input
@@ -199,11 +214,13 @@ class TfGatedSubscriber {
   void clear() {
     filter_.clear();
     order_.clear();
+    pending_.clear();
     ++clears_;
   }
   std::string topic() const { return subscriber_.getTopic(); }
-  /// Messages that arrived on the topic (whatever became of them).
+  /// Messages that arrived on the topic (whatever became of them), and when the first did.
   unsigned long received() const { return received_; }
+  ros::WallTime firstReceived() const { return first_received_; }
 
  private:
   /// Hands on the messages due unless the input was reset since `clears` was read (by a
@@ -215,10 +232,64 @@ class TfGatedSubscriber {
     }
   }
 
+  /// The filter answered for this message (let it out or gave up on it).
+  void answered(const Ptr& msg) {
+    const auto range = pending_.equal_range(msg->header.stamp);
+    for (auto it = range.first; it != range.second; ++it) {
+      if (it->second == msg) {
+        pending_.erase(it);
+        return;
+      }
+    }
+  }
+
+  /// When every message the filter holds unanswered is stamped before the earliest transform tf
+  /// holds for it (tf2: "extrapolation into the past"; e.g. readings a driver publishes before
+  /// its first odometry), they can never leave: tf2 gives up on them only once its cache has
+  /// moved a whole cache length past them (30 s), and tf2_ros 0.7 then also fails the messages
+  /// waiting at that moment. They are reported now (on_before_tf) and the filter is emptied.
+  /// (Any other message still waiting postpones this to a later sweep.)
+  void dropBeforeTf() {
+    std::vector<Ptr> waiting;
+    for (const auto& entry : pending_) {
+      const Ptr& msg = entry.second;
+      std::string error;
+      const std::string frame = stripSlash(msg->header.frame_id);
+      try {
+        if (frame.empty() || tf_->canTransform(target_frame_, frame, msg->header.stamp, &error) ||
+            error.find("into the past") == std::string::npos) {
+          return;  // one that may still leave: wait for the filter's answers
+        }
+      } catch (const std::exception&) {  // tf2's time arithmetic (a stamp 2^31 s off): the
+        return;                          // filter's to answer for, as before
+      }
+      waiting.push_back(msg);
+    }
+    filter_.clear();  // no failure callbacks; its tf2 requests go too
+    pending_.clear();
+    const unsigned long clears = clears_;
+    for (const Ptr& msg : waiting) {
+      bool handed_on = false;
+      std::vector<Ptr> due = order_.dropped(msg->header.stamp, msg, &handed_on);
+      if (!handed_on) {
+        if (handlers_.on_before_tf) {
+          handlers_.on_before_tf(msg);
+        } else if (handlers_.on_failure) {
+          handlers_.on_failure(msg, tf2_ros::filter_failure_reasons::OutTheBack);
+        }
+      }
+      if (clears_ != clears) return;  // a handler reset the input
+      deliver(std::move(due), clears);
+    }
+  }
+
   tf2_ros::Buffer* tf_;
   const std::string base_frame_;
+  const std::string target_frame_;
   const Handlers handlers_;
+  std::multimap<ros::Time, Ptr> pending_;  // in the filter, not answered for yet
   unsigned long received_ = 0;
+  ros::WallTime first_received_;
   message_filters::Subscriber<Message> subscriber_;
   tf2_ros::MessageFilter<Message> filter_;
   core::InOrderRelease<ros::Time, Ptr> order_;

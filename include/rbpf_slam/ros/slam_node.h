@@ -21,6 +21,7 @@
 #include <topic_tools/shape_shifter.h>
 
 #include <functional>
+#include <limits>
 #include <map>
 #include <memory>
 #include <set>
@@ -71,6 +72,8 @@ class SlamNode {
   std::unique_ptr<TfGatedSubscriber<Message>> subscribeFiltered(
       const std::string& topic, void (SlamNode::*callback)(const boost::shared_ptr<const Message>&));
   void messageDropped(const std_msgs::Header& header, tf2_ros::FilterFailureReason reason);
+  /// A message stamped before the earliest transform tf holds for it (TfGatedSubscriber).
+  void beforeTf(const std_msgs::Header& header);
   /// A message whose frame tf does not connect to the base: dropped, counted, warned.
   void frameNotInTf(const std_msgs::Header& header, const std::string& tf_error);
   /// The odometry pose of the base and the mount of the message frame in the base frame at
@@ -126,6 +129,10 @@ class SlamNode {
   std::vector<std::unique_ptr<TfGatedSubscriber<sensor_msgs::Range>>>
       sonar_inputs_;                           // a topic each
   std::set<std::string> silent_sonar_topics_;  // warned about once: silent while others talk
+  // The earliest odom -> base stamp on /tf since the start or the last reset: a message stamped
+  // before it can never be placed (dropped quietly, beforeTf).
+  double first_odometry_stamp_ = std::numeric_limits<double>::infinity();
+  bool said_before_first_odometry_ = false;
   std::unique_ptr<TfGatedSubscriber<sensor_msgs::PointCloud>> sonar_cloud_input_;
   ros::Subscriber sonar_cloud_subscriber_;      // either cloud type, into sonar_cloud_input_
   std::vector<core::Pose2> sonar_transducers_;  // sonar_cloud: from tf, found once
