@@ -17,6 +17,7 @@
 #include <utility>
 #include <vector>
 
+#include "rbpf_slam/core/slam/slam_session.h"
 #include "rbpf_slam/ros/bag_files.h"
 #include "rbpf_slam/ros/conversions.h"
 #include "rbpf_slam/ros/node_support.h"
@@ -234,9 +235,24 @@ BagReport validateBag(const std::string& path, const BagValidationOptions& optio
       report.problems.push_back(name + ": " + std::to_string(r.zero_stamps) + " zero stamp(s)");
     }
     if (r.gaps > 0) {
-      report.problems.push_back(name + ": " + std::to_string(r.gaps) + " gap(s) longer than " +
-                                fixed(r.gap_threshold_s) + " s (largest " + fixed(r.largest_gap_s) +
-                                " s, first at " + fixed(r.first_gap_at_s) + " s into the bag)");
+      // Sensors and landmark sightings may pause (a log's pauses, nothing in view): SLAM waits.
+      // Odometry pausing longer than the sessions' max_time_gap (30 s by default) makes SLAM
+      // treat the step as a gap (gap_action: more motion noise, or a new map): a problem.
+      // Shorter odometry pauses are interpolated over, as the filter does: a note.
+      const bool odometry = is_tf ? name == "tf " + options.odom_frame + " -> " + options.base_frame
+                                  : odometry_topics.count(name) > 0;
+      const std::string text = name + ": " + std::to_string(r.gaps) + " gap(s) longer than " +
+                               fixed(r.gap_threshold_s) + " s (largest " + fixed(r.largest_gap_s) +
+                               " s, first at " + fixed(r.first_gap_at_s) + " s into the bag)";
+      const double session_gap_s = core::SessionOptions().max_time_gap_s;
+      if (odometry && r.largest_gap_s > session_gap_s) {
+        report.problems.push_back(
+            text + "; over " + fixed(session_gap_s, 0) +
+            " s, SLAM's default max_time_gap, the step is a gap (gap_action)");
+      } else {
+        report.notes.push_back(text + (odometry ? "; SLAM interpolates over these"
+                                                : "; time without data, SLAM waits"));
+      }
     }
     if (r.invalid_values > 0) {
       report.problems.push_back(
