@@ -397,6 +397,15 @@ TEST(DpfMaster, AMissedAnswerIsNotFusedCountedAndTheLocalIsFusedAgainWhenItAnswe
   }
 }
 
+/// A healthy-looking answer (NIS 2, Neff 0.9) whose posterior is its prior.
+DpfLocalEstimate atItsPrior(int index, long step, const Pose2& prior) {
+  DpfLocalEstimate e = estimateOf(index, step, prior, 2.0, 0.9);
+  e.prior_mean = prior;
+  e.prior_covariance = 0.01 * Eigen::Matrix3d::Identity();
+  e.covariance = 0.005 * Eigen::Matrix3d::Identity();
+  return e;
+}
+
 // A local that does not answer a step is not judged: last step's verdict (inconsistent) does
 // not stay on it while it is silent.
 TEST(DpfMaster, ASilentLocalIsNotLeftInconsistent) {
@@ -404,13 +413,7 @@ TEST(DpfMaster, ASilentLocalIsNotLeftInconsistent) {
   o.local_filters = 3;
   o.isolate_after_steps = 5;
   DpfMaster master(o);
-  auto local = [](int index, long step, const Pose2& prior) {
-    DpfLocalEstimate e = estimateOf(index, step, prior, 2.0, 0.9);
-    e.prior_mean = prior;
-    e.prior_covariance = 0.01 * Eigen::Matrix3d::Identity();
-    e.covariance = 0.005 * Eigen::Matrix3d::Identity();
-    return e;
-  };
+  const auto local = atItsPrior;
   const Pose2 off(3.0, 0.0, 0.0);
   auto out = master.fuse(
       1, MotionInput(), {local(0, 1, Pose2::Zero()), local(1, 1, Pose2::Zero()), local(2, 1, off)});
@@ -444,13 +447,7 @@ std::vector<double> weightsOfAFaultyLocal(int readmit_after_steps, const std::ve
   o.isolate_after_steps = 2;
   o.readmit_after_steps = readmit_after_steps;
   DpfMaster master(o);
-  auto local = [](int index, long step, const Pose2& prior) {
-    DpfLocalEstimate e = estimateOf(index, step, prior, 2.0, 0.9);
-    e.prior_mean = prior;
-    e.prior_covariance = 0.01 * Eigen::Matrix3d::Identity();
-    e.covariance = 0.005 * Eigen::Matrix3d::Identity();
-    return e;
-  };
+  const auto local = atItsPrior;
   std::vector<double> weights;
   Pose2 m = Pose2::Zero();
   for (int k = 1; k <= steps; ++k) {
