@@ -6,25 +6,33 @@
 namespace rbpf_slam {
 namespace core {
 
-StampGuard::Verdict StampGuard::check(double stamp, double now) {
+StampGuard::Verdict StampGuard::check(const std::string& pair, double stamp, double now) {
   const bool clock_known = now > 0.0;
-  if (newest_ <= 0.0) {  // nothing taken to compare with: only a clock known to be right
-    return clock_trusted_ && clock_known && stamp > now + max_ahead_s_ ? Verdict::kRefuseAhead
-                                                                       : Verdict::kTake;
+  // Once a restart showed the clock right, it alone is the reference (the newest taken could
+  // creep ahead by a day a glitch at a time).
+  if (clock_trusted_ && clock_known) {
+    if (stamp > now + max_ahead_s_) return Verdict::kRefuseAhead;
+  } else if (newest_ > 0.0 && stamp > std::max(newest_, now) + max_ahead_s_) {
+    // Compared with the later of the newest and the clock: a forward jump of both (a second bag
+    // days later, a clock set by network time) is taken.
+    return Verdict::kRefuseAhead;
   }
-  // Compared with the later of the newest and the clock: a forward jump of both (a second bag
-  // days later, a clock set by network time) is taken.
-  if (stamp > std::max(newest_, now) + max_ahead_s_) return Verdict::kRefuseAhead;
-  const bool newest_ahead_of_clock = clock_known && newest_ > now + max_ahead_s_;
-  const bool agrees_with_clock = clock_known && std::fabs(stamp - now) <= max_ahead_s_;
-  if (stamp < newest_ - max_ahead_s_ && newest_ahead_of_clock && agrees_with_clock) {
+  const auto it = newest_of_pair_.find(pair);
+  if (it == newest_of_pair_.end() || !clock_known) return Verdict::kTake;
+  const double newest = it->second;
+  if (stamp < newest - max_ahead_s_ && newest > now + max_ahead_s_ &&
+      std::fabs(stamp - now) <= max_ahead_s_) {
     clock_trusted_ = true;
     return Verdict::kRestart;
   }
   return Verdict::kTake;
 }
 
-void StampGuard::taken(double stamp) { newest_ = std::max(newest_, stamp); }
+void StampGuard::taken(const std::string& pair, double stamp) {
+  newest_ = std::max(newest_, stamp);
+  double& newest = newest_of_pair_[pair];
+  newest = std::max(newest, stamp);
+}
 
 }  // namespace core
 }  // namespace rbpf_slam

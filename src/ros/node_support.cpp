@@ -61,7 +61,7 @@ void CheckedTransformListener::handle(const tf2_msgs::TFMessage& msg,
     // Static transforms: any stamp.
     if (problem.empty() && !is_static) {
       const double stamp = t.header.stamp.toSec();
-      switch (guard_.check(stamp, now.toSec())) {
+      switch (guard_.check(stripSlash(t.child_frame_id), stamp, now.toSec())) {
         case core::StampGuard::Verdict::kTake:
           break;
         case core::StampGuard::Verdict::kRefuseAhead:
@@ -90,7 +90,7 @@ void CheckedTransformListener::handle(const tf2_msgs::TFMessage& msg,
         // check): tf2 logs that, and a repeated stamp is common and harmless (converted
         // CARMEN logs repeat odometry stamps), so it is not counted here
         if (buffer_.setTransform(t, authority, is_static) && !is_static) {
-          guard_.taken(t.header.stamp.toSec());
+          guard_.taken(stripSlash(t.child_frame_id), t.header.stamp.toSec());
         }
         continue;
       } catch (const std::exception& e) {  // tf2's time arithmetic, whatever the stamp

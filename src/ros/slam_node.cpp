@@ -304,9 +304,6 @@ void SlamNode::odometryTfCallback(const tf2_msgs::TFMessage::ConstPtr& msg) {
   for (const auto& t : msg->transforms) {
     if (stripSlash(t.child_frame_id) == base && stripSlash(t.header.frame_id) == odom) {
       pipeline_.session().addOdometryStamp(t.header.stamp.toSec());
-      if (std::isfinite(t.header.stamp.toSec())) {
-        first_odometry_stamp_ = std::min(first_odometry_stamp_, t.header.stamp.toSec());
-      }
     }
   }
 }
@@ -321,19 +318,15 @@ void SlamNode::frameNotInTf(const std_msgs::Header& header, const std::string& t
 }
 
 void SlamNode::beforeTf(const std_msgs::Header& header) {
-  // Stamped before the first odometry transform (a driver that publishes its readings before
+  // Stamped before tf's first transform on its way (a driver that publishes its readings before
   // its odometry, every cycle; a bag recorded from such a driver): it can never be placed.
-  // Normal at start-up, so counted and said once. Otherwise it is older than what tf keeps.
-  if (!(header.stamp.toSec() < first_odometry_stamp_)) {
-    messageDropped(header, tf2_ros::filter_failure_reasons::OutTheBack);
-    return;
-  }
-  diagnostics_.recordDrop("stamped before the first odometry");
-  if (!said_before_first_odometry_) {
-    said_before_first_odometry_ = true;
-    ROS_INFO_STREAM("rbpf_slam_node: messages stamped before the first "
-                    << config_.ros.odom_frame << " -> " << config_.ros.base_frame
-                    << " transform cannot be placed and are dropped (normal at start-up)");
+  // Normal at start-up, so counted and said once.
+  diagnostics_.recordExpectedDrop("stamped before tf's first transform");
+  if (!said_before_first_transform_) {
+    said_before_first_transform_ = true;
+    ROS_INFO_STREAM("rbpf_slam_node: messages stamped before tf's first transform to "
+                    << config_.ros.odom_frame << " (e.g. from " << header.frame_id
+                    << ") cannot be placed and are dropped (normal at start-up)");
   }
 }
 
@@ -762,7 +755,6 @@ void SlamNode::resetAll(const std::string& why) {
   ROS_WARN_STREAM("rbpf_slam_node: " << why << ": clearing the map, the trajectory and tf");
   pipeline_.reset();  // filter, history and the scan matcher's reference
   tf_buffer_.clear();
-  first_odometry_stamp_ = std::numeric_limits<double>::infinity();
   if (scan_input_) scan_input_->clear();
   for (const auto& input : sonar_inputs_) input->clear();
   if (sonar_cloud_input_) sonar_cloud_input_->clear();

@@ -41,7 +41,7 @@ SonarFeaturesNode::SonarFeaturesNode(ros::NodeHandle nh, ros::NodeHandle private
   handlers.on_before_tf = [this](const Ptr& msg) {
     // Stamped before the earliest transform tf holds (a driver that publishes its readings
     // before its first odometry): normal at start-up, counted, not warned.
-    diagnostics_.recordDrop("stamped before tf's earliest transform");
+    diagnostics_.recordExpectedDrop("stamped before tf's first transform");
     ROS_DEBUG_STREAM("sonar_features: a reading from "
                      << msg->header.frame_id << " stamped before tf's earliest transform");
   };

@@ -173,8 +173,11 @@ TEST(Diagnostics, TheOkMessageSaysWhatTheNodeDoes) {
   rosbridge::SlamDiagnostics tracker("landmark_tracker",
                                      rosbridge::DiagnosticsOptions::withoutFilter("tracking"));
   tracker.recordUpdate(1.0);
+  tracker.recordExpectedDrop("stamped before tf's first transform");  // start-up: no WARN
   s = tracker.report(ros::Time(1.0), core::FilterStats(), 0, 1.0).status[0];
   EXPECT_EQ(s.message, "tracking");
+  EXPECT_EQ(s.level, diagnostic_msgs::DiagnosticStatus::OK);
+  EXPECT_EQ(value(s, "dropped: stamped before tf's first transform"), "1");
   EXPECT_EQ(value(s, "paused"), "<missing paused>");
 }
 

@@ -80,6 +80,9 @@ class SlamDiagnostics {
   /// Something that could not be used (a message, or `count` features or points of one);
   /// cause is a short fixed phrase ("no tf", "bad scan").
   void recordDrop(const std::string& cause, long count = 1);
+  /// A drop that is normal (readings before tf's first transform at start-up): counted under
+  /// its cause, but it does not turn the report to WARN.
+  void recordExpectedDrop(const std::string& cause) { ++drops_total_[cause]; }
   void recordReset() { ++resets_total_; }
   /// Features of used frames that the filter skipped (a kind it ignores, degenerate):
   /// reported as a count, not as a problem (dpf on line features would warn for ever).

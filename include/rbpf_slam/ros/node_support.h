@@ -130,9 +130,10 @@ class TfGatedSubscriber {
     std::function<void(const Ptr&, const std::string& why)> on_bad_stamp;
     std::function<void(const Ptr&, tf2_ros::FilterFailureReason)> on_failure;
     std::function<void(const Ptr&, const std::string& tf_error)> on_unknown_frame;
-    /// Stamped before the earliest transform tf holds on its way to the target frame (e.g. a
-    /// reading published before the first odometry): it can never leave (dropBeforeTf).
-    /// Without this handler such messages go to on_failure as OutTheBack.
+    /// Stamped before the earliest transform tf holds on its way to the target frame, within
+    /// tf's cache length of the latest (e.g. a reading published before the first odometry):
+    /// it can never leave (dropBeforeTf). Without this handler, and for messages that fell out
+    /// of tf's cache, on_failure with OutTheBack.
     std::function<void(const Ptr&)> on_before_tf;
   };
 
@@ -250,7 +251,7 @@ class TfGatedSubscriber {
   /// waiting at that moment. They are reported now (on_before_tf) and the filter is emptied.
   /// (Any other message still waiting postpones this to a later sweep.)
   void dropBeforeTf() {
-    std::vector<Ptr> waiting;
+    std::vector<std::pair<Ptr, bool>> waiting;  // and whether it is before tf's history
     for (const auto& entry : pending_) {
       const Ptr& msg = entry.second;
       std::string error;
@@ -263,16 +264,21 @@ class TfGatedSubscriber {
       } catch (const std::exception&) {  // tf2's time arithmetic (a stamp 2^31 s off): the
         return;                          // filter's to answer for, as before
       }
-      waiting.push_back(msg);
+      // Before tf's history (its data began later: start-up, a mount first sent late), or fell
+      // out of its cache (older than the clock less tf's cache length: a node that fell behind).
+      const double now = ros::Time::now().toSec();
+      const bool before_history =
+          now <= 0.0 || msg->header.stamp.toSec() >= now - tf_->getCacheLength().toSec();
+      waiting.emplace_back(msg, before_history);
     }
     filter_.clear();  // no failure callbacks; its tf2 requests go too
     pending_.clear();
     const unsigned long clears = clears_;
-    for (const Ptr& msg : waiting) {
+    for (const auto& [msg, before_history] : waiting) {
       bool handed_on = false;
       std::vector<Ptr> due = order_.dropped(msg->header.stamp, msg, &handed_on);
       if (!handed_on) {
-        if (handlers_.on_before_tf) {
+        if (before_history && handlers_.on_before_tf) {
           handlers_.on_before_tf(msg);
         } else if (handlers_.on_failure) {
           handlers_.on_failure(msg, tf2_ros::filter_failure_reasons::OutTheBack);

@@ -129,10 +129,7 @@ class SlamNode {
   std::vector<std::unique_ptr<TfGatedSubscriber<sensor_msgs::Range>>>
       sonar_inputs_;                           // a topic each
   std::set<std::string> silent_sonar_topics_;  // warned about once: silent while others talk
-  // The earliest odom -> base stamp on /tf since the start or the last reset: a message stamped
-  // before it can never be placed (dropped quietly, beforeTf).
-  double first_odometry_stamp_ = std::numeric_limits<double>::infinity();
-  bool said_before_first_odometry_ = false;
+  bool said_before_first_transform_ = false;   // beforeTf said it once
   std::unique_ptr<TfGatedSubscriber<sensor_msgs::PointCloud>> sonar_cloud_input_;
   ros::Subscriber sonar_cloud_subscriber_;      // either cloud type, into sonar_cloud_input_
   std::vector<core::Pose2> sonar_transducers_;  // sonar_cloud: from tf, found once
