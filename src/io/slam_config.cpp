@@ -161,6 +161,7 @@ void readGrid(YamlSection section, core::GridOptions* o) {
   section.read("resolution_m", &o->resolution_m);
   section.read("size_x_m", &o->size_x_m);
   section.read("size_y_m", &o->size_y_m);
+  section.read("max_size_m", &o->max_size_m);
   section.read("tile_cells", &o->tile_cells);
   section.read("log_odds_occupied", &o->log_odds_occupied);
   section.read("log_odds_free", &o->log_odds_free);

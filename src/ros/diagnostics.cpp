@@ -99,8 +99,12 @@ diagnostic_msgs::DiagnosticArray SlamDiagnostics::report(const ros::Time& stamp,
     if (stats.leader_changes > 0) {  // an ensemble whose reported member has changed
       status.values.push_back(keyValue("ensemble leader changes", text(stats.leader_changes)));
     }
-    if (stats.outside_grid > 0) {  // grid_pf beyond its fixed extent
+    if (stats.outside_grid > 0) {  // grid_pf beyond its extent
       status.values.push_back(keyValue("updates outside the grid", text(stats.outside_grid)));
+    }
+    if (stats.grid_growth_refused > 0) {  // grid_pf at grid.max_size_m or the memory limit
+      status.values.push_back(
+          keyValue("updates the grid could not grow for", text(stats.grid_growth_refused)));
     }
     if (stats.missed_answers > 0) {  // dpf_master_node: local filters that did not answer
       status.values.push_back(keyValue("local answers missed", text(stats.missed_answers)));

@@ -23,6 +23,7 @@
 #include <sstream>
 
 #include "rbpf_slam/core/grid/grid_map_data.h"
+#include "rbpf_slam/core/grid/grid_options.h"
 #include "rbpf_slam/io/evaluation.h"
 #include "rbpf_slam/io/grid_map_file.h"
 #include "rbpf_slam/io/json_writer.h"
@@ -445,9 +446,15 @@ std::vector<std::string> describeOutcome(const OfflineSummary& s, const OfflineO
   }
   if (s.updates_outside_grid > 0) {
     lines.push_back(std::to_string(s.updates_outside_grid) +
-                    " update(s) with the robot outside the grid (grid.size_x_m x grid.size_y_m, "
-                    "centred on the start): nothing was mapped or matched there, the pose is "
-                    "dead reckoning; enlarge the grid");
+                    " update(s) with the robot outside the grid: nothing was mapped or matched "
+                    "there, the pose is dead reckoning; " +
+                    core::kGridLimitAdvice);
+  }
+  if (s.grid_growth_refused > 0) {
+    lines.push_back(std::to_string(s.grid_growth_refused) +
+                    " update(s) with readings beyond the grid, which could not grow to hold "
+                    "them (they were not mapped); " +
+                    core::kGridLimitAdvice);
   }
   if (s.dpf_missed_answers > 0) {
     lines.push_back(std::to_string(s.dpf_missed_answers) +
@@ -827,6 +834,7 @@ OfflineSummary OfflineRunner::run() {
   summary.robust_steps = pipeline_.session().filter().stats().robust_steps;
   summary.ensemble_leader_changes = pipeline_.session().filter().stats().leader_changes;
   summary.updates_outside_grid = pipeline_.session().filter().stats().outside_grid;
+  summary.grid_growth_refused = pipeline_.session().filter().stats().grid_growth_refused;
   summary.dpf_missed_answers = pipeline_.session().filter().stats().missed_answers;
   summary.ensemble_members = pipeline_.session().filter().members();
   summary.ensemble_leader = pipeline_.session().filter().leader();
@@ -943,6 +951,7 @@ OfflineSummary OfflineRunner::writeOutputs(const OfflineSummary& in) const {
       .integer("ensemble_leader", summary.ensemble_leader)
       .integer("ensemble_leader_changes", summary.ensemble_leader_changes)
       .integer("updates_outside_grid", summary.updates_outside_grid)
+      .integer("grid_growth_refused", summary.grid_growth_refused)
       .integer("dpf_missed_answers", summary.dpf_missed_answers)
       .number("update_ms_mean", summary.update_ms_mean)
       .number("update_ms_p99", summary.update_ms_p99)

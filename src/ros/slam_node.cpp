@@ -13,6 +13,7 @@
 #include <sstream>
 
 #include "rbpf_slam/core/grid/grid_map_data.h"
+#include "rbpf_slam/core/grid/grid_options.h"
 #include "rbpf_slam/core/random.h"
 #include "rbpf_slam/io/grid_map_file.h"
 #include "rbpf_slam/io/landmark_file.h"
@@ -723,12 +724,19 @@ void SlamNode::publishDiagnostics(const ros::WallTimerEvent&) {
   diagnostics_.setOdometryGaps(pipeline_.session().gaps());
   const long outside_grid = pipeline_.session().filter().stats().outside_grid;
   if (outside_grid > outside_grid_seen_) {
-    warnThrottled("outside grid",
-                  "the robot is outside the grid (grid.size_x_m x grid.size_y_m, centred on the "
-                  "start): nothing is mapped or matched there and the pose is dead reckoning; "
-                  "enlarge the grid");
+    warnThrottled("outside grid", std::string("the robot is outside the grid: nothing is mapped "
+                                              "or matched there and the pose is dead "
+                                              "reckoning; ") +
+                                      core::kGridLimitAdvice);
   }
   outside_grid_seen_ = outside_grid;
+  const long growth_refused = pipeline_.session().filter().stats().grid_growth_refused;
+  if (growth_refused > growth_refused_seen_) {
+    warnThrottled("grid growth", std::string("readings beyond the grid are not mapped: the grid "
+                                             "could not grow to hold them; ") +
+                                     core::kGridLimitAdvice);
+  }
+  growth_refused_seen_ = growth_refused;
   if (const long refused = tf_listener_.takeRefused()) {
     diagnostics_.recordDrop("refused transform", refused);
   }
@@ -752,6 +760,7 @@ void SlamNode::publishDiagnostics(const ros::WallTimerEvent&) {
 void SlamNode::resetAll(const std::string& why) {
   diagnostics_.recordReset();
   outside_grid_seen_ = 0;  // the filter's counts start over
+  growth_refused_seen_ = 0;
   ROS_WARN_STREAM("rbpf_slam_node: " << why << ": clearing the map, the trajectory and tf");
   pipeline_.reset();  // filter, history and the scan matcher's reference
   tf_buffer_.clear();

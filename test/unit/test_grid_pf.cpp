@@ -300,6 +300,68 @@ TEST(TiledGrid, CopiesShareTilesUntilTheFirstWrite) {
   EXPECT_EQ(cy, 1);
 }
 
+// Growing moves the tile table, not the tiles: every world position keeps its log odds, grids
+// that grew differently still share the tiles they had, and cells are found at their new
+// indices. Growth stops at the limits, and a box with a non-finite corner grows nothing.
+TEST(TiledGrid, GrowingKeepsEveryCellAndTheSharing) {
+  TiledLogOddsGrid a(0.1, -1.0, -1.0, 20, 20, 8);  // 2 m x 2 m, 3 x 3 tiles of 0.8 m
+  const Eigen::Vector2d p(0.35, -0.55), q(0.95, 0.95);
+  int cx, cy;
+  ASSERT_TRUE(a.cellOf(p, &cx, &cy));
+  a.add(cx, cy, 2.0f, 5.0f);
+  ASSERT_TRUE(a.cellOf(q, &cx, &cy));  // in the last tile, which the first extent cuts at 20
+  a.add(cx, cy, -1.0f, 5.0f);
+  TiledLogOddsGrid b = a;  // shares both tiles
+
+  const Eigen::Vector2d far(-3.3, 2.1);  // 2.3 m beyond -x, 0.1 m beyond +y
+  EXPECT_FALSE(a.cellOf(far, &cx, &cy));
+  ASSERT_TRUE(a.grow(far, far, 100, 100, 10000));
+  ASSERT_TRUE(a.cellOf(far, &cx, &cy));
+  // -x: 3 tiles needed, + max(1, 3 / 4) margin; +y: the cut tile completed, then 1 more.
+  EXPECT_EQ(a.tilesX(), 3 + 3 + 1);
+  EXPECT_EQ(a.tilesY(), 3 + 1 + 1);
+  EXPECT_NEAR(a.originX(), -1.0 - 4 * 0.8, 1e-12);
+  EXPECT_NEAR(a.originY(), -1.0, 1e-12);
+  EXPECT_EQ(a.width(), 7 * 8);
+  ASSERT_TRUE(a.cellOf(p, &cx, &cy));
+  EXPECT_FLOAT_EQ(a.logOdds(cx, cy), 2.0f);
+  ASSERT_TRUE(a.cellOf(q, &cx, &cy));
+  EXPECT_FLOAT_EQ(a.logOdds(cx, cy), -1.0f);
+  std::vector<const TiledLogOddsGrid*> both{&a, &b};
+  EXPECT_EQ(TiledLogOddsGrid::distinctTiles(both), 2) << "growing copies no tile";
+
+  // b grows the other way; the tiles stay on one lattice, so the two still share.
+  ASSERT_TRUE(b.grow(Eigen::Vector2d(2.5, -2.5), Eigen::Vector2d(2.6, -2.4), 100, 100, 10000));
+  EXPECT_NEAR(b.originY(), -1.0 - 3 * 0.8, 1e-12);
+  ASSERT_TRUE(b.cellOf(p, &cx, &cy));
+  EXPECT_FLOAT_EQ(b.logOdds(cx, cy), 2.0f);
+  EXPECT_EQ(TiledLogOddsGrid::distinctTiles(both), 2);
+  ASSERT_TRUE(b.cellOf(q, &cx, &cy));
+  b.add(cx, cy, -1.0f, 5.0f);  // copy on write still works after growing
+  EXPECT_EQ(TiledLogOddsGrid::distinctTiles(both), 3);
+  ASSERT_TRUE(a.cellOf(q, &cx, &cy));
+  EXPECT_FLOAT_EQ(a.logOdds(cx, cy), -1.0f);
+
+  // The map drawn from a grown grid puts the cells where they were.
+  const GridMapData m = a.toGridMap();
+  const int mx = static_cast<int>(std::floor((p.x() - m.origin_x_m) / m.resolution_m));
+  const int my = static_cast<int>(std::floor((p.y() - m.origin_y_m) / m.resolution_m));
+  EXPECT_GT(m.at(mx, my), 65);
+
+  // Limits: 12 tiles along x, 50 tiles in all (y to 5 m needs 7 x 8); refused growth leaves
+  // the grid as it was.
+  const int tiles_x = a.tilesX(), tiles_y = a.tilesY();
+  EXPECT_FALSE(a.grow(Eigen::Vector2d(10.0, 0.0), Eigen::Vector2d(10.0, 0.0), 12, 100, 10000));
+  EXPECT_FALSE(a.grow(Eigen::Vector2d(0.0, 5.0), Eigen::Vector2d(0.0, 5.0), 100, 100, 50));
+  EXPECT_FALSE(a.grow(Eigen::Vector2d(NAN, 0.0), Eigen::Vector2d(0.0, 0.0), 100, 100, 10000));
+  EXPECT_FALSE(a.grow(Eigen::Vector2d(-1e300, 0.0), Eigen::Vector2d(0.0, 0.0), 100, 100, 1e9));
+  EXPECT_EQ(a.tilesX(), tiles_x);
+  EXPECT_EQ(a.tilesY(), tiles_y);
+  // Within the limits the margin is cut to fit: tiles -4 .. 4, 9 exactly, none more.
+  ASSERT_TRUE(a.grow(Eigen::Vector2d(0.0, 0.0), Eigen::Vector2d(2.7, 0.0), 9, 100, 10000));
+  EXPECT_EQ(a.tilesX(), 9);
+}
+
 TEST(TiledGrid, ToGridMapFollowsOccupancyGridConventions) {
   TiledLogOddsGrid g(0.1, -1.0, -1.0, 20, 20, 8);
   g.add(12, 3, 2.0f, 5.0f);
@@ -424,11 +486,12 @@ TEST(GridParticleFilter, WeightsFollowEquation14) {
   EXPECT_GT(map.allocatedTiles(), 0);
 }
 
-// The grid has a fixed extent: updates with the robot beyond it map and match nothing, and
-// are counted (FilterStats::outside_grid; the node warns, offline_slam says so) instead of the
-// filter silently turning into dead reckoning.
+// A fixed grid (grid.max_size_m 0): updates with the robot beyond it map and match nothing,
+// and are counted (FilterStats::outside_grid; the node warns, offline_slam says so) instead of
+// the filter silently turning into dead reckoning.
 TEST(GridParticleFilter, UpdatesOutsideTheGridAreCounted) {
   FilterOptions o = gridOptions(5);
+  o.grid.max_size_m = 0.0;
   GridParticleFilter filter(o);
   filter.reset(Pose2::Zero());
   filter.update(roomScan(0.0, 0.0));
@@ -440,6 +503,64 @@ TEST(GridParticleFilter, UpdatesOutsideTheGridAreCounted) {
   ASSERT_TRUE(filter.resetPose(Pose2(9.0, 0.0, 0.0), Eigen::Matrix3d::Zero()));
   filter.update(roomScan(0.0, 0.0));
   EXPECT_EQ(filter.stats().outside_grid, 2) << "inside again";
+}
+
+// While mapping, each particle's grid grows to hold what it sees: a robot 15 m from the start of
+// a 4 m grid maps the room around it, and the published map reaches it. Growth stops at
+// grid.max_size_m, and such updates are counted.
+TEST(GridParticleFilter, TheGridGrowsToHoldTheReadings) {
+  FilterOptions o = gridOptions(5);
+  o.grid.size_x_m = o.grid.size_y_m = 4.0;
+  o.grid.max_size_m = 40.0;
+  o.grid.tile_cells = 16;
+  GridParticleFilter filter(o);
+  filter.reset(Pose2::Zero());
+  filter.update(roomScan(0.0, 0.0));  // the room's walls 3 m along x: beyond the first 4 m
+  // A wall is occupied in one of the cells it touches.
+  auto wall_mapped = [&filter](const Eigen::Vector2d& at) {
+    const TiledLogOddsGrid& g = filter.bestGrid();
+    int cx, cy;
+    if (!g.cellOf(at, &cx, &cy)) return false;
+    for (int dx = -1; dx <= 1; ++dx) {
+      for (int dy = -1; dy <= 1; ++dy) {
+        if (cx + dx >= 0 && cy + dy >= 0 && cx + dx < g.width() && cy + dy < g.height() &&
+            g.logOdds(cx + dx, cy + dy) > 0.0f) {
+          return true;
+        }
+      }
+    }
+    return false;
+  };
+  const Eigen::Vector2d wall(3.0, 0.5);
+  EXPECT_TRUE(wall_mapped(wall));
+  ASSERT_TRUE(filter.resetPose(Pose2(15.0, -12.0, 0.0), Eigen::Matrix3d::Zero()));
+  filter.update(roomScan(0.0, 0.0));
+  EXPECT_EQ(filter.stats().outside_grid, 0);
+  EXPECT_EQ(filter.stats().grid_growth_refused, 0);
+  for (const Eigen::Vector2d& at :
+       {Eigen::Vector2d(18.0, -12.5),  // the moved room's walls
+        Eigen::Vector2d(12.0, -11.5), Eigen::Vector2d(15.5, -10.0), Eigen::Vector2d(14.5, -14.0)}) {
+    EXPECT_TRUE(wall_mapped(at)) << at.transpose();
+  }
+  EXPECT_TRUE(wall_mapped(wall)) << "the first room is kept";
+  GridMapData map;
+  ASSERT_TRUE(filter.occupancyGrid(map));
+  EXPECT_LE(map.origin_x_m, -3.0);
+  EXPECT_GE(map.origin_x_m + map.width * map.resolution_m, 18.0);
+  EXPECT_LE(map.origin_y_m, -14.0);
+  EXPECT_LE(map.width * map.resolution_m, 40.0 + 1e-9);
+
+  // 40 m along x at most: 30 m further on the grid cannot follow.
+  ASSERT_TRUE(filter.resetPose(Pose2(45.0, 0.0, 0.0), Eigen::Matrix3d::Zero()));
+  filter.update(roomScan(0.0, 0.0));
+  EXPECT_EQ(filter.stats().outside_grid, 1);
+  EXPECT_EQ(filter.stats().grid_growth_refused, 1);
+  // Localizing (mapping off) never grows the grid.
+  ASSERT_TRUE(filter.setMapping(false));
+  ASSERT_TRUE(filter.resetPose(Pose2(0.0, 25.0, 0.0), Eigen::Matrix3d::Zero()));
+  filter.update(roomScan(0.0, 0.0));
+  EXPECT_EQ(filter.stats().outside_grid, 2);
+  EXPECT_EQ(filter.stats().grid_growth_refused, 1);
 }
 
 TEST(GridParticleFilter, ResampledParticlesShareTiles) {
@@ -563,6 +684,9 @@ TEST(GridConfig, ErrorsNameTheGridKey) {
   EXPECT_NE(error("variant: grid_pf\ngrid: {match_f: -1}").find("grid.match_f"),
             std::string::npos);
   EXPECT_NE(error("grid: {resolutoin_m: 0.1}").find("resolutoin_m"), std::string::npos);
+  EXPECT_NE(error("variant: grid_pf\ngrid: {max_size_m: -1}").find("grid.max_size_m"),
+            std::string::npos);
+  EXPECT_EQ(error("variant: grid_pf\ngrid: {size_x_m: 50, max_size_m: 0}"), "");
   EXPECT_NE(error("map_update_period: -1").find("map_update_period"), std::string::npos);
 }
 

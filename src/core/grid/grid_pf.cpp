@@ -36,6 +36,7 @@ void validate(const GridOptions& o) {
   requireRange("grid.size_x_m", o.size_x_m, o.resolution_m, 1e5);
   requireRange("grid.size_y_m", o.size_y_m, o.resolution_m, 1e5);
   requireRange("grid.tile_cells", o.tile_cells, 4, 1024);
+  requireRange("grid.max_size_m", o.max_size_m, 0.0, 1e5);
   if (o.size_x_m / o.resolution_m * (o.size_y_m / o.resolution_m) > 4e9) {
     throw std::invalid_argument("grid.size_x_m * grid.size_y_m / grid.resolution_m^2 exceeds "
                                 "4e9 cells: raise the resolution or shrink the map");
@@ -71,6 +72,12 @@ double matchLocalMap(const std::vector<LocalMapCell>& local, const Pose2& pose,
   return match;
 }
 
+double localMapReach(const std::vector<LocalMapCell>& local, double resolution_m) {
+  double reach = 0.0;
+  for (const LocalMapCell& cell : local) reach = std::max(reach, cell.center.norm());
+  return reach + resolution_m;  // the cell's corners
+}
+
 void integrateLocalMap(const std::vector<LocalMapCell>& local, const Pose2& pose,
                        const GridOptions& options, TiledLogOddsGrid* grid) {
   const float occupied = static_cast<float>(options.log_odds_occupied);
@@ -102,7 +109,28 @@ GridParticleFilter::GridParticleFilter(const FilterOptions& options)
            "fewer particles";
     throw std::invalid_argument(why.str());
   }
+  // Growth is bounded by grid.max_size_m and by the memory of the particles' tile tables.
+  // An axis whose first extent is already larger does not grow.
+  const GridOptions& g = options_.grid;
+  const double tile_m = g.resolution_m * g.tile_cells;
+  max_tiles_x_ = static_cast<int>(std::ceil(std::max(g.max_size_m, g.size_x_m) / tile_m));
+  max_tiles_y_ = static_cast<int>(std::ceil(std::max(g.max_size_m, g.size_y_m) / tile_m));
+  max_tiles_ = static_cast<long>(kMaxTileTablesBytes / (2.0 * options_.particles + 1.0) /
+                                 sizeof(std::shared_ptr<void>));
   reset();
+}
+
+void GridParticleFilter::growGrids(const std::vector<LocalMapCell>& local) {
+  if (options_.grid.max_size_m <= 0.0) return;
+  const double reach = localMapReach(local, options_.grid.resolution_m);
+  bool refused = false;
+  for (Particle& p : particles_) {
+    const Eigen::Vector2d at = p.pose.head<2>();
+    const Eigen::Vector2d lo = at.array() - reach, hi = at.array() + reach;
+    if (p.grid.contains(lo, hi)) continue;
+    refused |= !p.grid.grow(lo, hi, max_tiles_x_, max_tiles_y_, max_tiles_);
+  }
+  if (refused) ++stats_.grid_growth_refused;
 }
 
 void GridParticleFilter::reset(const Pose2& initial_pose) {
@@ -136,6 +164,7 @@ UpdateStats GridParticleFilter::update(const FeatureSet& features) {
   local_stats_.no_echo += local_stats.no_echo;
   local_stats_.rejected += local_stats.rejected;
   ++stats_.updates;
+  if (mapping_) growGrids(local);
   if (!local.empty()) {
     // Eq. 14 in log space: log w += match / f, then normalise.
     std::vector<double> log_weights(particles_.size());
@@ -153,8 +182,8 @@ UpdateStats GridParticleFilter::update(const FeatureSet& features) {
     }
   }
   {
-    // The grid has a fixed extent: out of it nothing is mapped nor matched, and the filter
-    // falls back to dead reckoning without a word unless this is counted.
+    // Out of the grid (fixed, at its largest, or not mapping) nothing is mapped nor matched,
+    // and the filter falls back to dead reckoning without a word unless this is counted.
     const Particle& best = particles_[bestIndex()];
     int cx, cy;
     if (!best.grid.cellOf(best.pose.head<2>(), &cx, &cy)) ++stats_.outside_grid;

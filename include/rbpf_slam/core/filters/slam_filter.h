@@ -74,8 +74,10 @@ struct FilterStats {
   int landmarks = 0;  // in the best particle
   double attenuation = 0.0;  // hinf_fastslam: the theta in use (hinf.mode relative / adaptive)
   long leader_changes = 0;   // ensemble: updates after which another member was reported
-  long outside_grid = 0;     // grid_pf: updates whose best pose lay outside the fixed grid
-                             // (nothing is mapped or matched there: the map must be larger)
+  long outside_grid = 0;     // grid_pf: updates whose best pose lay outside the grid (fixed,
+                             // or at grid.max_size_m): nothing is mapped or matched there
+  long grid_growth_refused = 0;  // grid_pf: updates where a particle's grid could not grow to
+                                 // hold the readings (grid.max_size_m or the memory limit)
   long missed_answers = 0;   // dpf_master_node: local filters' answers not received within
                              // dpf.step_timeout_s (the step was fused without them)
   // Per-part state for /diagnostics, as (name, text) pairs (dpf: one per local filter).

@@ -8,11 +8,14 @@ namespace core {
 
 /// Grid, inverse sensor models (eq. 13) and map matching (eq. 14) of variant grid_pf.
 struct GridOptions {
-  // The map: a fixed extent centred on the first pose, stored in square tiles that particles
-  // share copy-on-write.
+  // The map: an extent centred on the first pose, stored in square tiles that particles share
+  // copy-on-write. While mapping, each particle's grid grows by whole tiles to hold what it
+  // observes, up to max_size_m along each axis (0: the grid stays size_x_m x size_y_m).
   double resolution_m = 0.05;
-  double size_x_m = 100.0;  // extent along x, centred on the start
-  double size_y_m = 100.0;
+  double size_x_m = 100.0;     // first extent along x, centred on the start; also the farthest
+  double size_y_m = 100.0;     // a reading is traced (the diagonal)
+  double max_size_m = 1000.0;  // largest extent along x or y when growing (0, or below
+                               // size_x_m / size_y_m: that axis never grows)
   int tile_cells = 64;      // tile side in cells (a tile is the unit of sharing)
   // Log-odds added per observation (eq. 13 with l(m_i) = 0 as the prior) and their clamp.
   double log_odds_occupied = 0.85;
@@ -39,6 +42,12 @@ struct GridOptions {
   double match_occupied_weight = 1.0;
   double match_free_weight = 1.0;
 };
+
+/// What to change when the grid cannot hold the robot or its readings (warnings, summaries).
+constexpr const char* kGridLimitAdvice =
+    "the grid grows up to grid.max_size_m along each axis (0: fixed at grid.size_x_m x "
+    "grid.size_y_m, centred on the start) and while its particles' tile tables fit in memory: "
+    "raise grid.max_size_m, coarsen grid.resolution_m or enlarge grid.tile_cells";
 
 /// Throws std::invalid_argument naming the first out-of-range field ("grid.NAME").
 void validate(const GridOptions& options);

@@ -18,6 +18,8 @@ namespace core {
 /// weight * (+1 occupied, -1 free) * (2 p - 1), p the grid's occupancy (unknown: 0).
 double matchLocalMap(const std::vector<LocalMapCell>& local, const Pose2& pose,
                      const TiledLogOddsGrid& grid, const GridOptions& options);
+/// How far from the robot a local map reaches (its farthest cell centre plus one cell), m.
+double localMapReach(const std::vector<LocalMapCell>& local, double resolution_m);
 /// Eq. 13: adds the local map placed at pose to the grid's log odds. Each local cell writes the
 /// world cell its placed centre falls in, the cell matchLocalMap reads for it. At headings off
 /// the axes some world cells are written twice by one scan and some not at all (~6 % at
@@ -58,6 +60,8 @@ class GridParticleFilter : public SlamFilter {
     TiledLogOddsGrid grid;
   };
   int bestIndex() const;
+  /// Grows each particle's grid (grid.max_size_m > 0) to hold the local map at its pose.
+  void growGrids(const std::vector<LocalMapCell>& local);
 
   const FilterOptions options_;
   std::unique_ptr<MotionModel> motion_;
@@ -68,6 +72,8 @@ class GridParticleFilter : public SlamFilter {
   FilterStats stats_;
   LocalMapStats local_stats_;  // totals since reset
   bool mapping_ = true;
+  int max_tiles_x_ = 0, max_tiles_y_ = 0;  // growth limits: grid.max_size_m in tiles ...
+  long max_tiles_ = 0;                     // ... and the tiles one particle's table may hold
 };
 
 }  // namespace core

@@ -12,7 +12,9 @@
 namespace rbpf_slam {
 namespace core {
 
-/// One particle's log-odds map over a fixed extent; cells never written read 0 (unknown).
+/// One particle's log-odds map; cells never written read 0 (unknown). Its extent is set when
+/// it is made and can grow by whole tiles (grow): tiles stay on the lattice of the first
+/// extent, so grids that grew differently still share their tiles.
 class TiledLogOddsGrid {
  public:
   TiledLogOddsGrid() = default;
@@ -29,6 +31,20 @@ class TiledLogOddsGrid {
     *cy = static_cast<int>(fy);
     return true;
   }
+  /// True when the box [min, max] lies inside the grid.
+  bool contains(const Eigen::Vector2d& min, const Eigen::Vector2d& max) const {
+    int cx, cy;
+    return cellOf(min, &cx, &cy) && cellOf(max, &cx, &cy);
+  }
+  /// Extends the grid by whole tiles so that it contains the box [min, max], adding on each
+  /// side that grows at least a quarter of the present extent (fewer, larger growths). Cell
+  /// indices change when the grid grows to -x or -y; world positions keep their log odds. The
+  /// grid never grows beyond max_tiles_x x max_tiles_y tiles nor max_tiles in all: when the
+  /// box would need more it is left as it was and false is returned (as for a box with a
+  /// non-finite corner).
+  bool grow(const Eigen::Vector2d& min, const Eigen::Vector2d& max, int max_tiles_x,
+            int max_tiles_y, long max_tiles);
+
   /// Log odds of an inside cell (0 when its tile was never written).
   float logOdds(int cx, int cy) const {
     const Tile* tile = tiles_[tileIndex(cx, cy)].get();
@@ -44,6 +60,8 @@ class TiledLogOddsGrid {
   int width() const { return width_; }
   int height() const { return height_; }
   int tileCells() const { return tile_cells_; }
+  int tilesX() const { return tiles_x_; }
+  int tilesY() const { return tiles_y_; }
   /// Tiles this grid has allocated (shared or not).
   int allocatedTiles() const;
   /// Tiles this grid holds that no other grid holds.
@@ -70,7 +88,11 @@ class TiledLogOddsGrid {
 
   double resolution_m_ = 0.05;
   double inverse_resolution_ = 20.0;
-  double origin_x_m_ = 0.0, origin_y_m_ = 0.0;
+  double origin_x_m_ = 0.0, origin_y_m_ = 0.0;  // cell (0, 0)'s corner
+  // The first extent's corner and this grid's first tile on that lattice (<= 0 after growing
+  // to -x / -y): origin = base + first tile x tile side, computed the same way in every grid.
+  double base_x_m_ = 0.0, base_y_m_ = 0.0;
+  int first_tile_x_ = 0, first_tile_y_ = 0;
   int width_ = 0, height_ = 0;
   int tile_cells_ = 64;
   int tiles_x_ = 0, tiles_y_ = 0;

@@ -1,0 +1,58 @@
+#!/usr/bin/env bash
+# grid_pf's grid grows while mapping (grid.max_size_m): on the simulated e-puck world a grid
+# that starts at 0.4 m x 0.4 m must give exactly the trajectory of config/grid_pf.yaml's 3 m
+# grid (growth keeps the cell lattice, so no cell moves); the same small grid fixed
+# (max_size_m 0) must report the updates outside it, and one that may grow to 0.8 m only the
+# updates it could not grow for, each named in offline_slam's summary.
+set -euo pipefail
+
+source "$(dirname "$0")/lib/offline.sh"
+require_tools simulate offline_slam
+
+"$bin/simulate" --world "$root/worlds/yatim_epuck.yaml" --output "$work/sim.bag" --seed 1 >/dev/null
+run() {  # NAME [--set ...]
+  local name=$1
+  shift
+  "$bin/offline_slam" --bag "$work/sim.bag" --config "$root/config/grid_pf.yaml" \
+    --output "$work/$name" --no-progress "$@" >"$work/$name.log" 2>&1 ||
+    { echo "FAIL: offline_slam ($name)"; cat "$work/$name.log"; exit 1; }
+}
+small=(--set grid.size_x_m=0.4 --set grid.size_y_m=0.4)
+run shipped
+run grown "${small[@]}"
+run fixed "${small[@]}" --set grid.max_size_m=0
+run capped "${small[@]}" --set grid.max_size_m=0.8
+
+status=0
+if cmp -s "$work/shipped/trajectory.tum" "$work/grown/trajectory.tum"; then
+  echo "ok: the grown 0.4 m grid gives the 3 m grid's trajectory ($(wc -l <"$work/shipped/trajectory.tum") poses)"
+else
+  echo "FAIL: the grown grid's trajectory differs from the 3 m grid's"; status=1
+fi
+/usr/bin/python3 - "$work" <<'PY' || status=1
+import json, os, sys
+work = sys.argv[1]
+s = {n: json.load(open(os.path.join(work, n, "summary.json"))) for n in ("shipped", "grown", "fixed", "capped")}
+log = {n: open(os.path.join(work, n + ".log")).read() for n in s}
+fails = []
+for n in ("shipped", "grown"):
+    if s[n]["updates_outside_grid"] or s[n]["grid_growth_refused"]:
+        fails.append("%s: %d outside, %d refused" % (n, s[n]["updates_outside_grid"], s[n]["grid_growth_refused"]))
+if s["grown"]["map_occupied_cells"] != s["shipped"]["map_occupied_cells"]:
+    fails.append("grown map %d occupied cells, shipped %d" % (s["grown"]["map_occupied_cells"], s["shipped"]["map_occupied_cells"]))
+if not s["fixed"]["updates_outside_grid"] > 0 or "outside the grid" not in log["fixed"]:
+    fails.append("the fixed grid's updates outside it are not reported")
+if not s["capped"]["grid_growth_refused"] > 0 or "could not grow" not in log["capped"]:
+    fails.append("the capped grid's refused growth is not reported")
+if not s["capped"]["map_width"] * s["capped"]["map_resolution"] <= 0.8 + 0.16 + 1e-9:
+    fails.append("the capped grid is %.2f m wide" % (s["capped"]["map_width"] * s["capped"]["map_resolution"]))
+print("map occupied cells: shipped %d, grown %d, fixed %d, capped %d; outside: fixed %d, capped %d; refused: capped %d"
+      % (s["shipped"]["map_occupied_cells"], s["grown"]["map_occupied_cells"], s["fixed"]["map_occupied_cells"],
+         s["capped"]["map_occupied_cells"], s["fixed"]["updates_outside_grid"], s["capped"]["updates_outside_grid"],
+         s["capped"]["grid_growth_refused"]))
+for f in fails:
+    print("FAIL: " + f)
+sys.exit(1 if fails else 0)
+PY
+[ "$status" -eq 0 ] && echo "PASS"
+exit "$status"
