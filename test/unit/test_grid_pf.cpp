@@ -9,8 +9,10 @@
 #include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <iomanip>
 #include <iterator>
 #include <memory>
+#include <random>
 #include <vector>
 
 #include "rbpf_slam/core/grid/grid_map_data.h"
@@ -317,7 +319,7 @@ TEST(TiledGrid, GrowingKeepsEveryCellAndTheSharing) {
   EXPECT_FALSE(a.cellOf(far, &cx, &cy));
   ASSERT_TRUE(a.grow(far, far, 100, 100, 10000));
   ASSERT_TRUE(a.cellOf(far, &cx, &cy));
-  // -x: 3 tiles needed, + max(1, 3 / 4) margin; +y: the cut tile completed, then 1 more.
+  // -x: 3 tiles needed and 1 more; +y: the cut tile completed, then 1 more.
   EXPECT_EQ(a.tilesX(), 3 + 3 + 1);
   EXPECT_EQ(a.tilesY(), 3 + 1 + 1);
   EXPECT_NEAR(a.originX(), -1.0 - 4 * 0.8, 1e-12);
@@ -348,18 +350,68 @@ TEST(TiledGrid, GrowingKeepsEveryCellAndTheSharing) {
   const int my = static_cast<int>(std::floor((p.y() - m.origin_y_m) / m.resolution_m));
   EXPECT_GT(m.at(mx, my), 65);
 
-  // Limits: 12 tiles along x, 50 tiles in all (y to 5 m needs 7 x 8); refused growth leaves
-  // the grid as it was.
-  const int tiles_x = a.tilesX(), tiles_y = a.tilesY();
+  // At most 12 tiles along x: a box at x = 10 m is beyond them. The grid grows to the limit
+  // toward it, keeping what it had, and says the box is not held.
+  const int tiles_y = a.tilesY();
   EXPECT_FALSE(a.grow(Eigen::Vector2d(10.0, 0.0), Eigen::Vector2d(10.0, 0.0), 12, 100, 10000));
-  EXPECT_FALSE(a.grow(Eigen::Vector2d(0.0, 5.0), Eigen::Vector2d(0.0, 5.0), 100, 100, 50));
+  EXPECT_EQ(a.tilesX(), 12);
+  EXPECT_NEAR(a.originX(), -1.0 - 4 * 0.8, 1e-12);
+  EXPECT_TRUE(a.cellOf(Eigen::Vector2d(5.3, 0.0), &cx, &cy));
+  EXPECT_FALSE(a.cellOf(Eigen::Vector2d(10.0, 0.0), &cx, &cy));
+  ASSERT_TRUE(a.cellOf(p, &cx, &cy));
+  EXPECT_FLOAT_EQ(a.logOdds(cx, cy), 2.0f);
+  // More than 100 tiles in all (y to 5 m: 12 x 9), or a non-finite corner: nothing grows.
+  EXPECT_FALSE(a.grow(Eigen::Vector2d(0.0, 5.0), Eigen::Vector2d(0.0, 5.0), 100, 100, 100));
   EXPECT_FALSE(a.grow(Eigen::Vector2d(NAN, 0.0), Eigen::Vector2d(0.0, 0.0), 100, 100, 10000));
-  EXPECT_FALSE(a.grow(Eigen::Vector2d(-1e300, 0.0), Eigen::Vector2d(0.0, 0.0), 100, 100, 1e9));
-  EXPECT_EQ(a.tilesX(), tiles_x);
+  EXPECT_EQ(a.tilesX(), 12);
   EXPECT_EQ(a.tilesY(), tiles_y);
-  // Within the limits the margin is cut to fit: tiles -4 .. 4, 9 exactly, none more.
-  ASSERT_TRUE(a.grow(Eigen::Vector2d(0.0, 0.0), Eigen::Vector2d(2.7, 0.0), 9, 100, 10000));
-  EXPECT_EQ(a.tilesX(), 9);
+  // A corner 1e300 m away: the limit, toward it, and no overflow.
+  EXPECT_FALSE(a.grow(Eigen::Vector2d(-1e300, 0.0), Eigen::Vector2d(0.0, 0.0), 20, 100, 1e9));
+  EXPECT_EQ(a.tilesX(), 20);
+  EXPECT_NEAR(a.originX(), -1.0 - 12 * 0.8, 1e-12);
+
+  // Within the limits the extra tile is left out when it does not fit: tiles 0 .. 4.
+  TiledLogOddsGrid c(0.1, -1.0, -1.0, 20, 20, 8);
+  ASSERT_TRUE(c.grow(Eigen::Vector2d(0.0, 0.0), Eigen::Vector2d(2.7, 0.0), 5, 100, 10000));
+  EXPECT_EQ(c.tilesX(), 5);
+  // Beyond the limits on both sides, the window is centred on the box: tiles -3 .. 5 (the
+  // first three kept) for a box around tile 1 that reaches -9 .. 11.
+  TiledLogOddsGrid d(0.1, -1.0, -1.0, 20, 20, 8);
+  EXPECT_FALSE(d.grow(Eigen::Vector2d(-8.0, 0.0), Eigen::Vector2d(8.5, 0.0), 9, 100, 10000));
+  EXPECT_EQ(d.tilesX(), 9);
+  EXPECT_NEAR(d.originX(), -1.0 - 3 * 0.8, 1e-12);
+}
+
+// The box's tiles come from the lattice and cellOf from the origin: at a grid's edge the two can
+// round apart. Whenever grow says it holds a box, cellOf must agree (else the grid would be
+// grown again at every update).
+TEST(TiledGrid, AGrownGridHoldsWhatGrowSaysItHolds) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  std::uniform_int_distribution<int> ulps(-6, 6);
+  const double resolutions[] = {0.01, 0.05, 0.1, 0.03, 0.07};
+  const int tiles[] = {4, 16, 64, 5, 7};
+  int held = 0;
+  for (int i = 0; i < 5000; ++i) {
+    const double resolution = resolutions[i % 5];
+    const double ox = 100.0 * u(rng), oy = 100.0 * u(rng);
+    TiledLogOddsGrid g(resolution, ox, oy, 40, 40, tiles[(i / 5) % 5]);
+    for (int k = 0; k < 2; ++k) {  // grown a little, to -x or +x
+      const Eigen::Vector2d c(ox + 100.0 * resolution * u(rng), oy + 20.0 * resolution);
+      g.grow(c, c, 1 << 20, 1 << 20, 1L << 30);
+    }
+    // A point on the grid's lower or upper x edge, moved by a few units in the last place.
+    double x = u(rng) < 0.0 ? g.originX() : g.originX() + g.width() * resolution;
+    const int n = ulps(rng);
+    for (int k = 0; k < std::abs(n); ++k) x = std::nextafter(x, n > 0 ? 1e9 : -1e9);
+    const Eigen::Vector2d at(x, g.originY() + 0.5 * resolution * g.height());
+    if (g.contains(at, at)) continue;
+    ASSERT_TRUE(g.grow(at, at, 1 << 20, 1 << 20, 1L << 30));
+    ++held;
+    int cx, cy;
+    ASSERT_TRUE(g.cellOf(at, &cx, &cy)) << std::setprecision(17) << at.transpose();
+  }
+  EXPECT_GT(held, 1000);
 }
 
 TEST(TiledGrid, ToGridMapFollowsOccupancyGridConventions) {
@@ -550,11 +602,19 @@ TEST(GridParticleFilter, TheGridGrowsToHoldTheReadings) {
   EXPECT_LE(map.origin_y_m, -14.0);
   EXPECT_LE(map.width * map.resolution_m, 40.0 + 1e-9);
 
-  // 40 m along x at most: 30 m further on the grid cannot follow.
+  // 40 m along x at most: at 45 m the grid cannot follow; it grows as far as it may toward
+  // the robot, so a room at 30 m is then mapped whole.
   ASSERT_TRUE(filter.resetPose(Pose2(45.0, 0.0, 0.0), Eigen::Matrix3d::Zero()));
   filter.update(roomScan(0.0, 0.0));
   EXPECT_EQ(filter.stats().outside_grid, 1);
   EXPECT_EQ(filter.stats().grid_growth_refused, 1);
+  ASSERT_TRUE(filter.occupancyGrid(map));
+  EXPECT_LE(map.width * map.resolution_m, 40.0 + 1e-9);
+  ASSERT_TRUE(filter.resetPose(Pose2(30.0, 0.0, 0.0), Eigen::Matrix3d::Zero()));
+  filter.update(roomScan(0.0, 0.0));
+  EXPECT_EQ(filter.stats().grid_growth_refused, 1);
+  EXPECT_TRUE(wall_mapped(Eigen::Vector2d(33.0, 0.5)));
+  EXPECT_TRUE(wall_mapped(Eigen::Vector2d(27.0, 0.5)));
   // Localizing (mapping off) never grows the grid.
   ASSERT_TRUE(filter.setMapping(false));
   ASSERT_TRUE(filter.resetPose(Pose2(0.0, 25.0, 0.0), Eigen::Matrix3d::Zero()));

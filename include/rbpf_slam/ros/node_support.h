@@ -197,16 +197,7 @@ class TfGatedSubscriber {
     if (frameInTf(*tf_, base_frame_, msg->header.frame_id, &error)) {
       order_.entered(msg->header.stamp, msg);  // before add(): the filter may answer at once
       pending_.emplace(msg->header.stamp, msg);
-      try {
-        filter_.add(msg);
-      } catch (const std::exception& e) {  // tf2's time arithmetic, whatever the stamp
-        answered(msg);
-        bool handed_on = false;
-        std::vector<Ptr> due = order_.dropped(msg->header.stamp, msg, &handed_on);
-        const unsigned long clears = clears_;  // on_bad_stamp may reset the input
-        if (!handed_on && handlers_.on_bad_stamp) handlers_.on_bad_stamp(msg, e.what());
-        deliver(std::move(due), clears);
-      }
+      intoFilter(msg);
     } else if (handlers_.on_unknown_frame) {
       handlers_.on_unknown_frame(msg, error);
     }
@@ -233,6 +224,20 @@ class TfGatedSubscriber {
     }
   }
 
+  /// Gives the filter a message already in order_ and pending_ (it may answer at once).
+  void intoFilter(const Ptr& msg) {
+    try {
+      filter_.add(msg);
+    } catch (const std::exception& e) {  // tf2's time arithmetic, whatever the stamp
+      answered(msg);
+      bool handed_on = false;
+      std::vector<Ptr> due = order_.dropped(msg->header.stamp, msg, &handed_on);
+      const unsigned long clears = clears_;  // on_bad_stamp may reset the input
+      if (!handed_on && handlers_.on_bad_stamp) handlers_.on_bad_stamp(msg, e.what());
+      deliver(std::move(due), clears);
+    }
+  }
+
   /// The filter answered for this message (let it out or gave up on it).
   void answered(const Ptr& msg) {
     const auto range = pending_.equal_range(msg->header.stamp);
@@ -244,14 +249,15 @@ class TfGatedSubscriber {
     }
   }
 
-  /// When every message the filter holds unanswered is stamped before the earliest transform tf
+  /// A message the filter holds unanswered that is stamped before the earliest transform tf
   /// holds for it (tf2: "extrapolation into the past"; e.g. readings a driver publishes before
-  /// its first odometry), they can never leave: tf2 gives up on them only once its cache has
-  /// moved a whole cache length past them (30 s), and tf2_ros 0.7 then also fails the messages
-  /// waiting at that moment. They are reported now (on_before_tf) and the filter is emptied.
-  /// (Any other message still waiting postpones this to a later sweep.)
+  /// its first odometry) can never leave: tf2 gives up on it only once its cache has moved a
+  /// whole cache length past it (30 s), and tf2_ros 0.7 then also fails the messages waiting at
+  /// that moment. Such messages are reported now (on_before_tf); the filter cannot drop one
+  /// message, so it is emptied and the others are given to it again, in stamp order.
   void dropBeforeTf() {
     std::vector<std::pair<Ptr, bool>> waiting;  // and whether it is before tf's history
+    std::vector<Ptr> keep;                      // may still leave
     for (const auto& entry : pending_) {
       const Ptr& msg = entry.second;
       std::string error;
@@ -259,10 +265,12 @@ class TfGatedSubscriber {
       try {
         if (frame.empty() || tf_->canTransform(target_frame_, frame, msg->header.stamp, &error) ||
             error.find("into the past") == std::string::npos) {
-          return;  // one that may still leave: wait for the filter's answers
+          keep.push_back(msg);  // the filter's to answer for
+          continue;
         }
       } catch (const std::exception&) {  // tf2's time arithmetic (a stamp 2^31 s off): the
-        return;                          // filter's to answer for, as before
+        keep.push_back(msg);             // filter's to answer for, as before
+        continue;
       }
       // Before tf's history (its data began later: start-up, a mount first sent late), or fell
       // out of its cache (older than the clock less tf's cache length: a node that fell behind).
@@ -271,8 +279,10 @@ class TfGatedSubscriber {
           now <= 0.0 || msg->header.stamp.toSec() >= now - tf_->getCacheLength().toSec();
       waiting.emplace_back(msg, before_history);
     }
+    if (waiting.empty()) return;
     filter_.clear();  // no failure callbacks; its tf2 requests go too
     pending_.clear();
+    for (const Ptr& msg : keep) pending_.emplace(msg->header.stamp, msg);
     const unsigned long clears = clears_;
     for (const auto& [msg, before_history] : waiting) {
       bool handed_on = false;
@@ -286,6 +296,10 @@ class TfGatedSubscriber {
       }
       if (clears_ != clears) return;  // a handler reset the input
       deliver(std::move(due), clears);
+    }
+    for (const Ptr& msg : keep) {  // back into the filter (still in order_ and pending_)
+      if (clears_ != clears) return;
+      intoFilter(msg);
     }
   }
 

@@ -110,22 +110,30 @@ GridParticleFilter::GridParticleFilter(const FilterOptions& options)
     throw std::invalid_argument(why.str());
   }
   // Growth is bounded by grid.max_size_m and by the memory of the particles' tile tables.
-  // An axis whose first extent is already larger does not grow.
+  // An axis whose first extent is already as large does not grow (its tiles counted as the
+  // grid counts them: rounding must not make the limit smaller than the grid).
   const GridOptions& g = options_.grid;
   const double tile_m = g.resolution_m * g.tile_cells;
-  max_tiles_x_ = static_cast<int>(std::ceil(std::max(g.max_size_m, g.size_x_m) / tile_m));
-  max_tiles_y_ = static_cast<int>(std::ceil(std::max(g.max_size_m, g.size_y_m) / tile_m));
+  const auto first_tiles = [&g](double size_m) {
+    return (static_cast<int>(std::ceil(size_m / g.resolution_m)) + g.tile_cells - 1) / g.tile_cells;
+  };
+  const double max_tiles = std::min(std::ceil(g.max_size_m / tile_m), 1e9);
+  max_tiles_x_ = std::max(static_cast<int>(max_tiles), first_tiles(g.size_x_m));
+  max_tiles_y_ = std::max(static_cast<int>(max_tiles), first_tiles(g.size_y_m));
+  grows_ = g.max_size_m > 0.0 &&
+           (max_tiles_x_ > first_tiles(g.size_x_m) || max_tiles_y_ > first_tiles(g.size_y_m));
   max_tiles_ = static_cast<long>(kMaxTileTablesBytes / (2.0 * options_.particles + 1.0) /
                                  sizeof(std::shared_ptr<void>));
   reset();
 }
 
 void GridParticleFilter::growGrids(const std::vector<LocalMapCell>& local) {
-  if (options_.grid.max_size_m <= 0.0) return;
+  if (!grows_) return;
   const double reach = localMapReach(local, options_.grid.resolution_m);
   bool refused = false;
   for (Particle& p : particles_) {
     const Eigen::Vector2d at = p.pose.head<2>();
+    if (!at.allFinite()) continue;  // nothing of it can be placed on any grid
     const Eigen::Vector2d lo = at.array() - reach, hi = at.array() + reach;
     if (p.grid.contains(lo, hi)) continue;
     refused |= !p.grid.grow(lo, hi, max_tiles_x_, max_tiles_y_, max_tiles_);

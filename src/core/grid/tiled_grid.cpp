@@ -39,61 +39,99 @@ void TiledLogOddsGrid::add(int cx, int cy, float delta, float clamp) {
   cell = std::max(-clamp, std::min(clamp, cell + delta));
 }
 
+namespace {
+
+/// One axis of TiledLogOddsGrid::grow: the tile range [first, end) grown toward the box's tiles
+/// lo .. hi (doubles: a far corner must not overflow an int), at most `limit` tiles long and
+/// never losing [first, end). When the box does not fit, a window of `limit` tiles as nearly
+/// centred on the box (the robot) as [first, end) allows. Returns whether the box is held.
+bool growAxis(int first, int end, double lo, double hi, int limit, int* new_first, int* new_end) {
+  const double need_first = std::min<double>(first, lo);
+  const double need_end = std::max<double>(end, hi + 1.0);
+  if (need_end - need_first <= limit) {
+    *new_first = static_cast<int>(need_first);
+    *new_end = static_cast<int>(need_end);
+    // One tile more on a side that grows, when it fits: the next growth comes a tile later.
+    int slack = limit - (*new_end - *new_first);
+    if (*new_first < first && slack > 0) --*new_first, --slack;
+    if (*new_end > end && slack > 0) ++*new_end;
+    return true;
+  }
+  *new_first = first;
+  *new_end = end;
+  if (end - first >= limit) return false;
+  double centre = std::floor(0.5 * (lo + hi));
+  if (!std::isfinite(centre)) centre = 0.5 * (first + end);
+  double start = std::clamp(centre - std::floor(0.5 * limit), static_cast<double>(end - limit),
+                            static_cast<double>(first));
+  start = std::max(start, need_first);
+  *new_first = static_cast<int>(start);
+  *new_end = static_cast<int>(std::min(start + limit, need_end));
+  return false;
+}
+
+}  // namespace
+
 bool TiledLogOddsGrid::grow(const Eigen::Vector2d& min, const Eigen::Vector2d& max, int max_tiles_x,
                             int max_tiles_y, long max_tiles) {
   if (!min.allFinite() || !max.allFinite() || tiles_.empty()) return false;
   if (contains(min, max)) return true;
   const double tile_m = tile_cells_ * resolution_m_;
-  // The box's tiles on the lattice, in doubles first: a far corner must not overflow an int.
-  const double lo_x = std::floor((min.x() - base_x_m_) / tile_m);
-  const double lo_y = std::floor((min.y() - base_y_m_) / tile_m);
-  const double hi_x = std::floor((max.x() - base_x_m_) / tile_m);
-  const double hi_y = std::floor((max.y() - base_y_m_) / tile_m);
-  const double first_x = std::min<double>(first_tile_x_, lo_x);
-  const double first_y = std::min<double>(first_tile_y_, lo_y);
-  const double end_x = std::max<double>(first_tile_x_ + tiles_x_, hi_x + 1);
-  const double end_y = std::max<double>(first_tile_y_ + tiles_y_, hi_y + 1);
-  if (end_x - first_x > max_tiles_x || end_y - first_y > max_tiles_y ||
-      (end_x - first_x) * (end_y - first_y) > static_cast<double>(max_tiles)) {
+  int x0, x1, y0, y1;
+  const bool whole_x =
+      growAxis(first_tile_x_, first_tile_x_ + tiles_x_, std::floor((min.x() - base_x_m_) / tile_m),
+               std::floor((max.x() - base_x_m_) / tile_m), max_tiles_x, &x0, &x1);
+  const bool whole_y =
+      growAxis(first_tile_y_, first_tile_y_ + tiles_y_, std::floor((min.y() - base_y_m_) / tile_m),
+               std::floor((max.y() - base_y_m_) / tile_m), max_tiles_y, &y0, &y1);
+  if (static_cast<double>(x1 - x0) * (y1 - y0) > static_cast<double>(max_tiles)) return false;
+  reshape(x0, x1, y0, y1);
+  if (!(whole_x && whole_y)) return false;
+  if (contains(min, max)) return true;
+  // The box's tiles come from the lattice, cellOf from the origin: at an edge the two can round
+  // apart. One tile more on each side cellOf still refuses, within the limits.
+  const double fx0 = (min.x() - origin_x_m_) * inverse_resolution_;
+  const double fy0 = (min.y() - origin_y_m_) * inverse_resolution_;
+  const double fx1 = (max.x() - origin_x_m_) * inverse_resolution_;
+  const double fy1 = (max.y() - origin_y_m_) * inverse_resolution_;
+  x0 -= fx0 < 0.0;
+  y0 -= fy0 < 0.0;
+  x1 += fx1 >= width_;
+  y1 += fy1 >= height_;
+  if (x1 - x0 > max_tiles_x || y1 - y0 > max_tiles_y ||
+      static_cast<double>(x1 - x0) * (y1 - y0) > static_cast<double>(max_tiles)) {
     return false;
   }
-  // Each side that must grow gets at least a quarter of the extent more, within the limits.
-  auto widen = [](int first, int end, int limit, int* need_first, int* need_end) {
-    int slack = limit - (*need_end - *need_first);
-    const int extra = std::max(1, (end - first) / 4);
-    if (*need_first < first) {
-      const int more = std::min(extra, slack);
-      *need_first -= more;
-      slack -= more;
-    }
-    if (*need_end > end) *need_end += std::min(extra, slack);
-  };
-  const int need_x0 = static_cast<int>(first_x), need_x1 = static_cast<int>(end_x);
-  const int need_y0 = static_cast<int>(first_y), need_y1 = static_cast<int>(end_y);
-  int nx0 = need_x0, nx1 = need_x1, ny0 = need_y0, ny1 = need_y1;
-  widen(first_tile_x_, first_tile_x_ + tiles_x_, max_tiles_x, &nx0, &nx1);
-  widen(first_tile_y_, first_tile_y_ + tiles_y_, max_tiles_y, &ny0, &ny1);
-  if (static_cast<double>(nx1 - nx0) * (ny1 - ny0) > static_cast<double>(max_tiles)) {
-    nx0 = need_x0, nx1 = need_x1, ny0 = need_y0, ny1 = need_y1;  // no margin beyond the box
+  reshape(x0, x1, y0, y1);
+  return contains(min, max);
+}
+
+void TiledLogOddsGrid::reshape(int first_x, int end_x, int first_y, int end_y) {
+  if (first_x == first_tile_x_ && first_y == first_tile_y_ && end_x - first_x == tiles_x_ &&
+      end_y - first_y == tiles_y_) {
+    width_ = tiles_x_ * tile_cells_;  // a first extent cut inside its last tile is completed
+    height_ = tiles_y_ * tile_cells_;
+    return;
   }
-  std::vector<std::shared_ptr<Tile>> tiles(static_cast<size_t>(nx1 - nx0) * (ny1 - ny0));
+  const int nx = end_x - first_x, ny = end_y - first_y;
+  std::vector<std::shared_ptr<Tile>> tiles(static_cast<size_t>(nx) * ny);
   for (int ty = 0; ty < tiles_y_; ++ty) {
     for (int tx = 0; tx < tiles_x_; ++tx) {
       const size_t to =
-          static_cast<size_t>(first_tile_y_ + ty - ny0) * (nx1 - nx0) + (first_tile_x_ + tx - nx0);
+          static_cast<size_t>(first_tile_y_ + ty - first_y) * nx + (first_tile_x_ + tx - first_x);
       tiles[to] = std::move(tiles_[static_cast<size_t>(ty) * tiles_x_ + tx]);
     }
   }
   tiles_ = std::move(tiles);
-  first_tile_x_ = nx0;
-  first_tile_y_ = ny0;
-  tiles_x_ = nx1 - nx0;
-  tiles_y_ = ny1 - ny0;
+  first_tile_x_ = first_x;
+  first_tile_y_ = first_y;
+  tiles_x_ = nx;
+  tiles_y_ = ny;
   width_ = tiles_x_ * tile_cells_;
   height_ = tiles_y_ * tile_cells_;
+  const double tile_m = tile_cells_ * resolution_m_;
   origin_x_m_ = base_x_m_ + first_tile_x_ * tile_m;
   origin_y_m_ = base_y_m_ + first_tile_y_ * tile_m;
-  return true;
 }
 
 int TiledLogOddsGrid::allocatedTiles() const {

@@ -45,9 +45,10 @@ struct GridOptions {
 
 /// What to change when the grid cannot hold the robot or its readings (warnings, summaries).
 constexpr const char* kGridLimitAdvice =
-    "the grid grows up to grid.max_size_m along each axis (0: fixed at grid.size_x_m x "
-    "grid.size_y_m, centred on the start) and while its particles' tile tables fit in memory: "
-    "raise grid.max_size_m, coarsen grid.resolution_m or enlarge grid.tile_cells";
+    "while mapping, the grid grows up to grid.max_size_m along each axis (0: fixed at "
+    "grid.size_x_m x grid.size_y_m, centred on the start) and while its particles' tile tables "
+    "fit in memory: raise grid.max_size_m, coarsen grid.resolution_m or enlarge "
+    "grid.tile_cells (localizing on a map, nothing grows: the robot has left the map)";
 
 /// Throws std::invalid_argument naming the first out-of-range field ("grid.NAME").
 void validate(const GridOptions& options);

@@ -74,6 +74,7 @@ class GridParticleFilter : public SlamFilter {
   bool mapping_ = true;
   int max_tiles_x_ = 0, max_tiles_y_ = 0;  // growth limits: grid.max_size_m in tiles ...
   long max_tiles_ = 0;                     // ... and the tiles one particle's table may hold
+  bool grows_ = false;                     // some axis may grow
 };
 
 }  // namespace core

@@ -36,12 +36,13 @@ class TiledLogOddsGrid {
     int cx, cy;
     return cellOf(min, &cx, &cy) && cellOf(max, &cx, &cy);
   }
-  /// Extends the grid by whole tiles so that it contains the box [min, max], adding on each
-  /// side that grows at least a quarter of the present extent (fewer, larger growths). Cell
-  /// indices change when the grid grows to -x or -y; world positions keep their log odds. The
-  /// grid never grows beyond max_tiles_x x max_tiles_y tiles nor max_tiles in all: when the
-  /// box would need more it is left as it was and false is returned (as for a box with a
-  /// non-finite corner).
+  /// Extends the grid by whole tiles so that it contains the box [min, max] (and one tile more
+  /// on each side that grows, when that fits). Cell indices change when the grid grows to -x or
+  /// -y; world positions keep their log odds. The grid never grows beyond max_tiles_x x
+  /// max_tiles_y tiles: along an axis where the box does not fit, it grows up to that limit as
+  /// nearly centred on the box's centre as the present extent allows. Returns whether the grid
+  /// holds the whole box. A box with a non-finite corner, or a growth to more than max_tiles
+  /// tiles in all (the memory limit), leaves the grid as it was.
   bool grow(const Eigen::Vector2d& min, const Eigen::Vector2d& max, int max_tiles_x,
             int max_tiles_y, long max_tiles);
 
@@ -82,6 +83,9 @@ class TiledLogOddsGrid {
   int tileIndex(int cx, int cy) const {
     return (cy / tile_cells_) * tiles_x_ + cx / tile_cells_;
   }
+  /// Tiles first_x .. end_x - 1 x first_y .. end_y - 1 of the lattice, a range holding the
+  /// present one: moves the tile pointers (no tile is copied).
+  void reshape(int first_x, int end_x, int first_y, int end_y);
   int cellIndex(int cx, int cy) const {
     return (cy % tile_cells_) * tile_cells_ + cx % tile_cells_;
   }
