@@ -326,10 +326,15 @@ void checkTopicTypes(rosbag::View& view, const std::string& bag_path, const io::
   }
 }
 
-/// --output-bag: the input's tf and sensor messages plus what rbpf_slam_node would have
-/// published (map -> odom on /tf, ~pose, ~landmarks, and ~trajectory at the end), for rviz.
+/// --output-bag: the input's tf, odometry and sensor messages plus what rbpf_slam_node would
+/// have published (map -> odom on /tf, ~pose, ~landmarks, and ~trajectory every
+/// kTrajectoryPeriodS of bag time and at the end), for rviz.
 class ResultBag {
  public:
+  /// s of bag time between two ~trajectory messages: each holds the whole path so far, so the
+  /// bag grows with the square of the run's length divided by this.
+  static constexpr double kTrajectoryPeriodS = 10.0;
+
   ResultBag(const std::string& path, const io::RosOptions& ros)
       : ros_(ros), bag_(makeParents(path)) {}
 
@@ -352,13 +357,23 @@ class ResultBag {
       bag_.write("/rbpf_slam_node/pose", stamp, pose);
     }
     bag_.write("/rbpf_slam_node/landmarks", stamp, markers_.update(session.filter().landmarks(), header));
+    if (trajectory_written_.isZero() || stamp < trajectory_written_ ||
+        (stamp - trajectory_written_).toSec() >= kTrajectoryPeriodS) {
+      bag_.write("/rbpf_slam_node/trajectory", stamp,
+                 toPath(session.estimatedTrajectory(), ros_.map_frame));
+      trajectory_written_ = stamp;
+    }
   }
 
-  /// Copies the input's tf and sensor topics and closes the bag.
+  /// Copies the input's tf, odometry (nav_msgs/Odometry, whatever the topic) and sensor topics
+  /// and closes the bag.
   void finish(const rosbag::Bag& input, const std::vector<std::string>& sensor_topics,
               const core::SlamSession& session) {
     std::vector<std::string> topics{"/tf", "tf", "/tf_static", "tf_static"};
     topics.insert(topics.end(), sensor_topics.begin(), sensor_topics.end());
+    for (const rosbag::ConnectionInfo* c : rosbag::View(input).getConnections()) {
+      if (c->datatype == "nav_msgs/Odometry") topics.push_back(c->topic);
+    }
     ros::Time last;
     for (const rosbag::MessageInstance& m : rosbag::View(input, rosbag::TopicQuery(topics))) {
       if (topicIs(m.getTopic(), "tf_static")) {
@@ -390,6 +405,7 @@ class ResultBag {
   const io::RosOptions ros_;
   PartialBag bag_;  // the output bag appears when complete
   LandmarkMarkers markers_;
+  ros::Time trajectory_written_;  // the last ~trajectory's stamp
 };
 
 }  // namespace

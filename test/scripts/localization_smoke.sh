@@ -5,7 +5,8 @@
 # 0.15 m against the ground truth) without adding a landmark, and unless a missing map_file
 # and localization_only without map_file are refused with a message naming the key. The
 # mapping run also writes --output-bag, which must hold a pose per update, markers, the
-# trajectory and the input's tf and scans.
+# trajectory every 10 s of bag time (growing, the last one a pose per update), and the input's
+# tf, odometry and scans.
 set -euo pipefail
 
 source "$(dirname "$0")/lib/offline.sh"
@@ -46,9 +47,18 @@ print("--output-bag topics:", counts)
 if counts.get("/rbpf_slam_node/pose") != mapping["updates"]:
     print("FAIL: --output-bag has %s poses for %d updates"
           % (counts.get("/rbpf_slam_node/pose"), mapping["updates"])); ok = False
-for topic in ("/rbpf_slam_node/landmarks", "/rbpf_slam_node/trajectory", "/tf", "/tf_static", "/scan"):
+for topic in ("/rbpf_slam_node/landmarks", "/rbpf_slam_node/trajectory", "/tf", "/tf_static", "/scan",
+              "/odom"):
     if not counts.get(topic):
         print("FAIL: --output-bag has no " + topic); ok = False
+with rosbag.Bag(work + "/map/results.bag") as bag:
+    paths = [(t.to_sec(), len(m.poses)) for _, m, t in bag.read_messages(topics=["/rbpf_slam_node/trajectory"])]
+    span = bag.get_end_time() - bag.get_start_time()
+print("--output-bag trajectories (bag time, poses):", [(round(t - paths[0][0], 1), n) for t, n in paths])
+if len(paths) < int(span // 10):
+    print("FAIL: %d trajectories over %.0f s of bag (one per 10 s)" % (len(paths), span)); ok = False
+if any(b[1] < a[1] for a, b in zip(paths, paths[1:])) or paths[-1][1] != mapping["updates"]:
+    print("FAIL: the trajectories do not grow to a pose per update (%d)" % mapping["updates"]); ok = False
 sys.exit(0 if ok else 1)
 PY
 
