@@ -144,7 +144,10 @@ int run(const Arguments& arguments) {
   const double half_y = 0.5 * height * options.resolution_m;
   core::TiledLogOddsGrid grid(options.resolution_m, start.x() - half_x, start.y() - half_y, width,
                               height, options.tile_cells);
-  long scans = 0, unmatched = 0, bad = 0;
+  // The grid grows as grid_pf's does (grid.max_size_m; one table), so that the reference
+  // covers what the filter could map.
+  const core::GridGrowthLimits limits = core::growthLimits(options, 1);
+  long scans = 0, unmatched = 0, bad = 0, not_held = 0;
   std::set<std::string> tilt_warned;  // scan frames warned about, once each
   const std::string topic = stripSlash(config.ros.scan_topic);
   for (const rosbag::MessageInstance& m :
@@ -181,7 +184,10 @@ int run(const Arguments& arguments) {
     core::FeatureSet features;
     features.scan = scan;
     core::LocalMapStats stats;
-    core::integrateLocalMap(core::buildLocalMap(features, options, &stats), pose, options, &grid);
+    const std::vector<core::LocalMapCell> local = core::buildLocalMap(features, options, &stats);
+    not_held +=
+        !core::growToHold(core::localMapReach(local, options.resolution_m), pose, limits, &grid);
+    core::integrateLocalMap(local, pose, options, &grid);
     ++scans;
   }
   if (scans == 0) throw std::runtime_error(bag_path + ": no scan matched a reference pose");
@@ -189,8 +195,9 @@ int run(const Arguments& arguments) {
   io::writeGridMap(output, map, "rbpf_slam: scans rendered at the reference poses");
   std::printf(
       "{\"scans\": %ld, \"scans_without_reference\": %ld, \"bad_scans\": %ld, "
-      "\"occupied_cells\": %ld, \"free_cells\": %ld, \"resolution\": %g}\n",
-      scans, unmatched, bad, map.count(65, 100), map.count(0, 19), map.resolution_m);
+      "\"scans_beyond_the_grid\": %ld, \"occupied_cells\": %ld, \"free_cells\": %ld, "
+      "\"resolution\": %g}\n",
+      scans, unmatched, bad, not_held, map.count(65, 100), map.count(0, 19), map.resolution_m);
   return 0;
 }
 

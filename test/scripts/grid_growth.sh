@@ -3,11 +3,13 @@
 # that starts at 0.4 m x 0.4 m must give exactly the trajectory of config/grid_pf.yaml's 3 m
 # grid (growth keeps the cell lattice, so no cell moves); the same small grid fixed
 # (max_size_m 0) must report the updates outside it, and one that may grow to 0.8 m only the
-# updates it could not grow for, each named in offline_slam's summary.
+# updates it could not grow for, each named in offline_slam's summary. render_grid (the
+# reference rendering of grid_aces.sh) grows the same way: the ACES slice rendered on a 20 m
+# first extent must give the 120 m grid's cells, and on a fixed 20 m grid name its scans beyond.
 set -euo pipefail
 
 source "$(dirname "$0")/lib/offline.sh"
-require_tools simulate offline_slam
+require_tools simulate offline_slam render_grid
 
 "$bin/simulate" --world "$root/worlds/yatim_epuck.yaml" --output "$work/sim.bag" --seed 1 >/dev/null
 run() {  # NAME [--set ...]
@@ -53,6 +55,26 @@ print("map occupied cells: shipped %d, grown %d, fixed %d, capped %d; outside: f
 for f in fails:
     print("FAIL: " + f)
 sys.exit(1 if fails else 0)
+PY
+render() {  # NAME [--set ...]: render_grid's JSON line
+  local name=$1
+  shift
+  "$bin/render_grid" --bag "$root/test/data/aces_head.bag" --reference "$root/test/data/aces_head.ref.tum" \
+    --config "$root/config/grid_pf_laser.yaml" --output "$work/$name" "$@" 2>"$work/$name.err" ||
+    { echo "FAIL: render_grid ($name)"; cat "$work/$name.err"; exit 1; }
+}
+render big >"$work/big.json"
+render small --set grid.size_x_m=20 --set grid.size_y_m=20 >"$work/small.json"
+render fixed --set grid.size_x_m=20 --set grid.size_y_m=20 --set grid.max_size_m=0 >"$work/fixed.json"
+/usr/bin/python3 - "$work" <<'PY' || status=1
+import json, os, sys
+r = {n: json.load(open(os.path.join(sys.argv[1], n + ".json"))) for n in ("big", "small", "fixed")}
+print("render_grid occupied cells: 120 m %d, 20 m growing %d, 20 m fixed %d (%d scans beyond it)"
+      % (r["big"]["occupied_cells"], r["small"]["occupied_cells"], r["fixed"]["occupied_cells"],
+         r["fixed"]["scans_beyond_the_grid"]))
+ok = (r["small"]["occupied_cells"] == r["big"]["occupied_cells"] and r["small"]["free_cells"] == r["big"]["free_cells"]
+      and r["small"]["scans_beyond_the_grid"] == 0 and r["fixed"]["scans_beyond_the_grid"] > 0)
+sys.exit(0 if ok else "FAIL: render_grid does not grow as the filter does")
 PY
 [ "$status" -eq 0 ] && echo "PASS"
 exit "$status"

@@ -109,35 +109,43 @@ GridParticleFilter::GridParticleFilter(const FilterOptions& options)
            "fewer particles";
     throw std::invalid_argument(why.str());
   }
-  // Growth is bounded by grid.max_size_m and by the memory of the particles' tile tables.
+  // The particles' tables and, while resampling, their copies.
+  limits_ = growthLimits(options_.grid, 2 * options_.particles + 1);
+  reset();
+}
+
+GridGrowthLimits growthLimits(const GridOptions& g, int tables) {
   // An axis whose first extent is already as large does not grow (its tiles counted as the
   // grid counts them: rounding must not make the limit smaller than the grid).
-  const GridOptions& g = options_.grid;
   const double tile_m = g.resolution_m * g.tile_cells;
   const auto first_tiles = [&g](double size_m) {
     return (static_cast<int>(std::ceil(size_m / g.resolution_m)) + g.tile_cells - 1) / g.tile_cells;
   };
   const double max_tiles = std::min(std::ceil(g.max_size_m / tile_m), 1e9);
-  max_tiles_x_ = std::max(static_cast<int>(max_tiles), first_tiles(g.size_x_m));
-  max_tiles_y_ = std::max(static_cast<int>(max_tiles), first_tiles(g.size_y_m));
-  grows_ = g.max_size_m > 0.0 &&
-           (max_tiles_x_ > first_tiles(g.size_x_m) || max_tiles_y_ > first_tiles(g.size_y_m));
-  max_tiles_ = static_cast<long>(kMaxTileTablesBytes / (2.0 * options_.particles + 1.0) /
-                                 sizeof(std::shared_ptr<void>));
-  reset();
+  GridGrowthLimits limits;
+  limits.tiles_x = std::max(static_cast<int>(max_tiles), first_tiles(g.size_x_m));
+  limits.tiles_y = std::max(static_cast<int>(max_tiles), first_tiles(g.size_y_m));
+  limits.grows = g.max_size_m > 0.0 && (limits.tiles_x > first_tiles(g.size_x_m) ||
+                                        limits.tiles_y > first_tiles(g.size_y_m));
+  limits.tiles =
+      static_cast<long>(kMaxTileTablesBytes / std::max(1, tables) / sizeof(std::shared_ptr<void>));
+  return limits;
+}
+
+bool growToHold(double reach, const Pose2& pose, const GridGrowthLimits& limits,
+                TiledLogOddsGrid* grid) {
+  const Eigen::Vector2d at = pose.head<2>();
+  if (!at.allFinite()) return true;  // nothing of it can be placed on any grid
+  const Eigen::Vector2d lo = at.array() - reach, hi = at.array() + reach;
+  if (grid->contains(lo, hi)) return true;
+  return limits.grows && grid->grow(lo, hi, limits.tiles_x, limits.tiles_y, limits.tiles);
 }
 
 void GridParticleFilter::growGrids(const std::vector<LocalMapCell>& local) {
-  if (!grows_) return;
+  if (!limits_.grows) return;
   const double reach = localMapReach(local, options_.grid.resolution_m);
   bool refused = false;
-  for (Particle& p : particles_) {
-    const Eigen::Vector2d at = p.pose.head<2>();
-    if (!at.allFinite()) continue;  // nothing of it can be placed on any grid
-    const Eigen::Vector2d lo = at.array() - reach, hi = at.array() + reach;
-    if (p.grid.contains(lo, hi)) continue;
-    refused |= !p.grid.grow(lo, hi, max_tiles_x_, max_tiles_y_, max_tiles_);
-  }
+  for (Particle& p : particles_) refused |= !growToHold(reach, p.pose, limits_, &p.grid);
   if (refused) ++stats_.grid_growth_refused;
 }
 

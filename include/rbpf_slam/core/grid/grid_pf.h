@@ -20,6 +20,20 @@ double matchLocalMap(const std::vector<LocalMapCell>& local, const Pose2& pose,
                      const TiledLogOddsGrid& grid, const GridOptions& options);
 /// How far from the robot a local map reaches (its farthest cell centre plus one cell), m.
 double localMapReach(const std::vector<LocalMapCell>& local, double resolution_m);
+/// How far a grid may grow (TiledLogOddsGrid::grow): grid.max_size_m in tiles per axis (never
+/// below the first extent), and the tiles one table may hold when `tables` of them must fit in
+/// the 4 GiB for tile tables.
+struct GridGrowthLimits {
+  int tiles_x = 0, tiles_y = 0;
+  long tiles = 0;
+  bool grows = false;  // some axis may grow
+};
+GridGrowthLimits growthLimits(const GridOptions& options, int tables);
+/// Grows the grid to hold a local map reaching `reach` around pose (when limits.grows).
+/// Returns false when the grid does not hold all of it (fixed, or at the limits); true for a
+/// non-finite pose.
+bool growToHold(double reach, const Pose2& pose, const GridGrowthLimits& limits,
+                TiledLogOddsGrid* grid);
 /// Eq. 13: adds the local map placed at pose to the grid's log odds. Each local cell writes the
 /// world cell its placed centre falls in, the cell matchLocalMap reads for it. At headings off
 /// the axes some world cells are written twice by one scan and some not at all (~6 % at
@@ -72,9 +86,7 @@ class GridParticleFilter : public SlamFilter {
   FilterStats stats_;
   LocalMapStats local_stats_;  // totals since reset
   bool mapping_ = true;
-  int max_tiles_x_ = 0, max_tiles_y_ = 0;  // growth limits: grid.max_size_m in tiles ...
-  long max_tiles_ = 0;                     // ... and the tiles one particle's table may hold
-  bool grows_ = false;                     // some axis may grow
+  GridGrowthLimits limits_;
 };
 
 }  // namespace core
