@@ -130,6 +130,27 @@ TEST(TfGatedSubscriber, AReadingBeforeTfIsDroppedWhileANewerOneWaits) {
   EXPECT_TRUE(r.failed.empty());
 }
 
+// The readings kept when the filter is emptied are in it again: in a queue of 2, two later
+// readings push the oldest kept one out, which the filter reports as a failure. Had it not
+// been given back, nothing would ever answer for it.
+TEST(TfGatedSubscriber, TheReadingsKeptAreGivenBackToTheFilter) {
+  ros::NodeHandle nh;
+  tf2_ros::Buffer tf;
+  const double t0 = std::floor(ros::Time::now().toSec());
+  tf.setTransform(odomToBase(t0), "test", false);
+  tf.setTransform(odomToBase(t0 + 1.0), "test", false);
+  Recorder r;
+  Gate gate(nh, "", 2, &tf, "base_link", "odom", r.handlers());
+  gate.add(scan(t0 - 0.5));  // before tf's history
+  gate.add(scan(t0 + 2.0));  // waits for tf
+  spinUntil(5.0 * Gate::kSweepPeriodS, [&r] { return !r.before_tf.empty(); });
+  ASSERT_EQ(r.before_tf, (std::vector<double>{t0 - 0.5}));
+  gate.add(scan(t0 + 2.1));
+  gate.add(scan(t0 + 2.2));
+  spinUntil(2.0, [&r] { return !r.failed.empty(); });
+  EXPECT_EQ(r.failed, (std::vector<double>{t0 + 2.0}));
+}
+
 // rosbridge::CheckedTransformListener with a first transform stamped two days ahead (a
 // driver's garbage at start-up): tf2 would refuse every real transform of that pair as older
 // than it, and nothing would move again. The first real one, which agrees with the clock, makes

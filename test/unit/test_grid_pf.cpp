@@ -360,8 +360,14 @@ TEST(TiledGrid, GrowingKeepsEveryCellAndTheSharing) {
   EXPECT_FALSE(a.cellOf(Eigen::Vector2d(10.0, 0.0), &cx, &cy));
   ASSERT_TRUE(a.cellOf(p, &cx, &cy));
   EXPECT_FLOAT_EQ(a.logOdds(cx, cy), 2.0f);
-  // More than 100 tiles in all (y to 5 m: 12 x 9), or a non-finite corner: nothing grows.
-  EXPECT_FALSE(a.grow(Eigen::Vector2d(0.0, 5.0), Eigen::Vector2d(0.0, 5.0), 100, 100, 100));
+  // Exactly at the memory limit the extra tile is left out rather than the growth.
+  TiledLogOddsGrid e(0.1, 0.0, 0.0, 24, 24, 8);  // 3 x 3 tiles
+  ASSERT_TRUE(e.grow(Eigen::Vector2d(3.0, 1.0), Eigen::Vector2d(3.0, 1.0), 100, 100, 12));
+  EXPECT_EQ(e.tilesX(), 4);
+  EXPECT_EQ(e.tilesY(), 3);
+  // More than 90 tiles in all (y to 5 m: 12 x 8 at least), or a non-finite corner: nothing
+  // grows.
+  EXPECT_FALSE(a.grow(Eigen::Vector2d(0.0, 5.0), Eigen::Vector2d(0.0, 5.0), 100, 100, 90));
   EXPECT_FALSE(a.grow(Eigen::Vector2d(NAN, 0.0), Eigen::Vector2d(0.0, 0.0), 100, 100, 10000));
   EXPECT_EQ(a.tilesX(), 12);
   EXPECT_EQ(a.tilesY(), tiles_y);
@@ -608,8 +614,10 @@ TEST(GridParticleFilter, TheGridGrowsToHoldTheReadings) {
   filter.update(roomScan(0.0, 0.0));
   EXPECT_EQ(filter.stats().outside_grid, 1);
   EXPECT_EQ(filter.stats().grid_growth_refused, 1);
-  ASSERT_TRUE(filter.occupancyGrid(map));
-  EXPECT_LE(map.width * map.resolution_m, 40.0 + 1e-9);
+  const TiledLogOddsGrid& at_limit = filter.bestGrid();
+  EXPECT_LE(at_limit.width() * at_limit.resolution(), 40.0 + 1e-9);
+  EXPECT_GT(at_limit.originX() + at_limit.width() * at_limit.resolution(), 34.0)
+      << "the grid did not grow toward the robot";
   ASSERT_TRUE(filter.resetPose(Pose2(30.0, 0.0, 0.0), Eigen::Matrix3d::Zero()));
   filter.update(roomScan(0.0, 0.0));
   EXPECT_EQ(filter.stats().grid_growth_refused, 1);

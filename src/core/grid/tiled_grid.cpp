@@ -45,14 +45,15 @@ namespace {
 /// lo .. hi (doubles: a far corner must not overflow an int), at most `limit` tiles long and
 /// never losing [first, end). When the box does not fit, a window of `limit` tiles as nearly
 /// centred on the box (the robot) as [first, end) allows. Returns whether the box is held.
-bool growAxis(int first, int end, double lo, double hi, int limit, int* new_first, int* new_end) {
+bool growAxis(int first, int end, double lo, double hi, int limit, bool extra, int* new_first,
+              int* new_end) {
   const double need_first = std::min<double>(first, lo);
   const double need_end = std::max<double>(end, hi + 1.0);
   if (need_end - need_first <= limit) {
     *new_first = static_cast<int>(need_first);
     *new_end = static_cast<int>(need_end);
     // One tile more on a side that grows, when it fits: the next growth comes a tile later.
-    int slack = limit - (*new_end - *new_first);
+    int slack = extra ? limit - (*new_end - *new_first) : 0;
     if (*new_first < first && slack > 0) --*new_first, --slack;
     if (*new_end > end && slack > 0) ++*new_end;
     return true;
@@ -77,13 +78,19 @@ bool TiledLogOddsGrid::grow(const Eigen::Vector2d& min, const Eigen::Vector2d& m
   if (!min.allFinite() || !max.allFinite() || tiles_.empty()) return false;
   if (contains(min, max)) return true;
   const double tile_m = tile_cells_ * resolution_m_;
+  const double lo_x = std::floor((min.x() - base_x_m_) / tile_m);
+  const double hi_x = std::floor((max.x() - base_x_m_) / tile_m);
+  const double lo_y = std::floor((min.y() - base_y_m_) / tile_m);
+  const double hi_y = std::floor((max.y() - base_y_m_) / tile_m);
   int x0, x1, y0, y1;
-  const bool whole_x =
-      growAxis(first_tile_x_, first_tile_x_ + tiles_x_, std::floor((min.x() - base_x_m_) / tile_m),
-               std::floor((max.x() - base_x_m_) / tile_m), max_tiles_x, &x0, &x1);
-  const bool whole_y =
-      growAxis(first_tile_y_, first_tile_y_ + tiles_y_, std::floor((min.y() - base_y_m_) / tile_m),
-               std::floor((max.y() - base_y_m_) / tile_m), max_tiles_y, &y0, &y1);
+  bool whole_x = false, whole_y = false;
+  for (const bool extra : {true, false}) {  // without the extra tiles when memory is short
+    whole_x =
+        growAxis(first_tile_x_, first_tile_x_ + tiles_x_, lo_x, hi_x, max_tiles_x, extra, &x0, &x1);
+    whole_y =
+        growAxis(first_tile_y_, first_tile_y_ + tiles_y_, lo_y, hi_y, max_tiles_y, extra, &y0, &y1);
+    if (static_cast<double>(x1 - x0) * (y1 - y0) <= static_cast<double>(max_tiles)) break;
+  }
   if (static_cast<double>(x1 - x0) * (y1 - y0) > static_cast<double>(max_tiles)) return false;
   reshape(x0, x1, y0, y1);
   if (!(whole_x && whole_y)) return false;
