@@ -104,6 +104,15 @@ TEST(TfGatedSubscriber, ClearDropsWhatWaitsAndUnknownFramesAreNamedAtOnce) {
   EXPECT_TRUE(r.failed.empty());
 }
 
+/// odom -> base_link at t0 and t0 + 1 s, t0 the clock's last whole second (within tf's cache of
+/// the clock, so that older stamps are before tf's history, not out of its cache); returns t0.
+double twoTransformsNow(tf2_ros::Buffer* tf) {
+  const double t0 = std::floor(ros::Time::now().toSec());
+  tf->setTransform(odomToBase(t0), "test", false);
+  tf->setTransform(odomToBase(t0 + 1.0), "test", false);
+  return t0;
+}
+
 // A reading stamped before tf's first odometry (a driver that publishes its sensors first) can
 // never be transformed: it is dropped at the next sweep (on_before_tf), even while a newer
 // reading waits for tf, and the newer one still leaves once tf has its stamp. Before, the newer
@@ -111,9 +120,7 @@ TEST(TfGatedSubscriber, ClearDropsWhatWaitsAndUnknownFramesAreNamedAtOnce) {
 TEST(TfGatedSubscriber, AReadingBeforeTfIsDroppedWhileANewerOneWaits) {
   ros::NodeHandle nh;
   tf2_ros::Buffer tf;
-  const double t0 = std::floor(ros::Time::now().toSec());  // within tf's cache of the clock
-  tf.setTransform(odomToBase(t0), "test", false);
-  tf.setTransform(odomToBase(t0 + 1.0), "test", false);
+  const double t0 = twoTransformsNow(&tf);
   Recorder r;
   Gate gate(nh, "", 10, &tf, "base_link", "odom", r.handlers());
   gate.add(scan(t0 - 0.5));  // before tf's history
@@ -136,9 +143,7 @@ TEST(TfGatedSubscriber, AReadingBeforeTfIsDroppedWhileANewerOneWaits) {
 TEST(TfGatedSubscriber, TheReadingsKeptAreGivenBackToTheFilter) {
   ros::NodeHandle nh;
   tf2_ros::Buffer tf;
-  const double t0 = std::floor(ros::Time::now().toSec());
-  tf.setTransform(odomToBase(t0), "test", false);
-  tf.setTransform(odomToBase(t0 + 1.0), "test", false);
+  const double t0 = twoTransformsNow(&tf);
   Recorder r;
   Gate gate(nh, "", 2, &tf, "base_link", "odom", r.handlers());
   gate.add(scan(t0 - 0.5));  // before tf's history
