@@ -473,6 +473,11 @@ SlamConfig loadSlamConfig(const std::string& path, const std::vector<std::string
 
 void applyMapConfig(const SlamConfig& config, core::SlamSession* session) {
   if (config.map_file.empty()) return;
+  if (!session->filter().usesLandmarkFeatures()) {  // before reading the file: not its fault
+    throw ConfigError("map_file: variant " + config.filter.variant +
+                      " maps cells, not landmarks, and cannot start from a map (its saved map.yaml "
+                      "/ map.pgm are for viewing and for map_server)");
+  }
   std::vector<core::LandmarkEstimate> landmarks;
   try {
     landmarks = loadLandmarksYaml(config.map_file);

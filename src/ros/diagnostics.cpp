@@ -102,6 +102,10 @@ diagnostic_msgs::DiagnosticArray SlamDiagnostics::report(const ros::Time& stamp,
     if (stats.outside_grid > 0) {  // grid_pf beyond its extent
       status.values.push_back(keyValue("updates outside the grid", text(stats.outside_grid)));
     }
+    if (stats.readings_beyond_reach > 0) {  // grid_pf: echoes beyond the first extent
+      status.values.push_back(
+          keyValue("readings beyond the grid's reach", text(stats.readings_beyond_reach)));
+    }
     if (stats.grid_growth_refused > 0) {  // grid_pf at grid.max_size_m or the memory limit
       status.values.push_back(
           keyValue("updates the grid could not grow for", text(stats.grid_growth_refused)));

@@ -327,13 +327,16 @@ void checkTopicTypes(rosbag::View& view, const std::string& bag_path, const io::
 }
 
 /// --output-bag: the input's tf, odometry and sensor messages plus what rbpf_slam_node would
-/// have published (map -> odom on /tf, ~pose, ~landmarks, and ~trajectory every
-/// kTrajectoryPeriodS of bag time and at the end), for rviz.
+/// have published (map -> odom on /tf, ~pose, ~landmarks for the landmark variants, ~map for
+/// grid_pf, and ~trajectory and ~map every kTrajectoryPeriodS / kMapPeriodS of bag time and at
+/// the end), for rviz.
 class ResultBag {
  public:
   /// s of bag time between two ~trajectory messages: each holds the whole path so far, so the
   /// bag grows with the square of the run's length divided by this.
   static constexpr double kTrajectoryPeriodS = 10.0;
+  /// s of bag time between two ~map messages (grid_pf's own grid; each a whole map).
+  static constexpr double kMapPeriodS = 30.0;
 
   ResultBag(const std::string& path, const io::RosOptions& ros)
       : ros_(ros), bag_(makeParents(path)) {}
@@ -356,13 +359,15 @@ class ResultBag {
       pose.pose.covariance = toPoseCovariance(estimate.covariance);
       bag_.write("/rbpf_slam_node/pose", stamp, pose);
     }
-    bag_.write("/rbpf_slam_node/landmarks", stamp, markers_.update(session.filter().landmarks(), header));
-    if (trajectory_written_.isZero() || stamp < trajectory_written_ ||
-        (stamp - trajectory_written_).toSec() >= kTrajectoryPeriodS) {
+    if (session.filter().usesLandmarkFeatures()) {
+      bag_.write("/rbpf_slam_node/landmarks", stamp,
+                 markers_.update(session.filter().landmarks(), header));
+    }
+    if (due(stamp, &trajectory_written_, kTrajectoryPeriodS)) {
       bag_.write("/rbpf_slam_node/trajectory", stamp,
                  toPath(session.estimatedTrajectory(), ros_.map_frame));
-      trajectory_written_ = stamp;
     }
+    if (due(stamp, &map_written_, kMapPeriodS)) writeMap(stamp, session);
   }
 
   /// Copies the input's tf, odometry (nav_msgs/Odometry, whatever the topic) and sensor topics
@@ -390,11 +395,27 @@ class ResultBag {
     if (!session.trajectory().empty() && !last.isZero()) {
       bag_.write("/rbpf_slam_node/trajectory", last,
                  toPath(session.estimatedTrajectory(), ros_.map_frame));
+      writeMap(last, session);
     }
     bag_.commit();
   }
 
  private:
+  /// Whether a message written at *last is period s old at stamp (or none was written, or the
+  /// stamps went back); if so, *last becomes stamp.
+  static bool due(const ros::Time& stamp, ros::Time* last, double period) {
+    if (!last->isZero() && stamp >= *last && (stamp - *last).toSec() < period) return false;
+    *last = stamp;
+    return true;
+  }
+  /// ~map: the filter's own grid (grid_pf); the landmark variants have their markers.
+  void writeMap(const ros::Time& stamp, const core::SlamSession& session) {
+    core::GridMapData grid;
+    if (session.filter().occupancyGrid(grid) && grid.width > 0 && grid.height > 0) {
+      bag_.write("/rbpf_slam_node/map", stamp, toOccupancyGrid(grid, ros_.map_frame, stamp));
+    }
+  }
+
   static const std::string& makeParents(const std::string& path) {
     const std::filesystem::path parent = std::filesystem::path(path).parent_path();
     std::error_code ignored;  // an unwritable place is reported when the bag is opened
@@ -406,6 +427,7 @@ class ResultBag {
   PartialBag bag_;  // the output bag appears when complete
   LandmarkMarkers markers_;
   ros::Time trajectory_written_;  // the last ~trajectory's stamp
+  ros::Time map_written_;         // the last ~map's stamp
 };
 
 }  // namespace
@@ -465,6 +487,10 @@ std::vector<std::string> describeOutcome(const OfflineSummary& s, const OfflineO
                     " update(s) with the robot outside the grid: nothing was mapped or matched "
                     "there, the pose is dead reckoning; " +
                     core::kGridLimitAdvice);
+  }
+  if (s.readings_beyond_reach > 0) {
+    lines.push_back(std::to_string(s.readings_beyond_reach) + " reading(s) " +
+                    core::kGridReachAdvice);
   }
   if (s.grid_growth_refused > 0) {
     lines.push_back(std::to_string(s.grid_growth_refused) +
@@ -851,6 +877,7 @@ OfflineSummary OfflineRunner::run() {
   summary.ensemble_leader_changes = pipeline_.session().filter().stats().leader_changes;
   summary.updates_outside_grid = pipeline_.session().filter().stats().outside_grid;
   summary.grid_growth_refused = pipeline_.session().filter().stats().grid_growth_refused;
+  summary.readings_beyond_reach = pipeline_.session().filter().stats().readings_beyond_reach;
   summary.dpf_missed_answers = pipeline_.session().filter().stats().missed_answers;
   summary.ensemble_members = pipeline_.session().filter().members();
   summary.ensemble_leader = pipeline_.session().filter().leader();
@@ -968,6 +995,7 @@ OfflineSummary OfflineRunner::writeOutputs(const OfflineSummary& in) const {
       .integer("ensemble_leader_changes", summary.ensemble_leader_changes)
       .integer("updates_outside_grid", summary.updates_outside_grid)
       .integer("grid_growth_refused", summary.grid_growth_refused)
+      .integer("readings_beyond_reach", summary.readings_beyond_reach)
       .integer("dpf_missed_answers", summary.dpf_missed_answers)
       .number("update_ms_mean", summary.update_ms_mean)
       .number("update_ms_p99", summary.update_ms_p99)

@@ -737,6 +737,12 @@ void SlamNode::publishDiagnostics(const ros::WallTimerEvent&) {
                                      core::kGridLimitAdvice);
   }
   growth_refused_seen_ = growth_refused;
+  const long beyond_reach = pipeline_.session().filter().stats().readings_beyond_reach;
+  if (beyond_reach > beyond_reach_seen_) {
+    warnThrottled("grid reach", std::to_string(beyond_reach - beyond_reach_seen_) + " reading(s) " +
+                                    core::kGridReachAdvice);
+  }
+  beyond_reach_seen_ = beyond_reach;
   if (const long refused = tf_listener_.takeRefused()) {
     diagnostics_.recordDrop("refused transform", refused);
   }
@@ -761,6 +767,7 @@ void SlamNode::resetAll(const std::string& why) {
   diagnostics_.recordReset();
   outside_grid_seen_ = 0;  // the filter's counts start over
   growth_refused_seen_ = 0;
+  beyond_reach_seen_ = 0;
   ROS_WARN_STREAM("rbpf_slam_node: " << why << ": clearing the map, the trajectory and tf");
   pipeline_.reset();  // filter, history and the scan matcher's reference
   tf_buffer_.clear();

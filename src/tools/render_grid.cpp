@@ -147,13 +147,14 @@ int run(const Arguments& arguments) {
   // The grid grows as grid_pf's does (grid.max_size_m; one table), so that the reference
   // covers what the filter could map.
   const core::GridGrowthLimits limits = core::growthLimits(options, 1);
-  long scans = 0, unmatched = 0, bad = 0, not_held = 0;
+  long scans = 0, unmatched = 0, bad = 0, not_held = 0, laser_messages = 0;
   std::set<std::string> tilt_warned;  // scan frames warned about, once each
   const std::string topic = stripSlash(config.ros.scan_topic);
   for (const rosbag::MessageInstance& m :
        rosbag::View(bag, rosbag::TopicQuery(std::vector<std::string>{"/" + topic, topic}))) {
     const auto msg = m.instantiate<sensor_msgs::LaserScan>();
     if (!msg) continue;
+    ++laser_messages;
     core::Pose2 pose;
     if (!referenceAt(reference, msg->header.stamp.toSec(), max_dt, &pose)) {
       ++unmatched;
@@ -189,6 +190,10 @@ int run(const Arguments& arguments) {
         !core::growToHold(core::localMapReach(local, options.resolution_m), pose, limits, &grid);
     core::integrateLocalMap(local, pose, options, &grid);
     ++scans;
+  }
+  if (laser_messages == 0) {
+    throw std::runtime_error(bag_path + ": no sensor_msgs/LaserScan on /" + topic +
+                             " (the config's scan_topic): render_grid renders laser scans only");
   }
   if (scans == 0) throw std::runtime_error(bag_path + ": no scan matched a reference pose");
   const core::GridMapData map = grid.toGridMap();

@@ -6,6 +6,8 @@
 # updates it could not grow for, each named in offline_slam's summary. render_grid (the
 # reference rendering of grid_aces.sh) grows the same way: the ACES slice rendered on a 20 m
 # first extent must give the 120 m grid's cells, and on a fixed 20 m grid name its scans beyond.
+# A first extent smaller than the sensor's reach (the sonar room's 3 m cones on a 1 m grid)
+# loses the far echoes: they must be counted and named (readings_beyond_reach).
 set -euo pipefail
 
 source "$(dirname "$0")/lib/offline.sh"
@@ -20,7 +22,7 @@ run() {  # NAME [--set ...]
     { echo "FAIL: offline_slam ($name)"; cat "$work/$name.log"; exit 1; }
 }
 small=(--set grid.size_x_m=0.4 --set grid.size_y_m=0.4)
-run shipped
+run shipped --output-bag "$work/shipped.bag"
 run grown "${small[@]}"
 run fixed "${small[@]}" --set grid.max_size_m=0
 run capped "${small[@]}" --set grid.max_size_m=0.8
@@ -48,6 +50,12 @@ if not s["capped"]["grid_growth_refused"] > 0 or "could not grow" not in log["ca
     fails.append("the capped grid's refused growth is not reported")
 if not s["capped"]["map_width"] * s["capped"]["map_resolution"] <= 0.8 + 0.16 + 1e-9:
     fails.append("the capped grid is %.2f m wide" % (s["capped"]["map_width"] * s["capped"]["map_resolution"]))
+import rosbag
+with rosbag.Bag(os.path.join(work, "shipped.bag")) as bag:
+    counts = {t: i.message_count for t, i in bag.get_type_and_topic_info().topics.items()}
+print("--output-bag: %s ~map, %s ~landmarks" % (counts.get("/rbpf_slam_node/map"), counts.get("/rbpf_slam_node/landmarks")))
+if not counts.get("/rbpf_slam_node/map", 0) >= 2 or "/rbpf_slam_node/landmarks" in counts:
+    fails.append("--output-bag: grid_pf's map is not written every 30 s and at the end, or empty landmark markers are")
 print("map occupied cells: shipped %d, grown %d, fixed %d, capped %d; outside: fixed %d, capped %d; refused: capped %d"
       % (s["shipped"]["map_occupied_cells"], s["grown"]["map_occupied_cells"], s["fixed"]["map_occupied_cells"],
          s["capped"]["map_occupied_cells"], s["fixed"]["updates_outside_grid"], s["capped"]["updates_outside_grid"],
@@ -55,6 +63,21 @@ print("map occupied cells: shipped %d, grown %d, fixed %d, capped %d; outside: f
 for f in fails:
     print("FAIL: " + f)
 sys.exit(1 if fails else 0)
+PY
+"$bin/simulate" --world "$root/worlds/lee_sonar_room.yaml" --output "$work/room.bag" --seed 1 \
+  --duration 60 >/dev/null
+for size in 30 1; do
+  "$bin/offline_slam" --bag "$work/room.bag" --config "$root/config/grid_pf_sonar.yaml" \
+    --output "$work/room$size" --no-progress --set grid.size_x_m=$size --set grid.size_y_m=$size \
+    >"$work/room$size.log" 2>&1 || { echo "FAIL: offline_slam (room, $size m)"; cat "$work/room$size.log"; exit 1; }
+done
+/usr/bin/python3 - "$work" <<'PY' || status=1
+import json, os, sys
+work = sys.argv[1]
+n = {s: json.load(open(os.path.join(work, "room%d" % s, "summary.json")))["readings_beyond_reach"] for s in (30, 1)}
+named = "beyond the diagonal of the first extent" in open(os.path.join(work, "room1.log")).read()
+print("sonar room, readings beyond the grid's reach: 30 m first extent %d, 1 m %d (named: %s)" % (n[30], n[1], named))
+sys.exit(0 if n[30] == 0 and n[1] > 0 and named else "FAIL: readings beyond the reach not counted or not named")
 PY
 render() {  # NAME [--set ...]: render_grid's JSON line
   local name=$1

@@ -226,6 +226,7 @@ TEST(InverseSensorModel, ReadingsBeyondTheGridAreRefusedAndNoConeOutgrowsIt) {
   LocalMapStats stats;
   EXPECT_FALSE(addConeReading(r, o, &builder, &stats));
   EXPECT_EQ(stats.rejected, 1);
+  EXPECT_EQ(stats.beyond_reach, 1) << "counted apart: the grid's first extent is too small";
   EXPECT_TRUE(builder.finish().empty());
   // A sensor whose maximum is far beyond the grid, without an echo: freed to the diagonal.
   r.max_range = 1e6;
@@ -240,6 +241,7 @@ TEST(InverseSensorModel, ReadingsBeyondTheGridAreRefusedAndNoConeOutgrowsIt) {
   r.range = 0.5;
   EXPECT_FALSE(addConeReading(r, o, &builder, &stats));
   EXPECT_EQ(stats.rejected, 2);
+  EXPECT_EQ(stats.beyond_reach, 1);
 }
 
 TEST(InverseSensorModel, NoLaserBeamIsTracedBeyondTheGrid) {
@@ -265,6 +267,7 @@ TEST(InverseSensorModel, NoLaserBeamIsTracedBeyondTheGrid) {
   EXPECT_LT(cells.size(), 5u * 300u);
   EXPECT_EQ(stats.echoes, 1);
   EXPECT_EQ(stats.no_echo, 4);
+  EXPECT_EQ(stats.beyond_reach, 1);  // the echo at 900 m
 }
 
 TEST(TiledGrid, CopiesShareTilesUntilTheFirstWrite) {
@@ -736,6 +739,20 @@ TEST(GridConfig, ShippedGridConfigsSelectTheVariantAndItsSensors) {
   EXPECT_EQ(laser.frontend, "laser");
   EXPECT_TRUE(laser.scan_matching.enabled);
   EXPECT_NO_THROW(createFilter(laser.filter));
+}
+
+// grid_pf cannot start from a landmark map: said before the file is read, so that the error is
+// not a misleading "'landmarks' is missing" about a map.yaml given by mistake.
+TEST(GridConfig, AMapFileIsRefusedForTheGridVariantFirst) {
+  io::SlamConfig config = io::loadSlamConfig(std::string(RBPF_SOURCE_DIR) + "/config/grid_pf.yaml");
+  config.map_file = "/nonexistent/map.yaml";
+  SlamPipeline pipeline(config.pipeline());
+  try {
+    io::applyMapConfig(config, &pipeline.session());
+    FAIL() << "no error";
+  } catch (const io::ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("grid_pf maps cells"), std::string::npos) << e.what();
+  }
 }
 
 TEST(GridConfig, ErrorsNameTheGridKey) {

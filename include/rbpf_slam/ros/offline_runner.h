@@ -60,6 +60,7 @@ struct OfflineSummary {
   long ensemble_leader_changes = 0;  // updates after which another member was reported
   long updates_outside_grid = 0;     // grid_pf: updates with the best pose outside the grid
   long grid_growth_refused = 0;      // grid_pf: updates the grid could not grow for
+  long readings_beyond_reach = 0;    // grid_pf: echoes beyond the first extent's diagonal
   long dpf_missed_answers = 0;       // dpf_master_node: local answers not received in time
   double update_ms_mean = 0.0;
   double update_ms_p99 = 0.0;

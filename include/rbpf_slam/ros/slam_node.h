@@ -141,6 +141,7 @@ class SlamNode {
   bool trajectory_pending_ = false;  // updates since the last ~trajectory sent
   long outside_grid_seen_ = 0;       // FilterStats::outside_grid at the last diagnostics
   long growth_refused_seen_ = 0;     // FilterStats::grid_growth_refused at the last diagnostics
+  long beyond_reach_seen_ = 0;       // FilterStats::readings_beyond_reach at the last diagnostics
   ros::Publisher landmarks_publisher_;
   ros::Publisher particles_publisher_;
   ros::ServiceServer reset_server_, pause_server_, resume_server_, save_map_server_,

@@ -38,8 +38,9 @@ void validate(const GridOptions& o) {
   requireRange("grid.tile_cells", o.tile_cells, 4, 1024);
   requireRange("grid.max_size_m", o.max_size_m, 0.0, 1e5);
   if (o.size_x_m / o.resolution_m * (o.size_y_m / o.resolution_m) > 4e9) {
-    throw std::invalid_argument("grid.size_x_m * grid.size_y_m / grid.resolution_m^2 exceeds "
-                                "4e9 cells: raise the resolution or shrink the map");
+    throw std::invalid_argument(
+        "grid.size_x_m * grid.size_y_m / grid.resolution_m^2 exceeds "
+        "4e9 cells: use coarser cells (a larger grid.resolution_m) or a smaller first extent");
   }
   requireRange("grid.log_odds_occupied", o.log_odds_occupied, 0.0, 100.0);
   requireRange("grid.log_odds_free", o.log_odds_free, -100.0, 0.0);
@@ -179,6 +180,8 @@ UpdateStats GridParticleFilter::update(const FeatureSet& features) {
   local_stats_.echoes += local_stats.echoes;
   local_stats_.no_echo += local_stats.no_echo;
   local_stats_.rejected += local_stats.rejected;
+  local_stats_.beyond_reach += local_stats.beyond_reach;
+  stats_.readings_beyond_reach += local_stats.beyond_reach;
   ++stats_.updates;
   if (mapping_) growGrids(local);
   if (!local.empty()) {

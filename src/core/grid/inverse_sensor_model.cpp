@@ -75,6 +75,7 @@ bool addConeReading(const ConeReading& reading, const GridOptions& options,
   if ((returned && reading.range > grid_reach) ||
       !(reading.sensor_pose.head<2>().norm() <= grid_reach)) {
     ++stats->rejected;
+    ++stats->beyond_reach;
     return false;
   }
   double max_range = reading.max_range;
@@ -146,6 +147,7 @@ void addRangeScan(const RangeScan& scan, const GridOptions& options, LocalMapBui
       continue;
     }
     const bool returned = std::isfinite(r) && r < scan.range_max;
+    if (returned && r <= options.laser_max_range_m && r > grid_reach) ++stats->beyond_reach;
     if (returned && r <= options.laser_max_range_m && r <= grid_reach) {
       ++stats->echoes;
       traceBeam(scan.sensor_pose, angle, r, true, r, options.resolution_m, builder);

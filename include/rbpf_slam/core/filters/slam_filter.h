@@ -76,6 +76,8 @@ struct FilterStats {
   long leader_changes = 0;   // ensemble: updates after which another member was reported
   long outside_grid = 0;     // grid_pf: updates whose best pose lay outside the grid (fixed,
                              // or at grid.max_size_m): nothing is mapped or matched there
+  long readings_beyond_reach = 0;  // grid_pf: readings with an echo beyond the first extent's
+                                   // diagonal (grid.size_x_m x grid.size_y_m): not mapped
   long grid_growth_refused = 0;  // grid_pf: updates where a particle's grid could not grow to
                                  // hold the readings (grid.max_size_m or the memory limit)
   long missed_answers = 0;   // dpf_master_node: local filters' answers not received within

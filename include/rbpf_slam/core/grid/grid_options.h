@@ -48,7 +48,13 @@ constexpr const char* kGridLimitAdvice =
     "while mapping, the grid grows up to grid.max_size_m along each axis (0: fixed at "
     "grid.size_x_m x grid.size_y_m, centred on the start) and while its particles' tile tables "
     "fit in memory: raise grid.max_size_m, coarsen grid.resolution_m or enlarge "
-    "grid.tile_cells (localizing on a map, nothing grows: the robot has left the map)";
+    "grid.tile_cells (with mapping off, nothing grows)";
+
+/// Said of readings whose echo lies beyond grid.size_x_m x grid.size_y_m's diagonal.
+constexpr const char* kGridReachAdvice =
+    "with an echo beyond the diagonal of the first extent (grid.size_x_m x grid.size_y_m), the "
+    "farthest one reading is traced, were not mapped (cones: left out; laser beams: free up to "
+    "it): enlarge grid.size_x_m / grid.size_y_m to the sensor's range at least";
 
 /// Throws std::invalid_argument naming the first out-of-range field ("grid.NAME").
 void validate(const GridOptions& options);

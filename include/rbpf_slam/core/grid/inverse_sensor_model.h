@@ -39,6 +39,8 @@ struct LocalMapStats {
   int echoes = 0;     // ... with a hit (occupied cells)
   int no_echo = 0;    // ... without (free cells only)
   int rejected = 0;   // ... NaN, negative, below min range or with an unusable cone
+  int beyond_reach = 0;  // ... with an echo beyond the first extent's diagonal (cones: among
+                         // the rejected; laser beams: traced as free up to it)
 };
 
 /// Cone sensor (sonar, infrared): the arc at the range occupied, the cone inside it free; a
