@@ -722,34 +722,32 @@ void SlamNode::publishDiagnostics(const ros::WallTimerEvent&) {
   diagnostics_.setPaused(paused_);
   diagnostics_.setActivity(pipeline_.session().mapping() ? "mapping" : "localizing (mapping off)");
   diagnostics_.setOdometryGaps(pipeline_.session().gaps());
-  const long outside_grid = pipeline_.session().filter().stats().outside_grid;
-  if (outside_grid > outside_grid_seen_) {
+  // grid_pf's limits: a warning when a count grew since the last report.
+  const core::FilterStats stats = pipeline_.session().filter().stats();
+  if (stats.outside_grid > grid_seen_.outside_grid) {
     warnThrottled("outside grid", std::string("the robot is outside the grid: nothing is mapped "
                                               "or matched there and the pose is dead "
                                               "reckoning; ") +
                                       core::kGridLimitAdvice);
   }
-  outside_grid_seen_ = outside_grid;
-  const long growth_refused = pipeline_.session().filter().stats().grid_growth_refused;
-  if (growth_refused > growth_refused_seen_) {
+  if (stats.grid_growth_refused > grid_seen_.grid_growth_refused) {
     warnThrottled("grid growth", std::string("readings beyond the grid are not mapped: the grid "
                                              "could not grow to hold them; ") +
                                      core::kGridLimitAdvice);
   }
-  growth_refused_seen_ = growth_refused;
-  const long beyond_reach = pipeline_.session().filter().stats().readings_beyond_reach;
-  if (beyond_reach > beyond_reach_seen_) {
-    warnThrottled("grid reach", std::to_string(beyond_reach - beyond_reach_seen_) + " reading(s) " +
-                                    core::kGridReachAdvice);
+  if (stats.readings_beyond_reach > grid_seen_.readings_beyond_reach) {
+    warnThrottled("grid reach",
+                  std::to_string(stats.readings_beyond_reach - grid_seen_.readings_beyond_reach) +
+                      " reading(s) " + core::kGridReachAdvice);
   }
-  beyond_reach_seen_ = beyond_reach;
+  grid_seen_ = stats;
   if (const long refused = tf_listener_.takeRefused()) {
     diagnostics_.recordDrop("refused transform", refused);
   }
   const ros::Time now = ros::Time::now();
-  diagnostics_publisher_.publish(diagnostics_.report(
-      now.isZero() ? ros::Time(ros::WallTime::now().toSec()) : now,
-      pipeline_.session().filter().stats(), config_.filter.particles));
+  diagnostics_publisher_.publish(
+      diagnostics_.report(now.isZero() ? ros::Time(ros::WallTime::now().toSec()) : now, stats,
+                          config_.filter.particles));
   // Input coming faster than it is handled overflows the topic's queue, which roscpp empties
   // without a word: say it when the inputs take most of the time (the report's own figure).
   const double busy = diagnostics_.lastBusyFraction();
@@ -765,9 +763,7 @@ void SlamNode::publishDiagnostics(const ros::WallTimerEvent&) {
 
 void SlamNode::resetAll(const std::string& why) {
   diagnostics_.recordReset();
-  outside_grid_seen_ = 0;  // the filter's counts start over
-  growth_refused_seen_ = 0;
-  beyond_reach_seen_ = 0;
+  grid_seen_ = core::FilterStats();  // the filter's counts start over
   ROS_WARN_STREAM("rbpf_slam_node: " << why << ": clearing the map, the trajectory and tf");
   pipeline_.reset();  // filter, history and the scan matcher's reference
   tf_buffer_.clear();

@@ -137,16 +137,10 @@ int run(const Arguments& arguments) {
       }
     }
   }
-  const int width = static_cast<int>(std::ceil(options.size_x_m / options.resolution_m));
-  const int height = static_cast<int>(std::ceil(options.size_y_m / options.resolution_m));
-  const core::Pose2& start = reference.front().pose;
-  const double half_x = 0.5 * width * options.resolution_m;
-  const double half_y = 0.5 * height * options.resolution_m;
-  core::TiledLogOddsGrid grid(options.resolution_m, start.x() - half_x, start.y() - half_y, width,
-                              height, options.tile_cells);
+  core::TiledLogOddsGrid grid = core::firstGrid(options, reference.front().pose);
   // The grid grows as grid_pf's does (grid.max_size_m; one table), so that the reference
   // covers what the filter could map.
-  const core::GridGrowthLimits limits = core::growthLimits(options, 1);
+  const core::GridGrowthLimits limits = core::growthLimits(options, grid, 1);
   long scans = 0, unmatched = 0, bad = 0, not_held = 0, laser_messages = 0;
   std::set<std::string> tilt_warned;  // scan frames warned about, once each
   const std::string topic = stripSlash(config.ros.scan_topic);

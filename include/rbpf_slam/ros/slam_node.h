@@ -139,9 +139,7 @@ class SlamNode {
   ros::WallTimer trajectory_timer_;
   ros::WallTime trajectory_published_at_;
   bool trajectory_pending_ = false;  // updates since the last ~trajectory sent
-  long outside_grid_seen_ = 0;       // FilterStats::outside_grid at the last diagnostics
-  long growth_refused_seen_ = 0;     // FilterStats::grid_growth_refused at the last diagnostics
-  long beyond_reach_seen_ = 0;       // FilterStats::readings_beyond_reach at the last diagnostics
+  core::FilterStats grid_seen_;      // the filter's counts at the last diagnostics (grid_pf)
   ros::Publisher landmarks_publisher_;
   ros::Publisher particles_publisher_;
   ros::ServiceServer reset_server_, pause_server_, resume_server_, save_map_server_,

@@ -110,24 +110,26 @@ GridParticleFilter::GridParticleFilter(const FilterOptions& options)
            "fewer particles";
     throw std::invalid_argument(why.str());
   }
-  // The particles' tables and, while resampling, their copies.
-  limits_ = growthLimits(options_.grid, 2 * options_.particles + 1);
   reset();
 }
 
-GridGrowthLimits growthLimits(const GridOptions& g, int tables) {
-  // An axis whose first extent is already as large does not grow (its tiles counted as the
-  // grid counts them: rounding must not make the limit smaller than the grid).
+TiledLogOddsGrid firstGrid(const GridOptions& g, const Pose2& centre) {
+  const int width = static_cast<int>(std::ceil(g.size_x_m / g.resolution_m));
+  const int height = static_cast<int>(std::ceil(g.size_y_m / g.resolution_m));
+  return TiledLogOddsGrid(g.resolution_m, centre.x() - 0.5 * width * g.resolution_m,
+                          centre.y() - 0.5 * height * g.resolution_m, width, height, g.tile_cells);
+}
+
+GridGrowthLimits growthLimits(const GridOptions& g, const TiledLogOddsGrid& first, int tables) {
+  // An axis whose first extent is already as large does not grow (the grid's own tile count:
+  // rounding must not make the limit smaller than the grid).
   const double tile_m = g.resolution_m * g.tile_cells;
-  const auto first_tiles = [&g](double size_m) {
-    return (static_cast<int>(std::ceil(size_m / g.resolution_m)) + g.tile_cells - 1) / g.tile_cells;
-  };
   const double max_tiles = std::min(std::ceil(g.max_size_m / tile_m), 1e9);
   GridGrowthLimits limits;
-  limits.tiles_x = std::max(static_cast<int>(max_tiles), first_tiles(g.size_x_m));
-  limits.tiles_y = std::max(static_cast<int>(max_tiles), first_tiles(g.size_y_m));
-  limits.grows = g.max_size_m > 0.0 && (limits.tiles_x > first_tiles(g.size_x_m) ||
-                                        limits.tiles_y > first_tiles(g.size_y_m));
+  limits.tiles_x = std::max(static_cast<int>(max_tiles), first.tilesX());
+  limits.tiles_y = std::max(static_cast<int>(max_tiles), first.tilesY());
+  limits.grows =
+      g.max_size_m > 0.0 && (limits.tiles_x > first.tilesX() || limits.tiles_y > first.tilesY());
   limits.tiles =
       static_cast<long>(kMaxTileTablesBytes / std::max(1, tables) / sizeof(std::shared_ptr<void>));
   return limits;
@@ -151,13 +153,10 @@ void GridParticleFilter::growGrids(const std::vector<LocalMapCell>& local) {
 }
 
 void GridParticleFilter::reset(const Pose2& initial_pose) {
-  const GridOptions& g = options_.grid;
-  const int width = static_cast<int>(std::ceil(g.size_x_m / g.resolution_m));
-  const int height = static_cast<int>(std::ceil(g.size_y_m / g.resolution_m));
   // Centred on the start; every particle starts with the same (empty, tile-less) grid.
-  const TiledLogOddsGrid empty(g.resolution_m, initial_pose.x() - 0.5 * width * g.resolution_m,
-                               initial_pose.y() - 0.5 * height * g.resolution_m, width, height,
-                               g.tile_cells);
+  const TiledLogOddsGrid empty = firstGrid(options_.grid, initial_pose);
+  // Growth limits: the particles' tables and, while resampling, their copies.
+  limits_ = growthLimits(options_.grid, empty, 2 * options_.particles + 1);
   particles_.assign(options_.particles, Particle{initial_pose, empty});
   weights_.assign(options_.particles, 1.0 / options_.particles);
   resampled_best_ = -1;

@@ -20,15 +20,19 @@ double matchLocalMap(const std::vector<LocalMapCell>& local, const Pose2& pose,
                      const TiledLogOddsGrid& grid, const GridOptions& options);
 /// How far from the robot a local map reaches (its farthest cell centre plus one cell), m.
 double localMapReach(const std::vector<LocalMapCell>& local, double resolution_m);
+/// The empty grid of the first extent (grid.size_x_m x grid.size_y_m) centred on a pose: every
+/// grid of a run (each particle's, render_grid's) starts from it, so all share one tile lattice.
+TiledLogOddsGrid firstGrid(const GridOptions& options, const Pose2& centre);
 /// How far a grid may grow (TiledLogOddsGrid::grow): grid.max_size_m in tiles per axis (never
-/// below the first extent), and the tiles one table may hold when `tables` of them must fit in
+/// below the first grid's), and the tiles one table may hold when `tables` of them must fit in
 /// the 4 GiB for tile tables.
 struct GridGrowthLimits {
   int tiles_x = 0, tiles_y = 0;
   long tiles = 0;
   bool grows = false;  // some axis may grow
 };
-GridGrowthLimits growthLimits(const GridOptions& options, int tables);
+GridGrowthLimits growthLimits(const GridOptions& options, const TiledLogOddsGrid& first,
+                              int tables);
 /// Grows the grid to hold a local map reaching `reach` around pose (when limits.grows).
 /// Returns false when the grid does not hold all of it (fixed, or at the limits); true for a
 /// non-finite pose.
