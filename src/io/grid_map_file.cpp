@@ -77,7 +77,7 @@ core::GridMapData readGridMap(const std::string& yaml_path) {
   core::GridMapData grid;
   std::string image;
   int negate = 0;
-  double occupied_thresh = 0.65, free_thresh = 0.196;
+  double occupied_thresh = 0.65, free_thresh = 0.196, yaw = 0.0;
   try {
     if (!root.IsMap()) throw std::runtime_error(yaml_path + ": not a map_server map (not a map)");
     image = root["image"].as<std::string>();
@@ -88,6 +88,7 @@ core::GridMapData readGridMap(const std::string& yaml_path) {
     }
     grid.origin_x_m = origin[0].as<double>();
     grid.origin_y_m = origin[1].as<double>();
+    yaw = origin.size() >= 3 ? origin[2].as<double>() : 0.0;
     if (root["negate"]) negate = root["negate"].as<int>();
     if (root["occupied_thresh"]) occupied_thresh = root["occupied_thresh"].as<double>();
     if (root["free_thresh"]) free_thresh = root["free_thresh"].as<double>();
@@ -99,6 +100,11 @@ core::GridMapData readGridMap(const std::string& yaml_path) {
   }
   if (!std::isfinite(grid.origin_x_m) || !std::isfinite(grid.origin_y_m)) {
     throw std::runtime_error(yaml_path + ": origin must be finite");
+  }
+  if (!(std::abs(yaw) <= 1e-9)) {  // NaN too
+    throw std::runtime_error(yaml_path + ": origin yaw " + std::to_string(yaw) +
+                             " is not supported (the map's rows must run along the map frame's "
+                             "x axis): rotate the image and set the yaw to 0");
   }
   if (negate != 0 && negate != 1) throw std::runtime_error(yaml_path + ": negate must be 0 or 1");
   if (!(free_thresh >= 0.0 && free_thresh < occupied_thresh && occupied_thresh <= 1.0)) {

@@ -1,8 +1,10 @@
 #include "rbpf_slam/io/slam_config.h"
 
 #include <cmath>
+#include <sstream>
 #include <stdexcept>
 
+#include "rbpf_slam/io/grid_map_file.h"
 #include "rbpf_slam/io/landmark_file.h"
 
 namespace rbpf_slam {
@@ -471,21 +473,71 @@ SlamConfig loadSlamConfig(const std::string& path, const std::vector<std::string
   return parseSlamConfig(root, source);
 }
 
-void applyMapConfig(const SlamConfig& config, core::SlamSession* session) {
-  if (config.map_file.empty()) return;
-  if (!session->filter().usesLandmarkFeatures()) {  // before reading the file: not its fault
-    throw ConfigError("map_file: variant " + config.filter.variant +
-                      " maps cells, not landmarks, and cannot start from a map (its saved map.yaml "
-                      "/ map.pgm are for viewing and for map_server)");
+namespace {
+
+/// What a map file holds, by its keys: a map_server map has `image`, a landmarks YAML
+/// `landmarks`; anything else (unreadable, not YAML) is left to the reader to explain.
+enum class MapFileKind { kGrid, kLandmarks, kOther };
+MapFileKind mapFileKind(const std::string& path) {
+  try {
+    const YAML::Node root = YAML::LoadFile(path);
+    if (!root.IsMap()) return MapFileKind::kOther;
+    if (root["landmarks"]) return MapFileKind::kLandmarks;
+    return root["image"] ? MapFileKind::kGrid : MapFileKind::kOther;
+  } catch (const std::exception&) {
+    return MapFileKind::kOther;
+  }
+}
+
+}  // namespace
+
+std::string loadPriorMap(const std::string& path, core::SlamSession* session) {
+  const core::SlamFilter& filter = session->filter();
+  const std::string variant = "variant " + filter.variant();
+  const MapFileKind kind = mapFileKind(path);
+  if (!filter.usesLandmarkFeatures()) {
+    if (kind == MapFileKind::kLandmarks) {
+      throw ConfigError(path + ": a landmarks YAML; " + variant +
+                        " maps cells and starts from an occupancy-grid map: map_server's "
+                        "map.yaml (image, resolution, origin), as save_map and offline_slam "
+                        "write for it");
+    }
+    core::GridMapData grid;
+    try {
+      grid = readGridMap(path);
+      if (!session->setPriorGridMap(grid)) throw ConfigError(variant + " cannot start from a map");
+    } catch (const ConfigError&) {
+      throw;
+    } catch (const std::exception& e) {
+      throw ConfigError(std::string(e.what()).rfind(path, 0) == 0 ? e.what()
+                                                                  : path + ": " + e.what());
+    }
+    std::ostringstream what;
+    what << "a " << grid.width << " x " << grid.height << " grid of " << grid.resolution_m
+         << " m cells (" << grid.count(100, 100) << " occupied)";
+    return what.str();
+  }
+  if (kind == MapFileKind::kGrid) {
+    throw ConfigError(path + ": an occupancy-grid map (map_server's map.yaml); " + variant +
+                      " maps landmarks and starts from the landmarks YAML that save_map and "
+                      "offline_slam write beside it (landmarks.yaml)");
   }
   std::vector<core::LandmarkEstimate> landmarks;
   try {
-    landmarks = loadLandmarksYaml(config.map_file);
+    landmarks = loadLandmarksYaml(path);
   } catch (const std::exception& e) {
-    throw ConfigError(std::string("map_file: ") + e.what());
+    throw ConfigError(e.what());
   }
-  if (!session->setPriorMap(landmarks)) {
-    throw ConfigError("map_file: variant " + config.filter.variant + " cannot start from a map");
+  if (!session->setPriorMap(landmarks)) throw ConfigError(variant + " cannot start from a map");
+  return std::to_string(landmarks.size()) + " landmarks";
+}
+
+void applyMapConfig(const SlamConfig& config, core::SlamSession* session) {
+  if (config.map_file.empty()) return;
+  try {
+    loadPriorMap(config.map_file, session);
+  } catch (const ConfigError& e) {
+    throw ConfigError(std::string("map_file: ") + e.what());
   }
   if (config.localization_only && !session->setMapping(false)) {
     throw ConfigError("localization_only: variant " + config.filter.variant +

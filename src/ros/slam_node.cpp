@@ -488,7 +488,11 @@ bool SlamNode::currentMap(const ros::Time& stamp, nav_msgs::OccupancyGrid* map) 
 }
 
 void SlamNode::publishMap(const ros::TimerEvent&) {
-  if (updates_ == map_published_at_update_ || updates_ == 0) return;  // nothing new
+  // Nothing new; before the first update only a map loaded from a file.
+  if (updates_ == map_published_at_update_ ||
+      (updates_ == 0 && !pipeline_.session().hasPriorMap())) {
+    return;
+  }
   nav_msgs::OccupancyGrid map;
   if (!currentMap(ros::Time::now(), &map)) return;
   map_published_at_update_ = updates_;
@@ -588,15 +592,14 @@ bool SlamNode::loadMapService(MapFile::Request& request, MapFile::Response& resp
     response.message = "load_map: no path given and ~map_file is not set";
   } else {
     try {
-      const std::vector<core::LandmarkEstimate> landmarks = io::loadLandmarksYaml(path);
-      if (pipeline_.session().setPriorMap(landmarks)) {
-        response.success = true;
-        response.message = "loaded " + std::to_string(landmarks.size()) + " landmarks from " +
-                           path + "; set the robot's pose on it with initialpose";
+      const std::string loaded = io::loadPriorMap(path, &pipeline_.session());
+      response.success = true;
+      response.message =
+          "loaded " + loaded + " from " + path + "; set the robot's pose on it with initialpose";
+      if (pipeline_.session().filter().usesLandmarkFeatures()) {
         publishLandmarks(ros::Time::now());
-      } else {
-        response.message = "load_map: variant " + config_.filter.variant + " cannot take a map";
       }
+      map_published_at_update_ = -1;  // the next map timer publishes the loaded map
     } catch (const std::exception& e) {
       response.message = std::string("load_map failed: ") + e.what();
     }

@@ -20,6 +20,7 @@
 #include "rbpf_slam/core/grid/inverse_sensor_model.h"
 #include "rbpf_slam/core/grid/tiled_grid.h"
 #include "rbpf_slam/core/slam/slam_pipeline.h"
+#include "rbpf_slam/core/slam/slam_session.h"
 #include "rbpf_slam/io/grid_map_file.h"
 #include "rbpf_slam/io/slam_config.h"
 
@@ -669,6 +670,137 @@ TEST(GridParticleFilter, ResampledParticlesShareTiles) {
   EXPECT_GT(map.count(0, 40), 3000);   // the room's inside, seen free twice
 }
 
+// A saved map becomes log odds at the filter's resolution: each cell takes the map cell holding
+// its centre, occupied the clamp, free minus the clamp, unknown (and 50 %) nothing; the origin
+// is kept. A map that is empty or lacks cells is refused by name.
+TEST(GridMapLoading, AMapBecomesLogOddsAtTheFilterResolution) {
+  GridMapData map;
+  map.resolution_m = 0.1;
+  map.origin_x_m = -0.3;
+  map.origin_y_m = 1.0;
+  map.width = 3;
+  map.height = 2;
+  map.cells = {100, 0, -1, 50, 100, 0};  // row 0 at the bottom
+  GridOptions o;
+  o.resolution_m = 0.05;
+  o.log_odds_clamp = 4.0;
+  o.tile_cells = 4;
+  const TiledLogOddsGrid grid = gridFromMap(map, o);
+  EXPECT_EQ(grid.width(), 6);
+  EXPECT_EQ(grid.height(), 4);
+  EXPECT_DOUBLE_EQ(grid.originX(), -0.3);
+  EXPECT_DOUBLE_EQ(grid.originY(), 1.0);
+  for (int y = 0; y < 4; ++y) {
+    for (int x = 0; x < 6; ++x) {
+      const int value = map.at(x / 2, y / 2);
+      const float expected = value == 100 ? 4.0f : value == 0 ? -4.0f : 0.0f;
+      EXPECT_FLOAT_EQ(grid.logOdds(x, y), expected) << x << ", " << y;
+    }
+  }
+  int cx, cy;
+  ASSERT_TRUE(grid.cellOf(Eigen::Vector2d(-0.25 + 1e-6, 1.17), &cx, &cy));  // map cell (0, 1)
+  EXPECT_EQ(cx, 1);
+  EXPECT_EQ(cy, 3);
+  EXPECT_EQ(grid.toGridMap().count(65, 100), 8);  // back to occupancy: 2 map cells x 4
+  o.resolution_m = 0.2;  // coarser: each cell takes the map cell at its centre
+  const TiledLogOddsGrid coarse = gridFromMap(map, o);
+  EXPECT_EQ(coarse.width(), 2);
+  EXPECT_EQ(coarse.height(), 1);
+  EXPECT_FLOAT_EQ(coarse.logOdds(0, 0), 4.0f);  // centre (0.1, 0.1): map cell (1, 1), occupied
+  EXPECT_FLOAT_EQ(coarse.logOdds(1, 0), 0.0f);   // centre (0.3, 0.1): beyond the map's width
+
+  auto error = [&](const GridMapData& m) -> std::string {
+    try {
+      gridFromMap(m, o);
+    } catch (const std::invalid_argument& e) {
+      return e.what();
+    }
+    return "";
+  };
+  GridMapData bad = map;
+  bad.cells.pop_back();
+  EXPECT_NE(error(bad).find("5 cell values for 3 x 2 cells"), std::string::npos) << error(bad);
+  bad = map;
+  bad.width = 0;
+  EXPECT_NE(error(bad).find("empty"), std::string::npos) << error(bad);
+  bad = map;
+  bad.origin_x_m = std::nan("");
+  EXPECT_NE(error(bad).find("origin"), std::string::npos) << error(bad);
+}
+
+/// The occupancy grid of the 6 m x 4 m room of roomScan, mapped from a few poses.
+GridMapData roomMap(const GridOptions& o) {
+  TiledLogOddsGrid grid(o.resolution_m, -4.0, -3.0, 160, 120, o.tile_cells);
+  LocalMapStats ignored;
+  for (const Eigen::Vector2d& at : {Eigen::Vector2d(0, 0), Eigen::Vector2d(-2, 1),
+                                    Eigen::Vector2d(2, -1), Eigen::Vector2d(1.5, 1.2)}) {
+    for (int k = 0; k < 4; ++k) {
+      integrateLocalMap(buildLocalMap(roomScan(at.x(), at.y()), o, &ignored),
+                        Pose2(at.x(), at.y(), 0.0), o, &grid);
+    }
+  }
+  return grid.toGridMap();
+}
+
+// Localization on a loaded map (mapping off): particles spread around a wrong guess find the
+// robot from one scan, and the map stays as loaded; on an empty map the same scan tells
+// nothing and the estimate stays at the guess. Through a session that centres the filter on
+// the first pose (filter_origin start), the map keeps its place in the map frame and comes
+// back after a reset.
+TEST(GridMapLoading, ParticlesFindTheRobotOnALoadedMap) {
+  FilterOptions o = gridOptions(400);
+  o.resample_threshold = 0.5;
+  const GridMapData map = roomMap(o.grid);
+  const Pose2 truth(0.8, -0.5, 0.0), guess(1.0, -0.35, 0.0);
+  Eigen::Matrix3d spread = Eigen::Matrix3d::Zero();
+  spread.diagonal() << 0.15 * 0.15, 0.15 * 0.15, 0.05 * 0.05;
+  auto locate = [&](bool with_map) {
+    GridParticleFilter filter(o);
+    filter.reset(guess);
+    if (with_map) {
+      EXPECT_TRUE(filter.loadGridMap(map));
+    }
+    EXPECT_TRUE(filter.setMapping(false));
+    EXPECT_TRUE(filter.resetPose(guess, spread));
+    for (int k = 0; k < 3; ++k) filter.update(roomScan(truth.x(), truth.y()));
+    GridMapData after;
+    EXPECT_TRUE(filter.occupancyGrid(after));
+    if (with_map) {
+      EXPECT_EQ(after.cells, map.cells);  // nothing mapped
+    }
+    return filter.estimate().mean;
+  };
+  const Pose2 found = locate(true), unaided = locate(false);
+  EXPECT_LT((found.head<2>() - truth.head<2>()).norm(), 0.05) << found.transpose();
+  EXPECT_LT(std::fabs(found.z()), 0.03) << found.transpose();
+  EXPECT_GT((unaided.head<2>() - truth.head<2>()).norm(), 0.15) << unaided.transpose();
+
+  SessionOptions session_options;
+  session_options.filter_origin = "start";
+  SlamSession session(createFilter(o), session_options);
+  ASSERT_TRUE(session.setPriorGridMap(map));
+  ASSERT_TRUE(session.setMapping(false));
+  ASSERT_TRUE(session.setPose(guess, spread));
+  const Pose2 odom_start(5.0, 7.0, 0.3);  // the odometry frame is not the map frame
+  for (int k = 0; k < 3; ++k) {
+    FeatureSet scan = roomScan(truth.x(), truth.y());
+    session.process(1.0 + k, odom_start, scan);
+  }
+  EXPECT_LT((session.filter().estimate().mean.head<2>() - truth.head<2>()).norm(), 0.05)
+      << session.filter().estimate().mean.transpose();
+  GridMapData reported;
+  ASSERT_TRUE(session.filter().occupancyGrid(reported));
+  EXPECT_NEAR(reported.origin_x_m, map.origin_x_m, 1e-9);
+  EXPECT_NEAR(reported.origin_y_m, map.origin_y_m, 1e-9);
+  EXPECT_EQ(reported.cells, map.cells);
+  session.reset();
+  FeatureSet scan = roomScan(truth.x(), truth.y());
+  session.process(10.0, truth, scan);  // map == odom at the restart
+  ASSERT_TRUE(session.filter().occupancyGrid(reported));
+  EXPECT_EQ(reported.cells, map.cells);
+  EXPECT_NEAR(reported.origin_x_m, map.origin_x_m, 1e-9);
+}
+
 TEST(SlamPipeline, ConeReadingsReachTheFilterInTheBaseFrameOfTheUpdate) {
   PipelineOptions o;
   o.filter = gridOptions(5);
@@ -741,18 +873,68 @@ TEST(GridConfig, ShippedGridConfigsSelectTheVariantAndItsSensors) {
   EXPECT_NO_THROW(createFilter(laser.filter));
 }
 
-// grid_pf cannot start from a landmark map: said before the file is read, so that the error is
-// not a misleading "'landmarks' is missing" about a map.yaml given by mistake.
-TEST(GridConfig, AMapFileIsRefusedForTheGridVariantFirst) {
-  io::SlamConfig config = io::loadSlamConfig(std::string(RBPF_SOURCE_DIR) + "/config/grid_pf.yaml");
-  config.map_file = "/nonexistent/map.yaml";
-  SlamPipeline pipeline(config.pipeline());
+/// The ConfigError applyMapConfig throws for config (with map_file set), "" when it loads.
+std::string mapConfigError(const io::SlamConfig& config, SlamPipeline* pipeline) {
   try {
-    io::applyMapConfig(config, &pipeline.session());
-    FAIL() << "no error";
+    io::applyMapConfig(config, &pipeline->session());
   } catch (const io::ConfigError& e) {
-    EXPECT_NE(std::string(e.what()).find("grid_pf maps cells"), std::string::npos) << e.what();
+    return e.what();
   }
+  return "";
+}
+
+// grid_pf starts from an occupancy-grid map (map_server's map.yaml), the landmark variants from
+// a landmarks YAML: a file of the other kind is named as such, not met by a parser's complaint
+// about a missing key; a missing file is named; a good map loads, and localization_only turns
+// mapping off.
+TEST(GridConfig, EachVariantStartsFromItsKindOfMapFile) {
+  char dir[] = "/tmp/grid_map_configXXXXXX";
+  ASSERT_NE(mkdtemp(dir), nullptr);
+  GridMapData g;
+  g.resolution_m = 0.1;
+  g.width = 3;
+  g.height = 2;
+  g.cells = {100, 0, -1, 100, 0, -1};
+  const std::string grid_yaml = io::writeGridMap(std::string(dir) + "/m", g)[1];
+  const std::string landmarks_yaml = std::string(dir) + "/landmarks.yaml";
+  std::ofstream(landmarks_yaml) << "landmarks: []\n";
+  const std::string configs = std::string(RBPF_SOURCE_DIR) + "/config/";
+
+  io::SlamConfig grid = io::loadSlamConfig(configs + "grid_pf.yaml");
+  grid.map_file = landmarks_yaml;
+  SlamPipeline grid_pipeline(grid.pipeline());
+  EXPECT_NE(mapConfigError(grid, &grid_pipeline).find("a landmarks YAML; variant grid_pf maps cells"),
+            std::string::npos)
+      << mapConfigError(grid, &grid_pipeline);
+  grid.map_file = std::string(dir) + "/missing.yaml";
+  EXPECT_NE(mapConfigError(grid, &grid_pipeline).find("map_file: " + grid.map_file),
+            std::string::npos)
+      << mapConfigError(grid, &grid_pipeline);
+  EXPECT_FALSE(grid_pipeline.session().hasPriorMap());
+  grid.map_file = grid_yaml;
+  grid.localization_only = true;
+  EXPECT_EQ(mapConfigError(grid, &grid_pipeline), "");
+  EXPECT_TRUE(grid_pipeline.session().hasPriorMap());
+  EXPECT_FALSE(grid_pipeline.session().mapping());
+  GridMapData loaded;
+  ASSERT_TRUE(grid_pipeline.session().filter().occupancyGrid(loaded));
+  EXPECT_EQ(loaded.count(65, 100), 200);  // 2 map cells of 0.1 m, each 100 cells of 0.01 m
+  EXPECT_EQ(loaded.count(0, 19), 200);
+
+  io::SlamConfig landmarks = io::loadSlamConfig(configs + "laser_fastslam2.yaml");
+  landmarks.map_file = grid_yaml;
+  SlamPipeline landmark_pipeline(landmarks.pipeline());
+  EXPECT_NE(mapConfigError(landmarks, &landmark_pipeline)
+                .find("an occupancy-grid map (map_server's map.yaml); variant fastslam2 maps "
+                      "landmarks"),
+            std::string::npos)
+      << mapConfigError(landmarks, &landmark_pipeline);
+  landmarks.map_file = landmarks_yaml;
+  EXPECT_EQ(mapConfigError(landmarks, &landmark_pipeline), "");
+  for (const std::string& f : {grid_yaml, std::string(dir) + "/m.pgm", landmarks_yaml}) {
+    std::remove(f.c_str());
+  }
+  rmdir(dir);
 }
 
 TEST(GridConfig, ErrorsNameTheGridKey) {
@@ -842,6 +1024,10 @@ TEST(GridMapFile, BrokenMapFilesAreNamed) {
   EXPECT_NE(gridMapError(g, "resolution: 0.1", "resolution: .nan").find("resolution must be"),
             std::string::npos);
   EXPECT_NE(gridMapError(g, "origin: [0, 0, 0.0]", "origin: [.inf, 0, 0]").find("origin must"),
+            std::string::npos);
+  EXPECT_NE(gridMapError(g, "origin: [0, 0, 0.0]", "origin: [0, 0, 0.5]").find("origin yaw"),
+            std::string::npos);
+  EXPECT_NE(gridMapError(g, "origin: [0, 0, 0.0]", "origin: [0, 0, .nan]").find("origin yaw"),
             std::string::npos);
   EXPECT_NE(gridMapError(g, "negate: 0", "negate: 2").find("negate must be 0 or 1"),
             std::string::npos);

@@ -67,7 +67,13 @@ SlamConfig parseSlamConfig(const YAML::Node& root, const std::string& source);
 /// Loads a YAML file and applies "key=value" overrides before parsing.
 SlamConfig loadSlamConfig(const std::string& path, const std::vector<std::string>& overrides = {});
 
-/// Gives the session config.map_file as its prior map and turns mapping off when
+/// Reads the map file at path and gives it to the session as its prior map: a landmarks YAML
+/// (save_map's landmarks.yaml) for the landmark variants, an occupancy-grid map (map_server's
+/// map.yaml + image, as save_map writes for grid_pf) for the variants that map cells. Returns
+/// what was loaded ("12 landmarks", "a 240 x 200 grid of 0.05 m cells"); throws ConfigError
+/// naming the file and what is wrong with it (a map of the other kind named as such).
+std::string loadPriorMap(const std::string& path, core::SlamSession* session);
+/// Gives the session config.map_file as its prior map (loadPriorMap) and turns mapping off when
 /// config.localization_only; throws ConfigError naming what failed. No-op without map_file.
 void applyMapConfig(const SlamConfig& config, core::SlamSession* session);
 

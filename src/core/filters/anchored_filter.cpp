@@ -104,6 +104,13 @@ bool AnchoredFilter::loadMap(const std::vector<LandmarkEstimate>& landmarks) {
   return mutableInner().loadMap(shifted);
 }
 
+bool AnchoredFilter::loadGridMap(const GridMapData& map) {
+  GridMapData shifted = map;
+  shifted.origin_x_m -= origin_->x();
+  shifted.origin_y_m -= origin_->y();
+  return mutableInner().loadGridMap(shifted);
+}
+
 bool AnchoredFilter::setMapping(bool enabled) { return mutableInner().setMapping(enabled); }
 
 bool AnchoredFilter::occupancyGrid(GridMapData& out) const {

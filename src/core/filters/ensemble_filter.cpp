@@ -82,16 +82,10 @@ class EnsembleFilter : public SlamFilter {
     return ok;
   }
   bool loadMap(const std::vector<LandmarkEstimate>& landmarks) override {
-    bool ok = true;
-    for (auto& m : members_) ok = m->loadMap(landmarks) && ok;
-    if (!ok) return false;  // refused (every member had the same input): nothing changed
-    // The totals ranked the maps just replaced; every member now holds the same map.
-    log_evidence_.assign(members_.size(), 0.0);
-    created_.assign(members_.size(), 0);
-    if (leader_ != 0) ++leader_changes_;  // the reported member changes like any other time
-    leader_ = 0;
-    updates_ = 0;  // the next consensus comes a full period after the load
-    return true;
+    return loadIntoEvery([&](SlamFilter& m) { return m.loadMap(landmarks); });
+  }
+  bool loadGridMap(const GridMapData& map) override {
+    return loadIntoEvery([&](SlamFilter& m) { return m.loadGridMap(map); });
   }
   bool setMapping(bool enabled) override {
     bool ok = true;
@@ -111,6 +105,20 @@ class EnsembleFilter : public SlamFilter {
   int leader() const override { return leader_; }
 
  private:
+  /// Gives every member the same map (load returns whether member m took it); the totals ranked
+  /// the maps just replaced, so they start over and the first member leads.
+  template <typename Load>
+  bool loadIntoEvery(const Load& load) {
+    bool ok = true;
+    for (auto& m : members_) ok = load(*m) && ok;
+    if (!ok) return false;  // refused (every member had the same input): nothing changed
+    log_evidence_.assign(members_.size(), 0.0);
+    created_.assign(members_.size(), 0);
+    if (leader_ != 0) ++leader_changes_;  // the reported member changes like any other time
+    leader_ = 0;
+    updates_ = 0;  // the next consensus comes a full period after the load
+    return true;
+  }
   /// The first best member by rank_by (a member at -inf evidence leads only if all are), if
   /// it beats the leader by the margin; else the leader.
   int evidenceLeader() const {

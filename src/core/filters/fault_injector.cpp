@@ -38,6 +38,7 @@ class FaultInjectedFilter : public SlamFilter {
   bool loadMap(const std::vector<LandmarkEstimate>& landmarks) override {
     return inner_->loadMap(landmarks);
   }
+  bool loadGridMap(const GridMapData& map) override { return inner_->loadGridMap(map); }
   bool setMapping(bool enabled) override { return inner_->setMapping(enabled); }
   bool occupancyGrid(GridMapData& out) const override { return inner_->occupancyGrid(out); }
   std::vector<Pose2> bestPath() const override { return inner_->bestPath(); }

@@ -18,16 +18,35 @@ namespace core {
 namespace {
 
 /// Every particle's grid holds a table of tile pointers over the whole map, allocated when the
-/// filter starts (the tiles themselves come as the map fills): bytes per particle.
-double tileTableBytes(const GridOptions& o) {
-  const double width = std::ceil(o.size_x_m / o.resolution_m);
-  const double height = std::ceil(o.size_y_m / o.resolution_m);
+/// filter starts (the tiles themselves come as the map fills): bytes per particle for a grid of
+/// size_x_m x size_y_m.
+double tileTableBytes(const GridOptions& o, double size_x_m, double size_y_m) {
+  const double width = std::ceil(size_x_m / o.resolution_m);
+  const double height = std::ceil(size_y_m / o.resolution_m);
   return std::ceil(width / o.tile_cells) * std::ceil(height / o.tile_cells) *
          static_cast<double>(sizeof(std::shared_ptr<void>));  // as any shared_ptr
 }
 
 /// The tile tables of every particle together may take at most this much memory.
 constexpr double kMaxTileTablesBytes = 4.0 * (1ull << 30);
+
+/// Refuses (std::invalid_argument) a grid of size_x_m x size_y_m, `what`, whose tile tables
+/// would not fit in kMaxTileTablesBytes at the peak: the particles' tables and, while
+/// resampling, their copies, plus one.
+void requireTablesFit(const GridOptions& o, double size_x_m, double size_y_m, int particles,
+                      const std::string& what) {
+  const double bytes = tileTableBytes(o, size_x_m, size_y_m) * (2.0 * particles + 1.0);
+  if (bytes <= kMaxTileTablesBytes) return;
+  std::ostringstream why;
+  why << what << ": the grid's tile tables would take " << std::setprecision(3)
+      << bytes / (1ull << 30) << " GiB at the peak (2 x " << particles
+      << " particles while resampling + 1, each a table of " << size_x_m << " m x " << size_y_m
+      << " m / (grid.resolution_m x grid.tile_cells)^2 tiles, " << sizeof(std::shared_ptr<void>)
+      << " bytes each), more than " << kMaxTileTablesBytes / (1ull << 30)
+      << " GiB: use a smaller map, coarser cells (grid.resolution_m), a larger grid.tile_cells "
+         "or fewer particles";
+  throw std::invalid_argument(why.str());
+}
 
 }  // namespace
 
@@ -96,20 +115,8 @@ GridParticleFilter::GridParticleFilter(const FilterOptions& options)
     : options_(options), motion_(createMotionModel(options.motion)), rng_(options.seed) {
   validate(options_.grid);
   if (options_.particles < 1) throw std::invalid_argument("particles must be >= 1");
-  // At the peak: the template, the particles' tables and, while resampling, their copies.
-  const double bytes = tileTableBytes(options_.grid) * (2.0 * options_.particles + 1.0);
-  if (bytes > kMaxTileTablesBytes) {
-    std::ostringstream why;
-    why << "the grid's tile tables would take " << std::setprecision(3) << bytes / (1ull << 30)
-        << " GiB at the peak (2 x " << options_.particles
-        << " particles while resampling + 1, each a table of grid.size_x_m x "
-        << "grid.size_y_m / (grid.resolution_m x grid.tile_cells)^2 tiles, " << sizeof(std::shared_ptr<void>) << " bytes each), "
-           "more than "
-        << kMaxTileTablesBytes / (1ull << 30)
-        << " GiB: shrink the map, coarsen the resolution, enlarge grid.tile_cells or use "
-           "fewer particles";
-    throw std::invalid_argument(why.str());
-  }
+  requireTablesFit(options_.grid, options_.grid.size_x_m, options_.grid.size_y_m,
+                   options_.particles, "grid.size_x_m x grid.size_y_m");
   reset();
 }
 
@@ -118,6 +125,48 @@ TiledLogOddsGrid firstGrid(const GridOptions& g, const Pose2& centre) {
   const int height = static_cast<int>(std::ceil(g.size_y_m / g.resolution_m));
   return TiledLogOddsGrid(g.resolution_m, centre.x() - 0.5 * width * g.resolution_m,
                           centre.y() - 0.5 * height * g.resolution_m, width, height, g.tile_cells);
+}
+
+TiledLogOddsGrid gridFromMap(const GridMapData& map, const GridOptions& g) {
+  std::ostringstream size;
+  size << map.width << " x " << map.height << " cells of " << map.resolution_m << " m";
+  if (map.width <= 0 || map.height <= 0) {
+    throw std::invalid_argument("the map is empty (" + size.str() + ")");
+  }
+  if (map.cells.size() != static_cast<size_t>(map.width) * map.height) {
+    throw std::invalid_argument("the map has " + std::to_string(map.cells.size()) +
+                                " cell values for " + size.str());
+  }
+  if (!(std::isfinite(map.resolution_m) && map.resolution_m > 0.0) ||
+      !std::isfinite(map.origin_x_m) || !std::isfinite(map.origin_y_m)) {
+    throw std::invalid_argument("the map's resolution must be finite and > 0, its origin "
+                                "finite (" + size.str() + ")");
+  }
+  const double size_x_m = map.width * map.resolution_m, size_y_m = map.height * map.resolution_m;
+  // In the filter's cells (grid.resolution_m): a map saved at another resolution is resampled.
+  const double width = std::ceil(size_x_m / g.resolution_m - 1e-9);
+  const double height = std::ceil(size_y_m / g.resolution_m - 1e-9);
+  if (width * height > 4e9) {
+    throw std::invalid_argument("the map (" + size.str() +
+                                ") exceeds 4e9 cells of grid.resolution_m: use coarser cells");
+  }
+  TiledLogOddsGrid grid(g.resolution_m, map.origin_x_m, map.origin_y_m, static_cast<int>(width),
+                        static_cast<int>(height), g.tile_cells);
+  const double clamp = g.log_odds_clamp;
+  for (int y = 0; y < grid.height(); ++y) {
+    const int my = static_cast<int>((y + 0.5) * g.resolution_m / map.resolution_m);
+    if (my >= map.height) break;
+    for (int x = 0; x < grid.width(); ++x) {
+      const int mx = static_cast<int>((x + 0.5) * g.resolution_m / map.resolution_m);
+      if (mx >= map.width) break;
+      const int value = map.at(mx, my);
+      if (value < 0) continue;  // unknown: log odds 0, no tile needed
+      const double p = std::min(value, 100) / 100.0;
+      const double l = std::clamp(std::log(p / (1.0 - p)), -clamp, clamp);  // +-inf at 1 / 0
+      if (l != 0.0) grid.add(x, y, static_cast<float>(l), static_cast<float>(clamp));
+    }
+  }
+  return grid;
 }
 
 GridGrowthLimits growthLimits(const GridOptions& g, const TiledLogOddsGrid& first, int tables) {
@@ -251,6 +300,17 @@ bool GridParticleFilter::resetPose(const Pose2& pose, const Eigen::Matrix3d& cov
     p.pose = sampleMultivariate<3>(rng_, pose, covariance);
     p.pose.z() = wrapAngle(p.pose.z());
   }
+  weights_.assign(particles_.size(), 1.0 / particles_.size());
+  resampled_best_ = -1;
+  return true;
+}
+
+bool GridParticleFilter::loadGridMap(const GridMapData& map) {
+  TiledLogOddsGrid grid = gridFromMap(map, options_.grid);
+  requireTablesFit(options_.grid, grid.width() * grid.resolution(),
+                   grid.height() * grid.resolution(), options_.particles, "the map");
+  limits_ = growthLimits(options_.grid, grid, 2 * options_.particles + 1);
+  for (Particle& p : particles_) p.grid = grid;  // one map: every particle shares its tiles
   weights_.assign(particles_.size(), 1.0 / particles_.size());
   resampled_best_ = -1;
   return true;

@@ -59,7 +59,20 @@ SlamSession::SlamSession(std::unique_ptr<SlamFilter> filter, const SessionOption
 bool SlamSession::setPriorMap(const std::vector<LandmarkEstimate>& landmarks) {
   if (!filter_->loadMap(landmarks)) return false;
   prior_map_ = landmarks;
+  prior_grid_.reset();
   return true;
+}
+
+bool SlamSession::setPriorGridMap(const GridMapData& grid) {
+  if (!filter_->loadGridMap(grid)) return false;
+  prior_grid_ = grid;
+  prior_map_.reset();
+  return true;
+}
+
+void SlamSession::reloadPriorMap() {
+  if (prior_map_) filter_->loadMap(*prior_map_);
+  if (prior_grid_) filter_->loadGridMap(*prior_grid_);
 }
 
 bool SlamSession::setMapping(bool enabled) {
@@ -91,7 +104,7 @@ void SlamSession::reset() {
 
 void SlamSession::restart() {
   filter_->reset(Pose2::Zero());
-  if (prior_map_) filter_->loadMap(*prior_map_);
+  reloadPriorMap();
   start_pose_.reset();
   has_previous_ = false;
   last_stamp_ = 0.0;
@@ -130,14 +143,14 @@ FrameResult SlamSession::process(double stamp, const Pose2& odom_pose,
     if (start_pose_) {
       // A given start (initial pose, usually on a prior map): map -> odom puts odom there.
       filter_->reset(start_pose_->first);
-      if (prior_map_) filter_->loadMap(*prior_map_);
+      reloadPriorMap();
       filter_->resetPose(start_pose_->first, start_pose_->second);
       map_to_odom_ = compose(start_pose_->first, inverse(odom_pose));
       start_pose_.reset();
     } else {
       // Anchor the map at the first pose: map == odom at start.
       filter_->reset(odom_pose);
-      if (prior_map_) filter_->loadMap(*prior_map_);
+      reloadPriorMap();
       map_to_odom_ = Pose2::Zero();
     }
     last_stats_ = filter_->update(features);

@@ -47,6 +47,7 @@ class AnchoredFilter : public SlamFilter {
   FilterStats stats() const override { return inner_->stats(); }
   bool resetPose(const Pose2& pose, const Eigen::Matrix3d& covariance) override;
   bool loadMap(const std::vector<LandmarkEstimate>& landmarks) override;
+  bool loadGridMap(const GridMapData& map) override;
   bool setMapping(bool enabled) override;
   bool occupancyGrid(GridMapData& out) const override;
   std::vector<Pose2> bestPath() const override;

@@ -112,6 +112,9 @@ class SlamFilter {
   }
   /// Gives every hypothesis this map (map frame), replacing what it had.
   virtual bool loadMap(const std::vector<LandmarkEstimate>& /*landmarks*/) { return false; }
+  /// Gives every hypothesis this occupancy grid (map frame) as its map, for variants that map
+  /// cells (grid_pf); throws std::invalid_argument for a grid the variant cannot hold.
+  virtual bool loadGridMap(const GridMapData& /*map*/) { return false; }
   /// Mapping off = localization only: landmarks are neither added nor changed.
   virtual bool setMapping(bool enabled) { return enabled; }
 

@@ -23,6 +23,12 @@ double localMapReach(const std::vector<LocalMapCell>& local, double resolution_m
 /// The empty grid of the first extent (grid.size_x_m x grid.size_y_m) centred on a pose: every
 /// grid of a run (each particle's, render_grid's) starts from it, so all share one tile lattice.
 TiledLogOddsGrid firstGrid(const GridOptions& options, const Pose2& centre);
+/// A saved occupancy grid (map frame, nav_msgs conventions) as a log-odds grid of
+/// options.resolution_m cells over the same extent: each cell takes the occupancy of the map
+/// cell holding its centre, as log odds clamped to grid.log_odds_clamp (occupied 100: the
+/// clamp, free 0: minus the clamp, unknown -1: 0). Throws std::invalid_argument naming what is
+/// wrong with the map (empty, cells missing, non-finite, too many cells).
+TiledLogOddsGrid gridFromMap(const GridMapData& map, const GridOptions& options);
 /// How far a grid may grow (TiledLogOddsGrid::grow): grid.max_size_m in tiles per axis (never
 /// below the first grid's), and the tiles one table may hold when `tables` of them must fit in
 /// the 4 GiB for tile tables.
@@ -61,6 +67,9 @@ class GridParticleFilter : public SlamFilter {
   std::vector<WeightedPose> particles() const override;
   FilterStats stats() const override { return stats_; }
   bool resetPose(const Pose2& pose, const Eigen::Matrix3d& covariance) override;
+  /// Every particle starts from this map (gridFromMap, shared tiles), e.g. to localize on a
+  /// map saved by an earlier run (with setMapping(false)) or to extend it.
+  bool loadGridMap(const GridMapData& map) override;
   bool setMapping(bool enabled) override;
   bool occupancyGrid(GridMapData& out) const override;
   bool usesLandmarkFeatures() const override { return false; }

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "rbpf_slam/core/filters/slam_filter.h"
+#include "rbpf_slam/core/grid/grid_map_data.h"
 #include "rbpf_slam/core/slam/odometry_stamps.h"
 
 namespace rbpf_slam {
@@ -122,6 +123,10 @@ class SlamSession {
   /// A map to start from (map frame), e.g. a saved one: given to the filter now and again
   /// after every reset. Returns false when the filter variant cannot take a map.
   bool setPriorMap(const std::vector<LandmarkEstimate>& landmarks);
+  /// The same for an occupancy grid (variants that map cells, grid_pf). Replaces a landmark
+  /// prior map and is replaced by one. Throws std::invalid_argument for a grid the filter cannot
+  /// hold (nothing changed then).
+  bool setPriorGridMap(const GridMapData& grid);
   /// Mapping (true) or localization only on the current map (false); false if unsupported.
   bool setMapping(bool enabled);
   bool mapping() const { return mapping_; }
@@ -143,7 +148,7 @@ class SlamSession {
   std::vector<Pose2> estimatedPath(bool* best_particle = nullptr) const;
   /// estimatedPath() with the trajectory's stamps: what the node publishes on ~trajectory.
   std::vector<TrajectoryPoint> estimatedTrajectory(bool* best_particle = nullptr) const;
-  bool hasPriorMap() const { return prior_map_.has_value(); }
+  bool hasPriorMap() const { return prior_map_.has_value() || prior_grid_.has_value(); }
   const UpdateStats& lastStats() const { return last_stats_; }
   const SlamFilter& filter() const { return *filter_; }
   SlamFilter& filter() { return *filter_; }
@@ -175,7 +180,10 @@ class SlamSession {
   OdometryStamps odometry_stamps_;  // cleared by reset()
   // Where the last odometry silence counted began (it counts once, whatever frames follow).
   double counted_silence_start_ = -std::numeric_limits<double>::infinity();
+  /// Gives the filter the prior map again (after it was reset).
+  void reloadPriorMap();
   std::optional<std::vector<LandmarkEstimate>> prior_map_;
+  std::optional<GridMapData> prior_grid_;
   std::optional<std::pair<Pose2, Eigen::Matrix3d>> start_pose_;  // for the first frame
   bool mapping_ = true;
 };
