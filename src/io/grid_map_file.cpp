@@ -71,8 +71,10 @@ core::GridMapData readGridMap(const std::string& yaml_path) {
   YAML::Node root;
   try {
     root = YAML::LoadFile(yaml_path);
+  } catch (const YAML::BadFile&) {
+    throw std::runtime_error(yaml_path + ": cannot be read");
   } catch (const YAML::Exception& e) {
-    throw std::runtime_error(yaml_path + ": " + e.what());
+    throw std::runtime_error(yaml_path + ": not YAML: " + e.what());
   }
   core::GridMapData grid;
   std::string image;

@@ -9,6 +9,7 @@
 #include <cstring>
 
 #include "rbpf_slam/core/filters/observation.h"
+#include "rbpf_slam/core/random.h"
 
 namespace rbpf_slam {
 namespace rosbridge {
@@ -35,6 +36,31 @@ core::Pose2 toPose2(const geometry_msgs::Transform& t) {
 
 core::Pose2 toPose2(const geometry_msgs::Pose& p) {
   return core::Pose2(p.position.x, p.position.y, tf2::getYaw(p.orientation));
+}
+
+std::string fromInitialPose(const geometry_msgs::PoseWithCovarianceStamped& msg,
+                            const std::string& map_frame, core::Pose2* pose,
+                            Eigen::Matrix3d* covariance, std::string* note) {
+  note->clear();
+  if (!msg.header.frame_id.empty() && stripSlash(msg.header.frame_id) != stripSlash(map_frame)) {
+    return "in frame '" + msg.header.frame_id + "': expected the map frame '" + map_frame + "'";
+  }
+  *pose = toPose2(msg.pose.pose);
+  if (!pose->allFinite()) return "whose position or orientation is not finite";
+  const int index[3] = {0, 1, 5};
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) (*covariance)(i, j) = msg.pose.covariance[index[i] * 6 + index[j]];
+  }
+  // rviz sends 0.25 m^2 and 0.0685 rad^2; an all-zero (unset) covariance gets those, and so
+  // does a broken one, with a note naming what is wrong with it.
+  const bool unset = covariance->isZero(0.0);
+  const std::string problem = core::poseCovarianceProblem(*covariance);
+  if (!unset && !problem.empty()) {
+    *note = "(x, y, yaw rows of pose.covariance) " + problem +
+            "; using rviz's 0.25 m^2, 0.25 m^2, 0.0685 rad^2 instead";
+  }
+  if (unset || !problem.empty()) *covariance = Eigen::Vector3d(0.25, 0.25, 0.0685).asDiagonal();
+  return "";
 }
 
 std::string stripSlash(const std::string& name) {

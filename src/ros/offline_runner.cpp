@@ -288,6 +288,38 @@ std::string describeTopics(const rosbag::Bag& bag) {
 
 /// Refuses a topic of the wrong message type (e.g. scan_topic set to an odometry topic)
 /// instead of counting every message as malformed.
+/// A recorded initialpose (rviz's 2D Pose Estimate) given to the session as the node would take
+/// it (fromInitialPose); one that cannot be taken is counted with the first reason.
+void takeInitialPose(const rosbag::MessageInstance& m, const std::string& map_frame,
+                     core::SlamSession* session, OfflineSummary* summary) {
+  std::string ignored;
+  try {
+    const auto msg = m.instantiate<geometry_msgs::PoseWithCovarianceStamped>();
+    if (!msg) {
+      ignored = "a " + m.getDataType() + ", not a geometry_msgs/PoseWithCovarianceStamped";
+    } else {
+      core::Pose2 pose;
+      Eigen::Matrix3d covariance;
+      std::string note;
+      ignored = fromInitialPose(*msg, map_frame, &pose, &covariance, &note);
+      if (ignored.empty() && !note.empty()) {
+        std::fprintf(stderr, "offline_slam: %s: covariance %s\n", m.getTopic().c_str(),
+                     note.c_str());
+      }
+      if (ignored.empty() && !session->setPose(pose, covariance)) {
+        ignored = "that the filter variant cannot take";
+      }
+    }
+  } catch (const std::exception& e) {
+    ignored = std::string("that does not decode (") + e.what() + ")";
+  }
+  if (ignored.empty()) {
+    ++summary->initial_poses;
+  } else if (summary->ignored_initial_poses++ == 0) {
+    summary->first_ignored_initial_pose = m.getTopic() + ": " + ignored;
+  }
+}
+
 void checkTopicTypes(rosbag::View& view, const std::string& bag_path, const io::RosOptions& ros,
                      const std::string& frontend) {
   const auto among = [](const std::string& topic, const std::vector<std::string>& names) {
@@ -460,6 +492,10 @@ std::vector<std::string> describeOutcome(const OfflineSummary& s, const OfflineO
     lines.push_back("dropped " + std::to_string(s.dropped_bad_message) +
                     " malformed message(s); the first: " + s.first_bad_message);
   }
+  if (s.ignored_initial_poses > 0) {
+    lines.push_back("ignored " + std::to_string(s.ignored_initial_poses) +
+                    " initialpose message(s); the first: " + s.first_ignored_initial_pose);
+  }
   if (s.rejected > 0) {
     lines.push_back(std::to_string(s.rejected) + " frame(s) were not used: stamped before a "
                     "frame already used (inputs stamped out of order across topics or with a "
@@ -577,9 +613,9 @@ OfflineSummary OfflineRunner::run() {
     topics.push_back(stripSlash(topic));
     wanted += (wanted.empty() ? "'" : ", '") + topic + "'";
   }
-  rosbag::View view(bag, rosbag::TopicQuery(topics));
-  checkTopicTypes(view, options_.bag_path, ros_options, config_.frontend);
-  if (view.size() == 0) {
+  rosbag::View inputs(bag, rosbag::TopicQuery(topics));
+  checkTopicTypes(inputs, options_.bag_path, ros_options, config_.frontend);
+  if (inputs.size() == 0) {
     if (uses_features) {
       wanted += (wanted.empty() ? "'" : " or '") + ros_options.features_topic + "'";
     } else {
@@ -623,8 +659,21 @@ OfflineSummary OfflineRunner::run() {
   std::set<std::string> tilted_frames;   // warned once each
   std::set<std::string> warned_scan_headers;  // scan frames with an inconsistent header, once
   std::vector<double> update_ms;
+  if (options_.has_initial_pose &&
+      !pipeline_.session().setPose(options_.initial_pose, options_.initial_covariance)) {
+    throw std::runtime_error("--initial-pose: variant " + config_.filter.variant +
+                             " cannot take a start pose, or its covariance is unusable");
+  }
+  // rviz's 2D Pose Estimate, recorded with the data: taken where it comes, as the node does.
+  topics.push_back("/initialpose");
+  topics.push_back("initialpose");
+  rosbag::View view(bag, rosbag::TopicQuery(topics));
   ProgressBar progress(options_.progress);
   for (const rosbag::MessageInstance& m : view) {
+    if (stripSlash(m.getTopic()) == "initialpose") {
+      takeInitialPose(m, ros_options.map_frame, &pipeline_.session(), &summary);
+      continue;
+    }
     ++summary.frames;
     std::string frame;
     ros::Time stamp;
@@ -967,6 +1016,8 @@ OfflineSummary OfflineRunner::writeOutputs(const OfflineSummary& in) const {
               summary.wall_s > 0.0 ? summary.bag_duration_s / summary.wall_s : 0.0)
       .number("cpu_s", summary.cpu_s)
       .integer("frames", summary.frames)
+      .integer("initial_poses", summary.initial_poses)
+      .integer("ignored_initial_poses", summary.ignored_initial_poses)
       .integer("updates", summary.updates)
       .integer("skipped_no_motion", summary.skipped)
       .integer("sonar_buffered", summary.buffered)

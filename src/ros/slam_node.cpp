@@ -613,33 +613,16 @@ bool SlamNode::loadMapService(MapFile::Request& request, MapFile::Response& resp
 }
 
 void SlamNode::initialPoseCallback(const geometry_msgs::PoseWithCovarianceStamped::ConstPtr& msg) {
-  if (!msg->header.frame_id.empty() && stripSlash(msg->header.frame_id) != config_.ros.map_frame) {
-    warnThrottled("initialpose frame", "Ignoring initialpose in frame '" + msg->header.frame_id +
-                                           "': expected the map frame '" +
-                                           config_.ros.map_frame + "'");
-    return;
-  }
-  const core::Pose2 pose = toPose2(msg->pose.pose);
+  core::Pose2 pose;
   Eigen::Matrix3d covariance;
-  const int index[3] = {0, 1, 5};
-  for (int i = 0; i < 3; ++i) {
-    for (int j = 0; j < 3; ++j) covariance(i, j) = msg->pose.covariance[index[i] * 6 + index[j]];
-  }
-  if (!pose.allFinite()) {
-    warnThrottled("initialpose", "Ignoring an initialpose whose position or orientation is not "
-                                 "finite");
+  std::string note;
+  const std::string ignored =
+      fromInitialPose(*msg, config_.ros.map_frame, &pose, &covariance, &note);
+  if (!ignored.empty()) {
+    warnThrottled("initialpose", "Ignoring an initialpose " + ignored);
     return;
   }
-  // rviz sends 0.25 m^2 and 0.0685 rad^2; an all-zero (unset) covariance gets those, and so
-  // does a broken one, with a warning naming what is wrong with it.
-  const bool unset = covariance.isZero(0.0);
-  const std::string problem = core::poseCovarianceProblem(covariance);
-  if (!unset && !problem.empty()) {
-    warnThrottled("initialpose covariance",
-                  "initialpose covariance (x, y, yaw rows of pose.covariance) " + problem +
-                      "; using rviz's 0.25 m^2, 0.25 m^2, 0.0685 rad^2 instead");
-  }
-  if (unset || !problem.empty()) covariance = Eigen::Vector3d(0.25, 0.25, 0.0685).asDiagonal();
+  if (!note.empty()) warnThrottled("initialpose covariance", "initialpose covariance " + note);
   if (!pipeline_.session().setPose(pose, covariance)) {
     warnThrottled("initialpose", "Ignoring an initialpose that the filter variant cannot take");
     return;

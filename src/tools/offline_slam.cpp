@@ -2,10 +2,13 @@
 //   offline_slam --bag IN.bag --config config/NAME.yaml --output DIR [--seed N]
 //                [--set key=value ...] [--reference REF.tum] [--no-progress]
 //                [--output-bag OUT.bag]  (tf, pose, landmarks, trajectory for rviz)
+//                [--initial-pose X,Y,YAW[,SIGMA_XY,SIGMA_YAW]]
 
 #include <cstdio>
 #include <iostream>
 #include <optional>
+#include <sstream>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -20,18 +23,51 @@ namespace io = rbpf_slam::io;
 const char kUsage[] =
     "usage: offline_slam --bag IN.bag --config CONFIG.yaml --output DIR [--seed N]\n"
     "                    [--set key=value ...] [--reference REF.tum] [--no-progress] [--verbose]\n"
-    "                    [--output-bag OUT.bag]\n"
+    "                    [--output-bag OUT.bag] [--initial-pose X,Y,YAW[,SIGMA_XY,SIGMA_YAW]]\n"
     "  --seed N         the filter's seed (as --set seed=N)\n"
     "  --set key=value  overrides a config key (dotted for sections: motion.alpha1=0.1)\n"
     "  --reference F    TUM ground truth: ATE in summary.json\n"
     "  --output-bag F   the input's tf and sensors plus map -> odom, pose, landmarks, trajectory\n"
+    "  --initial-pose P the start in the map frame (m, rad; sigmas default 0.5 m, 0.26 rad), as "
+    "an\n"
+    "                   initialpose before the first frame; the bag's initialpose messages are\n"
+    "                   used too (e.g. to localize on map_file from a known start)\n"
     "Writes DIR/trajectory.tum, trajectory_online.tum, landmarks.yaml, summary.json, map.png,\n"
     "map.pgm and map.yaml (with smoothing also trajectory_filter.tum, landmarks_filter.yaml).\n"
     "Exits 2 on bad arguments, 1 when the bag or the config cannot be read, a config or --set\n"
     "value is refused, a topic carries the wrong message type, an output is a directory, a\n"
-    "pipe, a device or a socket (checked before the bag is read), --output-bag names the input, an\n"
+    "pipe, a device or a socket (checked before the bag is read), --output-bag names the input, "
+    "an\n"
     "output cannot be written, no frame could be used or --reference could not be\n"
     "evaluated (the outputs are written all the same in the last two cases).\n";
+
+/// --initial-pose X,Y,YAW[,SIGMA_XY,SIGMA_YAW] (m, rad): the start pose in the map frame and
+/// its standard deviations (default rviz's: 0.5 m, 0.26 rad).
+void parseInitialPose(const std::string& text, rbpf_slam::rosbridge::OfflineOptions* options) {
+  std::vector<double> values;
+  std::stringstream in(text);
+  std::string item;
+  while (std::getline(in, item, ',')) {
+    values.push_back(io::parseNumber("--initial-pose", item, io::NumberRule::kFinite));
+  }
+  if (values.size() != 3 && values.size() != 5) {
+    throw std::invalid_argument(
+        "--initial-pose needs X,Y,YAW or X,Y,YAW,SIGMA_XY,SIGMA_YAW "
+        "(m, rad), got '" +
+        text + "'");
+  }
+  options->has_initial_pose = true;
+  options->initial_pose = rbpf_slam::core::Pose2(values[0], values[1], values[2]);
+  if (values.size() == 5) {
+    if (!(values[3] > 0.0 && values[4] > 0.0)) {
+      throw std::invalid_argument("--initial-pose: SIGMA_XY and SIGMA_YAW must be > 0, got '" +
+                                  text + "'");
+    }
+    options->initial_covariance =
+        Eigen::Vector3d(values[3] * values[3], values[3] * values[3], values[4] * values[4])
+            .asDiagonal();
+  }
+}
 
 struct Arguments {
   rbpf_slam::rosbridge::OfflineOptions options;
@@ -62,6 +98,8 @@ Arguments parseArguments(int argc, char** argv) {
       a.options.verbose = true;
     } else if (arg == "--output-bag") {
       a.options.output_bag = cursor.value();
+    } else if (arg == "--initial-pose") {
+      parseInitialPose(cursor.value(), &a.options);
     } else {
       throw std::invalid_argument("unknown argument '" + arg + "'");
     }

@@ -452,18 +452,24 @@ TEST_F(BagPlaybackTest, SaveMapSmoothsTheMap) {
 
 // ~min_occupied_cells / ~min_free_cells (grid_pf): one ~map must have held at least that many
 // occupied (>= 65) and free (< 20) cells; a node that read only some of its sensors maps less.
+// ~max_occupied_cells: no ~map may have held more (localization only on a loaded map).
 TEST_F(BagPlaybackTest, GridMapHoldsEnoughCells) {
-  int min_occupied = 0, min_free = 0;
+  int min_occupied = 0, min_free = 0, max_occupied = 0;
   ros::NodeHandle("~").param("min_occupied_cells", min_occupied, 0);
   ros::NodeHandle("~").param("min_free_cells", min_free, 0);
-  if (min_occupied <= 0 && min_free <= 0) {
-    GTEST_SKIP() << "neither ~min_occupied_cells nor ~min_free_cells set by this launch file";
+  ros::NodeHandle("~").param("max_occupied_cells", max_occupied, 0);
+  if (min_occupied <= 0 && min_free <= 0 && max_occupied <= 0) {
+    GTEST_SKIP() << "none of ~min_occupied_cells, ~min_free_cells, ~max_occupied_cells set by "
+                    "this launch file";
   }
   std::lock_guard<std::mutex> lock(observer_->mutex_);
   RecordProperty("max_occupied_cells", std::to_string(observer_->max_occupied_cells_));
   RecordProperty("max_free_cells", std::to_string(observer_->max_free_cells_));
   EXPECT_GE(observer_->max_occupied_cells_, min_occupied);
   EXPECT_GE(observer_->max_free_cells_, min_free);
+  if (max_occupied > 0) {
+    EXPECT_LE(observer_->max_occupied_cells_, max_occupied);
+  }
 }
 
 // Runs last (gtest keeps the order of definition): it clears the node's map.

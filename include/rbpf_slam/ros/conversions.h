@@ -2,6 +2,7 @@
 // Converts ROS messages to and from the core's types; no logic beyond the conversion.
 
 #include <geometry_msgs/Pose.h>
+#include <geometry_msgs/PoseWithCovarianceStamped.h>
 #include <geometry_msgs/Transform.h>
 #include <geometry_msgs/TransformStamped.h>
 #include <nav_msgs/OccupancyGrid.h>
@@ -26,6 +27,14 @@ namespace rosbridge {
 
 core::Pose2 toPose2(const geometry_msgs::Transform& transform);
 core::Pose2 toPose2(const geometry_msgs::Pose& pose);
+/// An initialpose message (rviz's 2D Pose Estimate) as the session takes it: the pose and the
+/// x, y, yaw rows of its covariance. An all-zero (unset) covariance becomes rviz's 0.25 m^2,
+/// 0.25 m^2, 0.0685 rad^2, and so does an unusable one, said in *note. Returns why the message
+/// is to be ignored ("" when it is not): a frame other than map_frame (empty is taken as it),
+/// a non-finite pose.
+std::string fromInitialPose(const geometry_msgs::PoseWithCovarianceStamped& msg,
+                            const std::string& map_frame, core::Pose2* pose,
+                            Eigen::Matrix3d* covariance, std::string* note);
 /// A sensor's mounting pose in the base frame as the 2D filters use it.
 struct SensorMount {
   core::Pose2 pose = core::Pose2::Zero();  // x, y and the direction of the sensor's x axis

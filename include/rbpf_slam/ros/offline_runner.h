@@ -19,6 +19,12 @@ struct OfflineOptions {
   bool progress = true;        // a progress bar on stderr when it is a terminal
   bool verbose = false;        // one line per update on stderr
   std::string output_bag;      // optional: a bag of the results (tf, pose, markers) for rviz
+  // Optional: where the robot starts in the map frame (e.g. on a prior map) and how uncertain
+  // that is, as an initialpose before the first frame. The bag's own initialpose messages
+  // (rviz's 2D Pose Estimate, recorded) are used either way, at their place in the bag.
+  bool has_initial_pose = false;
+  core::Pose2 initial_pose = core::Pose2::Zero();
+  Eigen::Matrix3d initial_covariance = Eigen::Vector3d(0.25, 0.25, 0.0685).asDiagonal();
 };
 
 /// Counts and timings of one offline run.
@@ -38,6 +44,9 @@ struct OfflineSummary {
   long gaps = 0;  // steps across a time gap or odometry jump (max_time_gap, max_odometry_jump)
   long dropped_no_tf = 0;
   long dropped_bad_message = 0;
+  long initial_poses = 0;          // initialpose messages of the bag that set the pose
+  long ignored_initial_poses = 0;  // ... and those that could not (frame, non-finite, variant)
+  std::string first_ignored_initial_pose;  // why the first of them was
   long skipped_transforms = 0;  // repeated or malformed tf in the bag
   long malformed_transforms = 0;  // of them, those tf2 refuses (transformProblem)
   std::string first_malformed_transform;  // the first of them, with why

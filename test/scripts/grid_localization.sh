@@ -1,0 +1,128 @@
+#!/usr/bin/env bash
+# grid_pf localizes on a saved occupancy-grid map (map_file + localization_only, map_server's
+# map.yaml): on the simulated e-puck world, with the arena's floor plan as the map, the path
+# must stay within 1.5 cm of the truth in the map frame (no alignment) and beat the odometry,
+# and the map must come out as loaded. Started 3 cm and 0.11 rad off (--initial-pose with its
+# uncertainty, or the same as a recorded /initialpose in the bag) it must find the robot; an
+# initialpose in another frame is ignored and named. A map saved by a grid_pf mapping run loads
+# back unchanged; each kind of variant names a map file of the other kind.
+# The live node on the same map: test/rostest/grid_localization.test.
+set -euo pipefail
+
+source "$(dirname "$0")/lib/offline.sh"
+require_tools simulate offline_slam evaluate
+config="$root/config/grid_pf.yaml"
+world="$root/worlds/yatim_epuck.yaml"
+
+"$bin/simulate" --world "$world" --output "$work/a.bag" --seed 1 >/dev/null
+"$bin/simulate" --world "$world" --output "$work/b.bag" --seed 2 >/dev/null
+
+# The floor plan (test/tools/floor_plan.py): walls and object outlines occupied, the arena's
+# floor free, 1 cm cells; test/data/epuck_floor_plan.* (grid_localization.test's map) must be it.
+/usr/bin/python3 "$here/../tools/floor_plan.py" "$world" "$work/plan"
+cmp "$work/plan.pgm" "$root/test/data/epuck_floor_plan.pgm" ||
+  { echo "FAIL: test/data/epuck_floor_plan.pgm is not floor_plan.py's map of $world"; exit 1; }
+
+# The odometry as a TUM trajectory, and the bag with a recorded initialpose (good, then one in
+# the odometry frame, which must be ignored) before its first scan.
+/usr/bin/python3 - "$work" <<'PY'
+import sys, rosbag, rospy
+from geometry_msgs.msg import PoseWithCovarianceStamped
+work = sys.argv[1]
+with rosbag.Bag(work + "/b.bag") as bag, open(work + "/b.odom.tum", "w") as f:
+    for _, m, _ in bag.read_messages(topics=["/odom"]):
+        p, q = m.pose.pose.position, m.pose.pose.orientation
+        f.write("%.9f %.6f %.6f 0 %.9f %.9f %.9f %.9f\n" % (m.header.stamp.to_sec(), p.x, p.y, q.x, q.y, q.z, q.w))
+    start = bag.get_start_time()
+    with rosbag.Bag(work + "/b_initialpose.bag", "w") as out:
+        for frame in ("map", "odom"):
+            msg = PoseWithCovarianceStamped()
+            msg.header.frame_id = frame
+            msg.header.stamp = rospy.Time.from_sec(start - 0.01)  # before the first scan
+            msg.pose.pose.position.x, msg.pose.pose.position.y = 0.10, 0.065
+            msg.pose.pose.orientation.z, msg.pose.pose.orientation.w = 0.0549723, 0.9984879  # 0.11 rad
+            msg.pose.covariance[0] = msg.pose.covariance[7] = 0.03 ** 2
+            msg.pose.covariance[35] = 0.15 ** 2
+            out.write("/initialpose", msg, msg.header.stamp)
+        for topic, m, t, in bag.read_messages(return_connection_header=False):
+            out.write(topic, m, t)
+PY
+
+run() {  # NAME BAG [args...]
+  local name=$1 bag=$2
+  shift 2
+  "$bin/offline_slam" --bag "$work/$bag" --config "$config" --output "$work/$name" --no-progress \
+    --reference "$work/${bag%%[._]*}.ref.tum" "$@" >"$work/$name.log" 2>&1 ||
+    { echo "FAIL: offline_slam ($name)"; cat "$work/$name.log"; exit 1; }
+}
+loc=(--set localization_only=true)
+run plan b.bag --set "map_file=$work/plan.yaml" "${loc[@]}"
+run off b.bag --set "map_file=$work/plan.yaml" "${loc[@]}" --initial-pose 0.10,0.065,0.11,0.03,0.15
+run recorded b_initialpose.bag --set "map_file=$work/plan.yaml" "${loc[@]}"
+run mapped a.bag
+run reloaded b.bag --set "map_file=$work/mapped/map.yaml" "${loc[@]}"
+
+status=0
+/usr/bin/python3 - "$work" "$bin/evaluate" <<'PY' || status=1
+import json, math, subprocess, sys
+work, evaluate = sys.argv[1:]
+def load(path):
+    out = []
+    for line in open(path):
+        v = line.split()
+        if len(v) == 8 and not v[0].startswith("#"):
+            out.append((float(v[0]), float(v[1]), float(v[2]), 2 * math.atan2(float(v[6]), float(v[7]))))
+    return out
+truth = {round(p[0], 3): p for p in load(work + "/b.ref.tum")}
+def errors(path):  # position error in the map frame at each pose (the truth at the same stamp)
+    return [math.hypot(p[1] - truth[round(p[0], 3)][1], p[2] - truth[round(p[0], 3)][2])
+            for p in load(path) if round(p[0], 3) in truth]
+def rms(e): return math.sqrt(sum(x * x for x in e) / len(e))
+def ate(path):
+    return json.loads(subprocess.check_output([evaluate, path, work + "/b.ref.tum", "--no-align"]))["ate_rmse_m"]
+summary = {n: json.load(open("%s/%s/summary.json" % (work, n))) for n in ("plan", "off", "recorded", "mapped", "reloaded")}
+logs = {n: open("%s/%s.log" % (work, n)).read() for n in summary}
+odometry = ate(work + "/b.odom.tum")
+fails = []
+plan = ate(work + "/plan/trajectory.tum")
+print("on the floor plan: %.4f m in the map frame, odometry %.4f m" % (plan, odometry))
+if not (plan < 0.015 and plan < odometry):
+    fails.append("localization on the floor plan %.4f m (odometry %.4f m)" % (plan, odometry))
+occupied = open(work + "/plan.pgm", "rb").read().split(b"\n", 3)[3].count(b"\x00")
+if summary["plan"]["map_occupied_cells"] != occupied:
+    fails.append("the map changed: %d occupied cells, the floor plan has %d" % (summary["plan"]["map_occupied_cells"], occupied))
+for name in ("off", "recorded"):
+    e = errors("%s/%s/trajectory.tum" % (work, name))
+    first, late = e[0], rms(e[len(e) // 2:])
+    print("started off (%s): first pose %.3f m off, second half %.4f m" % (name, first, late))
+    if not (first > 0.02 and late < 0.015):
+        fails.append("%s: not found from the wrong start (first %.3f m, second half %.4f m)" % (name, first, late))
+if summary["recorded"]["initial_poses"] != 1 or summary["recorded"]["ignored_initial_poses"] != 1:
+    fails.append("recorded initialpose: %d taken, %d ignored (expected 1 and 1)"
+                 % (summary["recorded"]["initial_poses"], summary["recorded"]["ignored_initial_poses"]))
+if "in frame 'odom': expected the map frame 'map'" not in logs["recorded"]:
+    fails.append("the initialpose in the odometry frame is not named")
+if summary["reloaded"]["map_occupied_cells"] != summary["mapped"]["map_occupied_cells"]:
+    fails.append("a saved map did not load back: %d occupied cells, saved %d"
+                 % (summary["reloaded"]["map_occupied_cells"], summary["mapped"]["map_occupied_cells"]))
+print("a mapping run's map (%d occupied cells) localizes: %.4f m in the map frame"
+      % (summary["mapped"]["map_occupied_cells"], ate(work + "/reloaded/trajectory.tum")))
+for f in fails: print("FAIL: " + f)
+sys.exit(1 if fails else 0)
+PY
+
+# A map of the other kind is named: landmarks for grid_pf, a grid for a landmark variant.
+if "$bin/offline_slam" --bag "$work/b.bag" --config "$config" --output "$work/wrong" --no-progress \
+  --set "map_file=$work/a.landmarks.yaml" >"$work/wrong.log" 2>&1; then
+  echo "FAIL: grid_pf took a landmarks YAML as its map"; status=1
+elif ! grep -q "a landmarks YAML; variant grid_pf maps cells" "$work/wrong.log"; then
+  echo "FAIL: grid_pf's error for a landmarks YAML:"; cat "$work/wrong.log"; status=1
+fi
+if "$bin/offline_slam" --bag "$work/b.bag" --config "$root/config/landmarks_fastslam2.yaml" \
+  --output "$work/wrong2" --no-progress --set "map_file=$work/plan.yaml" >"$work/wrong2.log" 2>&1; then
+  echo "FAIL: a landmark variant took an occupancy-grid map"; status=1
+elif ! grep -q "an occupancy-grid map (map_server's map.yaml)" "$work/wrong2.log"; then
+  echo "FAIL: the landmark variant's error for a grid map:"; cat "$work/wrong2.log"; status=1
+fi
+[ $status -eq 0 ] && echo "ok: grid_pf localizes on a saved map"
+exit $status
