@@ -670,17 +670,23 @@ TEST(GridParticleFilter, ResampledParticlesShareTiles) {
   EXPECT_GT(map.count(0, 40), 3000);   // the room's inside, seen free twice
 }
 
+/// A map of 3 x 2 cells of 0.1 m (row 0 at the bottom) with its corner at (x, y).
+GridMapData smallMap(const std::vector<int8_t>& cells, double x = 0.0, double y = 0.0) {
+  GridMapData map;
+  map.resolution_m = 0.1;
+  map.origin_x_m = x;
+  map.origin_y_m = y;
+  map.width = 3;
+  map.height = 2;
+  map.cells = cells;
+  return map;
+}
+
 // A saved map becomes log odds at the filter's resolution: each cell takes the map cell holding
 // its centre, occupied the clamp, free minus the clamp, unknown (and 50 %) nothing; the origin
 // is kept. A map that is empty or lacks cells is refused by name.
 TEST(GridMapLoading, AMapBecomesLogOddsAtTheFilterResolution) {
-  GridMapData map;
-  map.resolution_m = 0.1;
-  map.origin_x_m = -0.3;
-  map.origin_y_m = 1.0;
-  map.width = 3;
-  map.height = 2;
-  map.cells = {100, 0, -1, 50, 100, 0};  // row 0 at the bottom
+  const GridMapData map = smallMap({100, 0, -1, 50, 100, 0}, -0.3, 1.0);
   GridOptions o;
   o.resolution_m = 0.05;
   o.log_odds_clamp = 4.0;
@@ -890,11 +896,7 @@ std::string mapConfigError(const io::SlamConfig& config, SlamPipeline* pipeline)
 TEST(GridConfig, EachVariantStartsFromItsKindOfMapFile) {
   char dir[] = "/tmp/grid_map_configXXXXXX";
   ASSERT_NE(mkdtemp(dir), nullptr);
-  GridMapData g;
-  g.resolution_m = 0.1;
-  g.width = 3;
-  g.height = 2;
-  g.cells = {100, 0, -1, 100, 0, -1};
+  const GridMapData g = smallMap({100, 0, -1, 100, 0, -1});
   const std::string grid_yaml = io::writeGridMap(std::string(dir) + "/m", g)[1];
   const std::string landmarks_yaml = std::string(dir) + "/landmarks.yaml";
   std::ofstream(landmarks_yaml) << "landmarks: []\n";
@@ -958,13 +960,7 @@ TEST(GridConfig, ErrorsNameTheGridKey) {
 }
 
 TEST(GridMapFile, WritesAndReadsMapServerFiles) {
-  GridMapData g;
-  g.resolution_m = 0.1;
-  g.origin_x_m = -1.5;
-  g.origin_y_m = 2.0;
-  g.width = 3;
-  g.height = 2;
-  g.cells = {100, 0, -1, 70, 19, 50};  // row 0 is the bottom
+  const GridMapData g = smallMap({100, 0, -1, 70, 19, 50}, -1.5, 2.0);
   char dir[] = "/tmp/grid_map_fileXXXXXX";
   ASSERT_NE(mkdtemp(dir), nullptr);
   const std::vector<std::string> files = io::writeGridMap(std::string(dir) + "/m", g);
@@ -1013,11 +1009,7 @@ std::string gridMapError(const GridMapData& g, const std::string& from, const st
 // readGridMap used to take any resolution and origin, ignore negate and the thresholds, and
 // allocate what the PGM header announced before reading the data.
 TEST(GridMapFile, BrokenMapFilesAreNamed) {
-  GridMapData g;
-  g.resolution_m = 0.1;
-  g.width = 3;
-  g.height = 2;
-  g.cells = {100, 0, -1, 70, 19, 50};
+  const GridMapData g = smallMap({100, 0, -1, 70, 19, 50});
   EXPECT_EQ(gridMapError(g, "", ""), "");
   EXPECT_NE(gridMapError(g, "resolution: 0.1", "resolution: 0").find("resolution must be"),
             std::string::npos);
