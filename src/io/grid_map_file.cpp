@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <iomanip>
 #include <sstream>
@@ -68,6 +69,18 @@ std::vector<std::string> writeGridMap(const std::string& prefix, const core::Gri
 }
 
 core::GridMapData readGridMap(const std::string& yaml_path) {
+  const std::filesystem::path given(yaml_path);
+  std::string extension = given.extension().string();
+  std::transform(extension.begin(), extension.end(), extension.begin(), ::tolower);
+  if (extension == ".pgm" || extension == ".png" || extension == ".bmp" || extension == ".jpg") {
+    throw std::runtime_error(yaml_path +
+                             ": an image; give the map's .yaml (image, resolution, "
+                             "origin), which names it");
+  }
+  std::error_code error;
+  if (std::filesystem::exists(given, error) && !std::filesystem::is_regular_file(given, error)) {
+    throw std::runtime_error(yaml_path + ": cannot be read (not a file)");
+  }
   YAML::Node root;
   try {
     root = YAML::LoadFile(yaml_path);
@@ -80,6 +93,7 @@ core::GridMapData readGridMap(const std::string& yaml_path) {
   std::string image;
   int negate = 0;
   double occupied_thresh = 0.65, free_thresh = 0.196, yaw = 0.0;
+  std::string mode = "trinary";
   try {
     if (!root.IsMap()) throw std::runtime_error(yaml_path + ": not a map_server map (not a map)");
     image = root["image"].as<std::string>();
@@ -94,6 +108,7 @@ core::GridMapData readGridMap(const std::string& yaml_path) {
     if (root["negate"]) negate = root["negate"].as<int>();
     if (root["occupied_thresh"]) occupied_thresh = root["occupied_thresh"].as<double>();
     if (root["free_thresh"]) free_thresh = root["free_thresh"].as<double>();
+    if (root["mode"]) mode = root["mode"].as<std::string>();
   } catch (const YAML::Exception& e) {
     throw std::runtime_error(yaml_path + ": not a map_server map: " + e.what());
   }
@@ -108,6 +123,11 @@ core::GridMapData readGridMap(const std::string& yaml_path) {
                              " is not supported (the map's rows must run along the map frame's "
                              "x axis): rotate the image and set the yaw to 0");
   }
+  if (mode != "trinary" && mode != "scale" && mode != "raw") {
+    throw std::runtime_error(yaml_path + ": mode '" + mode +
+                             "' is not one of map_server's "
+                             "trinary, scale, raw");
+  }
   if (negate != 0 && negate != 1) throw std::runtime_error(yaml_path + ": negate must be 0 or 1");
   if (!(free_thresh >= 0.0 && free_thresh < occupied_thresh && occupied_thresh <= 1.0)) {
     throw std::runtime_error(yaml_path + ": need 0 <= free_thresh < occupied_thresh <= 1");
@@ -115,6 +135,9 @@ core::GridMapData readGridMap(const std::string& yaml_path) {
   if (image.empty() || image[0] != '/') {
     const size_t slash = yaml_path.find_last_of('/');
     if (slash != std::string::npos) image = yaml_path.substr(0, slash + 1) + image;
+  }
+  if (!std::filesystem::is_regular_file(image, error)) {
+    throw std::runtime_error(image + " (the image of " + yaml_path + "): cannot be read");
   }
   std::ifstream pgm(image, std::ios::binary);
   std::string magic;
@@ -157,11 +180,21 @@ core::GridMapData readGridMap(const std::string& yaml_path) {
   for (int y = 0; y < grid.height; ++y) {
     for (int x = 0; x < grid.width; ++x) {
       const size_t pixel = static_cast<size_t>(grid.height - 1 - y) * grid.width + x;
+      int8_t& cell = grid.cells[static_cast<size_t>(y) * grid.width + x];
+      if (mode == "raw") {  // the pixel is the value; beyond 100 unknown
+        if (pixels[pixel] <= 100) cell = static_cast<int8_t>(pixels[pixel]);
+        continue;
+      }
       const double occupancy =
           negate ? pixels[pixel] / 255.0 : (255 - pixels[pixel]) / 255.0;  // map_server's rule
-      int8_t& cell = grid.cells[static_cast<size_t>(y) * grid.width + x];
-      if (occupancy > occupied_thresh) cell = 100;
-      else if (occupancy < free_thresh) cell = 0;
+      if (occupancy > occupied_thresh) {
+        cell = 100;
+      } else if (occupancy < free_thresh) {
+        cell = 0;
+      } else if (mode == "scale") {  // map_server: 1 + 98 x the place between the thresholds
+        cell = static_cast<int8_t>(
+            std::lround(1.0 + 98.0 * (occupancy - free_thresh) / (occupied_thresh - free_thresh)));
+      }
     }
   }
   return grid;

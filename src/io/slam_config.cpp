@@ -505,6 +505,11 @@ std::string loadPriorMap(const std::string& path, core::SlamSession* session) {
     core::GridMapData grid;
     try {
       grid = readGridMap(path);
+      if (grid.count(65, 100) == 0) {  // all free or unknown: nothing to localize on
+        throw ConfigError(path + ": the map has no occupied cell (" +
+                          std::to_string(grid.count(0, 64)) + " free, " +
+                          std::to_string(grid.count(-1, -1)) + " unknown)");
+      }
       if (!session->setPriorGridMap(grid)) throw ConfigError(variant + " cannot start from a map");
     } catch (const ConfigError&) {
       throw;
@@ -514,7 +519,7 @@ std::string loadPriorMap(const std::string& path, core::SlamSession* session) {
     }
     std::ostringstream what;
     what << "a " << grid.width << " x " << grid.height << " grid of " << grid.resolution_m
-         << " m cells (" << grid.count(100, 100) << " occupied)";
+         << " m cells (" << grid.count(65, 100) << " occupied)";
     return what.str();
   }
   if (kind == MapFileKind::kGrid) {

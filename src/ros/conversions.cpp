@@ -59,7 +59,7 @@ std::string fromInitialPose(const geometry_msgs::PoseWithCovarianceStamped& msg,
     *note = "(x, y, yaw rows of pose.covariance) " + problem +
             "; using rviz's 0.25 m^2, 0.25 m^2, 0.0685 rad^2 instead";
   }
-  if (unset || !problem.empty()) *covariance = Eigen::Vector3d(0.25, 0.25, 0.0685).asDiagonal();
+  if (unset || !problem.empty()) *covariance = core::defaultStartCovariance();
   return "";
 }
 

@@ -286,8 +286,6 @@ std::string describeTopics(const rosbag::Bag& bag) {
   return out;
 }
 
-/// Refuses a topic of the wrong message type (e.g. scan_topic set to an odometry topic)
-/// instead of counting every message as malformed.
 /// A recorded initialpose (rviz's 2D Pose Estimate) given to the session as the node would take
 /// it (fromInitialPose); one that cannot be taken is counted with the first reason.
 void takeInitialPose(const rosbag::MessageInstance& m, const std::string& map_frame,
@@ -320,6 +318,8 @@ void takeInitialPose(const rosbag::MessageInstance& m, const std::string& map_fr
   }
 }
 
+/// Refuses a topic of the wrong message type (e.g. scan_topic set to an odometry topic)
+/// instead of counting every message as malformed.
 void checkTopicTypes(rosbag::View& view, const std::string& bag_path, const io::RosOptions& ros,
                      const std::string& frontend) {
   const auto among = [](const std::string& topic, const std::vector<std::string>& names) {
@@ -522,7 +522,7 @@ std::vector<std::string> describeOutcome(const OfflineSummary& s, const OfflineO
     lines.push_back(std::to_string(s.updates_outside_grid) +
                     " update(s) with the robot outside the grid: nothing was mapped or matched "
                     "there, the pose is dead reckoning; " +
-                    core::kGridLimitAdvice);
+                    (s.prior_map ? core::kGridOffTheMapAdvice : core::kGridLimitAdvice));
   }
   if (s.readings_beyond_reach > 0) {
     lines.push_back(std::to_string(s.readings_beyond_reach) + " reading(s) " +
@@ -665,9 +665,10 @@ OfflineSummary OfflineRunner::run() {
                              " cannot take a start pose, or its covariance is unusable");
   }
   // rviz's 2D Pose Estimate, recorded with the data: taken where it comes, as the node does.
-  topics.push_back("/initialpose");
-  topics.push_back("initialpose");
-  rosbag::View view(bag, rosbag::TopicQuery(topics));
+  std::vector<std::string> read = topics;  // the inputs (copied to --output-bag) and the poses
+  read.push_back("/initialpose");
+  read.push_back("initialpose");
+  rosbag::View view(bag, rosbag::TopicQuery(read));
   ProgressBar progress(options_.progress);
   for (const rosbag::MessageInstance& m : view) {
     if (stripSlash(m.getTopic()) == "initialpose") {
@@ -925,6 +926,7 @@ OfflineSummary OfflineRunner::run() {
   summary.robust_steps = pipeline_.session().filter().stats().robust_steps;
   summary.ensemble_leader_changes = pipeline_.session().filter().stats().leader_changes;
   summary.updates_outside_grid = pipeline_.session().filter().stats().outside_grid;
+  summary.prior_map = pipeline_.session().hasPriorMap();
   summary.grid_growth_refused = pipeline_.session().filter().stats().grid_growth_refused;
   summary.readings_beyond_reach = pipeline_.session().filter().stats().readings_beyond_reach;
   summary.dpf_missed_answers = pipeline_.session().filter().stats().missed_answers;

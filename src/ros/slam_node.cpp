@@ -711,10 +711,12 @@ void SlamNode::publishDiagnostics(const ros::WallTimerEvent&) {
   // grid_pf's limits: a warning when a count grew since the last report.
   const core::FilterStats stats = pipeline_.session().filter().stats();
   if (stats.outside_grid > grid_seen_.outside_grid) {
-    warnThrottled("outside grid", std::string("the robot is outside the grid: nothing is mapped "
-                                              "or matched there and the pose is dead "
-                                              "reckoning; ") +
-                                      core::kGridLimitAdvice);
+    warnThrottled("outside grid",
+                  std::string("the robot is outside the grid: nothing is mapped "
+                              "or matched there and the pose is dead "
+                              "reckoning; ") +
+                      (pipeline_.session().hasPriorMap() ? core::kGridOffTheMapAdvice
+                                                         : core::kGridLimitAdvice));
   }
   if (stats.grid_growth_refused > grid_seen_.grid_growth_refused) {
     warnThrottled("grid growth", std::string("readings beyond the grid are not mapped: the grid "

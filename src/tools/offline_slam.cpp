@@ -45,6 +45,10 @@ const char kUsage[] =
 /// its standard deviations (default rviz's: 0.5 m, 0.26 rad).
 void parseInitialPose(const std::string& text, rbpf_slam::rosbridge::OfflineOptions* options) {
   std::vector<double> values;
+  if (!text.empty() && text.back() == ',') {
+    throw std::invalid_argument("--initial-pose: a number is missing after the last comma in '" +
+                                text + "'");
+  }
   std::stringstream in(text);
   std::string item;
   while (std::getline(in, item, ',')) {

@@ -44,6 +44,10 @@ expect "offline_slam missing bag" 1 "no_such_input" "$bin/offline_slam" --bag "$
   --config "$root/config/landmarks_fastslam2.yaml" --output "$work/o"
 expect "offline_slam bad seed" 2 "--seed needs a non-negative integer" "$bin/offline_slam" \
   --bag x.bag --config x.yaml --output "$work/o" --seed x
+for pose in 1,2 1,2,3, 1,2,nan 1,2,3,0,1; do
+  expect "offline_slam bad start pose $pose" 2 "--initial-pose" "$bin/offline_slam" --bag x.bag \
+    --config x.yaml --output x --initial-pose "$pose"
+done
 expect "offline_slam bad override" 2 "--set needs key=value" "$bin/offline_slam" --bag x.bag \
   --config x.yaml --output "$work/o" --set particles
 expect "offline_slam bad config value" 1 "particles" "$bin/offline_slam" --bag "$missing.bag" \

@@ -682,9 +682,10 @@ GridMapData smallMap(const std::vector<int8_t>& cells, double x = 0.0, double y 
   return map;
 }
 
-// A saved map becomes log odds at the filter's resolution: each cell takes the map cell holding
-// its centre, occupied the clamp, free minus the clamp, unknown (and 50 %) nothing; the origin
-// is kept. A map that is empty or lacks cells is refused by name.
+// A saved map becomes log odds at the filter's resolution: a finer cell takes the map cell
+// holding it, a coarser one the highest of those it overlaps (a thin wall must not vanish);
+// occupied the clamp, free minus the clamp, unknown (and 50 %) nothing; the origin is kept. A
+// map that is empty, lacks cells or would take more than 1e9 cells is refused by name.
 TEST(GridMapLoading, AMapBecomesLogOddsAtTheFilterResolution) {
   const GridMapData map = smallMap({100, 0, -1, 50, 100, 0}, -0.3, 1.0);
   GridOptions o;
@@ -708,12 +709,31 @@ TEST(GridMapLoading, AMapBecomesLogOddsAtTheFilterResolution) {
   EXPECT_EQ(cx, 1);
   EXPECT_EQ(cy, 3);
   EXPECT_EQ(grid.toGridMap().count(65, 100), 8);  // back to occupancy: 2 map cells x 4
-  o.resolution_m = 0.2;  // coarser: each cell takes the map cell at its centre
+  o.resolution_m = 0.2;  // coarser: each cell takes the highest of the map cells it overlaps
   const TiledLogOddsGrid coarse = gridFromMap(map, o);
   EXPECT_EQ(coarse.width(), 2);
   EXPECT_EQ(coarse.height(), 1);
-  EXPECT_FLOAT_EQ(coarse.logOdds(0, 0), 4.0f);  // centre (0.1, 0.1): map cell (1, 1), occupied
-  EXPECT_FLOAT_EQ(coarse.logOdds(1, 0), 0.0f);   // centre (0.3, 0.1): beyond the map's width
+  EXPECT_FLOAT_EQ(coarse.logOdds(0, 0), 4.0f);   // map cells x 0-1: 100, 0, 50, 100
+  EXPECT_FLOAT_EQ(coarse.logOdds(1, 0), -4.0f);  // map cells x 2 (-1, 0) and beyond: free
+
+  // A wall one map cell thick stays whole in cells of 2 and 3 map cells, wherever it lies.
+  for (int wall_x : {4, 5}) {
+    GridMapData thin;
+    thin.resolution_m = 0.01;
+    thin.width = 12;
+    thin.height = 12;
+    thin.cells.assign(144, 0);
+    for (int y = 0; y < 12; ++y) thin.cells[y * 12 + wall_x] = 100;
+    for (double resolution : {0.02, 0.03}) {
+      o.resolution_m = resolution;
+      const TiledLogOddsGrid g = gridFromMap(thin, o);
+      const int column = static_cast<int>(wall_x * 0.01 / resolution + 1e-9);
+      for (int y = 0; y < g.height(); ++y) {
+        EXPECT_FLOAT_EQ(g.logOdds(column, y), 4.0f) << wall_x << " at " << resolution << ", " << y;
+        EXPECT_FLOAT_EQ(g.logOdds(column == 0 ? 1 : 0, y), -4.0f) << wall_x << ", " << y;
+      }
+    }
+  }
 
   auto error = [&](const GridMapData& m) -> std::string {
     try {
@@ -732,6 +752,38 @@ TEST(GridMapLoading, AMapBecomesLogOddsAtTheFilterResolution) {
   bad = map;
   bad.origin_x_m = std::nan("");
   EXPECT_NE(error(bad).find("origin"), std::string::npos) << error(bad);
+  bad = map;
+  bad.resolution_m = 1000.0;  // 3 km x 2 km in cells of 5 cm: 2.4e9 cells
+  o.resolution_m = 0.05;
+  EXPECT_NE(error(bad).find("more than 1e9"), std::string::npos) << error(bad);
+}
+
+// A map whose tile tables would not fit is refused before anything is built (one cell of 1.5 km
+// is 30000 x 30000 cells of 5 cm, 900 MB of tables per particle in tiles of 4 cells), and the
+// filter keeps what it had.
+TEST(GridMapLoading, AMapTooLargeForTheTablesIsRefusedFirst) {
+  FilterOptions o = gridOptions(2);
+  o.grid.tile_cells = 4;
+  GridParticleFilter filter(o);
+  filter.reset(Pose2::Zero());
+  filter.update(roomScan(0.0, 0.0));
+  GridMapData before;
+  ASSERT_TRUE(filter.occupancyGrid(before));
+  GridMapData huge;
+  huge.resolution_m = 1500.0;
+  huge.width = huge.height = 1;
+  huge.cells = {100};
+  try {
+    filter.loadGridMap(huge);
+    FAIL() << "no error";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("the map: the grid's tile tables would take"),
+              std::string::npos)
+        << e.what();
+  }
+  GridMapData after;
+  ASSERT_TRUE(filter.occupancyGrid(after));
+  EXPECT_EQ(after.cells, before.cells);
 }
 
 /// The occupancy grid of the 6 m x 4 m room of roomScan, mapped from a few poses.
@@ -799,12 +851,52 @@ TEST(GridMapLoading, ParticlesFindTheRobotOnALoadedMap) {
   EXPECT_NEAR(reported.origin_x_m, map.origin_x_m, 1e-9);
   EXPECT_NEAR(reported.origin_y_m, map.origin_y_m, 1e-9);
   EXPECT_EQ(reported.cells, map.cells);
+  // A reset (a bag played again, ~reset) starts the next run at the start given before the
+  // first frame, on the map: not at the odometry's coordinates.
   session.reset();
-  FeatureSet scan = roomScan(truth.x(), truth.y());
-  session.process(10.0, truth, scan);  // map == odom at the restart
+  for (int k = 0; k < 3; ++k) {
+    FeatureSet scan = roomScan(truth.x(), truth.y());
+    session.process(10.0 + k, odom_start, scan);
+  }
   ASSERT_TRUE(session.filter().occupancyGrid(reported));
   EXPECT_EQ(reported.cells, map.cells);
   EXPECT_NEAR(reported.origin_x_m, map.origin_x_m, 1e-9);
+  EXPECT_LT((session.filter().estimate().mean.head<2>() - truth.head<2>()).norm(), 0.05)
+      << "after a reset: " << session.filter().estimate().mean.transpose();
+}
+
+// An odometry gap with gap_action "reset" on a prior map: the new run starts where the robot
+// is on the map (the last correction applied to the odometry), not at its odometry coordinates,
+// which on a map that is not the odometry's frame are somewhere else.
+TEST(GridMapLoading, AGapResetOnAMapKeepsTheRobotWhereItWas) {
+  FilterOptions o = gridOptions(200);
+  o.resample_threshold = 0.5;
+  SessionOptions session_options;
+  session_options.gap_action = "reset";  // a frame more than max_time_gap_s (30) after the last
+  SlamSession session(createFilter(o), session_options);
+  ASSERT_TRUE(session.setPriorGridMap(roomMap(o.grid)));
+  ASSERT_TRUE(session.setMapping(false));
+  const Pose2 start(0.8, -0.5, 0.0);
+  ASSERT_TRUE(session.setPose(start, Eigen::Vector3d(1e-4, 1e-4, 1e-4).asDiagonal()));
+  const Pose2 odom_start(5.0, 7.0, 0.0);
+  for (int k = 0; k < 3; ++k) {
+    FeatureSet scan = roomScan(start.x(), start.y());
+    session.process(1.0 + k, odom_start, scan);
+  }
+  // 40 s later, 0.6 m on (the odometry tells it right): a gap, and a new run.
+  const Pose2 there(1.4, -0.5, 0.0);
+  for (int k = 0; k < 3; ++k) {
+    FeatureSet scan = roomScan(there.x(), there.y());
+    const FrameResult result = session.process(43.0 + k, Pose2(5.6, 7.0, 0.0), scan);
+    if (k == 0) {
+      EXPECT_EQ(result, FrameResult::kReset);
+    }
+  }
+  EXPECT_EQ(session.gaps(), 1);
+  const Pose2 now = session.filter().estimate().mean;
+  // Found within the spread it restarts with (its covariance plus rviz's 0.5 m).
+  EXPECT_LT((now.head<2>() - there.head<2>()).norm(), 0.15) << now.transpose();
+  EXPECT_LT(std::fabs(now.z()), 0.05) << now.transpose();
 }
 
 TEST(SlamPipeline, ConeReadingsReachTheFilterInTheBaseFrameOfTheUpdate) {
@@ -939,6 +1031,36 @@ TEST(GridConfig, EachVariantStartsFromItsKindOfMapFile) {
   rmdir(dir);
 }
 
+// The map files a user can get wrong, each named: the image given for the YAML, a directory, a
+// missing image, and a map with nothing occupied (nothing to localize on).
+TEST(GridConfig, UnusableGridMapFilesAreNamed) {
+  char dir[] = "/tmp/grid_map_unusableXXXXXX";
+  ASSERT_NE(mkdtemp(dir), nullptr);
+  const std::string d = dir;
+  io::SlamConfig config = io::loadSlamConfig(std::string(RBPF_SOURCE_DIR) + "/config/grid_pf.yaml");
+  SlamPipeline pipeline(config.pipeline());
+  auto error = [&](const std::string& file) {
+    config.map_file = file;
+    return mapConfigError(config, &pipeline);
+  };
+  const std::vector<std::string> files =
+      io::writeGridMap(d + "/m", smallMap({100, 0, -1, 0, 0, 0}));
+  EXPECT_EQ(error(files[1]), "");
+  EXPECT_NE(error(files[0]).find("an image; give the map's .yaml"), std::string::npos)
+      << error(files[0]);
+  EXPECT_NE(error(d).find("cannot be read (not a file)"), std::string::npos) << error(d);
+  const std::vector<std::string> empty = io::writeGridMap(d + "/e", smallMap({0, 0, -1, 0, 0, -1}));
+  EXPECT_NE(error(empty[1]).find("the map has no occupied cell (4 free, 2 unknown)"),
+            std::string::npos)
+      << error(empty[1]);
+  std::remove(empty[0].c_str());
+  EXPECT_NE(error(empty[1]).find("e.pgm (the image of " + empty[1] + "): cannot be read"),
+            std::string::npos)
+      << error(empty[1]);
+  for (const std::string& f : {files[0], files[1], empty[1]}) std::remove(f.c_str());
+  rmdir(dir);
+}
+
 TEST(GridConfig, ErrorsNameTheGridKey) {
   auto error = [](const std::string& yaml) -> std::string {
     try {
@@ -1029,6 +1151,32 @@ TEST(GridMapFile, BrokenMapFilesAreNamed) {
   EXPECT_NE(huge.find("truncated (100000 x 100000 pixels announced, 2 bytes of data)"),
             std::string::npos)
       << huge;
+}
+
+// map_server's three modes: trinary (thresholds), scale (1..99 between them), raw (the pixel).
+TEST(GridMapFile, ScaleAndRawModesFollowMapServer) {
+  // Pixels, top row first: 0 (black), 128, 255 (white) / 0, 50, 101.
+  const std::string pgm =
+      std::string("P5\n3 2\n255\n") + std::string("\x00\x80\xff\x00\x32\x65", 6);
+  const GridMapData g = smallMap({-1, -1, -1, -1, -1, -1});
+  EXPECT_NE(gridMapError(g, "negate: 0", "negate: 0\nmode: bogus", pgm).find("mode 'bogus'"),
+            std::string::npos);
+  auto cells = [&](const std::string& mode) {
+    char dir[] = "/tmp/grid_map_modeXXXXXX";
+    if (mkdtemp(dir) == nullptr) return std::vector<int8_t>{};
+    const std::vector<std::string> files = io::writeGridMap(std::string(dir) + "/m", g);
+    std::ofstream(files[0], std::ios::binary) << pgm;
+    std::ofstream(files[1], std::ios::app) << "mode: " << mode << "\n";
+    const std::vector<int8_t> out = io::readGridMap(files[1]).cells;
+    for (const auto& f : files) std::remove(f.c_str());
+    rmdir(dir);
+    return out;
+  };
+  // Row 0 is the image's bottom row. Occupancy (255 - pixel) / 255: 1, 0.8, 0.6 / 1, 0.5, 0.
+  EXPECT_EQ(cells("trinary"), (std::vector<int8_t>{100, 100, -1, 100, -1, 0}));
+  // scale: 0.6 -> 1 + 98 (0.6039 - 0.196) / (0.65 - 0.196) = 89; 0.498 -> 66
+  EXPECT_EQ(cells("scale"), (std::vector<int8_t>{100, 100, 89, 100, 66, 0}));
+  EXPECT_EQ(cells("raw"), (std::vector<int8_t>{0, 50, -1, 0, -1, -1}));
 }
 
 }  // namespace

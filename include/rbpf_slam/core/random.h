@@ -30,6 +30,11 @@ bool poseCovarianceUsable(const Eigen::Matrix3d& covariance);
 /// Why poseCovarianceUsable refuses covariance ("is not symmetric (xy ... / yx ...)", ...), or
 /// "" when it is usable.
 std::string poseCovarianceProblem(const Eigen::Matrix3d& covariance);
+/// The spread rviz's 2D Pose Estimate sends (0.25 m^2, 0.25 m^2, 0.0685 rad^2): the default
+/// uncertainty of a start pose given without one.
+inline Eigen::Matrix3d defaultStartCovariance() {
+  return Eigen::Vector3d(0.25, 0.25, 0.0685).asDiagonal();
+}
 
 /// One draw from N(mean, cov) for a 2x2 or 3x3 covariance (Cholesky; jitter when semidefinite).
 template <int N>

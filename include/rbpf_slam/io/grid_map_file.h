@@ -19,7 +19,10 @@ std::vector<std::string> gridMapFiles(const std::string& prefix);
 std::vector<std::string> writeGridMap(const std::string& prefix, const core::GridMapData& grid,
                                       const std::string& comment = "rbpf_slam map");
 
-/// Reads a map written by writeGridMap (or map_saver, trinary P5) back: 100, 0 or -1 per cell.
+/// Reads a map_server map (a map written by writeGridMap or map_saver; binary PGM images) back:
+/// mode trinary (the default) gives 100, 0 or -1 per cell, scale also 1..99 between the
+/// thresholds, raw the pixel values (over 100: -1). Throws std::runtime_error naming the file
+/// and what is wrong (an image given instead of the YAML, a yaw in the origin, ...).
 core::GridMapData readGridMap(const std::string& yaml_path);
 
 /// The run picture over a grid: grey unknown, white free, black occupied, the reference

@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "rbpf_slam/core/random.h"
 #include "rbpf_slam/core/slam/slam_pipeline.h"
 #include "rbpf_slam/io/slam_config.h"
 
@@ -24,7 +25,7 @@ struct OfflineOptions {
   // (rviz's 2D Pose Estimate, recorded) are used either way, at their place in the bag.
   bool has_initial_pose = false;
   core::Pose2 initial_pose = core::Pose2::Zero();
-  Eigen::Matrix3d initial_covariance = Eigen::Vector3d(0.25, 0.25, 0.0685).asDiagonal();
+  Eigen::Matrix3d initial_covariance = core::defaultStartCovariance();
 };
 
 /// Counts and timings of one offline run.
@@ -44,6 +45,7 @@ struct OfflineSummary {
   long gaps = 0;  // steps across a time gap or odometry jump (max_time_gap, max_odometry_jump)
   long dropped_no_tf = 0;
   long dropped_bad_message = 0;
+  bool prior_map = false;          // the run started from a map (map_file)
   long initial_poses = 0;          // initialpose messages of the bag that set the pose
   long ignored_initial_poses = 0;  // ... and those that could not (frame, non-finite, variant)
   std::string first_ignored_initial_pose;  // why the first of them was

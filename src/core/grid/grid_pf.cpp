@@ -17,35 +17,75 @@ namespace rbpf_slam {
 namespace core {
 namespace {
 
-/// Every particle's grid holds a table of tile pointers over the whole map, allocated when the
-/// filter starts (the tiles themselves come as the map fills): bytes per particle for a grid of
-/// size_x_m x size_y_m.
-double tileTableBytes(const GridOptions& o, double size_x_m, double size_y_m) {
-  const double width = std::ceil(size_x_m / o.resolution_m);
-  const double height = std::ceil(size_y_m / o.resolution_m);
-  return std::ceil(width / o.tile_cells) * std::ceil(height / o.tile_cells) *
-         static_cast<double>(sizeof(std::shared_ptr<void>));  // as any shared_ptr
-}
-
 /// The tile tables of every particle together may take at most this much memory.
 constexpr double kMaxTileTablesBytes = 4.0 * (1ull << 30);
 
-/// Refuses (std::invalid_argument) a grid of size_x_m x size_y_m, `what`, whose tile tables
-/// would not fit in kMaxTileTablesBytes at the peak: the particles' tables and, while
-/// resampling, their copies, plus one.
-void requireTablesFit(const GridOptions& o, double size_x_m, double size_y_m, int particles,
+/// Refuses (std::invalid_argument) a grid of width x height cells, `what`, whose tile tables
+/// would not fit in kMaxTileTablesBytes at the peak: every particle's grid holds a table of
+/// tile pointers over the whole grid, allocated when the grid is made (the tiles themselves come
+/// as the map fills), and while resampling the copies' tables exist beside them, plus one.
+void requireTablesFit(const GridOptions& o, double width, double height, int particles,
                       const std::string& what) {
-  const double bytes = tileTableBytes(o, size_x_m, size_y_m) * (2.0 * particles + 1.0);
+  const double table_bytes = std::ceil(width / o.tile_cells) * std::ceil(height / o.tile_cells) *
+                             static_cast<double>(sizeof(std::shared_ptr<void>));
+  const double bytes = table_bytes * (2.0 * particles + 1.0);
   if (bytes <= kMaxTileTablesBytes) return;
   std::ostringstream why;
   why << what << ": the grid's tile tables would take " << std::setprecision(3)
       << bytes / (1ull << 30) << " GiB at the peak (2 x " << particles
-      << " particles while resampling + 1, each a table of " << size_x_m << " m x " << size_y_m
-      << " m / (grid.resolution_m x grid.tile_cells)^2 tiles, " << sizeof(std::shared_ptr<void>)
+      << " particles while resampling + 1, each a table of " << width << " x " << height
+      << " cells / grid.tile_cells^2 tiles, " << sizeof(std::shared_ptr<void>)
       << " bytes each), more than " << kMaxTileTablesBytes / (1ull << 30)
       << " GiB: use a smaller map, coarser cells (grid.resolution_m), a larger grid.tile_cells "
          "or fewer particles";
   throw std::invalid_argument(why.str());
+}
+
+/// A map's extent in cells of grid.resolution_m; throws std::invalid_argument naming what is
+/// wrong with the map (empty, cells missing, non-finite, more cells than 4 GiB of tiles hold).
+struct MapExtent {
+  int width = 0, height = 0;
+};
+MapExtent mapExtent(const GridMapData& map, const GridOptions& g) {
+  std::ostringstream size;
+  size << map.width << " x " << map.height << " cells of " << map.resolution_m << " m";
+  if (map.width <= 0 || map.height <= 0) {
+    throw std::invalid_argument("the map is empty (" + size.str() + ")");
+  }
+  if (map.cells.size() != static_cast<size_t>(map.width) * map.height) {
+    throw std::invalid_argument("the map has " + std::to_string(map.cells.size()) +
+                                " cell values for " + size.str());
+  }
+  if (!(std::isfinite(map.resolution_m) && map.resolution_m > 0.0) ||
+      !std::isfinite(map.origin_x_m) || !std::isfinite(map.origin_y_m)) {
+    throw std::invalid_argument(
+        "the map's resolution must be finite and > 0, its origin "
+        "finite (" +
+        size.str() + ")");
+  }
+  const double width = std::ceil(map.width * map.resolution_m / g.resolution_m - 1e-9);
+  const double height = std::ceil(map.height * map.resolution_m / g.resolution_m - 1e-9);
+  // Each known cell takes 4 bytes in its tile: at most 4 GiB of them.
+  if (width * height > 1e9) {
+    std::ostringstream why;
+    why << "the map (" << size.str() << ") is " << width << " x " << height << " cells of "
+        << "grid.resolution_m = " << g.resolution_m << " m, more than 1e9 (4 GiB): use coarser "
+        << "cells";
+    throw std::invalid_argument(why.str());
+  }
+  return {static_cast<int>(width), static_cast<int>(height)};
+}
+
+/// For each of n cells of size `cell` along an axis, the first and last of the map's cells of
+/// size `map_cell` (m of them) it overlaps.
+std::vector<std::pair<int, int>> coveredCells(int n, double cell, double map_cell, int m) {
+  std::vector<std::pair<int, int>> out(n);
+  for (int i = 0; i < n; ++i) {
+    const int first = std::min(m - 1, static_cast<int>(std::floor(i * cell / map_cell + 1e-9)));
+    const int last = static_cast<int>(std::ceil((i + 1) * cell / map_cell - 1e-9)) - 1;
+    out[i] = {first, std::min(m - 1, std::max(first, last))};
+  }
+  return out;
 }
 
 }  // namespace
@@ -115,7 +155,9 @@ GridParticleFilter::GridParticleFilter(const FilterOptions& options)
     : options_(options), motion_(createMotionModel(options.motion)), rng_(options.seed) {
   validate(options_.grid);
   if (options_.particles < 1) throw std::invalid_argument("particles must be >= 1");
-  requireTablesFit(options_.grid, options_.grid.size_x_m, options_.grid.size_y_m,
+  // As firstGrid() sizes it, before any table is allocated.
+  requireTablesFit(options_.grid, std::ceil(options_.grid.size_x_m / options_.grid.resolution_m),
+                   std::ceil(options_.grid.size_y_m / options_.grid.resolution_m),
                    options_.particles, "grid.size_x_m x grid.size_y_m");
   reset();
 }
@@ -128,38 +170,21 @@ TiledLogOddsGrid firstGrid(const GridOptions& g, const Pose2& centre) {
 }
 
 TiledLogOddsGrid gridFromMap(const GridMapData& map, const GridOptions& g) {
-  std::ostringstream size;
-  size << map.width << " x " << map.height << " cells of " << map.resolution_m << " m";
-  if (map.width <= 0 || map.height <= 0) {
-    throw std::invalid_argument("the map is empty (" + size.str() + ")");
-  }
-  if (map.cells.size() != static_cast<size_t>(map.width) * map.height) {
-    throw std::invalid_argument("the map has " + std::to_string(map.cells.size()) +
-                                " cell values for " + size.str());
-  }
-  if (!(std::isfinite(map.resolution_m) && map.resolution_m > 0.0) ||
-      !std::isfinite(map.origin_x_m) || !std::isfinite(map.origin_y_m)) {
-    throw std::invalid_argument("the map's resolution must be finite and > 0, its origin "
-                                "finite (" + size.str() + ")");
-  }
-  const double size_x_m = map.width * map.resolution_m, size_y_m = map.height * map.resolution_m;
-  // In the filter's cells (grid.resolution_m): a map saved at another resolution is resampled.
-  const double width = std::ceil(size_x_m / g.resolution_m - 1e-9);
-  const double height = std::ceil(size_y_m / g.resolution_m - 1e-9);
-  if (width * height > 4e9) {
-    throw std::invalid_argument("the map (" + size.str() +
-                                ") exceeds 4e9 cells of grid.resolution_m: use coarser cells");
-  }
-  TiledLogOddsGrid grid(g.resolution_m, map.origin_x_m, map.origin_y_m, static_cast<int>(width),
-                        static_cast<int>(height), g.tile_cells);
+  const MapExtent extent = mapExtent(map, g);
+  TiledLogOddsGrid grid(g.resolution_m, map.origin_x_m, map.origin_y_m, extent.width, extent.height,
+                        g.tile_cells);
+  // Each cell takes the highest occupancy of the map cells it overlaps (occupied over free over
+  // unknown): a wall one map cell thick stays a wall in coarser cells.
+  const auto xs = coveredCells(extent.width, g.resolution_m, map.resolution_m, map.width);
+  const auto ys = coveredCells(extent.height, g.resolution_m, map.resolution_m, map.height);
   const double clamp = g.log_odds_clamp;
-  for (int y = 0; y < grid.height(); ++y) {
-    const int my = static_cast<int>((y + 0.5) * g.resolution_m / map.resolution_m);
-    if (my >= map.height) break;
-    for (int x = 0; x < grid.width(); ++x) {
-      const int mx = static_cast<int>((x + 0.5) * g.resolution_m / map.resolution_m);
-      if (mx >= map.width) break;
-      const int value = map.at(mx, my);
+  for (int y = 0; y < extent.height; ++y) {
+    for (int x = 0; x < extent.width; ++x) {
+      int value = -1;
+      for (int my = ys[y].first; my <= ys[y].second; ++my) {
+        for (int mx = xs[x].first; mx <= xs[x].second; ++mx)
+          value = std::max<int>(value, map.at(mx, my));
+      }
       if (value < 0) continue;  // unknown: log odds 0, no tile needed
       const double p = std::min(value, 100) / 100.0;
       const double l = std::clamp(std::log(p / (1.0 - p)), -clamp, clamp);  // +-inf at 1 / 0
@@ -306,11 +331,21 @@ bool GridParticleFilter::resetPose(const Pose2& pose, const Eigen::Matrix3d& cov
 }
 
 bool GridParticleFilter::loadGridMap(const GridMapData& map) {
-  TiledLogOddsGrid grid = gridFromMap(map, options_.grid);
-  requireTablesFit(options_.grid, grid.width() * grid.resolution(),
-                   grid.height() * grid.resolution(), options_.particles, "the map");
-  limits_ = growthLimits(options_.grid, grid, 2 * options_.particles + 1);
-  for (Particle& p : particles_) p.grid = grid;  // one map: every particle shares its tiles
+  const MapExtent extent = mapExtent(map, options_.grid);  // checked before anything is built
+  requireTablesFit(options_.grid, extent.width, extent.height, options_.particles, "the map");
+  // The session gives the same map again after every reset, moved by where the filter's
+  // coordinates start (AnchoredFilter): the grid built last time is moved, not rebuilt.
+  const bool same = loaded_map_ && loaded_map_->resolution_m == map.resolution_m &&
+                    loaded_map_->width == map.width && loaded_map_->height == map.height &&
+                    loaded_map_->cells == map.cells;
+  if (!same) {
+    loaded_grid_ = gridFromMap(map, options_.grid);
+    GridMapData kept = map;
+    loaded_map_ = std::make_shared<const GridMapData>(std::move(kept));
+  }
+  loaded_grid_.moveTo(map.origin_x_m, map.origin_y_m);
+  limits_ = growthLimits(options_.grid, loaded_grid_, 2 * options_.particles + 1);
+  for (Particle& p : particles_) p.grid = loaded_grid_;  // every particle shares its tiles
   weights_.assign(particles_.size(), 1.0 / particles_.size());
   resampled_best_ = -1;
   return true;

@@ -87,6 +87,7 @@ bool SlamSession::setPose(const Pose2& pose, const Eigen::Matrix3d& covariance) 
   if (!pose.allFinite() || !poseCovarianceUsable(covariance)) return false;
   if (!has_previous_) {
     start_pose_.emplace(pose, covariance);
+    given_start_ = start_pose_;  // a restarted run (bag loop, ~reset) starts there again
     return true;
   }
   if (!filter_->resetPose(pose, covariance)) return false;
@@ -105,7 +106,7 @@ void SlamSession::reset() {
 void SlamSession::restart() {
   filter_->reset(Pose2::Zero());
   reloadPriorMap();
-  start_pose_.reset();
+  start_pose_ = given_start_;
   has_previous_ = false;
   last_stamp_ = 0.0;
   map_to_odom_ = Pose2::Zero();
@@ -197,7 +198,15 @@ FrameResult SlamSession::process(double stamp, const Pose2& odom_pose,
     ++gaps_;
     if (options_.gap_action == "reset") {
       const long gaps = gaps_;
+      // On a prior map the robot is still where the correction puts it, less sure by rviz's
+      // default spread: the new run starts there, not at its odometry coordinates.
+      std::optional<std::pair<Pose2, Eigen::Matrix3d>> here;
+      const PoseEstimate last = filter_->estimate();
+      if (hasPriorMap() && map_to_odom_.allFinite() && last.covariance.allFinite()) {
+        here.emplace(compose(map_to_odom_, odom_pose), last.covariance + defaultStartCovariance());
+      }
       restart();  // the odometry stamps stay: they are still this run's
+      if (here && poseCovarianceUsable(here->second)) start_pose_ = here;
       gaps_ = gaps;
       process(stamp, odom_pose, features);  // the first frame of a new map
       return FrameResult::kReset;

@@ -50,6 +50,12 @@ constexpr const char* kGridLimitAdvice =
     "fit in memory: raise grid.max_size_m, coarsen grid.resolution_m or enlarge "
     "grid.tile_cells (with mapping off, nothing grows)";
 
+/// What to check when the robot is outside a map it was given (map_file, ~load_map).
+constexpr const char* kGridOffTheMapAdvice =
+    "on a loaded map the robot is off it: most likely its start was not given on the map "
+    "(rviz's 2D Pose Estimate / initialpose, offline_slam --initial-pose; without one the first "
+    "odometry pose is taken as the pose in the map), or the map does not cover where it went";
+
 /// Said of readings whose echo lies beyond grid.size_x_m x grid.size_y_m's diagonal.
 constexpr const char* kGridReachAdvice =
     "with an echo beyond the diagonal of the first extent (grid.size_x_m x grid.size_y_m), the "

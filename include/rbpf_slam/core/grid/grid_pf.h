@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "rbpf_slam/core/filters/slam_filter.h"
+#include "rbpf_slam/core/grid/grid_map_data.h"
 #include "rbpf_slam/core/grid/grid_options.h"
 #include "rbpf_slam/core/grid/inverse_sensor_model.h"
 #include "rbpf_slam/core/grid/tiled_grid.h"
@@ -24,10 +25,11 @@ double localMapReach(const std::vector<LocalMapCell>& local, double resolution_m
 /// grid of a run (each particle's, render_grid's) starts from it, so all share one tile lattice.
 TiledLogOddsGrid firstGrid(const GridOptions& options, const Pose2& centre);
 /// A saved occupancy grid (map frame, nav_msgs conventions) as a log-odds grid of
-/// options.resolution_m cells over the same extent: each cell takes the occupancy of the map
-/// cell holding its centre, as log odds clamped to grid.log_odds_clamp (occupied 100: the
-/// clamp, free 0: minus the clamp, unknown -1: 0). Throws std::invalid_argument naming what is
-/// wrong with the map (empty, cells missing, non-finite, too many cells).
+/// options.resolution_m cells over the same extent, cell (0, 0) at the map's: each cell takes
+/// the highest occupancy of the map cells it overlaps (a finer cell: the one holding it), as log
+/// odds clamped to grid.log_odds_clamp (occupied 100: the clamp, free 0: minus the clamp, unknown
+/// -1: 0). Throws std::invalid_argument naming what is wrong with the map (empty, cells missing,
+/// non-finite, more than 1e9 cells of options.resolution_m).
 TiledLogOddsGrid gridFromMap(const GridMapData& map, const GridOptions& options);
 /// How far a grid may grow (TiledLogOddsGrid::grow): grid.max_size_m in tiles per axis (never
 /// below the first grid's), and the tiles one table may hold when `tables` of them must fit in
@@ -100,6 +102,9 @@ class GridParticleFilter : public SlamFilter {
   LocalMapStats local_stats_;  // totals since reset
   bool mapping_ = true;
   GridGrowthLimits limits_;
+  // The last map loaded (loadGridMap) and its grid, kept to give it again after a reset.
+  std::shared_ptr<const GridMapData> loaded_map_;
+  TiledLogOddsGrid loaded_grid_;
 };
 
 }  // namespace core

@@ -46,6 +46,14 @@ class TiledLogOddsGrid {
   bool grow(const Eigen::Vector2d& min, const Eigen::Vector2d& max, int max_tiles_x,
             int max_tiles_y, long max_tiles);
 
+  /// Moves the whole grid so that cell (0, 0)'s corner is at (origin_x_m, origin_y_m): every
+  /// cell keeps its index and value, the tile lattice moves with it.
+  void moveTo(double origin_x_m, double origin_y_m) {
+    base_x_m_ = origin_x_m - (origin_x_m_ - base_x_m_);  // exactly the origin when they agree
+    base_y_m_ = origin_y_m - (origin_y_m_ - base_y_m_);
+    origin_x_m_ = origin_x_m;
+    origin_y_m_ = origin_y_m;
+  }
   /// Log odds of an inside cell (0 when its tile was never written).
   float logOdds(int cx, int cy) const {
     const Tile* tile = tiles_[tileIndex(cx, cy)].get();

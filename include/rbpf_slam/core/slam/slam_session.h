@@ -116,8 +116,10 @@ class SlamSession {
   void addOdometryStamp(double stamp) { odometry_stamps_.add(stamp); }
   /// The odometry pose of the last frame the filter used.
   const Pose2& lastOdomPose() const { return last_odom_; }
-  /// Clears the filter and the history (e.g. after the clock jumped backwards); a prior map
-  /// and the mapping mode are kept.
+  /// Clears the filter and the history (e.g. after the clock jumped backwards); a prior map,
+  /// the mapping mode and a start pose given before the first frame (setPose) are kept: the
+  /// next frame starts there again. (A reset for an odometry gap, gap_action "reset", on a prior
+  /// map starts the new run where the robot was on that map instead.)
   void reset();
 
   /// A map to start from (map frame), e.g. a saved one: given to the filter now and again
@@ -131,6 +133,7 @@ class SlamSession {
   bool setMapping(bool enabled);
   bool mapping() const { return mapping_; }
   /// Puts the robot at pose (map frame) with this uncertainty (rviz's 2D Pose Estimate).
+  /// Before the first frame, the start of this run and of every restarted one (reset()).
   /// Before the first frame, the first frame starts there instead of at the map origin.
   /// False (nothing changed) for a non-finite pose, a covariance that poseCovarianceUsable()
   /// refuses, or one the filter variant cannot take.
@@ -185,6 +188,7 @@ class SlamSession {
   std::optional<std::vector<LandmarkEstimate>> prior_map_;
   std::optional<GridMapData> prior_grid_;
   std::optional<std::pair<Pose2, Eigen::Matrix3d>> start_pose_;  // for the first frame
+  std::optional<std::pair<Pose2, Eigen::Matrix3d>> given_start_;  // given before the first one
   bool mapping_ = true;
 };
 
