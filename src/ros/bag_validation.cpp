@@ -101,6 +101,8 @@ BagReport validateBag(const std::string& path, const BagValidationOptions& optio
 
   std::map<std::string, StreamState> streams;  // topic or tf edge
   std::map<std::string, std::set<std::string>> tf_neighbours;
+  std::map<std::string, std::set<std::string>> tf_children;  // parent -> children, as sent
+  std::set<std::string> tf_child_frames;
   std::map<std::string, std::string> range_topics;  // topics of sensor_msgs/Range
   std::set<std::string> odometry_topics;            // nav_msgs/Odometry (SLAM reads tf)
   std::set<std::string> features_topics;            // rbpf_slam/FeatureArray
@@ -126,6 +128,8 @@ BagReport validateBag(const std::string& path, const BagValidationOptions& optio
           if (problem.empty()) {
             tf_neighbours[parent].insert(child);
             tf_neighbours[child].insert(parent);
+            tf_children[parent].insert(child);
+            tf_child_frames.insert(child);
           }
         }
         continue;
@@ -205,8 +209,30 @@ BagReport validateBag(const std::string& path, const BagValidationOptions& optio
     }
   }
   if (!tf_neighbours.count(options.odom_frame) || !connected.count(options.odom_frame)) {
+    // What the bag's tf does hold, as a hint: the odometry frame's children (one is most likely
+    // the base frame), or without that frame the roots of its trees (one is most likely it).
+    const auto list = [](const std::set<std::string>& frames) {
+      std::string out;
+      for (const std::string& f : frames) out += (out.empty() ? "'" : "', '") + f;
+      return out + "'";
+    };
+    std::string hint;
+    if (tf_children.count(options.odom_frame)) {
+      hint = "; the bag's tf has " + options.odom_frame + " -> " +
+             list(tf_children.at(options.odom_frame)) +
+             ": is one of those the base frame (--base-frame, the config's base_frame)?";
+    } else {
+      std::set<std::string> roots;
+      for (const auto& [parent, children] : tf_children) {
+        if (!tf_child_frames.count(parent)) roots.insert(parent);
+      }
+      hint = roots.empty() ? "; the bag has no tf at all"
+                           : "; the bag's tf starts at " + list(roots) +
+                                 ": is one of those the odometry frame (--odom-frame, the "
+                                 "config's odom_frame)?";
+    }
     report.problems.push_back("tf never connects " + options.odom_frame + " and " +
-                              options.base_frame + ": no odometry for SLAM");
+                              options.base_frame + ": no odometry for SLAM" + hint);
   }
 
   for (auto& [name, state] : streams) {

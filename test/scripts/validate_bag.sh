@@ -3,7 +3,8 @@
 # simulated one with injected faults (a scan
 # stamped back in time, a repeated scan stamp, a scan in a frame tf does not know, NaN ranges,
 # 5 s without odometry tf (a note), NaN poses on /odom for 1 s) fails (exit 1) with each fault
-# named; odometry silent for 40 s is a problem, sensor gaps are notes.
+# named; odometry silent for 40 s is a problem, sensor gaps are notes. Given frames the bag does
+# not use, the problem names the frames its tf holds.
 set -euo pipefail
 
 source "$(dirname "$0")/lib/offline.sh"
@@ -14,6 +15,13 @@ if ! "$bin/validate_bag" "$work/clean.bag" >"$work/clean.txt"; then
   echo "FAIL: the clean bag was reported:"; cat "$work/clean.txt"; exit 1
 fi
 grep -q "no problems found" "$work/clean.txt" || { echo "FAIL: no verdict"; exit 1; }
+# Frames the bag does not use: the problem names what its tf does hold.
+"$bin/validate_bag" "$work/clean.bag" --base-frame robot >"$work/frames.txt" || true
+grep -q "tf never connects odom and robot: .*the bag's tf has odom -> 'base_link': is one of those the base frame" \
+  "$work/frames.txt" || { echo "FAIL: no base frame hint:"; grep PROBLEM "$work/frames.txt"; exit 1; }
+"$bin/validate_bag" "$work/clean.bag" --odom-frame world >"$work/frames.txt" || true
+grep -q "the bag's tf starts at 'odom': is one of those the odometry frame" "$work/frames.txt" ||
+  { echo "FAIL: no odometry frame hint:"; grep PROBLEM "$work/frames.txt"; exit 1; }
 # Short streams: four scans 3 s apart are no gap, a 40 s hole among four scans is one.
 /usr/bin/python3 - "$work" <<'PY'
 import sys
