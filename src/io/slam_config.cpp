@@ -404,8 +404,10 @@ SlamConfig parseSlamConfigTree(const YAML::Node& root, const std::string& source
   readRos(top, &config.ros);
   top.finish();
   if (config.localization_only && config.map_file.empty()) {
-    throw ConfigError(source + ": localization_only = true needs map_file (a landmarks YAML "
-                               "written by ~save_map or offline_slam)");
+    throw ConfigError(source +
+                      ": localization_only = true needs map_file (written by "
+                      "~save_map or offline_slam: the landmarks YAML, or for grid_pf "
+                      "map_server's map.yaml)");
   }
   if (config.smoothing.enabled && config.filter.use_lines) {
     throw ConfigError(source + ": smoothing.enabled re-estimates point landmarks only: it needs "
@@ -519,7 +521,17 @@ std::string loadPriorMap(const std::string& path, core::SlamSession* session) {
     }
     std::ostringstream what;
     what << "a " << grid.width << " x " << grid.height << " grid of " << grid.resolution_m
-         << " m cells (" << grid.count(65, 100) << " occupied)";
+         << " m cells (" << grid.count(65, 100) << " occupied, " << grid.count(0, 19) << " free)";
+    const double resolution = filter.gridResolution();
+    if (resolution > 0.0 && grid.resolution_m > 1.5 * resolution) {
+      what << "; note: its cells are coarser than grid.resolution_m (" << resolution
+           << " m), so its walls are up to " << grid.resolution_m
+           << " m thick in the filter's cells: a map at the filter's resolution localizes "
+              "better";
+    }
+    if (grid.count(65, 100) > grid.count(0, 19)) {
+      what << "; note: more of it is occupied than free: is its image inverted (negate)?";
+    }
     return what.str();
   }
   if (kind == MapFileKind::kGrid) {
@@ -537,10 +549,11 @@ std::string loadPriorMap(const std::string& path, core::SlamSession* session) {
   return std::to_string(landmarks.size()) + " landmarks";
 }
 
-void applyMapConfig(const SlamConfig& config, core::SlamSession* session) {
-  if (config.map_file.empty()) return;
+std::string applyMapConfig(const SlamConfig& config, core::SlamSession* session) {
+  if (config.map_file.empty()) return "";
+  std::string loaded;
   try {
-    loadPriorMap(config.map_file, session);
+    loaded = loadPriorMap(config.map_file, session);
   } catch (const ConfigError& e) {
     throw ConfigError(std::string("map_file: ") + e.what());
   }
@@ -548,6 +561,7 @@ void applyMapConfig(const SlamConfig& config, core::SlamSession* session) {
     throw ConfigError("localization_only: variant " + config.filter.variant +
                       " has no localization-only mode");
   }
+  return loaded;
 }
 
 }  // namespace io

@@ -286,6 +286,16 @@ std::string describeTopics(const rosbag::Bag& bag) {
   return out;
 }
 
+/// Says on stderr when a start pose given on a prior grid map is off it (outside, in a wall).
+void warnIfOffTheMap(const std::string& what, const core::Pose2& pose,
+                     const core::SlamSession& session) {
+  const core::GridMapData* map = session.priorGridMap();
+  const std::string problem = map ? core::poseOffMapProblem(*map, pose) : "";
+  if (!problem.empty()) {
+    std::fprintf(stderr, "offline_slam: %s: the start %s\n", what.c_str(), problem.c_str());
+  }
+}
+
 /// A recorded initialpose (rviz's 2D Pose Estimate) given to the session as the node would take
 /// it (fromInitialPose); one that cannot be taken is counted with the first reason.
 void takeInitialPose(const rosbag::MessageInstance& m, const std::string& map_frame,
@@ -307,6 +317,7 @@ void takeInitialPose(const rosbag::MessageInstance& m, const std::string& map_fr
       if (ignored.empty() && !session->setPose(pose, covariance)) {
         ignored = "that the filter variant cannot take";
       }
+      if (ignored.empty()) warnIfOffTheMap(m.getTopic(), pose, *session);
     }
   } catch (const std::exception& e) {
     ignored = std::string("that does not decode (") + e.what() + ")";
@@ -466,13 +477,13 @@ class ResultBag {
 
 OfflineRunner::OfflineRunner(const io::SlamConfig& config, const OfflineOptions& options)
     : config_(config), options_(options), pipeline_(config.pipeline()) {
-  io::applyMapConfig(config_, &pipeline_.session());
+  loaded_map_ = io::applyMapConfig(config_, &pipeline_.session());
 }
 
 OfflineRunner::OfflineRunner(const io::SlamConfig& config, const OfflineOptions& options,
                              std::unique_ptr<core::SlamFilter> filter)
     : config_(config), options_(options), pipeline_(config.pipeline(), std::move(filter)) {
-  io::applyMapConfig(config_, &pipeline_.session());
+  loaded_map_ = io::applyMapConfig(config_, &pipeline_.session());
 }
 
 std::vector<std::string> describeOutcome(const OfflineSummary& s, const OfflineOptions& options,
@@ -522,7 +533,9 @@ std::vector<std::string> describeOutcome(const OfflineSummary& s, const OfflineO
     lines.push_back(std::to_string(s.updates_outside_grid) +
                     " update(s) with the robot outside the grid: nothing was mapped or matched "
                     "there, the pose is dead reckoning; " +
-                    (s.prior_map ? core::kGridOffTheMapAdvice : core::kGridLimitAdvice));
+                    (!s.prior_map          ? core::kGridLimitAdvice
+                     : s.initial_poses > 0 ? core::kGridOffTheMapGivenStartAdvice
+                                           : core::kGridOffTheMapAdvice));
   }
   if (s.readings_beyond_reach > 0) {
     lines.push_back(std::to_string(s.readings_beyond_reach) + " reading(s) " +
@@ -659,10 +672,15 @@ OfflineSummary OfflineRunner::run() {
   std::set<std::string> tilted_frames;   // warned once each
   std::set<std::string> warned_scan_headers;  // scan frames with an inconsistent header, once
   std::vector<double> update_ms;
-  if (options_.has_initial_pose &&
-      !pipeline_.session().setPose(options_.initial_pose, options_.initial_covariance)) {
-    throw std::runtime_error("--initial-pose: variant " + config_.filter.variant +
-                             " cannot take a start pose, or its covariance is unusable");
+  if (!loaded_map_.empty())
+    std::fprintf(stderr, "offline_slam: map_file: %s\n", loaded_map_.c_str());
+  if (options_.has_initial_pose) {
+    if (!pipeline_.session().setPose(options_.initial_pose, options_.initial_covariance)) {
+      throw std::runtime_error("--initial-pose: variant " + config_.filter.variant +
+                               " cannot take a start pose, or its covariance is unusable");
+    }
+    ++summary.initial_poses;
+    warnIfOffTheMap("--initial-pose", options_.initial_pose, pipeline_.session());
   }
   // rviz's 2D Pose Estimate, recorded with the data: taken where it comes, as the node does.
   std::vector<std::string> read = topics;  // the inputs (copied to --output-bag) and the poses
@@ -999,6 +1017,13 @@ OfflineSummary OfflineRunner::writeOutputs(const OfflineSummary& in) const {
       summary.ate_rmse_m = r.ate_rmse_m;
       summary.final_position_error_m = r.final_position_error_m;
       summary.ate_online_rmse_m = io::evaluateTrajectory(online, reference, eval).ate_rmse_m;
+      if (pipeline_.session().hasPriorMap() && summary.has_reference) {
+        io::EvaluationOptions unaligned = eval;
+        unaligned.align = false;
+        summary.has_map_frame_ate = true;
+        summary.ate_map_frame_rmse_m =
+            io::evaluateTrajectory(estimate, reference, unaligned).ate_rmse_m;
+      }
       // Draw the reference in the estimate's frame.
       const core::Pose2 to_estimate = core::inverse(r.alignment);
       for (const auto& p : reference) reference_path.push_back(core::compose(to_estimate, p.pose));
@@ -1091,6 +1116,7 @@ OfflineSummary OfflineRunner::writeOutputs(const OfflineSummary& in) const {
         .number("ate_online_rmse_m", summary.ate_online_rmse_m)
         .number("final_position_error_m", summary.final_position_error_m);
   }
+  if (summary.has_map_frame_ate) json.number("ate_map_frame_rmse_m", summary.ate_map_frame_rmse_m);
   json.string("trajectory_source", summary.trajectory_source);
   if (config_.smoothing.enabled) {
     json.boolean("smoothed", summary.smoothed)

@@ -105,13 +105,12 @@ SlamNode::SlamNode(ros::NodeHandle nh, ros::NodeHandle private_nh,
   diagnostics_publisher_ = nh_.advertise<diagnostic_msgs::DiagnosticArray>("/diagnostics", 10);
   diagnostics_timer_ =
       nh_.createWallTimer(ros::WallDuration(1.0), &SlamNode::publishDiagnostics, this);
-  io::applyMapConfig(config_, &pipeline_.session());  // throws io::ConfigError
+  const std::string loaded_map = io::applyMapConfig(config_, &pipeline_.session());  // throws
   if (!config_.map_file.empty()) {
-    ROS_INFO_STREAM("rbpf_slam_node: started from the map " << config_.map_file << " ("
-                                                           << (config_.localization_only
-                                                                   ? "localization only"
-                                                                   : "mapping on")
-                                                           << "); set the pose with initialpose");
+    ROS_INFO_STREAM("rbpf_slam_node: started from the map "
+                    << config_.map_file << ", " << loaded_map << " ("
+                    << (config_.localization_only ? "localization only" : "mapping on")
+                    << "); set the pose with initialpose");
   }
   map_publisher_ = private_nh_.advertise<nav_msgs::OccupancyGrid>("map", 1, true);
   map_metadata_publisher_ = private_nh_.advertise<nav_msgs::MapMetaData>("map_metadata", 1, true);
@@ -629,6 +628,10 @@ void SlamNode::initialPoseCallback(const geometry_msgs::PoseWithCovarianceStampe
   }
   ROS_INFO_STREAM("rbpf_slam_node: pose set to (" << pose.x() << ", " << pose.y() << ", "
                                                   << pose.z() << " rad) from initialpose");
+  if (const core::GridMapData* map = pipeline_.session().priorGridMap()) {
+    const std::string off = core::poseOffMapProblem(*map, pose);
+    if (!off.empty()) warnThrottled("initialpose off the map", "initialpose: the start " + off);
+  }
   const ros::Time now = ros::Time::now();
   publishState(now.isZero() ? msg->header.stamp : now, true);  // ~trajectory's source changed
 }

@@ -28,8 +28,9 @@ const char kUsage[] =
     "  --set key=value  overrides a config key (dotted for sections: motion.alpha1=0.1)\n"
     "  --reference F    TUM ground truth: ATE in summary.json\n"
     "  --output-bag F   the input's tf and sensors plus map -> odom, pose, landmarks, trajectory\n"
-    "  --initial-pose P the start in the map frame (m, rad; sigmas default 0.5 m, 0.26 rad), as "
-    "an\n"
+    "  --initial-pose P the start in the map frame (m, rad; sigmas default rviz's 0.5 m, 0.26 "
+    "rad:\n"
+    "                   give ones that fit the place, e.g. 0.02 m for an e-puck), as an\n"
     "                   initialpose before the first frame; the bag's initialpose messages are\n"
     "                   used too (e.g. to localize on map_file from a known start)\n"
     "Writes DIR/trajectory.tum, trajectory_online.tum, landmarks.yaml, summary.json, map.png,\n"
@@ -127,6 +128,9 @@ int run(const Arguments& arguments) {
       s.updates, s.landmarks, s.particles, s.wall_s, s.bag_duration_s,
       s.wall_s > 0 ? s.bag_duration_s / s.wall_s : 0.0, s.update_ms_mean, s.update_ms_p99);
   if (s.has_reference) std::printf(", ATE %.3f m", s.ate_rmse_m);
+  if (s.has_map_frame_ate) {
+    std::printf(" (%.3f m in the map frame, unaligned)", s.ate_map_frame_rmse_m);
+  }
   std::printf(
       "\noffline_slam: wrote %s/{trajectory.tum,trajectory_online.tum,landmarks.yaml,%s"
       "summary.json,map.png,map.pgm,map.yaml}%s%s\n",

@@ -89,6 +89,11 @@ plan = ate(work + "/plan/trajectory.tum")
 print("on the floor plan: %.4f m in the map frame, odometry %.4f m" % (plan, odometry))
 if not (plan < 0.015 and plan < odometry):
     fails.append("localization on the floor plan %.4f m (odometry %.4f m)" % (plan, odometry))
+if abs(summary["plan"].get("ate_map_frame_rmse_m", -1) - plan) > 1e-6:
+    fails.append("summary.json's ate_map_frame_rmse_m %s is not evaluate --no-align's %.6f"
+                 % (summary["plan"].get("ate_map_frame_rmse_m"), plan))
+if "map_file: a 140 x 110 grid of 0.01 m cells (415 occupied" not in logs["plan"]:
+    fails.append("offline_slam does not say what map_file loaded")
 occupied = open(work + "/plan.pgm", "rb").read().split(b"\n", 3)[3].count(b"\x00")
 if summary["plan"]["map_occupied_cells"] != occupied:
     fails.append("the map changed: %d occupied cells, the floor plan has %d" % (summary["plan"]["map_occupied_cells"], occupied))
@@ -98,6 +103,8 @@ for name in ("off", "recorded"):
     print("started off (%s): first pose %.3f m off, second half %.4f m" % (name, first, late))
     if not (first > 0.02 and late < 0.015):
         fails.append("%s: not found from the wrong start (first %.3f m, second half %.4f m)" % (name, first, late))
+if summary["off"]["initial_poses"] != 1:
+    fails.append("--initial-pose not counted in initial_poses (%d)" % summary["off"]["initial_poses"])
 if summary["recorded"]["initial_poses"] != 1 or summary["recorded"]["ignored_initial_poses"] != 1:
     fails.append("recorded initialpose: %d taken, %d ignored (expected 1 and 1)"
                  % (summary["recorded"]["initial_poses"], summary["recorded"]["ignored_initial_poses"]))

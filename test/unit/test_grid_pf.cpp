@@ -761,6 +761,18 @@ TEST(GridMapLoading, AMapBecomesLogOddsAtTheFilterResolution) {
 // A map whose tile tables would not fit is refused before anything is built (one cell of 1.5 km
 // is 30000 x 30000 cells of 5 cm, 900 MB of tables per particle in tiles of 4 cells), and the
 // filter keeps what it had.
+// A start off the map is named: outside it, or in a wall.
+TEST(GridMapLoading, AStartOffTheMapIsNamed) {
+  const GridMapData map = smallMap({100, 0, -1, 0, 0, 0}, -0.3, 1.0);  // x -0.3 .. 0, y 1 .. 1.2
+  EXPECT_EQ(poseOffMapProblem(map, Pose2(-0.15, 1.05, 0.0)), "");      // free
+  EXPECT_EQ(poseOffMapProblem(map, Pose2(-0.05, 1.15, 0.0)), "");      // unknown: may be free
+  EXPECT_EQ(poseOffMapProblem(map, Pose2(-0.25, 1.05, 0.0)),
+            "(-0.25, 1.05) is on an occupied cell of the map (inside a wall)");
+  EXPECT_EQ(poseOffMapProblem(map, Pose2(5.0, 5.0, 0.0)),
+            "(5, 5) is outside the map, x -0.3 .. 0 m, y 1 .. 1.2 m");
+  EXPECT_NE(poseOffMapProblem(map, Pose2(std::nan(""), 1.05, 0.0)), "");
+}
+
 TEST(GridMapLoading, AMapTooLargeForTheTablesIsRefusedFirst) {
   FilterOptions o = gridOptions(2);
   o.grid.tile_cells = 4;
@@ -1008,6 +1020,15 @@ TEST(GridConfig, EachVariantStartsFromItsKindOfMapFile) {
   grid.map_file = grid_yaml;
   grid.localization_only = true;
   EXPECT_EQ(mapConfigError(grid, &grid_pipeline), "");
+  {
+    SlamPipeline described(grid.pipeline());  // what was loaded, and a note: 0.1 m over 0.01 m
+    const std::string loaded = io::applyMapConfig(grid, &described.session());
+    EXPECT_NE(loaded.find("a 3 x 2 grid of 0.1 m cells (2 occupied, 2 free); note: its cells are "
+                          "coarser than grid.resolution_m (0.01 m)"),
+              std::string::npos)
+        << loaded;
+    EXPECT_EQ(loaded.find("inverted"), std::string::npos) << loaded;
+  }
   EXPECT_TRUE(grid_pipeline.session().hasPriorMap());
   EXPECT_FALSE(grid_pipeline.session().mapping());
   GridMapData loaded;

@@ -74,8 +74,10 @@ SlamConfig loadSlamConfig(const std::string& path, const std::vector<std::string
 /// naming the file and what is wrong with it (a map of the other kind named as such).
 std::string loadPriorMap(const std::string& path, core::SlamSession* session);
 /// Gives the session config.map_file as its prior map (loadPriorMap) and turns mapping off when
-/// config.localization_only; throws ConfigError naming what failed. No-op without map_file.
-void applyMapConfig(const SlamConfig& config, core::SlamSession* session);
+/// config.localization_only; throws ConfigError naming what failed. Returns what was loaded,
+/// with notes on a map likely to localize badly (coarser than the filter's cells, mostly
+/// occupied); "" without map_file.
+std::string applyMapConfig(const SlamConfig& config, core::SlamSession* session);
 
 }  // namespace io
 }  // namespace rbpf_slam

@@ -46,7 +46,7 @@ struct OfflineSummary {
   long dropped_no_tf = 0;
   long dropped_bad_message = 0;
   bool prior_map = false;          // the run started from a map (map_file)
-  long initial_poses = 0;          // initialpose messages of the bag that set the pose
+  long initial_poses = 0;  // start poses taken: --initial-pose and the bag's initialpose messages
   long ignored_initial_poses = 0;  // ... and those that could not (frame, non-finite, variant)
   std::string first_ignored_initial_pose;  // why the first of them was
   long skipped_transforms = 0;  // repeated or malformed tf in the bag
@@ -81,6 +81,10 @@ struct OfflineSummary {
   double ate_rmse_m = 0.0;
   double final_position_error_m = 0.0;
   double ate_online_rmse_m = 0.0;  // of trajectory_online.tum (the per-update estimates)
+  // With a prior map: the ATE against the reference without alignment (the map's frame is the
+  // reference's when the map was made from it; the aligned ATE hides a wrong start).
+  bool has_map_frame_ate = false;
+  double ate_map_frame_rmse_m = 0.0;
   std::string trajectory_source;   // [smoothed_]best_particle_path | [smoothed_]online_estimate
   bool smoothed = false;           // smoothing.enabled and the smoother succeeded
   std::string smoothing;           // the smoother's account (or why it did not smooth)
@@ -115,6 +119,7 @@ class OfflineRunner {
   const io::SlamConfig config_;
   const OfflineOptions options_;
   core::SlamPipeline pipeline_;
+  std::string loaded_map_;  // what map_file gave (applyMapConfig), "" without one
 };
 
 }  // namespace rosbridge

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <stdexcept>
 #include <string>
@@ -13,6 +14,27 @@ long GridMapData::count(int8_t min_value, int8_t max_value) const {
   return static_cast<long>(std::count_if(cells.begin(), cells.end(), [&](int8_t v) {
     return v >= min_value && v <= max_value;
   }));
+}
+
+std::string poseOffMapProblem(const GridMapData& map, const Pose2& pose) {
+  const double fx = (pose.x() - map.origin_x_m) / map.resolution_m;
+  const double fy = (pose.y() - map.origin_y_m) / map.resolution_m;
+  auto number = [](double v) {
+    char text[32];
+    std::snprintf(text, sizeof(text), "%g", std::round(v * 1e6) / 1e6 + 0.0);  // no 5.55e-17
+    return std::string(text);
+  };
+  const std::string at = "(" + number(pose.x()) + ", " + number(pose.y()) + ")";
+  if (!(fx >= 0.0 && fy >= 0.0 && fx < map.width && fy < map.height)) {
+    return at + " is outside the map, x " + number(map.origin_x_m) + " .. " +
+           number(map.origin_x_m + map.width * map.resolution_m) + " m, y " +
+           number(map.origin_y_m) + " .. " +
+           number(map.origin_y_m + map.height * map.resolution_m) + " m";
+  }
+  if (map.at(static_cast<int>(fx), static_cast<int>(fy)) >= 65) {
+    return at + " is on an occupied cell of the map (inside a wall)";
+  }
+  return "";
 }
 
 GridMapData rasterizeLandmarks(const std::vector<LandmarkEstimate>& landmarks,

@@ -3,6 +3,7 @@
 // node publishes on ~map, what offline_slam writes as map.pgm + map.yaml.
 
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "rbpf_slam/core/filters/slam_filter.h"
@@ -22,6 +23,10 @@ struct GridMapData {
   int8_t at(int x, int y) const { return cells[static_cast<size_t>(y) * width + x]; }
   long count(int8_t min_value, int8_t max_value) const;  // cells with a value in [min, max]
 };
+
+/// Why a robot at pose cannot be on the map ("(5, 5) is outside the map, x -0.1 .. 1.3 m, y -0.1
+/// .. 1 m", or on an occupied cell), "" when it can.
+std::string poseOffMapProblem(const GridMapData& map, const Pose2& pose);
 
 /// Rasterises landmarks: lines as their observed segments, points as discs of point_radius_m,
 /// occupied (100) on unknown (-1), with margin_m around them. Throws std::runtime_error when

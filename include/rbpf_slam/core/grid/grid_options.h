@@ -56,6 +56,13 @@ constexpr const char* kGridOffTheMapAdvice =
     "(rviz's 2D Pose Estimate / initialpose, offline_slam --initial-pose; without one the first "
     "odometry pose is taken as the pose in the map), or the map does not cover where it went";
 
+/// The same when a start pose was given.
+constexpr const char* kGridOffTheMapGivenStartAdvice =
+    "on a loaded map the robot is off it: the start given (initialpose, offline_slam "
+    "--initial-pose) may be wrong, off the map or too uncertain (its spread reaching beyond the "
+    "map: give sigmas that fit the place, e.g. 0.02 m for an e-puck), or the map does not cover "
+    "where it went";
+
 /// Said of readings whose echo lies beyond grid.size_x_m x grid.size_y_m's diagonal.
 constexpr const char* kGridReachAdvice =
     "with an echo beyond the diagonal of the first extent (grid.size_x_m x grid.size_y_m), the "

@@ -72,6 +72,7 @@ class GridParticleFilter : public SlamFilter {
   /// Every particle starts from this map (gridFromMap, shared tiles), e.g. to localize on a
   /// map saved by an earlier run (with setMapping(false)) or to extend it.
   bool loadGridMap(const GridMapData& map) override;
+  double gridResolution() const override { return options_.grid.resolution_m; }
   bool setMapping(bool enabled) override;
   bool occupancyGrid(GridMapData& out) const override;
   bool usesLandmarkFeatures() const override { return false; }

@@ -152,6 +152,8 @@ class SlamSession {
   /// estimatedPath() with the trajectory's stamps: what the node publishes on ~trajectory.
   std::vector<TrajectoryPoint> estimatedTrajectory(bool* best_particle = nullptr) const;
   bool hasPriorMap() const { return prior_map_.has_value() || prior_grid_.has_value(); }
+  /// The occupancy grid given by setPriorGridMap, null without one.
+  const GridMapData* priorGridMap() const { return prior_grid_ ? &*prior_grid_ : nullptr; }
   const UpdateStats& lastStats() const { return last_stats_; }
   const SlamFilter& filter() const { return *filter_; }
   SlamFilter& filter() { return *filter_; }
