@@ -181,8 +181,9 @@ core::GridMapData readGridMap(const std::string& yaml_path) {
     for (int x = 0; x < grid.width; ++x) {
       const size_t pixel = static_cast<size_t>(grid.height - 1 - y) * grid.width + x;
       int8_t& cell = grid.cells[static_cast<size_t>(y) * grid.width + x];
-      if (mode == "raw") {  // the pixel is the value; beyond 100 unknown
-        if (pixels[pixel] <= 100) cell = static_cast<int8_t>(pixels[pixel]);
+      if (mode == "raw") {  // the pixel (negated first, as map_server does) is the value
+        const int value = negate ? 255 - pixels[pixel] : pixels[pixel];
+        if (value <= 100) cell = static_cast<int8_t>(value);  // beyond 100: unknown
         continue;
       }
       const double occupancy =

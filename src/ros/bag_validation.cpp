@@ -217,7 +217,11 @@ BagReport validateBag(const std::string& path, const BagValidationOptions& optio
       return out + "'";
     };
     std::string hint;
-    if (tf_children.count(options.odom_frame)) {
+    if (tf_child_frames.count(options.odom_frame) && !tf_children.count(options.odom_frame)) {
+      hint = "; the bag's tf has " + options.odom_frame +
+             " only as a child, with no transform from it: no odometry " + options.odom_frame +
+             " -> base frame";
+    } else if (tf_children.count(options.odom_frame)) {
       hint = "; the bag's tf has " + options.odom_frame + " -> " +
              list(tf_children.at(options.odom_frame)) +
              ": is one of those the base frame (--base-frame, the config's base_frame)?";
@@ -226,7 +230,7 @@ BagReport validateBag(const std::string& path, const BagValidationOptions& optio
       for (const auto& [parent, children] : tf_children) {
         if (!tf_child_frames.count(parent)) roots.insert(parent);
       }
-      hint = roots.empty() ? "; the bag has no tf at all"
+      hint = roots.empty() ? "; the bag has no usable tf"
                            : "; the bag's tf starts at " + list(roots) +
                                  ": is one of those the odometry frame (--odom-frame, the "
                                  "config's odom_frame)?";

@@ -676,8 +676,9 @@ OfflineSummary OfflineRunner::run() {
     std::fprintf(stderr, "offline_slam: map_file: %s\n", loaded_map_.c_str());
   if (options_.has_initial_pose) {
     if (!pipeline_.session().setPose(options_.initial_pose, options_.initial_covariance)) {
-      throw std::runtime_error("--initial-pose: variant " + config_.filter.variant +
-                               " cannot take a start pose, or its covariance is unusable");
+      throw std::runtime_error(
+          "--initial-pose: the session refused the start pose (a "
+          "non-finite pose or an unusable covariance)");
     }
     ++summary.initial_poses;
     warnIfOffTheMap("--initial-pose", options_.initial_pose, pipeline_.session());

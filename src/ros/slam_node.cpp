@@ -530,7 +530,8 @@ void SlamNode::publishTransform(const ros::TimerEvent&) {
 }
 
 bool SlamNode::resetService(std_srvs::Empty::Request&, std_srvs::Empty::Response&) {
-  resetAll("reset requested through " + reset_server_.getService());
+  resetAll("reset requested through " + reset_server_.getService(),
+           core::SlamSession::ResetCause::kRequested);
   return true;
 }
 
@@ -630,7 +631,7 @@ void SlamNode::initialPoseCallback(const geometry_msgs::PoseWithCovarianceStampe
                                                   << pose.z() << " rad) from initialpose");
   if (const core::GridMapData* map = pipeline_.session().priorGridMap()) {
     const std::string off = core::poseOffMapProblem(*map, pose);
-    if (!off.empty()) warnThrottled("initialpose off the map", "initialpose: the start " + off);
+    if (!off.empty()) ROS_WARN_STREAM("rbpf_slam_node: initialpose: the start " << off);
   }
   const ros::Time now = ros::Time::now();
   publishState(now.isZero() ? msg->header.stamp : now, true);  // ~trajectory's source changed
@@ -752,11 +753,11 @@ void SlamNode::publishDiagnostics(const ros::WallTimerEvent&) {
   }
 }
 
-void SlamNode::resetAll(const std::string& why) {
+void SlamNode::resetAll(const std::string& why, core::SlamSession::ResetCause cause) {
   diagnostics_.recordReset();
   grid_seen_ = core::FilterStats();  // the filter's counts start over
   ROS_WARN_STREAM("rbpf_slam_node: " << why << ": clearing the map, the trajectory and tf");
-  pipeline_.reset();  // filter, history and the scan matcher's reference
+  pipeline_.reset(cause);  // filter, history and the scan matcher's reference
   tf_buffer_.clear();
   if (scan_input_) scan_input_->clear();
   for (const auto& input : sonar_inputs_) input->clear();

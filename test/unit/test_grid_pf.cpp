@@ -758,9 +758,6 @@ TEST(GridMapLoading, AMapBecomesLogOddsAtTheFilterResolution) {
   EXPECT_NE(error(bad).find("more than 1e9"), std::string::npos) << error(bad);
 }
 
-// A map whose tile tables would not fit is refused before anything is built (one cell of 1.5 km
-// is 30000 x 30000 cells of 5 cm, 900 MB of tables per particle in tiles of 4 cells), and the
-// filter keeps what it had.
 // A start off the map is named: outside it, or in a wall.
 TEST(GridMapLoading, AStartOffTheMapIsNamed) {
   const GridMapData map = smallMap({100, 0, -1, 0, 0, 0}, -0.3, 1.0);  // x -0.3 .. 0, y 1 .. 1.2
@@ -773,6 +770,9 @@ TEST(GridMapLoading, AStartOffTheMapIsNamed) {
   EXPECT_NE(poseOffMapProblem(map, Pose2(std::nan(""), 1.05, 0.0)), "");
 }
 
+// A map whose tile tables would not fit is refused before anything is built (one cell of 1.5 km
+// is 30000 x 30000 cells of 5 cm, 900 MB of tables per particle in tiles of 4 cells), and the
+// filter keeps what it had.
 TEST(GridMapLoading, AMapTooLargeForTheTablesIsRefusedFirst) {
   FilterOptions o = gridOptions(2);
   o.grid.tile_cells = 4;
@@ -875,6 +875,12 @@ TEST(GridMapLoading, ParticlesFindTheRobotOnALoadedMap) {
   EXPECT_NEAR(reported.origin_x_m, map.origin_x_m, 1e-9);
   EXPECT_LT((session.filter().estimate().mean.head<2>() - truth.head<2>()).norm(), 0.05)
       << "after a reset: " << session.filter().estimate().mean.transpose();
+  // ~reset (requested) starts from scratch: the old start is forgotten, map = odom.
+  session.reset(SlamSession::ResetCause::kRequested);
+  FeatureSet scan = roomScan(truth.x(), truth.y());
+  session.process(20.0, odom_start, scan);
+  EXPECT_LT((session.filter().estimate().mean.head<2>() - odom_start.head<2>()).norm(), 1e-6)
+      << "after ~reset: " << session.filter().estimate().mean.transpose();
 }
 
 // An odometry gap with gap_action "reset" on a prior map: the new run starts where the robot
@@ -909,6 +915,35 @@ TEST(GridMapLoading, AGapResetOnAMapKeepsTheRobotWhereItWas) {
   // Found within the spread it restarts with (its covariance plus rviz's 0.5 m).
   EXPECT_LT((now.head<2>() - there.head<2>()).norm(), 0.15) << now.transpose();
   EXPECT_LT(std::fabs(now.z()), 0.05) << now.transpose();
+}
+
+// Gap resets without a prior map: with a start given, the new run goes on where the robot is
+// (after a time gap where the odometry puts it, after an odometry jump where it was), not back
+// at the start; with none, it starts at its odometry coordinates as before.
+TEST(SessionResets, AGapResetGoesOnFromWhereTheRobotIs) {
+  FilterOptions o = gridOptions(20);
+  SessionOptions session_options;
+  session_options.gap_action = "reset";
+  session_options.max_odometry_jump_m = 2.0;
+  const Eigen::Matrix3d tight = Eigen::Vector3d(1e-6, 1e-6, 1e-6).asDiagonal();
+  auto after_gap = [&](bool given_start, bool jump) {
+    SlamSession session(createFilter(o), session_options);
+    if (given_start) {
+      EXPECT_TRUE(session.setPose(Pose2(10.0, 20.0, 0.0), tight));
+    }
+    const FeatureSet none;
+    session.process(1.0, Pose2(0.0, 0.0, 0.0), none);
+    session.process(2.0, Pose2(0.5, 0.0, 0.0), none);
+    // A time gap of 40 s and 1 m on, or a 3 m odometry jump 1 s later.
+    const FrameResult result = jump ? session.process(3.0, Pose2(3.5, 0.0, 0.0), none)
+                                    : session.process(42.0, Pose2(1.5, 0.0, 0.0), none);
+    EXPECT_EQ(result, FrameResult::kReset);
+    return Eigen::Vector2d(session.filter().estimate().mean.head<2>());
+  };
+  // The restarted run's spread: the last estimate's (its motion noise) plus the given start's.
+  EXPECT_LT((after_gap(true, false) - Eigen::Vector2d(11.5, 20.0)).norm(), 0.05);
+  EXPECT_LT((after_gap(true, true) - Eigen::Vector2d(10.5, 20.0)).norm(), 0.05);
+  EXPECT_LT((after_gap(false, false) - Eigen::Vector2d(1.5, 0.0)).norm(), 1e-6);  // map = odom
 }
 
 TEST(SlamPipeline, ConeReadingsReachTheFilterInTheBaseFrameOfTheUpdate) {

@@ -21,8 +21,8 @@ std::vector<std::string> writeGridMap(const std::string& prefix, const core::Gri
 
 /// Reads a map_server map (a map written by writeGridMap or map_saver; binary PGM images) back:
 /// mode trinary (the default) gives 100, 0 or -1 per cell, scale also 1..99 between the
-/// thresholds, raw the pixel values (over 100: -1). Throws std::runtime_error naming the file
-/// and what is wrong (an image given instead of the YAML, a yaw in the origin, ...).
+/// thresholds, raw the pixel values (after negate; over 100: -1). Throws std::runtime_error naming
+/// the file and what is wrong (an image given instead of the YAML, a yaw in the origin, ...).
 core::GridMapData readGridMap(const std::string& yaml_path);
 
 /// The run picture over a grid: grey unknown, white free, black occupied, the reference

@@ -110,7 +110,8 @@ class SlamNode {
   bool checkClock();
   /// checkClock() and not paused (a paused frame is counted); false: ignore the frame.
   bool readyForFrame();
-  void resetAll(const std::string& why);
+  void resetAll(const std::string& why, core::SlamSession::ResetCause cause =
+                                            core::SlamSession::ResetCause::kClockWentBack);
   /// Warns about cause at most once every few seconds.
   void warnThrottled(const std::string& cause, const std::string& message) {
     warnings_.warn(cause, message);

@@ -35,8 +35,8 @@ SlamPipeline::SlamPipeline(const PipelineOptions& options, std::unique_ptr<SlamF
       session_(std::move(filter), options.session),
       sonar_clock_(options.session) {}
 
-void SlamPipeline::reset() {
-  session_.reset();
+void SlamPipeline::reset(SlamSession::ResetCause cause) {
+  session_.reset(cause);
   reference_points_.clear();
   submap_.clear();
   sonar_extractor_.reset();

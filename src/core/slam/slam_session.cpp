@@ -60,6 +60,7 @@ bool SlamSession::setPriorMap(const std::vector<LandmarkEstimate>& landmarks) {
   if (!filter_->loadMap(landmarks)) return false;
   prior_map_ = landmarks;
   prior_grid_.reset();
+  if (has_previous_) given_start_.reset();  // a start on the map this one replaces
   return true;
 }
 
@@ -67,6 +68,7 @@ bool SlamSession::setPriorGridMap(const GridMapData& grid) {
   if (!filter_->loadGridMap(grid)) return false;
   prior_grid_ = grid;
   prior_map_.reset();
+  if (has_previous_) given_start_.reset();  // a start on the map this one replaces
   return true;
 }
 
@@ -97,7 +99,8 @@ bool SlamSession::setPose(const Pose2& pose, const Eigen::Matrix3d& covariance) 
   return true;
 }
 
-void SlamSession::reset() {
+void SlamSession::reset(ResetCause cause) {
+  if (cause == ResetCause::kRequested) given_start_.reset();
   restart();
   odometry_stamps_.clear();  // after a clock jump they would be the old run's
   counted_silence_start_ = -std::numeric_limits<double>::infinity();
@@ -198,15 +201,20 @@ FrameResult SlamSession::process(double stamp, const Pose2& odom_pose,
     ++gaps_;
     if (options_.gap_action == "reset") {
       const long gaps = gaps_;
-      // On a prior map the robot is still where the correction puts it, less sure by rviz's
-      // default spread: the new run starts there, not at its odometry coordinates.
+      // On a prior map, or in a frame set by a given start, the new run starts where the robot
+      // is: after a time gap where the correction puts the odometry (it may have moved), after
+      // an odometry jump where it was (the jump is not to be trusted); less sure by the given
+      // start's spread, or rviz's. Otherwise it starts at its odometry coordinates (a new map).
       std::optional<std::pair<Pose2, Eigen::Matrix3d>> here;
       const PoseEstimate last = filter_->estimate();
-      if (hasPriorMap() && map_to_odom_.allFinite() && last.covariance.allFinite()) {
-        here.emplace(compose(map_to_odom_, odom_pose), last.covariance + defaultStartCovariance());
+      if (hasPriorMap() || given_start_) {
+        const Pose2 at = jump ? last.mean : compose(map_to_odom_, odom_pose);
+        const Eigen::Matrix3d spread =
+            last.covariance + (given_start_ ? given_start_->second : defaultStartCovariance());
+        if (at.allFinite() && poseCovarianceUsable(spread)) here.emplace(at, spread);
       }
       restart();  // the odometry stamps stay: they are still this run's
-      if (here && poseCovarianceUsable(here->second)) start_pose_ = here;
+      start_pose_ = here;
       gaps_ = gaps;
       process(stamp, odom_pose, features);  // the first frame of a new map
       return FrameResult::kReset;

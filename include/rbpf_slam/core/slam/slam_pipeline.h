@@ -54,8 +54,8 @@ class SlamPipeline {
   long scansUnmatched() const { return scans_unmatched_; }
   /// The scan match of the last processScan (ok = false when none was attempted or it failed).
   const ScanMatchResult& lastMatch() const { return last_match_; }
-  /// Forgets everything, e.g. after the clock jumped backwards.
-  void reset();
+  /// Forgets everything, e.g. after the clock jumped backwards (SlamSession::reset).
+  void reset(SlamSession::ResetCause cause = SlamSession::ResetCause::kClockWentBack);
 
  private:
   LaserLineExtractor extractor_;

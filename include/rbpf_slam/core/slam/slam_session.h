@@ -116,14 +116,21 @@ class SlamSession {
   void addOdometryStamp(double stamp) { odometry_stamps_.add(stamp); }
   /// The odometry pose of the last frame the filter used.
   const Pose2& lastOdomPose() const { return last_odom_; }
-  /// Clears the filter and the history (e.g. after the clock jumped backwards); a prior map,
-  /// the mapping mode and a start pose given before the first frame (setPose) are kept: the
-  /// next frame starts there again. (A reset for an odometry gap, gap_action "reset", on a prior
-  /// map starts the new run where the robot was on that map instead.)
-  void reset();
+  /// Why a run starts over (reset()).
+  enum class ResetCause {
+    kClockWentBack,  // a bag played again: the run starts again at the start pose given before
+                     // its first frame (setPose), if any
+    kRequested       // ~reset: from scratch, at the odometry's coordinates (a start pose given
+                     // before is forgotten)
+  };
+  /// Clears the filter and the history; a prior map and the mapping mode are kept. (A reset for
+  /// an odometry gap, gap_action "reset", starts the new run where the robot was when a prior
+  /// map or a start pose was given, else at the odometry's coordinates.)
+  void reset(ResetCause cause = ResetCause::kClockWentBack);
 
   /// A map to start from (map frame), e.g. a saved one: given to the filter now and again
-  /// after every reset. Returns false when the filter variant cannot take a map.
+  /// after every reset. Returns false when the filter variant cannot take a map. Loaded during a
+  /// run, it forgets the start pose given before the run's first frame (it was on the old map).
   bool setPriorMap(const std::vector<LandmarkEstimate>& landmarks);
   /// The same for an occupancy grid (variants that map cells, grid_pf). Replaces a landmark
   /// prior map and is replaced by one. Throws std::invalid_argument for a grid the filter cannot
