@@ -16,9 +16,6 @@ namespace rbpf_slam {
 namespace io {
 namespace {
 
-constexpr int kOccupiedPercent = 65;  // occupied_thresh 0.65
-constexpr int kFreePercent = 19;      // below free_thresh 0.196
-
 uint8_t pgmValue(int8_t cell) {
   if (cell >= kOccupiedPercent) return 0;
   if (cell >= 0 && cell <= kFreePercent) return 254;

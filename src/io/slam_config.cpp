@@ -507,10 +507,12 @@ std::string loadPriorMap(const std::string& path, core::SlamSession* session) {
     core::GridMapData grid;
     try {
       grid = readGridMap(path);
-      if (grid.count(65, 100) == 0) {  // all free or unknown: nothing to localize on
+      if (grid.count(kOccupiedPercent, 100) == 0) {  // nothing to localize on
         throw ConfigError(path + ": the map has no occupied cell (" +
-                          std::to_string(grid.count(0, 64)) + " free, " +
-                          std::to_string(grid.count(-1, -1)) + " unknown)");
+                          std::to_string(grid.count(0, kFreePercent)) + " free, " +
+                          std::to_string(grid.count(-1, -1)) + " unknown, " +
+                          std::to_string(grid.count(kFreePercent + 1, kOccupiedPercent - 1)) +
+                          " between the thresholds)");
       }
       if (!session->setPriorGridMap(grid)) throw ConfigError(variant + " cannot start from a map");
     } catch (const ConfigError&) {
@@ -521,7 +523,8 @@ std::string loadPriorMap(const std::string& path, core::SlamSession* session) {
     }
     std::ostringstream what;
     what << "a " << grid.width << " x " << grid.height << " grid of " << grid.resolution_m
-         << " m cells (" << grid.count(65, 100) << " occupied, " << grid.count(0, 19) << " free)";
+         << " m cells (" << grid.count(kOccupiedPercent, 100) << " occupied, "
+         << grid.count(0, kFreePercent) << " free)";
     const double resolution = filter.gridResolution();
     if (resolution > 0.0 && grid.resolution_m > 1.5 * resolution) {
       what << "; note: its cells are coarser than grid.resolution_m (" << resolution
@@ -529,7 +532,7 @@ std::string loadPriorMap(const std::string& path, core::SlamSession* session) {
            << " m thick in the filter's cells: a map at the filter's resolution localizes "
               "better";
     }
-    if (grid.count(65, 100) > grid.count(0, 19)) {
+    if (grid.count(kOccupiedPercent, 100) > grid.count(0, kFreePercent)) {
       what << "; note: more of it is occupied than free: is its image inverted (negate)?";
     }
     return what.str();

@@ -289,8 +289,7 @@ std::string describeTopics(const rosbag::Bag& bag) {
 /// Says on stderr when a start pose given on a prior grid map is off it (outside, in a wall).
 void warnIfOffTheMap(const std::string& what, const core::Pose2& pose,
                      const core::SlamSession& session) {
-  const core::GridMapData* map = session.priorGridMap();
-  const std::string problem = map ? core::poseOffMapProblem(*map, pose) : "";
+  const std::string problem = session.offPriorMapProblem(pose);
   if (!problem.empty()) {
     std::fprintf(stderr, "offline_slam: %s: the start %s\n", what.c_str(), problem.c_str());
   }

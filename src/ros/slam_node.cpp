@@ -629,10 +629,8 @@ void SlamNode::initialPoseCallback(const geometry_msgs::PoseWithCovarianceStampe
   }
   ROS_INFO_STREAM("rbpf_slam_node: pose set to (" << pose.x() << ", " << pose.y() << ", "
                                                   << pose.z() << " rad) from initialpose");
-  if (const core::GridMapData* map = pipeline_.session().priorGridMap()) {
-    const std::string off = core::poseOffMapProblem(*map, pose);
-    if (!off.empty()) ROS_WARN_STREAM("rbpf_slam_node: initialpose: the start " << off);
-  }
+  const std::string off = pipeline_.session().offPriorMapProblem(pose);
+  if (!off.empty()) ROS_WARN_STREAM("rbpf_slam_node: initialpose: the start " << off);
   const ros::Time now = ros::Time::now();
   publishState(now.isZero() ? msg->header.stamp : now, true);  // ~trajectory's source changed
 }

@@ -848,7 +848,10 @@ TEST(GridMapLoading, ParticlesFindTheRobotOnALoadedMap) {
   SessionOptions session_options;
   session_options.filter_origin = "start";
   SlamSession session(createFilter(o), session_options);
+  EXPECT_EQ(session.offPriorMapProblem(Pose2(50.0, 50.0, 0.0)), "");  // no map: nothing to say
   ASSERT_TRUE(session.setPriorGridMap(map));
+  EXPECT_EQ(session.offPriorMapProblem(guess), "");
+  EXPECT_NE(session.offPriorMapProblem(Pose2(50.0, 50.0, 0.0)), "");
   ASSERT_TRUE(session.setMapping(false));
   ASSERT_TRUE(session.setPose(guess, spread));
   const Pose2 odom_start(5.0, 7.0, 0.3);  // the odometry frame is not the map frame
@@ -1106,7 +1109,7 @@ TEST(GridConfig, UnusableGridMapFilesAreNamed) {
       << error(files[0]);
   EXPECT_NE(error(d).find("cannot be read (not a file)"), std::string::npos) << error(d);
   const std::vector<std::string> empty = io::writeGridMap(d + "/e", smallMap({0, 0, -1, 0, 0, -1}));
-  EXPECT_NE(error(empty[1]).find("the map has no occupied cell (4 free, 2 unknown)"),
+  EXPECT_NE(error(empty[1]).find("the map has no occupied cell (4 free, 2 unknown, 0 between"),
             std::string::npos)
       << error(empty[1]);
   std::remove(empty[0].c_str());

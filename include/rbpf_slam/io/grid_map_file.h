@@ -10,6 +10,12 @@
 namespace rbpf_slam {
 namespace io {
 
+/// Occupancy (nav_msgs, 0..100) from which a cell counts as occupied (map_server's
+/// occupied_thresh 0.65), and up to which it counts as free (below free_thresh 0.196); the files
+/// written, the run picture and the map loader's counts use both.
+constexpr int kOccupiedPercent = 65;
+constexpr int kFreePercent = 19;
+
 /// The two files writeGridMap writes for PREFIX: PREFIX.pgm and PREFIX.yaml.
 std::vector<std::string> gridMapFiles(const std::string& prefix);
 

@@ -46,6 +46,13 @@ void requireTablesFit(const GridOptions& o, double width, double height, int par
 struct MapExtent {
   int width = 0, height = 0;
 };
+
+/// The first extent (grid.size_x_m x grid.size_y_m) in cells: the size of firstGrid(), and
+/// what the constructor checks against the memory limit before any table is allocated.
+MapExtent firstExtent(const GridOptions& g) {
+  return {static_cast<int>(std::ceil(g.size_x_m / g.resolution_m)),
+          static_cast<int>(std::ceil(g.size_y_m / g.resolution_m))};
+}
 MapExtent mapExtent(const GridMapData& map, const GridOptions& g) {
   std::ostringstream size;
   size << map.width << " x " << map.height << " cells of " << map.resolution_m << " m";
@@ -155,18 +162,17 @@ GridParticleFilter::GridParticleFilter(const FilterOptions& options)
     : options_(options), motion_(createMotionModel(options.motion)), rng_(options.seed) {
   validate(options_.grid);
   if (options_.particles < 1) throw std::invalid_argument("particles must be >= 1");
-  // As firstGrid() sizes it, before any table is allocated.
-  requireTablesFit(options_.grid, std::ceil(options_.grid.size_x_m / options_.grid.resolution_m),
-                   std::ceil(options_.grid.size_y_m / options_.grid.resolution_m),
-                   options_.particles, "grid.size_x_m x grid.size_y_m");
+  const MapExtent first = firstExtent(options_.grid);  // before any table is allocated
+  requireTablesFit(options_.grid, first.width, first.height, options_.particles,
+                   "grid.size_x_m x grid.size_y_m");
   reset();
 }
 
 TiledLogOddsGrid firstGrid(const GridOptions& g, const Pose2& centre) {
-  const int width = static_cast<int>(std::ceil(g.size_x_m / g.resolution_m));
-  const int height = static_cast<int>(std::ceil(g.size_y_m / g.resolution_m));
-  return TiledLogOddsGrid(g.resolution_m, centre.x() - 0.5 * width * g.resolution_m,
-                          centre.y() - 0.5 * height * g.resolution_m, width, height, g.tile_cells);
+  const MapExtent first = firstExtent(g);
+  return TiledLogOddsGrid(g.resolution_m, centre.x() - 0.5 * first.width * g.resolution_m,
+                          centre.y() - 0.5 * first.height * g.resolution_m, first.width,
+                          first.height, g.tile_cells);
 }
 
 TiledLogOddsGrid gridFromMap(const GridMapData& map, const GridOptions& g) {

@@ -161,6 +161,11 @@ class SlamSession {
   bool hasPriorMap() const { return prior_map_.has_value() || prior_grid_.has_value(); }
   /// The occupancy grid given by setPriorGridMap, null without one.
   const GridMapData* priorGridMap() const { return prior_grid_ ? &*prior_grid_ : nullptr; }
+  /// What is wrong with pose as a start on the prior grid map (outside it, in a wall:
+  /// poseOffMapProblem), or "" (fine, or no grid map).
+  std::string offPriorMapProblem(const Pose2& pose) const {
+    return prior_grid_ ? poseOffMapProblem(*prior_grid_, pose) : "";
+  }
   const UpdateStats& lastStats() const { return last_stats_; }
   const SlamFilter& filter() const { return *filter_; }
   SlamFilter& filter() { return *filter_; }
