@@ -682,6 +682,16 @@ OfflineSummary OfflineRunner::run() {
     ++summary.initial_poses;
     warnIfOffTheMap("--initial-pose", options_.initial_pose, pipeline_.session());
   }
+  if (options_.global_localization) {
+    if (!pipeline_.session().localizeGlobally()) {
+      throw std::runtime_error(
+          "--global-localization needs variant grid_pf with map_file naming a map_server map "
+          "(map.yaml): the particles start spread over its free cells" +
+          std::string(pipeline_.session().priorGridMap() ? " (the map has no free cell)"
+                                                         : " (no grid map is loaded)"));
+    }
+    summary.global_localization = true;
+  }
   // rviz's 2D Pose Estimate, recorded with the data: taken where it comes, as the node does.
   std::vector<std::string> read = topics;  // the inputs (copied to --output-bag) and the poses
   read.push_back("/initialpose");
@@ -1043,6 +1053,7 @@ OfflineSummary OfflineRunner::writeOutputs(const OfflineSummary& in) const {
               summary.wall_s > 0.0 ? summary.bag_duration_s / summary.wall_s : 0.0)
       .number("cpu_s", summary.cpu_s)
       .integer("frames", summary.frames)
+      .boolean("global_localization", summary.global_localization)
       .integer("initial_poses", summary.initial_poses)
       .integer("ignored_initial_poses", summary.ignored_initial_poses)
       .integer("updates", summary.updates)

@@ -100,6 +100,8 @@ SlamNode::SlamNode(ros::NodeHandle nh, ros::NodeHandle private_nh,
   resume_server_ = private_nh_.advertiseService("resume", &SlamNode::resumeService, this);
   save_map_server_ = private_nh_.advertiseService("save_map", &SlamNode::saveMapService, this);
   load_map_server_ = private_nh_.advertiseService("load_map", &SlamNode::loadMapService, this);
+  global_localization_server_ = private_nh_.advertiseService(
+      "global_localization", &SlamNode::globalLocalizationService, this);
   initial_pose_subscriber_ =
       nh_.subscribe("initialpose", 1, &SlamNode::initialPoseCallback, this);
   diagnostics_publisher_ = nh_.advertise<diagnostic_msgs::DiagnosticArray>("/diagnostics", 10);
@@ -532,6 +534,25 @@ void SlamNode::publishTransform(const ros::TimerEvent&) {
 bool SlamNode::resetService(std_srvs::Empty::Request&, std_srvs::Empty::Response&) {
   resetAll("reset requested through " + reset_server_.getService(),
            core::SlamSession::ResetCause::kRequested);
+  return true;
+}
+
+bool SlamNode::globalLocalizationService(std_srvs::Empty::Request&, std_srvs::Empty::Response&) {
+  if (!pipeline_.session().localizeGlobally()) {
+    ROS_ERROR_STREAM("rbpf_slam_node: " << global_localization_server_.getService()
+                                        << " needs variant grid_pf with a map_server map loaded "
+                                           "(map_file or ~load_map), with free cells; variant "
+                                        << config_.filter.variant << ", "
+                                        << (pipeline_.session().priorGridMap()
+                                                ? "a grid map without free cells"
+                                                : "no grid map loaded"));
+    return false;
+  }
+  ROS_INFO_STREAM(
+      "rbpf_slam_node: particles spread over the map's free cells (global "
+      "localization); they gather as the robot moves and observes");
+  const ros::Time now = ros::Time::now();
+  if (!now.isZero()) publishState(now, true);  // simulated time: not before the first /clock
   return true;
 }
 

@@ -2,7 +2,7 @@
 //   offline_slam --bag IN.bag --config config/NAME.yaml --output DIR [--seed N]
 //                [--set key=value ...] [--reference REF.tum] [--no-progress]
 //                [--output-bag OUT.bag]  (tf, pose, landmarks, trajectory for rviz)
-//                [--initial-pose X,Y,YAW[,SIGMA_XY,SIGMA_YAW]]
+//                [--initial-pose X,Y,YAW[,SIGMA_XY,SIGMA_YAW] | --global-localization]
 
 #include <cstdio>
 #include <iostream>
@@ -24,6 +24,7 @@ const char kUsage[] =
     "usage: offline_slam --bag IN.bag --config CONFIG.yaml --output DIR [--seed N]\n"
     "                    [--set key=value ...] [--reference REF.tum] [--no-progress] [--verbose]\n"
     "                    [--output-bag OUT.bag] [--initial-pose X,Y,YAW[,SIGMA_XY,SIGMA_YAW]]\n"
+    "                    [--global-localization]\n"
     "  --seed N         the filter's seed (as --set seed=N)\n"
     "  --set key=value  overrides a config key (dotted for sections: motion.alpha1=0.1)\n"
     "  --reference F    TUM ground truth: ATE in summary.json\n"
@@ -33,6 +34,9 @@ const char kUsage[] =
     "                   give ones that fit the place, e.g. 0.02 m for an e-puck), as an\n"
     "                   initialpose before the first frame; the bag's initialpose messages are\n"
     "                   used too (e.g. to localize on map_file from a known start)\n"
+    "  --global-localization  grid_pf on a map_server map_file: the start is unknown, the\n"
+    "                   particles start spread over the map's free cells with any heading (use\n"
+    "                   thousands of particles: --set particles=5000)\n"
     "Writes DIR/trajectory.tum, trajectory_online.tum, landmarks.yaml, summary.json, map.png,\n"
     "map.pgm and map.yaml (with smoothing also trajectory_filter.tum, landmarks_filter.yaml).\n"
     "Exits 2 on bad arguments, 1 when the bag or the config cannot be read, a config or --set\n"
@@ -105,12 +109,18 @@ Arguments parseArguments(int argc, char** argv) {
       a.options.output_bag = cursor.value();
     } else if (arg == "--initial-pose") {
       parseInitialPose(cursor.value(), &a.options);
+    } else if (arg == "--global-localization") {
+      a.options.global_localization = true;
     } else {
       throw std::invalid_argument("unknown argument '" + arg + "'");
     }
   }
   if (a.options.bag_path.empty() || a.config_path.empty() || a.options.output_dir.empty()) {
     throw std::invalid_argument("--bag, --config and --output are required");
+  }
+  if (a.options.global_localization && a.options.has_initial_pose) {
+    throw std::invalid_argument(
+        "--initial-pose and --global-localization exclude each other (a known start or none)");
   }
   return a;
 }

@@ -154,6 +154,15 @@ TEST_F(ServicesTest, LoadMapReportsAMissingFile) {
       << srv.response.message;
 }
 
+// ~global_localization (amcl's name) spreads grid_pf's particles over a loaded grid map; a
+// landmark variant has none and must refuse the call (offline: grid_localization.sh).
+TEST_F(ServicesTest, GlobalLocalizationIsRefusedWithoutAGridMap) {
+  const std::string service = "/rbpf_slam_node/global_localization";
+  ASSERT_TRUE(ros::service::waitForService(service, ros::Duration(20.0))) << service;
+  std_srvs::Empty empty;
+  EXPECT_FALSE(ros::service::call(service, empty));
+}
+
 TEST_F(ServicesTest, InitialPoseMovesTheEstimate) {
   ros::NodeHandle nh;
   ros::Publisher publisher = nh.advertise<geometry_msgs::PoseWithCovarianceStamped>("/initialpose", 1);

@@ -26,6 +26,9 @@ struct OfflineOptions {
   bool has_initial_pose = false;
   core::Pose2 initial_pose = core::Pose2::Zero();
   Eigen::Matrix3d initial_covariance = core::defaultStartCovariance();
+  // Optional: the start is unknown; the particles start spread over map_file's free cells
+  // (grid_pf on a map_server map, SlamSession::localizeGlobally).
+  bool global_localization = false;
 };
 
 /// Counts and timings of one offline run.
@@ -46,6 +49,7 @@ struct OfflineSummary {
   long dropped_no_tf = 0;
   long dropped_bad_message = 0;
   bool prior_map = false;          // the run started from a map (map_file)
+  bool global_localization = false;  // the run started spread over the map (--global-localization)
   long initial_poses = 0;  // start poses taken: --initial-pose and the bag's initialpose messages
   long ignored_initial_poses = 0;  // ... and those that could not (frame, non-finite, variant)
   std::string first_ignored_initial_pose;  // why the first of them was

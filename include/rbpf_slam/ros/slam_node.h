@@ -95,6 +95,9 @@ class SlamNode {
   void flushTrajectory(const ros::WallTimerEvent& event);
   void publishTransform(const ros::TimerEvent& event);
   bool resetService(std_srvs::Empty::Request& request, std_srvs::Empty::Response& response);
+  /// amcl's global_localization: grid_pf on a loaded map spreads its particles over the map.
+  bool globalLocalizationService(std_srvs::Empty::Request& request,
+                                 std_srvs::Empty::Response& response);
   bool pauseService(std_srvs::Empty::Request& request, std_srvs::Empty::Response& response);
   bool resumeService(std_srvs::Empty::Request& request, std_srvs::Empty::Response& response);
   bool saveMapService(MapFile::Request& request, MapFile::Response& response);
@@ -144,7 +147,7 @@ class SlamNode {
   ros::Publisher landmarks_publisher_;
   ros::Publisher particles_publisher_;
   ros::ServiceServer reset_server_, pause_server_, resume_server_, save_map_server_,
-      load_map_server_;
+      load_map_server_, global_localization_server_;
   ros::Subscriber initial_pose_subscriber_;
   ros::Subscriber odometry_tf_subscriber_;  // /tf, for the stamps of odom -> base only
   ros::Publisher diagnostics_publisher_;

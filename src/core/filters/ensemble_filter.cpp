@@ -87,6 +87,11 @@ class EnsembleFilter : public SlamFilter {
   bool loadGridMap(const GridMapData& map) override {
     return loadIntoEvery([&](SlamFilter& m) { return m.loadGridMap(map); });
   }
+  bool spreadOverMap() override {
+    bool ok = true;
+    for (auto& m : members_) ok = m->spreadOverMap() && ok;
+    return ok;
+  }
   double gridResolution() const override { return members_[0]->gridResolution(); }
   bool setMapping(bool enabled) override {
     bool ok = true;

@@ -39,6 +39,7 @@ class FaultInjectedFilter : public SlamFilter {
     return inner_->loadMap(landmarks);
   }
   bool loadGridMap(const GridMapData& map) override { return inner_->loadGridMap(map); }
+  bool spreadOverMap() override { return inner_->spreadOverMap(); }
   double gridResolution() const override { return inner_->gridResolution(); }
   bool setMapping(bool enabled) override { return inner_->setMapping(enabled); }
   bool occupancyGrid(GridMapData& out) const override { return inner_->occupancyGrid(out); }

@@ -244,6 +244,34 @@ void GridParticleFilter::reset(const Pose2& initial_pose) {
   local_stats_ = LocalMapStats();
 }
 
+Pose2 GridParticleFilter::randomFreePose() {
+  const TiledLogOddsGrid& map = loaded_grid_;
+  const int cell = free_cells_[std::min(
+      free_cells_.size() - 1, static_cast<size_t>(sampleUniform(rng_) * free_cells_.size()))];
+  const double r = map.resolution();
+  return Pose2(map.originX() + (cell % map.width() + sampleUniform(rng_)) * r,
+               map.originY() + (cell / map.width() + sampleUniform(rng_)) * r,
+               wrapAngle(M_PI * (2.0 * sampleUniform(rng_) - 1.0)));
+}
+
+bool GridParticleFilter::spreadOverMap() {
+  if (!loaded_map_) return false;
+  if (!free_cells_listed_) {
+    // Only a run that localizes globally pays for the list (4 bytes per free cell).
+    for (int y = 0; y < loaded_grid_.height(); ++y) {
+      for (int x = 0; x < loaded_grid_.width(); ++x) {
+        if (loaded_grid_.logOdds(x, y) < 0.0f) free_cells_.push_back(y * loaded_grid_.width() + x);
+      }
+    }
+    free_cells_listed_ = true;
+  }
+  if (free_cells_.empty()) return false;
+  for (Particle& p : particles_) p = Particle{randomFreePose(), loaded_grid_};
+  weights_.assign(particles_.size(), 1.0 / particles_.size());
+  resampled_best_ = -1;
+  return true;
+}
+
 void GridParticleFilter::predict(const MotionInput& motion) {
   for (Particle& p : particles_) p.pose = motion_->sample(p.pose, motion, rng_);
   ++stats_.predictions;
@@ -346,6 +374,8 @@ bool GridParticleFilter::loadGridMap(const GridMapData& map) {
                     loaded_map_->cells == map.cells;
   if (!same) {
     loaded_grid_ = gridFromMap(map, options_.grid);
+    free_cells_.clear();  // listed when first needed (spreadOverMap)
+    free_cells_listed_ = false;
     GridMapData kept = map;
     loaded_map_ = std::make_shared<const GridMapData>(std::move(kept));
   }

@@ -60,7 +60,7 @@ bool SlamSession::setPriorMap(const std::vector<LandmarkEstimate>& landmarks) {
   if (!filter_->loadMap(landmarks)) return false;
   prior_map_ = landmarks;
   prior_grid_.reset();
-  if (has_previous_) given_start_.reset();  // a start on the map this one replaces
+  if (has_previous_) forgetGivenStart();  // a start on the map this one replaces
   return true;
 }
 
@@ -68,7 +68,7 @@ bool SlamSession::setPriorGridMap(const GridMapData& grid) {
   if (!filter_->loadGridMap(grid)) return false;
   prior_grid_ = grid;
   prior_map_.reset();
-  if (has_previous_) given_start_.reset();  // a start on the map this one replaces
+  if (has_previous_) forgetGivenStart();  // a start on the map this one replaces
   return true;
 }
 
@@ -90,6 +90,7 @@ bool SlamSession::setPose(const Pose2& pose, const Eigen::Matrix3d& covariance) 
   if (!has_previous_) {
     start_pose_.emplace(pose, covariance);
     given_start_ = start_pose_;  // a restarted run (bag loop, ~reset) starts there again
+    start_global_ = given_global_ = false;
     return true;
   }
   if (!filter_->resetPose(pose, covariance)) return false;
@@ -99,8 +100,30 @@ bool SlamSession::setPose(const Pose2& pose, const Eigen::Matrix3d& covariance) 
   return true;
 }
 
+bool SlamSession::localizeGlobally() {
+  if (!prior_grid_) return false;
+  if (!has_previous_) {
+    // Checked now, not at the first frame, so that a variant that cannot is told at once.
+    if (!filter_->spreadOverMap()) return false;
+    start_pose_.reset();
+    given_start_.reset();
+    start_global_ = given_global_ = true;
+    return true;
+  }
+  if (!filter_->spreadOverMap()) return false;
+  map_to_odom_ = compose(filter_->estimate().mean, inverse(last_odom_));
+  frames_.clear();
+  frames_broken_ = true;
+  return true;
+}
+
+void SlamSession::forgetGivenStart() {
+  given_start_.reset();
+  given_global_ = false;
+}
+
 void SlamSession::reset(ResetCause cause) {
-  if (cause == ResetCause::kRequested) given_start_.reset();
+  if (cause == ResetCause::kRequested) forgetGivenStart();
   restart();
   odometry_stamps_.clear();  // after a clock jump they would be the old run's
   counted_silence_start_ = -std::numeric_limits<double>::infinity();
@@ -110,6 +133,7 @@ void SlamSession::restart() {
   filter_->reset(Pose2::Zero());
   reloadPriorMap();
   start_pose_ = given_start_;
+  start_global_ = given_global_;
   has_previous_ = false;
   last_stamp_ = 0.0;
   map_to_odom_ = Pose2::Zero();
@@ -151,6 +175,13 @@ FrameResult SlamSession::process(double stamp, const Pose2& odom_pose,
       filter_->resetPose(start_pose_->first, start_pose_->second);
       map_to_odom_ = compose(start_pose_->first, inverse(odom_pose));
       start_pose_.reset();
+    } else if (start_global_) {
+      // Anywhere on the prior grid map: the update below weighs the spread.
+      filter_->reset(odom_pose);
+      reloadPriorMap();
+      filter_->spreadOverMap();
+      map_to_odom_ = Pose2::Zero();
+      start_global_ = false;
     } else {
       // Anchor the map at the first pose: map == odom at start.
       filter_->reset(odom_pose);

@@ -48,6 +48,7 @@ class AnchoredFilter : public SlamFilter {
   bool resetPose(const Pose2& pose, const Eigen::Matrix3d& covariance) override;
   bool loadMap(const std::vector<LandmarkEstimate>& landmarks) override;
   bool loadGridMap(const GridMapData& map) override;
+  bool spreadOverMap() override { return mutableInner().spreadOverMap(); }
   double gridResolution() const override { return inner_->gridResolution(); }
   bool setMapping(bool enabled) override;
   bool occupancyGrid(GridMapData& out) const override;

@@ -115,6 +115,9 @@ class SlamFilter {
   /// Gives every hypothesis this occupancy grid (map frame) as its map, for variants that map
   /// cells (grid_pf); throws std::invalid_argument for a grid the variant cannot hold.
   virtual bool loadGridMap(const GridMapData& /*map*/) { return false; }
+  /// Global localization (amcl's global_localization): spreads every hypothesis over the free
+  /// space of the loaded map with any heading, for variants that localize on a grid map.
+  virtual bool spreadOverMap() { return false; }
   /// The cell size of the grids it keeps, m (0: it keeps none).
   virtual double gridResolution() const { return 0.0; }
   /// Mapping off = localization only: landmarks are neither added nor changed.

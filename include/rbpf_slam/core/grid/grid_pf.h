@@ -73,6 +73,10 @@ class GridParticleFilter : public SlamFilter {
   /// map saved by an earlier run (with setMapping(false)) or to extend it.
   bool loadGridMap(const GridMapData& map) override;
   double gridResolution() const override { return options_.grid.resolution_m; }
+  /// Global localization on the loaded map: every particle starts again on it, at a pose drawn
+  /// uniformly over its free cells (log odds below 0 at grid.resolution_m) with any heading.
+  /// False when no map is loaded or it has no free cell.
+  bool spreadOverMap() override;
   bool setMapping(bool enabled) override;
   bool occupancyGrid(GridMapData& out) const override;
   bool usesLandmarkFeatures() const override { return false; }
@@ -92,6 +96,8 @@ class GridParticleFilter : public SlamFilter {
   int bestIndex() const;
   /// Grows each particle's grid (grid.max_size_m > 0) to hold the local map at its pose.
   void growGrids(const std::vector<LocalMapCell>& local);
+  /// A pose drawn uniformly over the loaded map's free cells, with any heading.
+  Pose2 randomFreePose();
 
   const FilterOptions options_;
   std::unique_ptr<MotionModel> motion_;
@@ -106,6 +112,8 @@ class GridParticleFilter : public SlamFilter {
   // The last map loaded (loadGridMap) and its grid, kept to give it again after a reset.
   std::shared_ptr<const GridMapData> loaded_map_;
   TiledLogOddsGrid loaded_grid_;
+  std::vector<int> free_cells_;     // cells of loaded_grid_ (y * width + x) with log odds < 0
+  bool free_cells_listed_ = false;  // free_cells_ is the list for the map loaded last
 };
 
 }  // namespace core

@@ -145,6 +145,11 @@ class SlamSession {
   /// False (nothing changed) for a non-finite pose, a covariance that poseCovarianceUsable()
   /// refuses, or one the filter variant cannot take.
   bool setPose(const Pose2& pose, const Eigen::Matrix3d& covariance);
+  /// Global localization on the prior grid map (amcl's global_localization): the robot may be
+  /// anywhere on its free cells, with any heading. Before the first frame, like setPose, the
+  /// start of this run and of every restarted one. False (nothing changed) without a prior grid
+  /// map or when the filter variant cannot spread over one.
+  bool localizeGlobally();
 
   /// map -> odom so that map -> base equals the filter's estimate at the last update.
   Pose2 mapToOdom() const { return map_to_odom_; }
@@ -179,6 +184,8 @@ class SlamSession {
  private:
   /// reset() but for what is known about the input (the odometry stamps): a new map after a gap.
   void restart();
+  /// Forgets the start given before the first frame (a pose or the global spread).
+  void forgetGivenStart();
 
   std::unique_ptr<SlamFilter> filter_;
   const SessionOptions options_;
@@ -203,6 +210,8 @@ class SlamSession {
   std::optional<GridMapData> prior_grid_;
   std::optional<std::pair<Pose2, Eigen::Matrix3d>> start_pose_;  // for the first frame
   std::optional<std::pair<Pose2, Eigen::Matrix3d>> given_start_;  // given before the first one
+  bool start_global_ = false;  // the first frame starts spread over the prior grid map ...
+  bool given_global_ = false;  // ... as asked before the first frame (localizeGlobally)
   bool mapping_ = true;
 };
 
