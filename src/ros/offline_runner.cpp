@@ -477,12 +477,24 @@ class ResultBag {
 OfflineRunner::OfflineRunner(const io::SlamConfig& config, const OfflineOptions& options)
     : config_(config), options_(options), pipeline_(config.pipeline()) {
   loaded_map_ = io::applyMapConfig(config_, &pipeline_.session());
+  startGlobally();
 }
 
 OfflineRunner::OfflineRunner(const io::SlamConfig& config, const OfflineOptions& options,
                              std::unique_ptr<core::SlamFilter> filter)
     : config_(config), options_(options), pipeline_(config.pipeline(), std::move(filter)) {
   loaded_map_ = io::applyMapConfig(config_, &pipeline_.session());
+  startGlobally();
+}
+
+void OfflineRunner::startGlobally() {
+  std::string why;
+  if (options_.global_localization && !pipeline_.session().localizeGlobally(&why)) {
+    throw std::runtime_error(
+        "--global-localization (grid_pf on a map_server map_file with "
+        "localization_only: true): " +
+        why);
+  }
 }
 
 std::vector<std::string> describeOutcome(const OfflineSummary& s, const OfflineOptions& options,
@@ -682,16 +694,7 @@ OfflineSummary OfflineRunner::run() {
     ++summary.initial_poses;
     warnIfOffTheMap("--initial-pose", options_.initial_pose, pipeline_.session());
   }
-  if (options_.global_localization) {
-    if (!pipeline_.session().localizeGlobally()) {
-      throw std::runtime_error(
-          "--global-localization needs variant grid_pf with map_file naming a map_server map "
-          "(map.yaml): the particles start spread over its free cells" +
-          std::string(pipeline_.session().priorGridMap() ? " (the map has no free cell)"
-                                                         : " (no grid map is loaded)"));
-    }
-    summary.global_localization = true;
-  }
+  summary.global_localization = options_.global_localization;  // asked (startGlobally)
   // rviz's 2D Pose Estimate, recorded with the data: taken where it comes, as the node does.
   std::vector<std::string> read = topics;  // the inputs (copied to --output-bag) and the poses
   read.push_back("/initialpose");

@@ -538,14 +538,12 @@ bool SlamNode::resetService(std_srvs::Empty::Request&, std_srvs::Empty::Response
 }
 
 bool SlamNode::globalLocalizationService(std_srvs::Empty::Request&, std_srvs::Empty::Response&) {
-  if (!pipeline_.session().localizeGlobally()) {
+  std::string why;
+  if (!pipeline_.session().localizeGlobally(&why)) {
     ROS_ERROR_STREAM("rbpf_slam_node: " << global_localization_server_.getService()
-                                        << " needs variant grid_pf with a map_server map loaded "
-                                           "(map_file or ~load_map), with free cells; variant "
-                                        << config_.filter.variant << ", "
-                                        << (pipeline_.session().priorGridMap()
-                                                ? "a grid map without free cells"
-                                                : "no grid map loaded"));
+                                        << " refused (grid_pf on a map_server map, "
+                                           "localization_only: true): "
+                                        << why);
     return false;
   }
   ROS_INFO_STREAM(

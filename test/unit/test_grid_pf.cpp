@@ -1067,18 +1067,32 @@ TEST(GlobalLocalization, TheSessionSpreadsWhenAndAsOftenAsAsked) {
   SessionOptions session_options;
   session_options.filter_origin = "start";
   SlamSession session(createFilter(o), session_options);
-  EXPECT_FALSE(session.localizeGlobally());  // no map
-  ASSERT_TRUE(session.setPriorGridMap(asymmetricRoomMap(o.grid)));
+  std::string why;
+  EXPECT_FALSE(session.localizeGlobally(&why));
+  EXPECT_NE(why.find("no grid map is loaded"), std::string::npos) << why;
+  const GridMapData map = asymmetricRoomMap(o.grid);
+  ASSERT_TRUE(session.setPriorGridMap(map));
+  EXPECT_FALSE(session.localizeGlobally(&why));  // thousands of maps from random poses
+  EXPECT_NE(why.find("mapping is on"), std::string::npos) << why;
   ASSERT_TRUE(session.setMapping(false));
   ASSERT_TRUE(session.localizeGlobally());
   const Pose2 truth(1.8, -1.2, 2.0), odom(5.0, 7.0, 0.3);
   const FeatureSet none;  // frames without readings: the spread stays as drawn
-  // Spread over the room (6 m x 4 m: a uniform spread has variances 3 and 1.3 m^2).
-  auto spread = [&]() { return session.filter().estimate().covariance(0, 0) > 1.0; };
+  // Spread over the room (6 m x 4 m: a uniform spread has variances 3 and 1.3 m^2), in the
+  // map frame although the filter runs centred on the first odometry pose (5, 7); 10 cm of
+  // margin for a step of motion.
+  auto spread = [&]() {
+    for (const WeightedPose& p : session.filter().particles()) {
+      if (!(std::fabs(p.pose.x()) < 3.1 && std::fabs(p.pose.y()) < 2.1)) return false;
+    }
+    return session.filter().estimate().covariance(0, 0) > 1.0;
+  };
   session.process(1.0, odom, none);
   EXPECT_TRUE(spread());
   session.process(2.0, Pose2(odom.x() + 0.01, odom.y(), odom.z()), none);
   EXPECT_TRUE(spread());
+  // A grid map loaded during the run keeps the global start for a restarted run.
+  ASSERT_TRUE(session.setPriorGridMap(map));
   session.reset();  // the clock went back: spread again
   session.process(1.0, odom, none);
   EXPECT_TRUE(spread()) << "after a restart";
@@ -1086,9 +1100,12 @@ TEST(GlobalLocalization, TheSessionSpreadsWhenAndAsOftenAsAsked) {
   session.process(1.0, odom, none);
   EXPECT_FALSE(spread());
   EXPECT_LT((session.filter().estimate().mean.head<2>() - odom.head<2>()).norm(), 1e-6);
-  // Asked during a run (the node's ~global_localization): spread at once.
+  // Asked during a run (the node's ~global_localization): spread at once; map -> odom stays
+  // until the next update.
+  const Pose2 map_to_odom = session.mapToOdom();
   ASSERT_TRUE(session.localizeGlobally());
   EXPECT_TRUE(spread()) << "asked during a run";
+  EXPECT_LT((session.mapToOdom() - map_to_odom).norm(), 1e-12);
   // A start pose given before the first frame replaces a global start asked before it.
   session.reset(SlamSession::ResetCause::kRequested);
   ASSERT_TRUE(session.localizeGlobally());

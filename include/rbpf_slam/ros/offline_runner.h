@@ -49,7 +49,8 @@ struct OfflineSummary {
   long dropped_no_tf = 0;
   long dropped_bad_message = 0;
   bool prior_map = false;          // the run started from a map (map_file)
-  bool global_localization = false;  // the run started spread over the map (--global-localization)
+  bool global_localization = false;  // --global-localization was given (a start pose given
+                                     // after it, a recorded initialpose, replaces it)
   long initial_poses = 0;  // start poses taken: --initial-pose and the bag's initialpose messages
   long ignored_initial_poses = 0;  // ... and those that could not (frame, non-finite, variant)
   std::string first_ignored_initial_pose;  // why the first of them was
@@ -120,6 +121,9 @@ class OfflineRunner {
 
  private:
   OfflineSummary writeOutputs(const OfflineSummary& summary) const;
+  /// --global-localization: asks the session before anything is read; throws
+  /// std::runtime_error with the reason when it cannot (no grid map, mapping on, ...).
+  void startGlobally();
   const io::SlamConfig config_;
   const OfflineOptions options_;
   core::SlamPipeline pipeline_;

@@ -88,9 +88,13 @@ class EnsembleFilter : public SlamFilter {
     return loadIntoEvery([&](SlamFilter& m) { return m.loadGridMap(map); });
   }
   bool spreadOverMap() override {
-    bool ok = true;
-    for (auto& m : members_) ok = m->spreadOverMap() && ok;
-    return ok;
+    return loadIntoEvery([](SlamFilter& m) { return m.spreadOverMap(); });
+  }
+  bool canSpreadOverMap() const override {
+    for (const auto& m : members_) {
+      if (!m->canSpreadOverMap()) return false;
+    }
+    return true;
   }
   double gridResolution() const override { return members_[0]->gridResolution(); }
   bool setMapping(bool enabled) override {

@@ -68,7 +68,8 @@ bool SlamSession::setPriorGridMap(const GridMapData& grid) {
   if (!filter_->loadGridMap(grid)) return false;
   prior_grid_ = grid;
   prior_map_.reset();
-  if (has_previous_) forgetGivenStart();  // a start on the map this one replaces
+  // A start pose was on the map this one replaces; a global start is on whichever map is loaded.
+  if (has_previous_) given_start_.reset();
   return true;
 }
 
@@ -95,26 +96,43 @@ bool SlamSession::setPose(const Pose2& pose, const Eigen::Matrix3d& covariance) 
   }
   if (!filter_->resetPose(pose, covariance)) return false;
   map_to_odom_ = compose(pose, inverse(last_odom_));
-  frames_.clear();
-  frames_broken_ = true;
+  breakFrames();
   return true;
 }
 
-bool SlamSession::localizeGlobally() {
-  if (!prior_grid_) return false;
+bool SlamSession::localizeGlobally(std::string* why) {
+  std::string problem;
+  if (!prior_grid_) {
+    problem = "no grid map is loaded (map_file or ~load_map naming map_server's map.yaml)";
+  } else if (!filter_->canSpreadOverMap()) {
+    problem = "variant " + filter_->variant() + " cannot spread its particles over a map";
+  } else if (mapping_) {
+    problem =
+        "mapping is on: global localization needs localization_only (each of thousands of "
+        "particles would map its own copy from a random pose)";
+  } else if (prior_grid_->count(0, 49) == 0) {
+    problem = "the map has no free cell (occupancy below 50)";
+  } else if (has_previous_ && !filter_->spreadOverMap()) {
+    problem = "the map has no free cell at the filter's resolution";
+  }
+  if (!problem.empty()) {
+    if (why) *why = problem;
+    return false;
+  }
   if (!has_previous_) {
-    // Checked now, not at the first frame, so that a variant that cannot is told at once.
-    if (!filter_->spreadOverMap()) return false;
     start_pose_.reset();
     given_start_.reset();
     start_global_ = given_global_ = true;
     return true;
   }
-  if (!filter_->spreadOverMap()) return false;
-  map_to_odom_ = compose(filter_->estimate().mean, inverse(last_odom_));
+  // map -> odom stays: the mean of the spread is no place, the next update says where it is.
+  breakFrames();
+  return true;
+}
+
+void SlamSession::breakFrames() {
   frames_.clear();
   frames_broken_ = true;
-  return true;
 }
 
 void SlamSession::forgetGivenStart() {
@@ -175,19 +193,16 @@ FrameResult SlamSession::process(double stamp, const Pose2& odom_pose,
       filter_->resetPose(start_pose_->first, start_pose_->second);
       map_to_odom_ = compose(start_pose_->first, inverse(odom_pose));
       start_pose_.reset();
-    } else if (start_global_) {
-      // Anywhere on the prior grid map: the update below weighs the spread.
-      filter_->reset(odom_pose);
-      reloadPriorMap();
-      filter_->spreadOverMap();
-      map_to_odom_ = Pose2::Zero();
-      start_global_ = false;
     } else {
-      // Anchor the map at the first pose: map == odom at start.
+      // Anchor the map at the first pose: map == odom at start. Asked to localize globally
+      // (and still localizing only), the particles are spread over the prior grid map instead,
+      // and this frame's update weighs them.
       filter_->reset(odom_pose);
       reloadPriorMap();
       map_to_odom_ = Pose2::Zero();
+      if (start_global_ && !mapping_) filter_->spreadOverMap();
     }
+    start_global_ = false;
     last_stats_ = filter_->update(features);
     const Pose2 first = filter_->estimate().mean;
     if (first.allFinite()) map_to_odom_ = compose(first, inverse(odom_pose));

@@ -49,6 +49,7 @@ class AnchoredFilter : public SlamFilter {
   bool loadMap(const std::vector<LandmarkEstimate>& landmarks) override;
   bool loadGridMap(const GridMapData& map) override;
   bool spreadOverMap() override { return mutableInner().spreadOverMap(); }
+  bool canSpreadOverMap() const override { return inner_->canSpreadOverMap(); }
   double gridResolution() const override { return inner_->gridResolution(); }
   bool setMapping(bool enabled) override;
   bool occupancyGrid(GridMapData& out) const override;

@@ -77,6 +77,7 @@ class GridParticleFilter : public SlamFilter {
   /// uniformly over its free cells (log odds below 0 at grid.resolution_m) with any heading.
   /// False when no map is loaded or it has no free cell.
   bool spreadOverMap() override;
+  bool canSpreadOverMap() const override { return loaded_map_ != nullptr; }
   bool setMapping(bool enabled) override;
   bool occupancyGrid(GridMapData& out) const override;
   bool usesLandmarkFeatures() const override { return false; }

@@ -146,10 +146,15 @@ class SlamSession {
   /// refuses, or one the filter variant cannot take.
   bool setPose(const Pose2& pose, const Eigen::Matrix3d& covariance);
   /// Global localization on the prior grid map (amcl's global_localization): the robot may be
-  /// anywhere on its free cells, with any heading. Before the first frame, like setPose, the
-  /// start of this run and of every restarted one. False (nothing changed) without a prior grid
-  /// map or when the filter variant cannot spread over one.
-  bool localizeGlobally();
+  /// anywhere on its free cells, with any heading. During a run the particles are spread at
+  /// once (map -> odom stays as it was until the next update). Before the first frame, like
+  /// setPose, the start of this run and of every restarted one (a start pose given after it
+  /// replaces it; ~reset forgets it; a grid map loaded after it keeps it), spread at the first
+  /// frame if mapping is still off then. False, with the reason in *why, and nothing changed:
+  /// without a prior grid map, for a variant that cannot spread over one, while mapping (each
+  /// of thousands of particles would map its own copy from a random pose: localization only),
+  /// or on a map without a free cell.
+  bool localizeGlobally(std::string* why = nullptr);
 
   /// map -> odom so that map -> base equals the filter's estimate at the last update.
   Pose2 mapToOdom() const { return map_to_odom_; }
@@ -186,6 +191,9 @@ class SlamSession {
   void restart();
   /// Forgets the start given before the first frame (a pose or the global spread).
   void forgetGivenStart();
+  /// After the particles were put somewhere else (setPose, localizeGlobally during a run): the
+  /// kept frames no longer continue the filter's path.
+  void breakFrames();
 
   std::unique_ptr<SlamFilter> filter_;
   const SessionOptions options_;
