@@ -23,8 +23,8 @@ namespace io = rbpf_slam::io;
 const char kUsage[] =
     "usage: offline_slam --bag IN.bag --config CONFIG.yaml --output DIR [--seed N]\n"
     "                    [--set key=value ...] [--reference REF.tum] [--no-progress] [--verbose]\n"
-    "                    [--output-bag OUT.bag] [--initial-pose X,Y,YAW[,SIGMA_XY,SIGMA_YAW]]\n"
-    "                    [--global-localization]\n"
+    "                    [--output-bag OUT.bag]\n"
+    "                    [--initial-pose X,Y,YAW[,SIGMA_XY,SIGMA_YAW] | --global-localization]\n"
     "  --seed N         the filter's seed (as --set seed=N)\n"
     "  --set key=value  overrides a config key (dotted for sections: motion.alpha1=0.1)\n"
     "  --reference F    TUM ground truth: ATE in summary.json\n"
@@ -37,15 +37,17 @@ const char kUsage[] =
     "  --global-localization  grid_pf on a map_server map_file with localization_only: the\n"
     "                   start is unknown, the particles start spread over the map's free cells\n"
     "                   with any heading (use thousands: --set particles=3000, and\n"
-    "                   --set grid.match_free_weight=0.2; README \"Map once, then localize\")\n"
+    "                   --set grid.match_free_weight=0.2; README \"Map once, then localize\");\n"
+    "                   not with --initial-pose\n"
     "Writes DIR/trajectory.tum, trajectory_online.tum, landmarks.yaml, summary.json, map.png,\n"
     "map.pgm and map.yaml (with smoothing also trajectory_filter.tum, landmarks_filter.yaml).\n"
     "Exits 2 on bad arguments, 1 when the bag or the config cannot be read, a config or --set\n"
     "value is refused, a topic carries the wrong message type, an output is a directory, a\n"
     "pipe, a device or a socket (checked before the bag is read), --output-bag names the input, "
     "an\n"
-    "output cannot be written, no frame could be used or --reference could not be\n"
-    "evaluated (the outputs are written all the same in the last two cases).\n";
+    "output cannot be written, --global-localization cannot be done (no grid map, mapping on),\n"
+    "no frame could be used or --reference could not be evaluated (the outputs are written\n"
+    "all the same in the last two cases).\n";
 
 /// --initial-pose X,Y,YAW[,SIGMA_XY,SIGMA_YAW] (m, rad): the start pose in the map frame and
 /// its standard deviations (default rviz's: 0.5 m, 0.26 rad).

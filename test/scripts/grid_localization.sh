@@ -145,8 +145,9 @@ fi
 # plan's free cells (3000 particles, free cells weighing 0.2). The e-puck drives round the
 # rectangular arena 8 cm from its walls and its 7 cm infrared sees only them, so the pose turned
 # by half a turn about the arena's centre, (1.2 - x, 0.9 - y, yaw + pi), sees exactly the same:
-# each run must end on the truth or on that mirror (filter seeds 1-6 did, 4 on the truth, each
-# within 1.8 cm RMS over the last quarter; docs/results.md, grid PF, session 46), never between.
+# each run must end on the truth or on that mirror, never between (filter seeds 1-6 did, 4 on
+# the truth, each within 1.8 cm RMS over the last quarter; with the present order of random
+# draws seeds 1 / 2 / 3 end on mirror / truth / truth; docs/results.md, grid PF, session 46).
 # Without a grid map, while mapping, or with a start pose as well, it is refused by name.
 for s in 1 2 3; do
   run "global$s" b.bag --set "map_file=$work/plan.yaml" "${loc[@]}" --global-localization \
