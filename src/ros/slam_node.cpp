@@ -546,6 +546,13 @@ bool SlamNode::globalLocalizationService(std_srvs::Empty::Request&, std_srvs::Em
                                         << why);
     return false;
   }
+  if (!pipeline_.session().started()) {
+    // Nothing to publish yet: the estimate is not spread until the first frame.
+    ROS_INFO_STREAM(
+        "rbpf_slam_node: global localization: the particles will be spread over the "
+        "map's free cells at the first frame");
+    return true;
+  }
   ROS_INFO_STREAM(
       "rbpf_slam_node: particles spread over the map's free cells (global "
       "localization); they gather as the robot moves and observes");

@@ -1075,6 +1075,15 @@ TEST(GlobalLocalization, TheSessionSpreadsWhenAndAsOftenAsAsked) {
   EXPECT_FALSE(session.localizeGlobally(&why));  // thousands of maps from random poses
   EXPECT_NE(why.find("mapping is on"), std::string::npos) << why;
   ASSERT_TRUE(session.setMapping(false));
+  // A map whose free space is all unknown has nowhere to spread over.
+  GridMapData unknown = map;
+  for (auto& cell : unknown.cells) {
+    if (cell >= 0 && cell < 50) cell = -1;
+  }
+  ASSERT_TRUE(session.setPriorGridMap(unknown));
+  EXPECT_FALSE(session.localizeGlobally(&why));
+  EXPECT_NE(why.find("no free cell"), std::string::npos) << why;
+  ASSERT_TRUE(session.setPriorGridMap(map));
   ASSERT_TRUE(session.localizeGlobally());
   const Pose2 truth(1.8, -1.2, 2.0), odom(5.0, 7.0, 0.3);
   const FeatureSet none;  // frames without readings: the spread stays as drawn

@@ -254,9 +254,8 @@ Pose2 GridParticleFilter::randomFreePose() {
                wrapAngle(M_PI * (2.0 * sampleUniform(rng_) - 1.0)));
 }
 
-bool GridParticleFilter::spreadOverMap() {
-  if (!loaded_map_) return false;
-  if (!free_cells_listed_) {
+const std::vector<int>& GridParticleFilter::freeCells() const {
+  if (!free_cells_listed_ && loaded_map_) {
     // Only a run that localizes globally pays for the list (4 bytes per free cell).
     for (int y = 0; y < loaded_grid_.height(); ++y) {
       for (int x = 0; x < loaded_grid_.width(); ++x) {
@@ -265,7 +264,11 @@ bool GridParticleFilter::spreadOverMap() {
     }
     free_cells_listed_ = true;
   }
-  if (free_cells_.empty()) return false;
+  return free_cells_;
+}
+
+bool GridParticleFilter::spreadOverMap() {
+  if (!canSpreadOverMap()) return false;
   for (Particle& p : particles_) p = Particle{randomFreePose(), loaded_grid_};
   weights_.assign(particles_.size(), 1.0 / particles_.size());
   resampled_best_ = -1;

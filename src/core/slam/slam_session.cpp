@@ -104,16 +104,16 @@ bool SlamSession::localizeGlobally(std::string* why) {
   std::string problem;
   if (!prior_grid_) {
     problem = "no grid map is loaded (map_file or ~load_map naming map_server's map.yaml)";
-  } else if (!filter_->canSpreadOverMap()) {
+  } else if (filter_->gridResolution() <= 0.0) {
     problem = "variant " + filter_->variant() + " cannot spread its particles over a map";
   } else if (mapping_) {
     problem =
         "mapping is on: global localization needs localization_only (each of thousands of "
         "particles would map its own copy from a random pose)";
-  } else if (prior_grid_->count(0, 49) == 0) {
-    problem = "the map has no free cell (occupancy below 50)";
+  } else if (!filter_->canSpreadOverMap()) {
+    problem = "the map has no free cell (occupancy below 50 %) at the filter's resolution";
   } else if (has_previous_ && !filter_->spreadOverMap()) {
-    problem = "the map has no free cell at the filter's resolution";
+    problem = "variant " + filter_->variant() + " could not spread its particles over the map";
   }
   if (!problem.empty()) {
     if (why) *why = problem;

@@ -77,7 +77,8 @@ class GridParticleFilter : public SlamFilter {
   /// uniformly over its free cells (log odds below 0 at grid.resolution_m) with any heading.
   /// False when no map is loaded or it has no free cell.
   bool spreadOverMap() override;
-  bool canSpreadOverMap() const override { return loaded_map_ != nullptr; }
+  /// A map is loaded and it has a free cell at grid.resolution_m (lists them when first asked).
+  bool canSpreadOverMap() const override { return loaded_map_ && !freeCells().empty(); }
   bool setMapping(bool enabled) override;
   bool occupancyGrid(GridMapData& out) const override;
   bool usesLandmarkFeatures() const override { return false; }
@@ -99,6 +100,8 @@ class GridParticleFilter : public SlamFilter {
   void growGrids(const std::vector<LocalMapCell>& local);
   /// A pose drawn uniformly over the loaded map's free cells, with any heading.
   Pose2 randomFreePose();
+  /// The loaded map's free cells, listed when first asked for that map.
+  const std::vector<int>& freeCells() const;
 
   const FilterOptions options_;
   std::unique_ptr<MotionModel> motion_;
@@ -113,8 +116,9 @@ class GridParticleFilter : public SlamFilter {
   // The last map loaded (loadGridMap) and its grid, kept to give it again after a reset.
   std::shared_ptr<const GridMapData> loaded_map_;
   TiledLogOddsGrid loaded_grid_;
-  std::vector<int> free_cells_;     // cells of loaded_grid_ (y * width + x) with log odds < 0
-  bool free_cells_listed_ = false;  // free_cells_ is the list for the map loaded last
+  // Cells of loaded_grid_ (y * width + x) with log odds < 0, listed by freeCells().
+  mutable std::vector<int> free_cells_;
+  mutable bool free_cells_listed_ = false;  // free_cells_ is the list for the map loaded last
 };
 
 }  // namespace core

@@ -180,6 +180,8 @@ class SlamSession {
   const SlamFilter& filter() const { return *filter_; }
   SlamFilter& filter() { return *filter_; }
   double lastStamp() const { return last_stamp_; }
+  /// Whether this run has had its first frame (a start pose or spread given now is used at once).
+  bool started() const { return has_previous_; }
   long resets() const { return resets_; }
   const SessionOptions& options() const { return options_; }
   /// Gaps met (max_time_gap_s, max_odometry_jump_m): one odometry silence counts once, however
