@@ -179,6 +179,11 @@ void readGrid(YamlSection section, core::GridOptions* o) {
   section.read("match_f", &o->match_f);
   section.read("match_occupied_weight", &o->match_occupied_weight);
   section.read("match_free_weight", &o->match_free_weight);
+  section.read("match_model", &o->match_model);
+  section.read("field_sigma_m", &o->field_sigma_m);
+  section.read("field_max_dist_m", &o->field_max_dist_m);
+  section.read("field_z_hit", &o->field_z_hit);
+  section.read("spread_candidates", &o->spread_candidates);
   section.finish();
 }
 

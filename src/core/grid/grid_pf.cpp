@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <iomanip>
+#include <limits>
 #include <memory>
 #include <sstream>
 #include <stdexcept>
@@ -122,6 +123,104 @@ void validate(const GridOptions& o) {
   requireRange("grid.match_f", o.match_f, 1e-6, 1e9);
   requireRange("grid.match_occupied_weight", o.match_occupied_weight, 0.0, 1e6);
   requireRange("grid.match_free_weight", o.match_free_weight, 0.0, 1e6);
+  if (o.match_model != "map_matching" && o.match_model != "likelihood_field") {
+    throw std::invalid_argument(
+        "grid.match_model must be map_matching (eq. 14) or "
+        "likelihood_field (localization on a map), not \"" +
+        o.match_model + "\"");
+  }
+  requireRange("grid.field_sigma_m", o.field_sigma_m, 1e-3, 100.0);
+  requireRange("grid.field_max_dist_m", o.field_max_dist_m, 1e-3, 1000.0);
+  requireRange("grid.field_z_hit", o.field_z_hit, 0.0, 0.999);
+  requireRange("grid.spread_candidates", o.spread_candidates, 1, 1000);
+}
+
+namespace {
+
+/// Exact squared distances along one line (Felzenszwalb and Huttenlocher's lower envelope of
+/// parabolas): f holds squared distances in cells (a large finite value where nothing is) and
+/// is replaced by the transform. v, z and out are scratch.
+void squaredDistances1d(std::vector<float>& f, std::vector<int>& v, std::vector<double>& z,
+                        std::vector<float>& out) {
+  const int n = static_cast<int>(f.size());
+  if (n == 0) return;
+  v.assign(n, 0);
+  z.assign(n + 1, 0.0);
+  out.assign(n, 0.0f);
+  const auto meet = [&f](int q, int p) {  // where the parabolas from q and p cross
+    return ((f[q] + static_cast<double>(q) * q) - (f[p] + static_cast<double>(p) * p)) /
+           (2.0 * (q - p));
+  };
+  int k = 0;
+  z[0] = -std::numeric_limits<double>::infinity();
+  z[1] = std::numeric_limits<double>::infinity();
+  for (int q = 1; q < n; ++q) {
+    double s = meet(q, v[k]);
+    while (s <= z[k]) s = meet(q, v[--k]);  // z[0] = -inf stops it
+    ++k;
+    v[k] = q;
+    z[k] = s;
+    z[k + 1] = std::numeric_limits<double>::infinity();
+  }
+  k = 0;
+  for (int q = 0; q < n; ++q) {
+    while (z[k + 1] < q) ++k;
+    const double d = q - v[k];
+    out[q] = static_cast<float>(d * d + f[v[k]]);
+  }
+  f.swap(out);
+}
+
+}  // namespace
+
+std::vector<float> distanceToOccupied(const TiledLogOddsGrid& grid, double max_dist_m) {
+  const int w = grid.width(), h = grid.height();
+  // Capped well above max_dist so that sums of squares cannot overflow a float.
+  const float cap_cells = static_cast<float>(max_dist_m / grid.resolution()) + 2.0f;
+  const float far = cap_cells * cap_cells;
+  std::vector<float> d(static_cast<size_t>(w) * h, far);
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      if (grid.logOdds(x, y) > 0.0f) d[static_cast<size_t>(y) * w + x] = 0.0f;
+    }
+  }
+  std::vector<float> line, out;
+  std::vector<double> z;
+  std::vector<int> v;
+  for (int y = 0; y < h; ++y) {  // along x
+    line.assign(d.begin() + static_cast<size_t>(y) * w, d.begin() + static_cast<size_t>(y + 1) * w);
+    squaredDistances1d(line, v, z, out);
+    std::copy(line.begin(), line.end(), d.begin() + static_cast<size_t>(y) * w);
+  }
+  for (int x = 0; x < w; ++x) {  // along y
+    line.resize(h);
+    for (int y = 0; y < h; ++y) line[y] = d[static_cast<size_t>(y) * w + x];
+    squaredDistances1d(line, v, z, out);
+    for (int y = 0; y < h; ++y) {
+      d[static_cast<size_t>(y) * w + x] =
+          std::min(static_cast<float>(max_dist_m),
+                   std::sqrt(std::min(line[y], far)) * static_cast<float>(grid.resolution()));
+    }
+  }
+  return d;
+}
+
+double fieldLogLikelihood(const std::vector<LocalMapCell>& local, const Pose2& pose,
+                          const TiledLogOddsGrid& grid, const std::vector<float>& distances,
+                          const GridOptions& options) {
+  const double inv_two_var = 1.0 / (2.0 * options.field_sigma_m * options.field_sigma_m);
+  const double miss = 1.0 - options.field_z_hit;
+  const double far = options.field_max_dist_m;
+  double sum = 0.0;
+  int cx, cy;
+  for (const LocalMapCell& cell : local) {
+    if (!cell.occupied) continue;
+    const double d = grid.cellOf(transformPoint(pose, cell.center), &cx, &cy)
+                         ? distances[static_cast<size_t>(cy) * grid.width() + cx]
+                         : far;
+    sum += std::log(options.field_z_hit * std::exp(-d * d * inv_two_var) + miss);
+  }
+  return sum;
 }
 
 double matchLocalMap(const std::vector<LocalMapCell>& local, const Pose2& pose,
@@ -240,6 +339,7 @@ void GridParticleFilter::reset(const Pose2& initial_pose) {
   particles_.assign(options_.particles, Particle{initial_pose, empty});
   weights_.assign(options_.particles, 1.0 / options_.particles);
   resampled_best_ = -1;
+  spread_pending_ = false;
   stats_ = FilterStats();
   local_stats_ = LocalMapStats();
 }
@@ -272,7 +372,34 @@ bool GridParticleFilter::spreadOverMap() {
   for (Particle& p : particles_) p = Particle{randomFreePose(), loaded_grid_};
   weights_.assign(particles_.size(), 1.0 / particles_.size());
   resampled_best_ = -1;
+  spread_pending_ = options_.grid.spread_candidates > 1;
   return true;
+}
+
+double GridParticleFilter::matchScore(const std::vector<LocalMapCell>& local, const Pose2& pose,
+                                      const TiledLogOddsGrid& grid) const {
+  return fieldInUse()
+             ? fieldLogLikelihood(local, pose, loaded_grid_, field_distances_, options_.grid)
+             : matchLocalMap(local, pose, grid, options_.grid);
+}
+
+void GridParticleFilter::drawFromCandidates(const std::vector<LocalMapCell>& local) {
+  // The first scan after a spread, weighed at spread_candidates times as many uniform poses as
+  // there are particles; the particles are drawn from them by that weight. The same posterior
+  // as weighing the spread itself, with more of it near the places the scan fits.
+  const size_t count = particles_.size() * static_cast<size_t>(options_.grid.spread_candidates);
+  std::vector<Pose2> poses(count);
+  std::vector<double> log_weights(count), weights;
+  for (size_t j = 0; j < count; ++j) {
+    poses[j] = randomFreePose();
+    log_weights[j] = matchScore(local, poses[j], loaded_grid_) / options_.grid.match_f;
+  }
+  normalizeLogWeights(log_weights, &weights);  // all equal if every score is -inf or NaN
+  const std::vector<int> drawn =
+      resampleLowVariance(weights, static_cast<int>(particles_.size()), rng_);
+  for (size_t i = 0; i < particles_.size(); ++i) particles_[i].pose = poses[drawn[i]];
+  weights_.assign(particles_.size(), 1.0 / particles_.size());
+  resampled_best_ = -1;
 }
 
 void GridParticleFilter::predict(const MotionInput& motion) {
@@ -294,12 +421,21 @@ UpdateStats GridParticleFilter::update(const FeatureSet& features) {
   stats_.readings_beyond_reach += local_stats.beyond_reach;
   ++stats_.updates;
   if (mapping_) growGrids(local);
+  const bool from_candidates = spread_pending_ && !mapping_ && !local.empty();
+  if (from_candidates) {
+    drawFromCandidates(local);
+    spread_pending_ = false;
+    result.resampled = true;
+    ++stats_.resamples;
+    result.neff = effectiveSampleSize(weights_);
+    stats_.last_neff = result.neff;
+    return result;
+  }
   if (!local.empty()) {
-    // Eq. 14 in log space: log w += match / f, then normalise.
+    // Eq. 14 in log space: log w += match / f, then normalise (or the likelihood field).
     std::vector<double> log_weights(particles_.size());
     for (size_t i = 0; i < particles_.size(); ++i) {
-      const double match = matchLocalMap(local, particles_[i].pose, particles_[i].grid,
-                                         options_.grid);
+      const double match = matchScore(local, particles_[i].pose, particles_[i].grid);
       log_weights[i] = std::log(std::max(weights_[i], 1e-300)) + match / options_.grid.match_f;
     }
     if (!normalizeLogWeights(log_weights, &weights_)) {
@@ -364,6 +500,7 @@ bool GridParticleFilter::resetPose(const Pose2& pose, const Eigen::Matrix3d& cov
   }
   weights_.assign(particles_.size(), 1.0 / particles_.size());
   resampled_best_ = -1;
+  spread_pending_ = false;
   return true;
 }
 
@@ -379,6 +516,10 @@ bool GridParticleFilter::loadGridMap(const GridMapData& map) {
     loaded_grid_ = gridFromMap(map, options_.grid);
     free_cells_.clear();  // listed when first needed (spreadOverMap)
     free_cells_listed_ = false;
+    field_distances_.clear();
+    if (options_.grid.match_model == "likelihood_field") {
+      field_distances_ = distanceToOccupied(loaded_grid_, options_.grid.field_max_dist_m);
+    }
     GridMapData kept = map;
     loaded_map_ = std::make_shared<const GridMapData>(std::move(kept));
   }

@@ -41,6 +41,18 @@ struct GridOptions {
   double match_f = 100.0;
   double match_occupied_weight = 1.0;
   double match_free_weight = 1.0;
+  // While localizing on a loaded map (mapping off), "likelihood_field" (amcl's model, not the
+  // paper's) weighs instead by w *= exp(match / f) with match = sum over the occupied local
+  // cells of log(z_hit exp(-d^2 / (2 field_sigma_m^2)) + 1 - z_hit), d the distance to the map's
+  // nearest occupied cell (at most field_max_dist_m; off the map the most); free cells unused.
+  // "map_matching" (eq. 14) always while mapping.
+  std::string match_model = "map_matching";
+  double field_sigma_m = 0.2;
+  double field_max_dist_m = 2.0;
+  double field_z_hit = 0.95;
+  // Global localization (spreadOverMap): the first scan after the spread is weighed at this
+  // many uniform poses per particle and the particles drawn from them (1: the spread as is).
+  int spread_candidates = 1;
 };
 
 /// What to change when the grid cannot hold the robot or its readings (warnings, summaries).

@@ -21,6 +21,15 @@ double matchLocalMap(const std::vector<LocalMapCell>& local, const Pose2& pose,
                      const TiledLogOddsGrid& grid, const GridOptions& options);
 /// How far from the robot a local map reaches (its farthest cell centre plus one cell), m.
 double localMapReach(const std::vector<LocalMapCell>& local, double resolution_m);
+/// Per cell of grid (y * width + x), the distance to its nearest occupied cell (log odds above
+/// 0), m, at most max_dist_m (exact Euclidean, between cell centres).
+std::vector<float> distanceToOccupied(const TiledLogOddsGrid& grid, double max_dist_m);
+/// grid.match_model likelihood_field: the sum over local's occupied cells (at pose) of
+/// log(z_hit exp(-d^2 / (2 sigma^2)) + 1 - z_hit), d from distances (distanceToOccupied of
+/// grid), the largest distance off the grid.
+double fieldLogLikelihood(const std::vector<LocalMapCell>& local, const Pose2& pose,
+                          const TiledLogOddsGrid& grid, const std::vector<float>& distances,
+                          const GridOptions& options);
 /// The empty grid of the first extent (grid.size_x_m x grid.size_y_m) centred on a pose: every
 /// grid of a run (each particle's, render_grid's) starts from it, so all share one tile lattice.
 TiledLogOddsGrid firstGrid(const GridOptions& options, const Pose2& centre);
@@ -100,6 +109,14 @@ class GridParticleFilter : public SlamFilter {
   void growGrids(const std::vector<LocalMapCell>& local);
   /// A pose drawn uniformly over the loaded map's free cells, with any heading.
   Pose2 randomFreePose();
+  /// Weighing by the likelihood field (grid.match_model) now: localizing on a loaded map.
+  bool fieldInUse() const { return !mapping_ && !field_distances_.empty(); }
+  /// The weight's exponent before 1 / f for local at pose on grid (grid.match_model).
+  double matchScore(const std::vector<LocalMapCell>& local, const Pose2& pose,
+                    const TiledLogOddsGrid& grid) const;
+  /// The first scan after a spread: the particles drawn from grid.spread_candidates times as
+  /// many uniform poses, by that scan's weight.
+  void drawFromCandidates(const std::vector<LocalMapCell>& local);
   /// The loaded map's free cells, listed when first asked for that map.
   const std::vector<int>& freeCells() const;
 
@@ -119,6 +136,10 @@ class GridParticleFilter : public SlamFilter {
   // Cells of loaded_grid_ (y * width + x) with log odds < 0, listed by freeCells().
   mutable std::vector<int> free_cells_;
   mutable bool free_cells_listed_ = false;  // free_cells_ is the list for the map loaded last
+  // grid.match_model likelihood_field: per cell of loaded_grid_ (y * width + x), the distance
+  // to its nearest occupied cell, m, at most grid.field_max_dist_m (distanceToOccupied).
+  std::vector<float> field_distances_;
+  bool spread_pending_ = false;  // spread, and no scan weighed since (drawFromCandidates)
 };
 
 }  // namespace core
