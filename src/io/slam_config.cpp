@@ -184,6 +184,8 @@ void readGrid(YamlSection section, core::GridOptions* o) {
   section.read("field_max_dist_m", &o->field_max_dist_m);
   section.read("field_z_hit", &o->field_z_hit);
   section.read("spread_candidates", &o->spread_candidates);
+  section.read("spread_match_f", &o->spread_match_f);
+  section.read("spread_gathered_m", &o->spread_gathered_m);
   section.finish();
 }
 

@@ -148,10 +148,15 @@ fi
 # each run must end on the truth or on that mirror, never between (filter seeds 1-6 did, 4 on
 # the truth, each within 1.8 cm RMS over the last quarter; with the present order of random
 # draws seeds 1 / 2 / 3 end on mirror / truth / truth; docs/results.md, grid PF, session 46).
+# The likelihood field (grid.match_model: likelihood_field, the config's 2 cm sigma) needs no
+# lower free weight and ends closer: seeds 1-3 on the truth within 0.7 cm (7 of seeds 1-8 on the
+# truth, session 47); asserted as truth-or-mirror within 1.5 cm.
 # Without a grid map, while mapping, or with a start pose as well, it is refused by name.
 for s in 1 2 3; do
   run "global$s" b.bag --set "map_file=$work/plan.yaml" "${loc[@]}" --global-localization \
     --set particles=3000 --set grid.match_free_weight=0.2 --seed "$s"
+  run "field$s" b.bag --set "map_file=$work/plan.yaml" "${loc[@]}" --global-localization \
+    --set particles=3000 --set grid.match_model=likelihood_field --seed "$s"
 done
 /usr/bin/python3 - "$work" <<'PY' || status=1
 import json, math, sys
@@ -161,22 +166,23 @@ def load(path):
 truth = {round(p[0], 3): p for p in load(work + "/b.ref.tum")}
 fails = []
 def rms(v): return math.sqrt(sum(x * x for x in v) / len(v))
-for s in (1, 2, 3):
-    summary = json.load(open("%s/global%d/summary.json" % (work, s)))
+for name, s, bound in [(n, s, b) for n, b in (("global", 0.025), ("field", 0.015)) for s in (1, 2, 3)]:
+    summary = json.load(open("%s/%s%d/summary.json" % (work, name, s)))
     if summary.get("global_localization") is not True:
-        fails.append("seed %d: summary.json's global_localization is %s" % (s, summary.get("global_localization")))
-    path = [p for p in load("%s/global%d/trajectory.tum" % (work, s)) if round(p[0], 3) in truth]
+        fails.append("%s seed %d: summary.json's global_localization is %s" % (name, s, summary.get("global_localization")))
+    path = [p for p in load("%s/%s%d/trajectory.tum" % (work, name, s)) if round(p[0], 3) in truth]
     on = [math.hypot(p[1] - truth[round(p[0], 3)][1], p[2] - truth[round(p[0], 3)][2]) for p in path]
     mirror = [math.hypot(p[1] - (1.2 - truth[round(p[0], 3)][1]), p[2] - (0.9 - truth[round(p[0], 3)][2]))
               for p in path]
     n = len(path) // 4
-    print("global localization, seed %d: first pose %.3f m off; last quarter %.4f m RMS from the "
-          "truth, %.4f m from its mirror" % (s, on[0], rms(on[-n:]), rms(mirror[-n:])))
+    print("global localization (%s), seed %d: first pose %.3f m off; last quarter %.4f m RMS from "
+          "the truth, %.4f m from its mirror" % (name, s, on[0], rms(on[-n:]), rms(mirror[-n:])))
     if not on[0] > 0.1:
-        fails.append("seed %d: the first pose is %.3f m from the truth: not spread over the map" % (s, on[0]))
-    if not min(rms(on[-n:]), rms(mirror[-n:])) < 0.025:
-        fails.append("seed %d: ends neither on the truth nor on its mirror (%.4f / %.4f m)"
-                     % (s, rms(on[-n:]), rms(mirror[-n:])))
+        fails.append("%s seed %d: the first pose is %.3f m from the truth: not spread over the map"
+                     % (name, s, on[0]))
+    if not min(rms(on[-n:]), rms(mirror[-n:])) < bound:
+        fails.append("%s seed %d: ends neither on the truth nor on its mirror within %.3f m (%.4f / %.4f m)"
+                     % (name, s, bound, rms(on[-n:]), rms(mirror[-n:])))
 for f in fails: print("FAIL: " + f)
 sys.exit(1 if fails else 0)
 PY

@@ -1071,7 +1071,15 @@ TEST(GlobalLocalization, TheLikelihoodFieldFindsTheRobotWithFewerParticles) {
   FilterOptions o = globalOptions(1000);
   o.grid.match_free_weight = 1.0;
   o.grid.match_model = "likelihood_field";
-  EXPECT_GE(foundInTheAsymmetricRoom(o), 4) << "of 6 seeds";  // 5 when written
+  const int found = foundInTheAsymmetricRoom(o);
+  EXPECT_GE(found, 4) << "of 6 seeds";  // 5 when written
+  // grid.spread_match_f replaces f until the particles gather: weights flattened by a huge f
+  // find nothing while they never count as gathered, and change nothing once they do at once.
+  o.grid.spread_match_f = 1e9;
+  o.grid.spread_gathered_m = 0.0;
+  EXPECT_EQ(foundInTheAsymmetricRoom(o), 0) << "with f = 1e9 throughout";
+  o.grid.spread_gathered_m = 1e6;
+  EXPECT_EQ(foundInTheAsymmetricRoom(o), found) << "gathered at the first scan";
 }
 
 // Weighing the first scan at many more uniform poses than there are particles (and drawing the
@@ -1140,6 +1148,9 @@ TEST(LikelihoodField, BadOptionsAreRefusedByName) {
   g = gridOptions(5).grid;
   g.spread_candidates = 0;
   EXPECT_NE(error(g).find("grid.spread_candidates"), std::string::npos) << error(g);
+  g = gridOptions(5).grid;
+  g.spread_match_f = -1.0;
+  EXPECT_NE(error(g).find("grid.spread_match_f"), std::string::npos) << error(g);
 }
 
 // A scan scores best where it was taken; hits off the map count as the farthest.

@@ -133,6 +133,8 @@ void validate(const GridOptions& o) {
   requireRange("grid.field_max_dist_m", o.field_max_dist_m, 1e-3, 1000.0);
   requireRange("grid.field_z_hit", o.field_z_hit, 0.0, 0.999);
   requireRange("grid.spread_candidates", o.spread_candidates, 1, 1000);
+  requireRange("grid.spread_match_f", o.spread_match_f, 0.0, 1e9);
+  requireRange("grid.spread_gathered_m", o.spread_gathered_m, 0.0, 1e6);
 }
 
 namespace {
@@ -339,7 +341,7 @@ void GridParticleFilter::reset(const Pose2& initial_pose) {
   particles_.assign(options_.particles, Particle{initial_pose, empty});
   weights_.assign(options_.particles, 1.0 / options_.particles);
   resampled_best_ = -1;
-  spread_pending_ = false;
+  spread_pending_ = gathering_ = false;
   stats_ = FilterStats();
   local_stats_ = LocalMapStats();
 }
@@ -373,6 +375,7 @@ bool GridParticleFilter::spreadOverMap() {
   weights_.assign(particles_.size(), 1.0 / particles_.size());
   resampled_best_ = -1;
   spread_pending_ = options_.grid.spread_candidates > 1;
+  gathering_ = true;
   return true;
 }
 
@@ -392,7 +395,7 @@ void GridParticleFilter::drawFromCandidates(const std::vector<LocalMapCell>& loc
   std::vector<double> log_weights(count), weights;
   for (size_t j = 0; j < count; ++j) {
     poses[j] = randomFreePose();
-    log_weights[j] = matchScore(local, poses[j], loaded_grid_) / options_.grid.match_f;
+    log_weights[j] = matchScore(local, poses[j], loaded_grid_) / matchF();
   }
   normalizeLogWeights(log_weights, &weights);  // all equal if every score is -inf or NaN
   const std::vector<int> drawn =
@@ -436,7 +439,7 @@ UpdateStats GridParticleFilter::update(const FeatureSet& features) {
     std::vector<double> log_weights(particles_.size());
     for (size_t i = 0; i < particles_.size(); ++i) {
       const double match = matchScore(local, particles_[i].pose, particles_[i].grid);
-      log_weights[i] = std::log(std::max(weights_[i], 1e-300)) + match / options_.grid.match_f;
+      log_weights[i] = std::log(std::max(weights_[i], 1e-300)) + match / matchF();
     }
     if (!normalizeLogWeights(log_weights, &weights_)) {
       ++result.weight_resets;
@@ -452,6 +455,13 @@ UpdateStats GridParticleFilter::update(const FeatureSet& features) {
     const Particle& best = particles_[bestIndex()];
     int cx, cy;
     if (!best.grid.cellOf(best.pose.head<2>(), &cx, &cy)) ++stats_.outside_grid;
+  }
+  if (gathering_) {
+    // The spread has gathered once the particles' position spread is below spread_gathered_m:
+    // from then on the weights use match_f again.
+    const PoseEstimate e = estimate();
+    gathering_ =
+        std::sqrt(e.covariance(0, 0) + e.covariance(1, 1)) >= options_.grid.spread_gathered_m;
   }
   result.neff = effectiveSampleSize(weights_);
   stats_.last_neff = result.neff;
@@ -500,7 +510,7 @@ bool GridParticleFilter::resetPose(const Pose2& pose, const Eigen::Matrix3d& cov
   }
   weights_.assign(particles_.size(), 1.0 / particles_.size());
   resampled_best_ = -1;
-  spread_pending_ = false;
+  spread_pending_ = gathering_ = false;
   return true;
 }
 

@@ -53,6 +53,11 @@ struct GridOptions {
   // Global localization (spreadOverMap): the first scan after the spread is weighed at this
   // many uniform poses per particle and the particles drawn from them (1: the spread as is).
   int spread_candidates = 1;
+  // From a global spread until the particles gather (their position spread, the root of the
+  // covariance's trace, below spread_gathered_m), f is spread_match_f (0: match_f): softer
+  // weights while many places fit, the usual precision once found.
+  double spread_match_f = 0.0;
+  double spread_gathered_m = 1.0;
 };
 
 /// What to change when the grid cannot hold the robot or its readings (warnings, summaries).

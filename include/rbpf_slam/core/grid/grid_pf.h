@@ -111,6 +111,12 @@ class GridParticleFilter : public SlamFilter {
   Pose2 randomFreePose();
   /// Weighing by the likelihood field (grid.match_model) now: localizing on a loaded map.
   bool fieldInUse() const { return !mapping_ && !field_distances_.empty(); }
+  /// f of w *= exp(match / f): grid.spread_match_f from a global spread until the particles
+  /// gather (grid.spread_gathered_m), else grid.match_f.
+  double matchF() const {
+    return gathering_ && options_.grid.spread_match_f > 0.0 ? options_.grid.spread_match_f
+                                                            : options_.grid.match_f;
+  }
   /// The weight's exponent before 1 / f for local at pose on grid (grid.match_model).
   double matchScore(const std::vector<LocalMapCell>& local, const Pose2& pose,
                     const TiledLogOddsGrid& grid) const;
@@ -140,6 +146,7 @@ class GridParticleFilter : public SlamFilter {
   // to its nearest occupied cell, m, at most grid.field_max_dist_m (distanceToOccupied).
   std::vector<float> field_distances_;
   bool spread_pending_ = false;  // spread, and no scan weighed since (drawFromCandidates)
+  bool gathering_ = false;       // spread, and not yet gathered (grid.spread_match_f in use)
 };
 
 }  // namespace core
