@@ -1020,11 +1020,6 @@ void standingStep(SlamFilter* filter, const Pose2& truth) {
   filter->update(asymmetricRoomScan(truth));
 }
 
-// Global localization: the particles start anywhere on the map's free cells, with any heading,
-// and gather on the robot. Standing still in the asymmetric room (nearly symmetric under a half
-// turn but for its two inner walls), 3000 particles find it in 7 of seeds 1-8 (1 of 8 with free
-// cells weighing as much as occupied ones, 3 of 8 with 1500 particles): asserted over six seeds.
-// Without a loaded map there is nothing to spread over.
 /// Seeds 1-6 of global localization in the asymmetric room with these options: how many found
 /// the standing robot within 15 cm and 0.1 rad after 40 scans.
 int foundInTheAsymmetricRoom(FilterOptions o) {
@@ -1060,6 +1055,11 @@ int foundInTheAsymmetricRoom(FilterOptions o) {
   return found;
 }
 
+// Global localization: the particles start anywhere on the map's free cells, with any heading,
+// and gather on the robot. Standing still in the asymmetric room (nearly symmetric under a half
+// turn but for its two inner walls), 3000 particles find it in 7 of seeds 1-8 (1 of 8 with free
+// cells weighing as much as occupied ones, 3 of 8 with 1500 particles): asserted over six seeds.
+// Without a loaded map there is nothing to spread over.
 TEST(GlobalLocalization, FindsTheRobotInAnAsymmetricRoomMostOfTheTime) {
   EXPECT_GE(foundInTheAsymmetricRoom(globalOptions(3000)), 4) << "of 6 seeds";
 }
@@ -1074,7 +1074,8 @@ TEST(GlobalLocalization, TheLikelihoodFieldFindsTheRobotWithFewerParticles) {
   const int found = foundInTheAsymmetricRoom(o);
   EXPECT_GE(found, 4) << "of 6 seeds";  // 5 when written
   // grid.spread_match_f replaces f until the particles gather: weights flattened by a huge f
-  // find nothing while they never count as gathered, and change nothing once they do at once.
+  // find nothing while they never count as gathered, and change nothing when they count as
+  // gathered before the first scan is weighed.
   o.grid.spread_match_f = 1e9;
   o.grid.spread_gathered_m = 0.0;
   EXPECT_EQ(foundInTheAsymmetricRoom(o), 0) << "with f = 1e9 throughout";

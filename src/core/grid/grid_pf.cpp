@@ -131,9 +131,9 @@ void validate(const GridOptions& o) {
   }
   requireRange("grid.field_sigma_m", o.field_sigma_m, 1e-3, 100.0);
   requireRange("grid.field_max_dist_m", o.field_max_dist_m, 1e-3, 1000.0);
-  requireRange("grid.field_z_hit", o.field_z_hit, 0.0, 0.999);
+  requireRange("grid.field_z_hit", o.field_z_hit, 1e-3, 0.999);
   requireRange("grid.spread_candidates", o.spread_candidates, 1, 1000);
-  requireRange("grid.spread_match_f", o.spread_match_f, 0.0, 1e9);
+  if (o.spread_match_f != 0.0) requireRange("grid.spread_match_f", o.spread_match_f, 1e-6, 1e9);
   requireRange("grid.spread_gathered_m", o.spread_gathered_m, 0.0, 1e6);
 }
 
@@ -263,6 +263,11 @@ GridParticleFilter::GridParticleFilter(const FilterOptions& options)
     : options_(options), motion_(createMotionModel(options.motion)), rng_(options.seed) {
   validate(options_.grid);
   if (options_.particles < 1) throw std::invalid_argument("particles must be >= 1");
+  if (static_cast<double>(options_.particles) * options_.grid.spread_candidates > 1e7) {
+    throw std::invalid_argument(
+        "particles x grid.spread_candidates exceeds 1e7 poses to weigh at once: lower "
+        "grid.spread_candidates");
+  }
   const MapExtent first = firstExtent(options_.grid);  // before any table is allocated
   requireTablesFit(options_.grid, first.width, first.height, options_.particles,
                    "grid.size_x_m x grid.size_y_m");
@@ -386,7 +391,7 @@ double GridParticleFilter::matchScore(const std::vector<LocalMapCell>& local, co
              : matchLocalMap(local, pose, grid, options_.grid);
 }
 
-void GridParticleFilter::drawFromCandidates(const std::vector<LocalMapCell>& local) {
+bool GridParticleFilter::drawFromCandidates(const std::vector<LocalMapCell>& local) {
   // The first scan after a spread, weighed at spread_candidates times as many uniform poses as
   // there are particles; the particles are drawn from them by that weight. The same posterior
   // as weighing the spread itself, with more of it near the places the scan fits.
@@ -397,12 +402,13 @@ void GridParticleFilter::drawFromCandidates(const std::vector<LocalMapCell>& loc
     poses[j] = randomFreePose();
     log_weights[j] = matchScore(local, poses[j], loaded_grid_) / matchF();
   }
-  normalizeLogWeights(log_weights, &weights);  // all equal if every score is -inf or NaN
+  const bool finite = normalizeLogWeights(log_weights, &weights);  // else all equal
   const std::vector<int> drawn =
       resampleLowVariance(weights, static_cast<int>(particles_.size()), rng_);
   for (size_t i = 0; i < particles_.size(); ++i) particles_[i].pose = poses[drawn[i]];
   weights_.assign(particles_.size(), 1.0 / particles_.size());
   resampled_best_ = -1;
+  return finite;
 }
 
 void GridParticleFilter::predict(const MotionInput& motion) {
@@ -424,9 +430,23 @@ UpdateStats GridParticleFilter::update(const FeatureSet& features) {
   stats_.readings_beyond_reach += local_stats.beyond_reach;
   ++stats_.updates;
   if (mapping_) growGrids(local);
-  const bool from_candidates = spread_pending_ && !mapping_ && !local.empty();
+  if (gathering_) {
+    // The spread has gathered once the particles' position spread is below spread_gathered_m
+    // (checked before each scan is weighed): from then on the weights use match_f again.
+    const PoseEstimate e = estimate();
+    gathering_ =
+        !(std::sqrt(e.covariance(0, 0) + e.covariance(1, 1)) < options_.grid.spread_gathered_m);
+  }
+  // The candidates wait for a scan with a hit: one with free cells only scores every pose alike
+  // under the likelihood field (an infrared or sonar reading at its maximum range).
+  const bool from_candidates =
+      spread_pending_ && !mapping_ &&
+      std::any_of(local.begin(), local.end(), [](const LocalMapCell& c) { return c.occupied; });
   if (from_candidates) {
-    drawFromCandidates(local);
+    if (!drawFromCandidates(local)) {
+      ++result.weight_resets;
+      ++stats_.weight_resets;
+    }
     spread_pending_ = false;
     result.resampled = true;
     ++stats_.resamples;
@@ -455,13 +475,6 @@ UpdateStats GridParticleFilter::update(const FeatureSet& features) {
     const Particle& best = particles_[bestIndex()];
     int cx, cy;
     if (!best.grid.cellOf(best.pose.head<2>(), &cx, &cy)) ++stats_.outside_grid;
-  }
-  if (gathering_) {
-    // The spread has gathered once the particles' position spread is below spread_gathered_m:
-    // from then on the weights use match_f again.
-    const PoseEstimate e = estimate();
-    gathering_ =
-        std::sqrt(e.covariance(0, 0) + e.covariance(1, 1)) >= options_.grid.spread_gathered_m;
   }
   result.neff = effectiveSampleSize(weights_);
   stats_.last_neff = result.neff;
@@ -523,13 +536,16 @@ bool GridParticleFilter::loadGridMap(const GridMapData& map) {
                     loaded_map_->width == map.width && loaded_map_->height == map.height &&
                     loaded_map_->cells == map.cells;
   if (!same) {
-    loaded_grid_ = gridFromMap(map, options_.grid);
+    // Built first, then kept: a map that cannot be built leaves the filter as it was.
+    TiledLogOddsGrid grid = gridFromMap(map, options_.grid);
+    std::vector<float> field;
+    if (options_.grid.match_model == "likelihood_field") {
+      field = distanceToOccupied(grid, options_.grid.field_max_dist_m);
+    }
+    loaded_grid_ = std::move(grid);
+    field_distances_ = std::move(field);
     free_cells_.clear();  // listed when first needed (spreadOverMap)
     free_cells_listed_ = false;
-    field_distances_.clear();
-    if (options_.grid.match_model == "likelihood_field") {
-      field_distances_ = distanceToOccupied(loaded_grid_, options_.grid.field_max_dist_m);
-    }
     GridMapData kept = map;
     loaded_map_ = std::make_shared<const GridMapData>(std::move(kept));
   }
@@ -543,6 +559,7 @@ bool GridParticleFilter::loadGridMap(const GridMapData& map) {
 
 bool GridParticleFilter::setMapping(bool enabled) {
   mapping_ = enabled;
+  if (mapping_) spread_pending_ = gathering_ = false;  // a spread is for localization only
   return true;
 }
 

@@ -41,11 +41,13 @@ struct GridOptions {
   double match_f = 100.0;
   double match_occupied_weight = 1.0;
   double match_free_weight = 1.0;
-  // While localizing on a loaded map (mapping off), "likelihood_field" (amcl's model, not the
-  // paper's) weighs instead by w *= exp(match / f) with match = sum over the occupied local
-  // cells of log(z_hit exp(-d^2 / (2 field_sigma_m^2)) + 1 - z_hit), d the distance to the map's
-  // nearest occupied cell (at most field_max_dist_m; off the map the most); free cells unused.
-  // "map_matching" (eq. 14) always while mapping.
+  // While localizing on a loaded map (mapping off), "likelihood_field" (after amcl's model, not
+  // the paper's) weighs instead by w *= exp(match / f) with match = sum over the occupied local
+  // cells of log(z_hit exp(-d^2 / (2 field_sigma_m^2)) + 1 - z_hit), d the distance to the loaded
+  // map's nearest occupied cell (at most field_max_dist_m; off the map the most); free cells
+  // unused. Unlike amcl the miss term is the constant 1 - z_hit and the sum is divided by f, so
+  // amcl's parameter values do not carry over. "map_matching" (eq. 14) always while mapping or
+  // without a loaded map. The field holds 4 bytes per cell of the loaded map.
   std::string match_model = "map_matching";
   double field_sigma_m = 0.2;
   double field_max_dist_m = 2.0;
@@ -54,8 +56,10 @@ struct GridOptions {
   // many uniform poses per particle and the particles drawn from them (1: the spread as is).
   int spread_candidates = 1;
   // From a global spread until the particles gather (their position spread, the root of the
-  // covariance's trace, below spread_gathered_m), f is spread_match_f (0: match_f): softer
-  // weights while many places fit, the usual precision once found.
+  // covariance's trace, below spread_gathered_m before a scan is weighed), f is spread_match_f
+  // (0: match_f): softer weights while many places fit, the usual precision once found. The
+  // threshold is absolute: a place smaller than it (an e-puck arena) counts as gathered at once;
+  // 0 never gathers. Mapping turned on ends it.
   double spread_match_f = 0.0;
   double spread_gathered_m = 1.0;
 };

@@ -120,9 +120,10 @@ class GridParticleFilter : public SlamFilter {
   /// The weight's exponent before 1 / f for local at pose on grid (grid.match_model).
   double matchScore(const std::vector<LocalMapCell>& local, const Pose2& pose,
                     const TiledLogOddsGrid& grid) const;
-  /// The first scan after a spread: the particles drawn from grid.spread_candidates times as
-  /// many uniform poses, by that scan's weight.
-  void drawFromCandidates(const std::vector<LocalMapCell>& local);
+  /// The first scan with a hit after a spread: the particles drawn from
+  /// grid.spread_candidates times as many uniform poses, by that scan's weight. False when no
+  /// candidate had a finite weight (then drawn uniformly).
+  bool drawFromCandidates(const std::vector<LocalMapCell>& local);
   /// The loaded map's free cells, listed when first asked for that map.
   const std::vector<int>& freeCells() const;
 
