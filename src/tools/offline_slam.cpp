@@ -45,7 +45,8 @@ const char kUsage[] =
     "value is refused, a topic carries the wrong message type, an output is a directory, a\n"
     "pipe, a device or a socket (checked before the bag is read), --output-bag names the input, "
     "an\n"
-    "output cannot be written, --global-localization cannot be done (no grid map, mapping on),\n"
+    "output cannot be written, --global-localization cannot be done (no grid map, mapping on,\n"
+    "no free cell at the filter's resolution),\n"
     "no frame could be used or --reference could not be evaluated (the outputs are written\n"
     "all the same in the last two cases).\n";
 

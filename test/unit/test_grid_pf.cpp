@@ -1123,7 +1123,7 @@ TEST(LikelihoodField, DistancesAreExactAndCapped) {
   for (float v : empty) EXPECT_FLOAT_EQ(v, cap);
 }
 
-// A misspelt model or an unusable field parameter is refused by name.
+// A misspelt model or an unusable field or spread parameter is refused by name.
 TEST(LikelihoodField, BadOptionsAreRefusedByName) {
   auto error = [](const GridOptions& g) -> std::string {
     FilterOptions o = gridOptions(5);

@@ -118,7 +118,8 @@ class SlamFilter {
   /// Global localization (amcl's global_localization): spreads every hypothesis over the free
   /// space of the loaded map with any heading, for variants that localize on a grid map.
   virtual bool spreadOverMap() { return false; }
-  /// Whether spreadOverMap() could be asked now (a grid map is loaded), without doing it.
+  /// Whether spreadOverMap() could be asked now (a grid map with a free cell is loaded), without
+  /// doing it.
   virtual bool canSpreadOverMap() const { return false; }
   /// The cell size of the grids it keeps, m (0: it keeps none).
   virtual double gridResolution() const { return 0.0; }

@@ -52,8 +52,9 @@ struct GridOptions {
   double field_sigma_m = 0.2;
   double field_max_dist_m = 2.0;
   double field_z_hit = 0.95;
-  // Global localization (spreadOverMap): the first scan after the spread is weighed at this
-  // many uniform poses per particle and the particles drawn from them (1: the spread as is).
+  // Global localization (spreadOverMap): the first scan with a hit (an occupied local cell)
+  // after the spread, while mapping is off, is weighed at this many uniform poses per particle
+  // and the particles drawn from them (1: the spread as is); particles x this at most 1e7.
   int spread_candidates = 1;
   // From a global spread until the particles gather (their position spread, the root of the
   // covariance's trace, below spread_gathered_m before a scan is weighed), f is spread_match_f

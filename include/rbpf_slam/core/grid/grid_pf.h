@@ -1,7 +1,8 @@
 #pragma once
 // Occupancy-grid particle-filter SLAM for low-cost range sensors (Yatim and Buniyamin 2015):
 // differential-drive wheel model (eqs. 11, 12), a log-odds grid per particle (eq. 13), weights
-// from matching the local map against the particle's map (eq. 14), low-variance resampling.
+// from matching the local map against the particle's map (eq. 14; or the likelihood field,
+// grid.match_model, while localizing on a map), low-variance resampling.
 
 #include <memory>
 #include <vector>
