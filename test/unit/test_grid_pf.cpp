@@ -1097,6 +1097,39 @@ TEST(GlobalLocalization, CandidatePosesAtTheFirstScanNeedFewerParticles) {
   EXPECT_GT(with, without) << "of 6 seeds";
 }
 
+// The candidates wait for a scan with a hit (a scan of free cells only scores every pose alike
+// under the likelihood field), and mapping ends a spread: with resampling otherwise off, only a
+// draw from the candidates resamples.
+TEST(GlobalLocalization, CandidatesWaitForAHitAndMappingEndsTheSpread) {
+  FilterOptions o = globalOptions(100);
+  o.grid.match_model = "likelihood_field";
+  o.grid.spread_candidates = 20;
+  o.resample_threshold = 0.0;
+  const Pose2 truth(1.8, -1.2, 2.0);
+  GridParticleFilter filter(o);
+  ASSERT_TRUE(filter.loadGridMap(asymmetricRoomMap(o.grid)));
+  ASSERT_TRUE(filter.setMapping(false));
+  ASSERT_TRUE(filter.spreadOverMap());
+  FeatureSet no_hit = asymmetricRoomScan(truth);
+  auto open = std::make_shared<RangeScan>(*no_hit.scan);
+  for (float& r : open->ranges) r = open->range_max;
+  no_hit.scan = open;
+  const std::vector<WeightedPose> spread = filter.particles();
+  UpdateStats step = filter.update(no_hit);
+  EXPECT_FALSE(step.resampled) << "drawn from candidates at a scan without a hit";
+  const std::vector<WeightedPose> after = filter.particles();
+  for (size_t i = 0; i < spread.size(); ++i) {
+    ASSERT_EQ(after[i].pose, spread[i].pose) << i;
+  }
+  step = filter.update(asymmetricRoomScan(truth));
+  EXPECT_TRUE(step.resampled) << "not drawn from candidates at the first scan with a hit";
+  ASSERT_TRUE(filter.spreadOverMap());
+  ASSERT_TRUE(filter.setMapping(true));
+  ASSERT_TRUE(filter.setMapping(false));
+  step = filter.update(asymmetricRoomScan(truth));
+  EXPECT_FALSE(step.resampled) << "a spread pending after mapping was turned on";
+}
+
 // The distance transform is exact (against every occupied cell) and capped.
 TEST(LikelihoodField, DistancesAreExactAndCapped) {
   TiledLogOddsGrid grid(0.1, -1.0, 2.0, 37, 23, 8);
@@ -1159,20 +1192,29 @@ TEST(LikelihoodField, ScoresTheTruePoseAboveShiftedOnes) {
   FilterOptions o = globalOptions(10);
   const GridMapData map = asymmetricRoomMap(o.grid);
   const TiledLogOddsGrid grid = gridFromMap(map, o.grid);
+  const LikelihoodField field = likelihoodField(grid, o.grid);
+  // The table holds each cell's log likelihood of a hit, from its distance to a wall.
   const std::vector<float> d = distanceToOccupied(grid, o.grid.field_max_dist_m);
+  ASSERT_EQ(field.cell_log_likelihood.size(), d.size());
+  const double sigma = o.grid.field_sigma_m, z_hit = o.grid.field_z_hit;
+  for (size_t i = 0; i < d.size(); ++i) {
+    const double expected =
+        std::log(z_hit * std::exp(-d[i] * d[i] / (2 * sigma * sigma)) + 1.0 - z_hit);
+    ASSERT_NEAR(field.cell_log_likelihood[i], expected, 1e-6 * (1.0 + std::fabs(expected))) << i;
+  }
   const Pose2 truth(1.8, -1.2, 2.0);
   LocalMapStats ignored;
   const auto local = buildLocalMap(asymmetricRoomScan(truth), o.grid, &ignored);
-  const double at_truth = fieldLogLikelihood(local, truth, grid, d, o.grid);
+  const double at_truth = fieldLogLikelihood(local, truth, grid, field);
   EXPECT_GT(at_truth, -0.1 * local.size());  // nearly every hit on a wall
   for (const Pose2& off : {Pose2(2.0, -1.2, 2.0), Pose2(1.8, -1.0, 2.0), Pose2(1.8, -1.2, 2.1),
                            Pose2(-1.8, 1.2, 2.0 - M_PI)}) {
-    EXPECT_LT(fieldLogLikelihood(local, off, grid, d, o.grid), at_truth - 1.0) << off.transpose();
+    EXPECT_LT(fieldLogLikelihood(local, off, grid, field), at_truth - 1.0) << off.transpose();
   }
   const double z_miss = std::log(1.0 - o.grid.field_z_hit);
   int hits = 0;
   for (const auto& c : local) hits += c.occupied;
-  EXPECT_NEAR(fieldLogLikelihood(local, Pose2(100, 100, 0), grid, d, o.grid), hits * z_miss,
+  EXPECT_NEAR(fieldLogLikelihood(local, Pose2(100, 100, 0), grid, field), hits * z_miss,
               1e-9 * hits);
 }
 
@@ -1367,6 +1409,22 @@ TEST(GridConfig, EachVariantStartsFromItsKindOfMapFile) {
               std::string::npos)
         << loaded;
     EXPECT_EQ(loaded.find("inverted"), std::string::npos) << loaded;
+    EXPECT_EQ(loaded.find("likelihood_field"), std::string::npos) << loaded;
+  }
+  {
+    // The likelihood field weighs only while localizing: a mapping run says it uses eq. 14.
+    io::SlamConfig mapping = grid;
+    mapping.localization_only = false;
+    mapping.filter.grid.match_model = "likelihood_field";
+    SlamPipeline described(mapping.pipeline());
+    const std::string loaded = io::applyMapConfig(mapping, &described.session());
+    EXPECT_NE(loaded.find("note: grid.match_model likelihood_field weighs only while localizing"),
+              std::string::npos)
+        << loaded;
+    mapping.localization_only = true;
+    SlamPipeline localizing(mapping.pipeline());
+    EXPECT_EQ(io::applyMapConfig(mapping, &localizing.session()).find("likelihood_field"),
+              std::string::npos);
   }
   EXPECT_TRUE(grid_pipeline.session().hasPriorMap());
   EXPECT_FALSE(grid_pipeline.session().mapping());

@@ -90,9 +90,9 @@ class EnsembleFilter : public SlamFilter {
   bool spreadOverMap() override {
     return loadIntoEvery([](SlamFilter& m) { return m.spreadOverMap(); });
   }
-  bool canSpreadOverMap() const override {
+  bool canSpreadOverMap(std::string* why) const override {
     for (const auto& m : members_) {
-      if (!m->canSpreadOverMap()) return false;
+      if (!m->canSpreadOverMap(why)) return false;
     }
     return true;
   }

@@ -40,7 +40,7 @@ class FaultInjectedFilter : public SlamFilter {
   }
   bool loadGridMap(const GridMapData& map) override { return inner_->loadGridMap(map); }
   bool spreadOverMap() override { return inner_->spreadOverMap(); }
-  bool canSpreadOverMap() const override { return inner_->canSpreadOverMap(); }
+  bool canSpreadOverMap(std::string* why) const override { return inner_->canSpreadOverMap(why); }
   double gridResolution() const override { return inner_->gridResolution(); }
   bool setMapping(bool enabled) override { return inner_->setMapping(enabled); }
   bool occupancyGrid(GridMapData& out) const override { return inner_->occupancyGrid(out); }

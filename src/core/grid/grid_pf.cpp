@@ -207,20 +207,28 @@ std::vector<float> distanceToOccupied(const TiledLogOddsGrid& grid, double max_d
   return d;
 }
 
-double fieldLogLikelihood(const std::vector<LocalMapCell>& local, const Pose2& pose,
-                          const TiledLogOddsGrid& grid, const std::vector<float>& distances,
-                          const GridOptions& options) {
+LikelihoodField likelihoodField(const TiledLogOddsGrid& grid, const GridOptions& options) {
   const double inv_two_var = 1.0 / (2.0 * options.field_sigma_m * options.field_sigma_m);
-  const double miss = 1.0 - options.field_z_hit;
-  const double far = options.field_max_dist_m;
+  const auto log_likelihood = [&](double d) {
+    return std::log(options.field_z_hit * std::exp(-d * d * inv_two_var) + 1.0 -
+                    options.field_z_hit);
+  };
+  LikelihoodField field;
+  field.cell_log_likelihood = distanceToOccupied(grid, options.field_max_dist_m);
+  for (float& v : field.cell_log_likelihood) v = static_cast<float>(log_likelihood(v));
+  field.off_grid = log_likelihood(options.field_max_dist_m);
+  return field;
+}
+
+double fieldLogLikelihood(const std::vector<LocalMapCell>& local, const Pose2& pose,
+                          const TiledLogOddsGrid& grid, const LikelihoodField& field) {
   double sum = 0.0;
   int cx, cy;
   for (const LocalMapCell& cell : local) {
     if (!cell.occupied) continue;
-    const double d = grid.cellOf(transformPoint(pose, cell.center), &cx, &cy)
-                         ? distances[static_cast<size_t>(cy) * grid.width() + cx]
-                         : far;
-    sum += std::log(options.field_z_hit * std::exp(-d * d * inv_two_var) + miss);
+    sum += grid.cellOf(transformPoint(pose, cell.center), &cx, &cy)
+               ? field.cell_log_likelihood[static_cast<size_t>(cy) * grid.width() + cx]
+               : field.off_grid;
   }
   return sum;
 }
@@ -260,7 +268,10 @@ void integrateLocalMap(const std::vector<LocalMapCell>& local, const Pose2& pose
 }
 
 GridParticleFilter::GridParticleFilter(const FilterOptions& options)
-    : options_(options), motion_(createMotionModel(options.motion)), rng_(options.seed) {
+    : options_(options),
+      field_model_(options.grid.match_model == "likelihood_field"),
+      motion_(createMotionModel(options.motion)),
+      rng_(options.seed) {
   validate(options_.grid);
   if (options_.particles < 1) throw std::invalid_argument("particles must be >= 1");
   if (static_cast<double>(options_.particles) * options_.grid.spread_candidates > 1e7) {
@@ -374,8 +385,19 @@ const std::vector<int>& GridParticleFilter::freeCells() const {
   return free_cells_;
 }
 
+bool GridParticleFilter::canSpreadOverMap(std::string* why) const {
+  std::string problem;
+  if (!loaded_map_) {
+    problem = "no grid map is loaded";
+  } else if (freeCells().empty()) {
+    problem = "the map has no free cell (occupancy below 50 %) at the filter's resolution";
+  }
+  if (why) *why = problem;
+  return problem.empty();
+}
+
 bool GridParticleFilter::spreadOverMap() {
-  if (!canSpreadOverMap()) return false;
+  if (!canSpreadOverMap(nullptr)) return false;
   for (Particle& p : particles_) p = Particle{randomFreePose(), loaded_grid_};
   weights_.assign(particles_.size(), 1.0 / particles_.size());
   resampled_best_ = -1;
@@ -385,10 +407,20 @@ bool GridParticleFilter::spreadOverMap() {
 }
 
 double GridParticleFilter::matchScore(const std::vector<LocalMapCell>& local, const Pose2& pose,
-                                      const TiledLogOddsGrid& grid) const {
-  return fieldInUse()
-             ? fieldLogLikelihood(local, pose, loaded_grid_, field_distances_, options_.grid)
-             : matchLocalMap(local, pose, grid, options_.grid);
+                                      const TiledLogOddsGrid& own_grid) const {
+  return fieldInUse() ? fieldLogLikelihood(local, pose, loaded_grid_, field_)
+                      : matchLocalMap(local, pose, own_grid, options_.grid);
+}
+
+double GridParticleFilter::positionSpread() const {
+  // Two passes (as poseMoments), without its copy of the poses.
+  Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+  for (size_t i = 0; i < particles_.size(); ++i) mean += weights_[i] * particles_[i].pose.head<2>();
+  double variance = 0.0;
+  for (size_t i = 0; i < particles_.size(); ++i) {
+    variance += weights_[i] * (particles_[i].pose.head<2>() - mean).squaredNorm();
+  }
+  return std::sqrt(variance);
 }
 
 bool GridParticleFilter::drawFromCandidates(const std::vector<LocalMapCell>& local) {
@@ -433,9 +465,7 @@ UpdateStats GridParticleFilter::update(const FeatureSet& features) {
   if (gathering_) {
     // The spread has gathered once the particles' position spread is below spread_gathered_m
     // (checked before each scan is weighed): from then on the weights use match_f again.
-    const PoseEstimate e = estimate();
-    gathering_ =
-        !(std::sqrt(e.covariance(0, 0) + e.covariance(1, 1)) < options_.grid.spread_gathered_m);
+    gathering_ = !(positionSpread() < options_.grid.spread_gathered_m);
   }
   // The candidates wait for a scan with a hit: one with free cells only scores every pose alike
   // under the likelihood field (an infrared or sonar reading at its maximum range).
@@ -538,12 +568,10 @@ bool GridParticleFilter::loadGridMap(const GridMapData& map) {
   if (!same) {
     // Built first, then kept: a map that cannot be built leaves the filter as it was.
     TiledLogOddsGrid grid = gridFromMap(map, options_.grid);
-    std::vector<float> field;
-    if (options_.grid.match_model == "likelihood_field") {
-      field = distanceToOccupied(grid, options_.grid.field_max_dist_m);
-    }
+    LikelihoodField field;
+    if (field_model_) field = likelihoodField(grid, options_.grid);
     loaded_grid_ = std::move(grid);
-    field_distances_ = std::move(field);
+    field_ = std::move(field);
     free_cells_.clear();  // listed when first needed (spreadOverMap)
     free_cells_listed_ = false;
     GridMapData kept = map;

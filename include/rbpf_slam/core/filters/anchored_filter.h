@@ -49,7 +49,7 @@ class AnchoredFilter : public SlamFilter {
   bool loadMap(const std::vector<LandmarkEstimate>& landmarks) override;
   bool loadGridMap(const GridMapData& map) override;
   bool spreadOverMap() override { return mutableInner().spreadOverMap(); }
-  bool canSpreadOverMap() const override { return inner_->canSpreadOverMap(); }
+  bool canSpreadOverMap(std::string* why) const override { return inner_->canSpreadOverMap(why); }
   double gridResolution() const override { return inner_->gridResolution(); }
   bool setMapping(bool enabled) override;
   bool occupancyGrid(GridMapData& out) const override;

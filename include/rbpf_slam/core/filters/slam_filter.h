@@ -118,9 +118,13 @@ class SlamFilter {
   /// Global localization (amcl's global_localization): spreads every hypothesis over the free
   /// space of the loaded map with any heading, for variants that localize on a grid map.
   virtual bool spreadOverMap() { return false; }
-  /// Whether spreadOverMap() could be asked now (a grid map with a free cell is loaded), without
-  /// doing it.
-  virtual bool canSpreadOverMap() const { return false; }
+  /// Whether spreadOverMap() would spread now (a grid map with a free cell is loaded), without
+  /// doing it; when not, why (if given) says why: the variant never spreads, no map is loaded,
+  /// or the map has no free cell.
+  virtual bool canSpreadOverMap(std::string* why) const {
+    if (why) *why = "variant " + variant() + " cannot spread its particles over a map";
+    return false;
+  }
   /// The cell size of the grids it keeps, m (0: it keeps none).
   virtual double gridResolution() const { return 0.0; }
   /// Mapping off = localization only: landmarks are neither added nor changed.

@@ -25,12 +25,19 @@ double localMapReach(const std::vector<LocalMapCell>& local, double resolution_m
 /// Per cell of grid (y * width + x), the distance to its nearest occupied cell (log odds above
 /// 0), m, at most max_dist_m (exact Euclidean, between cell centres).
 std::vector<float> distanceToOccupied(const TiledLogOddsGrid& grid, double max_dist_m);
-/// grid.match_model likelihood_field: the sum over local's occupied cells (at pose) of
-/// log(z_hit exp(-d^2 / (2 sigma^2)) + 1 - z_hit), d from distances (distanceToOccupied of
-/// grid), the largest distance off the grid.
+/// grid.match_model likelihood_field over a grid: per cell (y * width + x), the log likelihood
+/// of a hit in it, log(z_hit exp(-d^2 / (2 sigma^2)) + 1 - z_hit) with d its distanceToOccupied
+/// (capped at grid.field_max_dist_m); off the grid, that of the cap. Computed once per map, so
+/// that weighing a scan only adds (as eq. 14 does).
+struct LikelihoodField {
+  std::vector<float> cell_log_likelihood;
+  double off_grid = 0.0;
+};
+LikelihoodField likelihoodField(const TiledLogOddsGrid& grid, const GridOptions& options);
+/// The likelihood field's score of local at pose: the sum over its occupied cells of the field's
+/// value where they fall (field built from grid by likelihoodField).
 double fieldLogLikelihood(const std::vector<LocalMapCell>& local, const Pose2& pose,
-                          const TiledLogOddsGrid& grid, const std::vector<float>& distances,
-                          const GridOptions& options);
+                          const TiledLogOddsGrid& grid, const LikelihoodField& field);
 /// The empty grid of the first extent (grid.size_x_m x grid.size_y_m) centred on a pose: every
 /// grid of a run (each particle's, render_grid's) starts from it, so all share one tile lattice.
 TiledLogOddsGrid firstGrid(const GridOptions& options, const Pose2& centre);
@@ -88,7 +95,7 @@ class GridParticleFilter : public SlamFilter {
   /// False when no map is loaded or it has no free cell.
   bool spreadOverMap() override;
   /// A map is loaded and it has a free cell at grid.resolution_m (lists them when first asked).
-  bool canSpreadOverMap() const override { return loaded_map_ && !freeCells().empty(); }
+  bool canSpreadOverMap(std::string* why) const override;
   bool setMapping(bool enabled) override;
   bool occupancyGrid(GridMapData& out) const override;
   bool usesLandmarkFeatures() const override { return false; }
@@ -111,16 +118,20 @@ class GridParticleFilter : public SlamFilter {
   /// A pose drawn uniformly over the loaded map's free cells, with any heading.
   Pose2 randomFreePose();
   /// Weighing by the likelihood field (grid.match_model) now: localizing on a loaded map.
-  bool fieldInUse() const { return !mapping_ && !field_distances_.empty(); }
+  bool fieldInUse() const { return !mapping_ && !field_.cell_log_likelihood.empty(); }
+  /// The particles' position spread, sqrt of the trace of their weighted position covariance, m.
+  double positionSpread() const;
   /// f of w *= exp(match / f): grid.spread_match_f from a global spread until the particles
   /// gather (grid.spread_gathered_m), else grid.match_f.
   double matchF() const {
     return gathering_ && options_.grid.spread_match_f > 0.0 ? options_.grid.spread_match_f
                                                             : options_.grid.match_f;
   }
-  /// The weight's exponent before 1 / f for local at pose on grid (grid.match_model).
+  /// The weight's exponent before 1 / f for local at pose: while fieldInUse(), the loaded map's
+  /// likelihood field; else eq. 14 against own_grid (the particle's grid, or the loaded map's for
+  /// a candidate pose).
   double matchScore(const std::vector<LocalMapCell>& local, const Pose2& pose,
-                    const TiledLogOddsGrid& grid) const;
+                    const TiledLogOddsGrid& own_grid) const;
   /// The first scan with a hit after a spread: the particles drawn from
   /// grid.spread_candidates times as many uniform poses, by that scan's weight. False when no
   /// candidate had a finite weight (then drawn uniformly).
@@ -129,6 +140,7 @@ class GridParticleFilter : public SlamFilter {
   const std::vector<int>& freeCells() const;
 
   const FilterOptions options_;
+  const bool field_model_;  // grid.match_model is likelihood_field (parsed once)
   std::unique_ptr<MotionModel> motion_;
   Rng rng_;
   std::vector<Particle> particles_;
@@ -144,9 +156,8 @@ class GridParticleFilter : public SlamFilter {
   // Cells of loaded_grid_ (y * width + x) with log odds < 0, listed by freeCells().
   mutable std::vector<int> free_cells_;
   mutable bool free_cells_listed_ = false;  // free_cells_ is the list for the map loaded last
-  // grid.match_model likelihood_field: per cell of loaded_grid_ (y * width + x), the distance
-  // to its nearest occupied cell, m, at most grid.field_max_dist_m (distanceToOccupied).
-  std::vector<float> field_distances_;
+  // grid.match_model likelihood_field: the field of loaded_grid_ (empty for map_matching).
+  LikelihoodField field_;
   bool spread_pending_ = false;  // spread, and no scan weighed since (drawFromCandidates)
   bool gathering_ = false;       // spread, and not yet gathered (grid.spread_match_f in use)
 };
