@@ -237,14 +237,20 @@ class BagPlaybackTest : public ::testing::Test {
       ros::WallDuration(0.2).sleep();
     }
     // ~global_localization: no start is given; the node is asked to spread its particles over
-    // its map before the player starts (it waits --delay=3 s after writing the reference).
+    // its map before the player starts: the player waits for ~ready_file, written after the
+    // call (play_simulated_bag.sh's READY_FILE).
     private_nh.param("global_localization", global_localization_, false);
     if (global_localization_) {
       const std::string service = "/" + observer_->slamNode() + "/global_localization";
       std_srvs::Empty call;
       global_localization_accepted_ = ros::service::waitForService(service, ros::Duration(30.0)) &&
                                       ros::service::call(service, call);
+      std::lock_guard<std::mutex> lock(observer_->mutex_);
+      poses_before_global_localization_ = observer_->poses_;
     }
+    std::string ready_file;
+    private_nh.param<std::string>("ready_file", ready_file, "");
+    if (!ready_file.empty()) std::ofstream(ready_file) << "ready\n";
     reference_ = readTum(reference_path_);
     if (reference_.empty()) return;
     const double last = reference_.back().stamp;
@@ -264,6 +270,7 @@ class BagPlaybackTest : public ::testing::Test {
   static double ate_odometry_ratio_;  // 0: ... nor compared with odometry's
   static bool ended_;
   static bool global_localization_, global_localization_accepted_;
+  static int poses_before_global_localization_;
   static std::unique_ptr<PlaybackObserver> observer_;
   static std::unique_ptr<ros::AsyncSpinner> spinner_;
 };
@@ -277,6 +284,7 @@ double BagPlaybackTest::yaw_tolerance_ = 0.3;
 bool BagPlaybackTest::ended_ = false;
 bool BagPlaybackTest::global_localization_ = false;
 bool BagPlaybackTest::global_localization_accepted_ = false;
+int BagPlaybackTest::poses_before_global_localization_ = 0;
 std::unique_ptr<PlaybackObserver> BagPlaybackTest::observer_;
 std::unique_ptr<ros::AsyncSpinner> BagPlaybackTest::spinner_;
 
@@ -331,6 +339,8 @@ TEST_F(BagPlaybackTest, GlobalLocalizationSpreadTheParticles) {
   ros::NodeHandle("~").param("min_first_sigma", min_first_sigma, min_first_sigma);
   EXPECT_TRUE(global_localization_accepted_)
       << "/" << observer_->slamNode() << "/global_localization was not there or refused";
+  EXPECT_EQ(poses_before_global_localization_, 0)
+      << "~global_localization was called after the first frame (the player did not wait)";
   std::lock_guard<std::mutex> lock(observer_->mutex_);
   std::cout << "[bag_playback] first ~pose position sigma " << observer_->first_pose_sigma_ << " m"
             << std::endl;

@@ -1105,6 +1105,7 @@ TEST(GlobalLocalization, CandidatesWaitForAHitAndMappingEndsTheSpread) {
   o.grid.match_model = "likelihood_field";
   o.grid.spread_candidates = 20;
   o.resample_threshold = 0.0;
+  o.grid.laser_no_return_free_m = 2.0;  // a beam without a return clears 2 m
   const Pose2 truth(1.8, -1.2, 2.0);
   GridParticleFilter filter(o);
   ASSERT_TRUE(filter.loadGridMap(asymmetricRoomMap(o.grid)));
@@ -1114,6 +1115,11 @@ TEST(GlobalLocalization, CandidatesWaitForAHitAndMappingEndsTheSpread) {
   auto open = std::make_shared<RangeScan>(*no_hit.scan);
   for (float& r : open->ranges) r = open->range_max;
   no_hit.scan = open;
+  LocalMapStats ignored;
+  const std::vector<LocalMapCell> free_only = buildLocalMap(no_hit, o.grid, &ignored);
+  ASSERT_FALSE(free_only.empty());
+  ASSERT_TRUE(std::none_of(free_only.begin(), free_only.end(),
+                           [](const LocalMapCell& c) { return c.occupied; }));
   const std::vector<WeightedPose> spread = filter.particles();
   UpdateStats step = filter.update(no_hit);
   EXPECT_FALSE(step.resampled) << "drawn from candidates at a scan without a hit";

@@ -104,13 +104,13 @@ bool SlamSession::localizeGlobally(std::string* why) {
   std::string problem;
   if (!prior_grid_) {
     problem = "no grid map is loaded (map_file or ~load_map naming map_server's map.yaml)";
-  } else if (!filter_->canSpreadOverMap(&problem)) {
-    // The filter says why: the variant never spreads, or the map has no free cell.
-    if (problem.empty()) problem = "variant " + filter_->variant() + " cannot spread over this map";
   } else if (mapping_) {
     problem =
         "mapping is on: global localization needs localization_only (each of thousands of "
         "particles would map its own copy from a random pose)";
+  } else if (!filter_->canSpreadOverMap(&problem)) {
+    // The filter says why: the variant never spreads, or the map has no free cell.
+    if (problem.empty()) problem = "variant " + filter_->variant() + " cannot spread over this map";
   } else if (has_previous_ && !filter_->spreadOverMap()) {
     problem = "variant " + filter_->variant() + " could not spread its particles over the map";
   }

@@ -120,7 +120,7 @@ class SlamFilter {
   virtual bool spreadOverMap() { return false; }
   /// Whether spreadOverMap() would spread now (a grid map with a free cell is loaded), without
   /// doing it; when not, why (if given) says why: the variant never spreads, no map is loaded,
-  /// or the map has no free cell.
+  /// or the map has no free cell (left empty when it would).
   virtual bool canSpreadOverMap(std::string* why) const {
     if (why) *why = "variant " + variant() + " cannot spread its particles over a map";
     return false;

@@ -150,10 +150,10 @@ class SlamSession {
   /// once (map -> odom stays as it was until the next update). Before the first frame, like
   /// setPose, the start of this run and of every restarted one (a start pose given after it
   /// replaces it; ~reset forgets it; a grid map loaded after it keeps it), spread at the first
-  /// frame if mapping is still off then. False, with the reason in *why, and nothing changed:
-  /// without a prior grid map, for a variant that cannot spread over one, while mapping (each
-  /// of thousands of particles would map its own copy from a random pose: localization only),
-  /// or on a map without a free cell.
+  /// frame if mapping is still off then. False, with the reason in *why, and nothing changed
+  /// (checked in this order): without a prior grid map, while mapping (each of thousands of
+  /// particles would map its own copy from a random pose: localization only), for a variant
+  /// that cannot spread over one, or on a map without a free cell.
   bool localizeGlobally(std::string* why = nullptr);
 
   /// map -> odom so that map -> base equals the filter's estimate at the last update.
