@@ -571,14 +571,19 @@ std::string applyMapConfig(const SlamConfig& config, core::SlamSession* session)
     throw ConfigError("localization_only: variant " + config.filter.variant +
                       " has no localization-only mode");
   }
-  if (!config.localization_only && config.filter.grid.match_model == "likelihood_field" &&
-      session->filter().gridResolution() > 0.0) {
-    // The field is the loaded map's: while mapping the filter weighs by eq. 14.
-    loaded +=
-        "; note: grid.match_model likelihood_field weighs only while localizing "
-        "(localization_only: true); this run maps and weighs by eq. 14 (map_matching)";
-  }
   return loaded;
+}
+
+std::vector<std::string> configNotes(const SlamConfig& config) {
+  std::vector<std::string> notes;
+  if (config.filter.variant == "grid_pf" && !config.localization_only &&
+      config.filter.grid.match_model == "likelihood_field") {
+    // The field is a loaded map's, and nothing turns mapping off during a run.
+    notes.push_back(
+        "grid.match_model likelihood_field weighs only while localizing on a map "
+        "(localization_only: true); this run maps and weighs by eq. 14 (map_matching)");
+  }
+  return notes;
 }
 
 }  // namespace io

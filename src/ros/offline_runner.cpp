@@ -685,6 +685,9 @@ OfflineSummary OfflineRunner::run() {
   std::vector<double> update_ms;
   if (!loaded_map_.empty())
     std::fprintf(stderr, "offline_slam: map_file: %s\n", loaded_map_.c_str());
+  for (const std::string& note : io::configNotes(config_)) {
+    std::fprintf(stderr, "offline_slam: note: %s\n", note.c_str());
+  }
   if (options_.has_initial_pose) {
     if (!pipeline_.session().setPose(options_.initial_pose, options_.initial_covariance)) {
       throw std::runtime_error(

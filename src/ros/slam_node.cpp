@@ -114,6 +114,9 @@ SlamNode::SlamNode(ros::NodeHandle nh, ros::NodeHandle private_nh,
                     << (config_.localization_only ? "localization only" : "mapping on")
                     << "); set the pose with initialpose");
   }
+  for (const std::string& note : io::configNotes(config_)) {
+    ROS_WARN_STREAM("rbpf_slam_node: note: " << note);
+  }
   map_publisher_ = private_nh_.advertise<nav_msgs::OccupancyGrid>("map", 1, true);
   map_metadata_publisher_ = private_nh_.advertise<nav_msgs::MapMetaData>("map_metadata", 1, true);
   dynamic_map_server_ =

@@ -1418,19 +1418,24 @@ TEST(GridConfig, EachVariantStartsFromItsKindOfMapFile) {
     EXPECT_EQ(loaded.find("likelihood_field"), std::string::npos) << loaded;
   }
   {
-    // The likelihood field weighs only while localizing: a mapping run says it uses eq. 14.
+    // The likelihood field weighs only while localizing: a mapping run (with a map or without)
+    // is told it weighs by eq. 14.
     io::SlamConfig mapping = grid;
     mapping.localization_only = false;
     mapping.filter.grid.match_model = "likelihood_field";
-    SlamPipeline described(mapping.pipeline());
-    const std::string loaded = io::applyMapConfig(mapping, &described.session());
-    EXPECT_NE(loaded.find("note: grid.match_model likelihood_field weighs only while localizing"),
-              std::string::npos)
-        << loaded;
+    for (const std::string& map_file : {grid_yaml, std::string()}) {
+      mapping.map_file = map_file;
+      const std::vector<std::string> notes = io::configNotes(mapping);
+      ASSERT_EQ(notes.size(), 1u) << map_file;
+      EXPECT_NE(notes[0].find("grid.match_model likelihood_field weighs only while localizing"),
+                std::string::npos)
+          << notes[0];
+    }
     mapping.localization_only = true;
-    SlamPipeline localizing(mapping.pipeline());
-    EXPECT_EQ(io::applyMapConfig(mapping, &localizing.session()).find("likelihood_field"),
-              std::string::npos);
+    EXPECT_TRUE(io::configNotes(mapping).empty());
+    mapping.localization_only = false;
+    mapping.filter.grid.match_model = "map_matching";
+    EXPECT_TRUE(io::configNotes(mapping).empty());
   }
   EXPECT_TRUE(grid_pipeline.session().hasPriorMap());
   EXPECT_FALSE(grid_pipeline.session().mapping());

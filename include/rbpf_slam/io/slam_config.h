@@ -78,6 +78,9 @@ std::string loadPriorMap(const std::string& path, core::SlamSession* session);
 /// with notes on a map likely to localize badly (coarser than the filter's cells, mostly
 /// occupied); "" without map_file.
 std::string applyMapConfig(const SlamConfig& config, core::SlamSession* session);
+/// Settings that are valid but do not do what they seem to in this config (e.g. the likelihood
+/// field in a mapping run), one sentence each, for the node and the offline runner to print.
+std::vector<std::string> configNotes(const SlamConfig& config);
 
 }  // namespace io
 }  // namespace rbpf_slam
