@@ -408,6 +408,7 @@ SlamConfig parseSlamConfigTree(const YAML::Node& root, const std::string& source
   s.keep_frames = config.smoothing.enabled;
   top.read("map_file", &config.map_file);
   top.read("localization_only", &config.localization_only);
+  top.read("global_localization", &config.global_localization);
   readRos(top, &config.ros);
   top.finish();
   if (config.localization_only && config.map_file.empty()) {
@@ -415,6 +416,12 @@ SlamConfig parseSlamConfigTree(const YAML::Node& root, const std::string& source
                       ": localization_only = true needs map_file (written by "
                       "~save_map or offline_slam: the landmarks YAML, or for grid_pf "
                       "map_server's map.yaml)");
+  }
+  if (config.global_localization && !config.localization_only) {
+    throw ConfigError(source +
+                      ": global_localization = true needs localization_only: true (and grid_pf "
+                      "with map_file naming map_server's map.yaml): each of thousands of "
+                      "particles would map its own copy from a random pose");
   }
   if (config.smoothing.enabled && config.filter.use_lines) {
     throw ConfigError(source + ": smoothing.enabled re-estimates point landmarks only: it needs "

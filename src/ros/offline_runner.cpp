@@ -488,12 +488,19 @@ OfflineRunner::OfflineRunner(const io::SlamConfig& config, const OfflineOptions&
 }
 
 void OfflineRunner::startGlobally() {
+  if (!startsGlobally()) return;
+  const std::string asked =
+      options_.global_localization ? "--global-localization" : "global_localization: true";
+  if (options_.has_initial_pose) {
+    throw std::runtime_error("--initial-pose and " + asked +
+                             " exclude each other (a known start or none)");
+  }
   std::string why;
-  if (options_.global_localization && !pipeline_.session().localizeGlobally(&why)) {
-    throw std::runtime_error(
-        "--global-localization (grid_pf on a map_server map_file with "
-        "localization_only: true): " +
-        why);
+  if (!pipeline_.session().localizeGlobally(&why)) {
+    throw std::runtime_error(asked +
+                             " (grid_pf on a map_server map_file with localization_only: "
+                             "true): " +
+                             why);
   }
 }
 
@@ -697,7 +704,7 @@ OfflineSummary OfflineRunner::run() {
     ++summary.initial_poses;
     warnIfOffTheMap("--initial-pose", options_.initial_pose, pipeline_.session());
   }
-  summary.global_localization = options_.global_localization;  // asked (startGlobally)
+  summary.global_localization = startsGlobally();  // asked (startGlobally)
   // rviz's 2D Pose Estimate, recorded with the data: taken where it comes, as the node does.
   std::vector<std::string> read = topics;  // the inputs (copied to --output-bag) and the poses
   read.push_back("/initialpose");

@@ -117,6 +117,15 @@ SlamNode::SlamNode(ros::NodeHandle nh, ros::NodeHandle private_nh,
   for (const std::string& note : io::configNotes(config_)) {
     ROS_WARN_STREAM("rbpf_slam_node: note: " << note);
   }
+  if (config_.global_localization) {
+    std::string why;
+    if (!pipeline_.session().localizeGlobally(&why)) {
+      throw io::ConfigError("global_localization: " + why);
+    }
+    ROS_INFO_STREAM(
+        "rbpf_slam_node: global_localization: the start is unknown; the particles "
+        "will be spread over the map's free cells at the first frame");
+  }
   map_publisher_ = private_nh_.advertise<nav_msgs::OccupancyGrid>("map", 1, true);
   map_metadata_publisher_ = private_nh_.advertise<nav_msgs::MapMetaData>("map_metadata", 1, true);
   dynamic_map_server_ =
@@ -785,6 +794,12 @@ void SlamNode::resetAll(const std::string& why, core::SlamSession::ResetCause ca
   grid_seen_ = core::FilterStats();  // the filter's counts start over
   ROS_WARN_STREAM("rbpf_slam_node: " << why << ": clearing the map, the trajectory and tf");
   pipeline_.reset(cause);  // filter, history and the scan matcher's reference
+  std::string why_not;
+  if (cause == core::SlamSession::ResetCause::kRequested && config_.global_localization &&
+      !pipeline_.session().localizeGlobally(&why_not)) {
+    // ~reset forgets the starts given since; the config's unknown start stays.
+    ROS_WARN_STREAM("rbpf_slam_node: global_localization after the reset: " << why_not);
+  }
   tf_buffer_.clear();
   if (scan_input_) scan_input_->clear();
   for (const auto& input : sonar_inputs_) input->clear();

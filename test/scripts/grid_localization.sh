@@ -204,5 +204,29 @@ if "$bin/offline_slam" --bag "$work/b.bag" --config "$config" --output "$work/bo
 elif ! grep -q "exclude each other" "$work/both.log"; then
   echo "FAIL: --global-localization with --initial-pose:"; cat "$work/both.log"; status=1
 fi
+# The config key (global_localization: true; the launch files' global_localization:=true) starts
+# as the flag does: the same trajectory as field seed 1. It needs localization_only, and
+# excludes a start pose too.
+run key1 b.bag --set "map_file=$work/plan.yaml" "${loc[@]}" --set global_localization=true \
+  --set particles=3000 --set grid.match_model=likelihood_field --seed 1
+if ! cmp -s "$work/key1/trajectory.tum" "$work/field1/trajectory.tum"; then
+  echo "FAIL: global_localization: true ran otherwise than --global-localization"; status=1
+elif ! /usr/bin/python3 -c "import json,sys; sys.exit(0 if json.load(open('$work/key1/summary.json'))['global_localization'] is True else 1)"; then
+  echo "FAIL: summary.json's global_localization with the config key"; status=1
+fi
+if "$bin/offline_slam" --bag "$work/b.bag" --config "$config" --output "$work/keymapping" \
+  --no-progress --set "map_file=$work/plan.yaml" --set global_localization=true \
+  >"$work/keymapping.log" 2>&1; then
+  echo "FAIL: global_localization: true ran while mapping"; status=1
+elif ! grep -q "global_localization = true needs localization_only" "$work/keymapping.log"; then
+  echo "FAIL: global_localization: true's error while mapping:"; cat "$work/keymapping.log"; status=1
+fi
+if "$bin/offline_slam" --bag "$work/b.bag" --config "$config" --output "$work/keyboth" --no-progress \
+  --set "map_file=$work/plan.yaml" "${loc[@]}" --set global_localization=true \
+  --initial-pose 0,0,0 >"$work/keyboth.log" 2>&1; then
+  echo "FAIL: global_localization: true ran with --initial-pose"; status=1
+elif ! grep -q "initial-pose and global_localization: true exclude each other" "$work/keyboth.log"; then
+  echo "FAIL: global_localization: true with --initial-pose:"; cat "$work/keyboth.log"; status=1
+fi
 [ $status -eq 0 ] && echo "ok: grid_pf localizes on a saved map"
 exit $status

@@ -1508,6 +1508,15 @@ TEST(GridConfig, ErrorsNameTheGridKey) {
             std::string::npos);
   EXPECT_EQ(error("variant: grid_pf\ngrid: {size_x_m: 50, max_size_m: 0}"), "");
   EXPECT_NE(error("map_update_period: -1").find("map_update_period"), std::string::npos);
+  // global_localization: a start spread over the map is for localization only.
+  EXPECT_NE(error("variant: grid_pf\nmap_file: m.yaml\nglobal_localization: true")
+                .find("global_localization = true needs localization_only"),
+            std::string::npos);
+  EXPECT_EQ(error("variant: grid_pf\nmap_file: m.yaml\nlocalization_only: true\n"
+                  "global_localization: true"),
+            "");
+  EXPECT_NE(error("variant: grid_pf\nglobal_localization: maybe").find("global_localization"),
+            std::string::npos);
 }
 
 TEST(GridMapFile, WritesAndReadsMapServerFiles) {

@@ -55,6 +55,9 @@ struct SlamConfig {
   RosOptions ros;
   std::string map_file;            // landmarks YAML to start from ("" = empty map)
   bool localization_only = false;  // true: track the robot on map_file, add no landmarks
+  // true: the start is unknown: the particles start spread over map_file's free cells (grid_pf,
+  // with localization_only), as ~global_localization called before the first frame.
+  bool global_localization = false;
 
   core::PipelineOptions pipeline() const {
     return {filter, session, laser, scan_matching, sonar};

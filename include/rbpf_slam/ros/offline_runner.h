@@ -49,8 +49,9 @@ struct OfflineSummary {
   long dropped_no_tf = 0;
   long dropped_bad_message = 0;
   bool prior_map = false;          // the run started from a map (map_file)
-  bool global_localization = false;  // --global-localization was given (a start pose given
-                                     // after it, a recorded initialpose, replaces it)
+  bool global_localization = false;  // --global-localization or the config's
+                                     // global_localization (a recorded initialpose after it
+                                     // replaces it)
   long initial_poses = 0;  // start poses taken: --initial-pose and the bag's initialpose messages
   long ignored_initial_poses = 0;  // ... and those that could not (frame, non-finite, variant)
   std::string first_ignored_initial_pose;  // why the first of them was
@@ -121,9 +122,13 @@ class OfflineRunner {
 
  private:
   OfflineSummary writeOutputs(const OfflineSummary& summary) const;
-  /// --global-localization: asks the session before anything is read; throws
-  /// std::runtime_error with the reason when it cannot (no grid map, mapping on, ...).
+  /// --global-localization or the config's global_localization: asks the session before
+  /// anything is read; throws std::runtime_error with the reason when it cannot (no grid map,
+  /// mapping on, ..., or a start pose given as well).
   void startGlobally();
+  bool startsGlobally() const {
+    return options_.global_localization || config_.global_localization;
+  }
   const io::SlamConfig config_;
   const OfflineOptions options_;
   core::SlamPipeline pipeline_;
