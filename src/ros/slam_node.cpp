@@ -111,8 +111,8 @@ SlamNode::SlamNode(ros::NodeHandle nh, ros::NodeHandle private_nh,
   if (!config_.map_file.empty()) {
     ROS_INFO_STREAM("rbpf_slam_node: started from the map "
                     << config_.map_file << ", " << loaded_map << " ("
-                    << (config_.localization_only ? "localization only" : "mapping on")
-                    << "); set the pose with initialpose");
+                    << (config_.localization_only ? "localization only" : "mapping on") << ")"
+                    << (config_.global_localization ? "" : "; set the pose with initialpose"));
   }
   for (const std::string& note : io::configNotes(config_)) {
     ROS_WARN_STREAM("rbpf_slam_node: note: " << note);
@@ -794,11 +794,16 @@ void SlamNode::resetAll(const std::string& why, core::SlamSession::ResetCause ca
   grid_seen_ = core::FilterStats();  // the filter's counts start over
   ROS_WARN_STREAM("rbpf_slam_node: " << why << ": clearing the map, the trajectory and tf");
   pipeline_.reset(cause);  // filter, history and the scan matcher's reference
-  std::string why_not;
-  if (cause == core::SlamSession::ResetCause::kRequested && config_.global_localization &&
-      !pipeline_.session().localizeGlobally(&why_not)) {
+  if (cause == core::SlamSession::ResetCause::kRequested && config_.global_localization) {
     // ~reset forgets the starts given since; the config's unknown start stays.
-    ROS_WARN_STREAM("rbpf_slam_node: global_localization after the reset: " << why_not);
+    std::string why_not;
+    if (pipeline_.session().localizeGlobally(&why_not)) {
+      ROS_INFO_STREAM(
+          "rbpf_slam_node: global_localization: the next run starts spread over "
+          "the map's free cells at its first frame");
+    } else {
+      ROS_WARN_STREAM("rbpf_slam_node: global_localization after the reset: " << why_not);
+    }
   }
   tf_buffer_.clear();
   if (scan_input_) scan_input_->clear();

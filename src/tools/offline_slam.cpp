@@ -44,12 +44,12 @@ const char kUsage[] =
     "map.pgm and map.yaml (with smoothing also trajectory_filter.tum, landmarks_filter.yaml).\n"
     "Exits 2 on bad arguments, 1 when the bag or the config cannot be read, a config or --set\n"
     "value is refused, a topic carries the wrong message type, an output is a directory, a\n"
-    "pipe, a device or a socket (checked before the bag is read), --output-bag names the input, "
-    "an\n"
-    "output cannot be written, --global-localization cannot be done (no grid map, mapping on,\n"
-    "no free cell at the filter's resolution),\n"
-    "no frame could be used or --reference could not be evaluated (the outputs are written\n"
-    "all the same in the last two cases).\n";
+    "pipe, a device or a socket (checked before the bag is read), --output-bag names the\n"
+    "input, an output cannot be written, --global-localization or the config's\n"
+    "global_localization cannot be done (no grid map, mapping on, no free cell at the\n"
+    "filter's resolution, the config's key with --initial-pose), no frame could be used or\n"
+    "--reference could not be evaluated (the outputs are written all the same in the last\n"
+    "two cases).\n";
 
 /// --initial-pose X,Y,YAW[,SIGMA_XY,SIGMA_YAW] (m, rad): the start pose in the map frame and
 /// its standard deviations (default rviz's: 0.5 m, 0.26 rad).

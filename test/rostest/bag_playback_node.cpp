@@ -242,12 +242,12 @@ class BagPlaybackTest : public ::testing::Test {
     private_nh.param("global_localization", global_localization_, false);
     bool call = true;  // false: the node starts globally by its config (global_localization)
     private_nh.param("call_global_localization", call, call);
-    if (global_localization_ && !call) global_localization_accepted_ = true;
-    if (global_localization_ && call) {
+    if (global_localization_) {
+      // Called, or (by config) only waited for: the node is up before the player starts.
       const std::string service = "/" + observer_->slamNode() + "/global_localization";
-      std_srvs::Empty call;
+      std_srvs::Empty request;
       global_localization_accepted_ = ros::service::waitForService(service, ros::Duration(30.0)) &&
-                                      ros::service::call(service, call);
+                                      (!call || ros::service::call(service, request));
       std::lock_guard<std::mutex> lock(observer_->mutex_);
       poses_before_global_localization_ = observer_->poses_;
     }
