@@ -28,7 +28,7 @@ std::vector<float> distanceToOccupied(const TiledLogOddsGrid& grid, double max_d
 /// grid.match_model likelihood_field over a grid: per cell (y * width + x), the log likelihood
 /// of a hit in it, log(z_hit exp(-d^2 / (2 sigma^2)) + 1 - z_hit) with d its distanceToOccupied
 /// (capped at grid.field_max_dist_m); off the grid, that of the cap. Computed once per map, so
-/// that weighing a scan only adds (as eq. 14 does).
+/// that weighing a hit is one look-up and one addition (no exp or log).
 struct LikelihoodField {
   std::vector<float> cell_log_likelihood;
   double off_grid = 0.0;
