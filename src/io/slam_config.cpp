@@ -578,6 +578,11 @@ std::string applyMapConfig(const SlamConfig& config, core::SlamSession* session)
     throw ConfigError("localization_only: variant " + config.filter.variant +
                       " has no localization-only mode");
   }
+  std::string why;
+  if (config.global_localization &&
+      !session->localizeGlobally(&why, core::SlamSession::GlobalStart::kConfigured)) {
+    throw ConfigError("global_localization: " + why);
+  }
   return loaded;
 }
 

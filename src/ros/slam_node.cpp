@@ -107,6 +107,7 @@ SlamNode::SlamNode(ros::NodeHandle nh, ros::NodeHandle private_nh,
   diagnostics_publisher_ = nh_.advertise<diagnostic_msgs::DiagnosticArray>("/diagnostics", 10);
   diagnostics_timer_ =
       nh_.createWallTimer(ros::WallDuration(1.0), &SlamNode::publishDiagnostics, this);
+  // The map, localization_only and the config's global start (every run, also after ~reset).
   const std::string loaded_map = io::applyMapConfig(config_, &pipeline_.session());  // throws
   if (!config_.map_file.empty()) {
     ROS_INFO_STREAM("rbpf_slam_node: started from the map "
@@ -118,10 +119,6 @@ SlamNode::SlamNode(ros::NodeHandle nh, ros::NodeHandle private_nh,
     ROS_WARN_STREAM("rbpf_slam_node: note: " << note);
   }
   if (config_.global_localization) {
-    std::string why;
-    if (!pipeline_.session().localizeGlobally(&why)) {
-      throw io::ConfigError("global_localization: " + why);
-    }
     ROS_INFO_STREAM(
         "rbpf_slam_node: global_localization: the start is unknown; the particles "
         "will be spread over the map's free cells at the first frame");
@@ -632,8 +629,10 @@ bool SlamNode::loadMapService(MapFile::Request& request, MapFile::Response& resp
     try {
       const std::string loaded = io::loadPriorMap(path, &pipeline_.session());
       response.success = true;
-      response.message =
-          "loaded " + loaded + " from " + path + "; set the robot's pose on it with initialpose";
+      response.message = "loaded " + loaded + " from " + path +
+                         (pipeline_.session().startsGlobally()
+                              ? "; the run starts spread over it (global localization)"
+                              : "; set the robot's pose on it with initialpose");
       if (pipeline_.session().filter().usesLandmarkFeatures()) {
         publishLandmarks(ros::Time::now());
       }
@@ -794,16 +793,11 @@ void SlamNode::resetAll(const std::string& why, core::SlamSession::ResetCause ca
   grid_seen_ = core::FilterStats();  // the filter's counts start over
   ROS_WARN_STREAM("rbpf_slam_node: " << why << ": clearing the map, the trajectory and tf");
   pipeline_.reset(cause);  // filter, history and the scan matcher's reference
-  if (cause == core::SlamSession::ResetCause::kRequested && config_.global_localization) {
-    // ~reset forgets the starts given since; the config's unknown start stays.
-    std::string why_not;
-    if (pipeline_.session().localizeGlobally(&why_not)) {
-      ROS_INFO_STREAM(
-          "rbpf_slam_node: global_localization: the next run starts spread over "
-          "the map's free cells at its first frame");
-    } else {
-      ROS_WARN_STREAM("rbpf_slam_node: global_localization after the reset: " << why_not);
-    }
+  if (pipeline_.session().startsGlobally()) {
+    // The config's global start (kept by ~reset), or one asked before a restarted run.
+    ROS_INFO_STREAM(
+        "rbpf_slam_node: the next run starts spread over the map's free cells at its "
+        "first frame (global localization)");
   }
   tf_buffer_.clear();
   if (scan_input_) scan_input_->clear();

@@ -1298,6 +1298,58 @@ TEST(GlobalLocalization, TheSessionSpreadsWhenAndAsOftenAsAsked) {
   EXPECT_TRUE(spread()) << "global after a start pose, restarted";
 }
 
+// The config's global_localization (GlobalStart::kConfigured, as applyMapConfig asks): unlike a
+// global start asked through ~global_localization, ~reset keeps it; a start pose given before a
+// run's first frame wins for that run only; a landmark map loaded instead of the grid ends it.
+TEST(GlobalLocalization, TheConfiguredStartOutlivesARequestedReset) {
+  FilterOptions o = globalOptions(500);
+  SessionOptions session_options;
+  session_options.filter_origin = "start";
+  SlamSession session(createFilter(o), session_options);
+  const GridMapData map = asymmetricRoomMap(o.grid);
+  ASSERT_TRUE(session.setPriorGridMap(map));
+  ASSERT_TRUE(session.setMapping(false));
+  std::string why;
+  ASSERT_TRUE(session.localizeGlobally(&why, SlamSession::GlobalStart::kConfigured)) << why;
+  EXPECT_TRUE(session.startsGlobally());
+  const Pose2 truth(1.8, -1.2, 2.0), odom(5.0, 7.0, 0.3);
+  const FeatureSet none;
+  auto spread = [&]() { return session.filter().estimate().covariance(0, 0) > 1.0; };
+  session.process(1.0, odom, none);
+  EXPECT_TRUE(spread());
+  EXPECT_FALSE(session.startsGlobally());  // this run has started
+  for (int i = 0; i < 2; ++i) {            // twice: the start is not used up by the first reset
+    session.reset(SlamSession::ResetCause::kRequested);
+    EXPECT_TRUE(session.startsGlobally()) << i;
+    session.process(1.0, odom, none);
+    EXPECT_TRUE(spread()) << "after ~reset " << i;
+  }
+  // A start pose before the next first frame: that run (and its restarts) starts there ...
+  session.reset(SlamSession::ResetCause::kRequested);
+  ASSERT_TRUE(session.setPose(truth, Eigen::Vector3d(1e-4, 1e-4, 1e-4).asDiagonal()));
+  EXPECT_FALSE(session.startsGlobally());
+  session.process(1.0, odom, none);
+  EXPECT_FALSE(spread());
+  EXPECT_LT((session.filter().estimate().mean.head<2>() - truth.head<2>()).norm(), 0.05);
+  session.reset();  // the clock went back
+  EXPECT_FALSE(session.startsGlobally());
+  session.process(1.0, odom, none);
+  EXPECT_LT((session.filter().estimate().mean.head<2>() - truth.head<2>()).norm(), 0.05);
+  // ... until ~reset forgets it: the configured start again.
+  session.reset(SlamSession::ResetCause::kRequested);
+  EXPECT_TRUE(session.startsGlobally());
+  session.process(1.0, odom, none);
+  EXPECT_TRUE(spread()) << "after ~reset forgot the start pose";
+  // The service's global start, by contrast, is forgotten by ~reset.
+  SlamSession asked(createFilter(o), session_options);
+  ASSERT_TRUE(asked.setPriorGridMap(map));
+  ASSERT_TRUE(asked.setMapping(false));
+  ASSERT_TRUE(asked.localizeGlobally());
+  asked.process(1.0, odom, none);
+  asked.reset(SlamSession::ResetCause::kRequested);
+  EXPECT_FALSE(asked.startsGlobally());
+}
+
 TEST(SlamPipeline, ConeReadingsReachTheFilterInTheBaseFrameOfTheUpdate) {
   PipelineOptions o;
   o.filter = gridOptions(5);

@@ -56,7 +56,8 @@ struct SlamConfig {
   std::string map_file;            // landmarks YAML to start from ("" = empty map)
   bool localization_only = false;  // true: track the robot on map_file, add no landmarks
   // true: the start is unknown: the particles start spread over map_file's free cells (grid_pf,
-  // with localization_only), as ~global_localization called before the first frame.
+  // with localization_only), as ~global_localization called before the first frame, and again
+  // after ~reset (applyMapConfig).
   bool global_localization = false;
 
   core::PipelineOptions pipeline() const {
@@ -76,8 +77,10 @@ SlamConfig loadSlamConfig(const std::string& path, const std::vector<std::string
 /// what was loaded ("12 landmarks", "a 240 x 200 grid of 0.05 m cells"); throws ConfigError
 /// naming the file and what is wrong with it (a map of the other kind named as such).
 std::string loadPriorMap(const std::string& path, core::SlamSession* session);
-/// Gives the session config.map_file as its prior map (loadPriorMap) and turns mapping off when
-/// config.localization_only; throws ConfigError naming what failed. Returns what was loaded,
+/// Gives the session config.map_file as its prior map (loadPriorMap), turns mapping off when
+/// config.localization_only and, when config.global_localization, makes every run start spread
+/// over the map (SlamSession::GlobalStart::kConfigured); throws ConfigError naming what failed
+/// (for global_localization the session's reason). Returns what was loaded,
 /// with notes on a map likely to localize badly (coarser than the filter's cells, mostly
 /// occupied); "" without map_file.
 std::string applyMapConfig(const SlamConfig& config, core::SlamSession* session);

@@ -122,9 +122,9 @@ class OfflineRunner {
 
  private:
   OfflineSummary writeOutputs(const OfflineSummary& summary) const;
-  /// --global-localization or the config's global_localization: asks the session before
-  /// anything is read; throws std::runtime_error with the reason when it cannot (no grid map,
-  /// mapping on, ..., or a start pose given as well).
+  /// --global-localization (the config's global_localization was asked by applyMapConfig):
+  /// asks the session before anything is read; throws std::runtime_error with the reason when
+  /// it cannot (no grid map, mapping on, ...), or when either comes with --initial-pose.
   void startGlobally();
   bool startsGlobally() const {
     return options_.global_localization || config_.global_localization;

@@ -413,14 +413,9 @@ double GridParticleFilter::matchScore(const std::vector<LocalMapCell>& local, co
 }
 
 double GridParticleFilter::positionSpread() const {
-  // Two passes (as poseMoments), without its copy of the poses.
-  Eigen::Vector2d mean = Eigen::Vector2d::Zero();
-  for (size_t i = 0; i < particles_.size(); ++i) mean += weights_[i] * particles_[i].pose.head<2>();
-  double variance = 0.0;
-  for (size_t i = 0; i < particles_.size(); ++i) {
-    variance += weights_[i] * (particles_[i].pose.head<2>() - mean).squaredNorm();
-  }
-  return std::sqrt(variance);
+  const PoseEstimate m =
+      poseMomentsOf(weights_, [&](size_t i) -> const Pose2& { return particles_[i].pose; });
+  return std::sqrt(m.covariance(0, 0) + m.covariance(1, 1));
 }
 
 bool GridParticleFilter::drawFromCandidates(const std::vector<LocalMapCell>& local) {
@@ -530,10 +525,8 @@ int GridParticleFilter::bestIndex() const {
 }
 
 PoseEstimate GridParticleFilter::estimate() const {
-  std::vector<Pose2> poses;
-  poses.reserve(particles_.size());
-  for (const auto& p : particles_) poses.push_back(p.pose);
-  PoseEstimate e = poseMoments(poses, weights_);
+  PoseEstimate e =
+      poseMomentsOf(weights_, [&](size_t i) -> const Pose2& { return particles_[i].pose; });
   e.covariance.diagonal().array() += 1e-9;
   return e;
 }

@@ -60,6 +60,7 @@ bool SlamSession::setPriorMap(const std::vector<LandmarkEstimate>& landmarks) {
   if (!filter_->loadMap(landmarks)) return false;
   prior_map_ = landmarks;
   prior_grid_.reset();
+  configured_global_ = false;             // no grid to spread over any more
   if (has_previous_) forgetGivenStart();  // a start on the map this one replaces
   return true;
 }
@@ -90,7 +91,7 @@ bool SlamSession::setPose(const Pose2& pose, const Eigen::Matrix3d& covariance) 
   if (!pose.allFinite() || !poseCovarianceUsable(covariance)) return false;
   if (!has_previous_) {
     start_pose_.emplace(pose, covariance);
-    given_start_ = start_pose_;  // a restarted run (bag loop, ~reset) starts there again
+    given_start_ = start_pose_;  // a restarted run (bag loop, gap reset) starts there again
     start_global_ = given_global_ = false;
     return true;
   }
@@ -100,7 +101,7 @@ bool SlamSession::setPose(const Pose2& pose, const Eigen::Matrix3d& covariance) 
   return true;
 }
 
-bool SlamSession::localizeGlobally(std::string* why) {
+bool SlamSession::localizeGlobally(std::string* why, GlobalStart kind) {
   std::string problem;
   if (!prior_grid_) {
     problem = "no grid map is loaded (map_file or ~load_map naming map_server's map.yaml)";
@@ -118,6 +119,7 @@ bool SlamSession::localizeGlobally(std::string* why) {
     if (why) *why = problem;
     return false;
   }
+  if (kind == GlobalStart::kConfigured) configured_global_ = true;
   if (!has_previous_) {
     start_pose_.reset();
     given_start_.reset();
@@ -150,7 +152,8 @@ void SlamSession::restart() {
   filter_->reset(Pose2::Zero());
   reloadPriorMap();
   start_pose_ = given_start_;
-  start_global_ = given_global_;
+  // A start pose given before the run's first frame wins over the configured global start.
+  start_global_ = given_global_ || (configured_global_ && !given_start_);
   has_previous_ = false;
   last_stamp_ = 0.0;
   map_to_odom_ = Pose2::Zero();

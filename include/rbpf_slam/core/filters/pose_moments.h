@@ -2,18 +2,40 @@
 // Moments of weighted pose sets, for every filter's estimate(): one circular mean for the
 // heading and one covariance rule, so that the variants report their clouds alike.
 
-#include <vector>
-
 #include <Eigen/Core>
+#include <cmath>
+#include <vector>
 
 #include "rbpf_slam/core/filters/slam_filter.h"
 
 namespace rbpf_slam {
 namespace core {
 
-/// Weighted mean (circular mean for the heading) and covariance of poses, the heading
-/// differences wrapped. The weights must sum to 1; an empty set gives the zero pose and a zero
-/// covariance.
+/// Weighted mean (circular mean for the heading) and covariance of the poses pose_at(i),
+/// i < weights.size(), the heading differences wrapped (poses held inside other records need
+/// no copy). The weights must sum to 1; an empty set gives the zero pose and a zero covariance.
+template <typename PoseAt>
+PoseEstimate poseMomentsOf(const std::vector<double>& weights, PoseAt pose_at) {
+  PoseEstimate e;
+  double x = 0.0, y = 0.0, c = 0.0, s = 0.0;
+  for (size_t i = 0; i < weights.size(); ++i) {
+    const Pose2& p = pose_at(i);
+    x += weights[i] * p.x();
+    y += weights[i] * p.y();
+    c += weights[i] * std::cos(p.z());
+    s += weights[i] * std::sin(p.z());
+  }
+  e.mean = Pose2(x, y, std::atan2(s, c));
+  e.covariance.setZero();
+  for (size_t i = 0; i < weights.size(); ++i) {
+    Pose2 d = pose_at(i) - e.mean;
+    d.z() = wrapAngle(d.z());
+    e.covariance += weights[i] * d * d.transpose();
+  }
+  return e;
+}
+
+/// poseMomentsOf a vector of poses (as many as weights).
 PoseEstimate poseMoments(const std::vector<Pose2>& poses, const std::vector<double>& weights);
 
 /// Moments of the Gaussian mixture sum_j w_j N(means_j, covariances_j): poseMoments of the

@@ -145,16 +145,25 @@ class SlamSession {
   /// False (nothing changed) for a non-finite pose, a covariance that poseCovarianceUsable()
   /// refuses, or one the filter variant cannot take.
   bool setPose(const Pose2& pose, const Eigen::Matrix3d& covariance);
+  /// How long a global start asked for lasts (localizeGlobally).
+  enum class GlobalStart {
+    kGiven,      // asked (~global_localization, --global-localization): like setPose, forgotten
+                 // by ~reset (ResetCause::kRequested)
+    kConfigured  // the config's global_localization: every run starts spread, also after
+                 // ~reset, unless a start pose is given before its first frame
+  };
   /// Global localization on the prior grid map (amcl's global_localization): the robot may be
   /// anywhere on its free cells, with any heading. During a run the particles are spread at
   /// once (map -> odom stays as it was until the next update). Before the first frame, like
   /// setPose, the start of this run and of every restarted one (a start pose given after it
-  /// replaces it; ~reset forgets it; a grid map loaded after it keeps it), spread at the first
-  /// frame if mapping is still off then. False, with the reason in *why, and nothing changed
-  /// (checked in this order): without a prior grid map, while mapping (each of thousands of
-  /// particles would map its own copy from a random pose: localization only), for a variant
-  /// that cannot spread over one, or on a map without a free cell.
-  bool localizeGlobally(std::string* why = nullptr);
+  /// replaces it; a grid map loaded after it keeps it; ~reset forgets a kGiven one), spread at
+  /// the first frame if mapping is still off then. False, with the reason in *why, and nothing
+  /// changed (checked in this order): without a prior grid map, while mapping (each of
+  /// thousands of particles would map its own copy from a random pose: localization only), for
+  /// a variant that cannot spread over one, or on a map without a free cell.
+  bool localizeGlobally(std::string* why = nullptr, GlobalStart kind = GlobalStart::kGiven);
+  /// Whether the next first frame (of this run, or of the next one once reset) starts spread.
+  bool startsGlobally() const { return start_global_; }
 
   /// map -> odom so that map -> base equals the filter's estimate at the last update.
   Pose2 mapToOdom() const { return map_to_odom_; }
@@ -222,6 +231,7 @@ class SlamSession {
   std::optional<std::pair<Pose2, Eigen::Matrix3d>> given_start_;  // given before the first one
   bool start_global_ = false;  // the first frame starts spread over the prior grid map ...
   bool given_global_ = false;  // ... as asked before the first frame (localizeGlobally)
+  bool configured_global_ = false;  // ... as configured: kept by ~reset (GlobalStart)
   bool mapping_ = true;
 };
 
