@@ -629,10 +629,14 @@ bool SlamNode::loadMapService(MapFile::Request& request, MapFile::Response& resp
     try {
       const std::string loaded = io::loadPriorMap(path, &pipeline_.session());
       response.success = true;
-      response.message = "loaded " + loaded + " from " + path +
-                         (pipeline_.session().startsGlobally()
-                              ? "; the run starts spread over it (global localization)"
-                              : "; set the robot's pose on it with initialpose");
+      std::string why_not;
+      response.message =
+          "loaded " + loaded + " from " + path +
+          (pipeline_.session().startsGlobally(&why_not)
+               ? "; the run starts spread over it (global localization)"
+           : why_not.empty() ? "; set the robot's pose on it with initialpose"
+                             : "; global localization cannot be done on it (" + why_not +
+                                   "): set the robot's pose with initialpose");
       if (pipeline_.session().filter().usesLandmarkFeatures()) {
         publishLandmarks(ros::Time::now());
       }
@@ -793,11 +797,14 @@ void SlamNode::resetAll(const std::string& why, core::SlamSession::ResetCause ca
   grid_seen_ = core::FilterStats();  // the filter's counts start over
   ROS_WARN_STREAM("rbpf_slam_node: " << why << ": clearing the map, the trajectory and tf");
   pipeline_.reset(cause);  // filter, history and the scan matcher's reference
-  if (pipeline_.session().startsGlobally()) {
+  std::string why_not;
+  if (pipeline_.session().startsGlobally(&why_not)) {
     // The config's global start (kept by ~reset), or one asked before a restarted run.
     ROS_INFO_STREAM(
         "rbpf_slam_node: the next run starts spread over the map's free cells at its "
         "first frame (global localization)");
+  } else if (!why_not.empty()) {
+    ROS_WARN_STREAM("rbpf_slam_node: global localization after the reset: " << why_not);
   }
   tf_buffer_.clear();
   if (scan_input_) scan_input_->clear();

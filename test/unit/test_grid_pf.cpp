@@ -1300,7 +1300,7 @@ TEST(GlobalLocalization, TheSessionSpreadsWhenAndAsOftenAsAsked) {
 
 // The config's global_localization (GlobalStart::kConfigured, as applyMapConfig asks): unlike a
 // global start asked through ~global_localization, ~reset keeps it; a start pose given before a
-// run's first frame wins for that run only; a landmark map loaded instead of the grid ends it.
+// run's first frame wins for that run only; a grid without a free cell loaded since is named.
 TEST(GlobalLocalization, TheConfiguredStartOutlivesARequestedReset) {
   FilterOptions o = globalOptions(500);
   SessionOptions session_options;
@@ -1348,6 +1348,20 @@ TEST(GlobalLocalization, TheConfiguredStartOutlivesARequestedReset) {
   asked.process(1.0, odom, none);
   asked.reset(SlamSession::ResetCause::kRequested);
   EXPECT_FALSE(asked.startsGlobally());
+  // A grid without a free cell loaded since: asked for, but it cannot be done, and says why.
+  GridMapData unknown = map;
+  for (auto& cell : unknown.cells) {
+    if (cell >= 0 && cell < 50) cell = -1;
+  }
+  ASSERT_TRUE(session.setPriorGridMap(unknown));
+  session.reset(SlamSession::ResetCause::kRequested);
+  EXPECT_FALSE(session.startsGlobally(&why));
+  EXPECT_NE(why.find("no free cell"), std::string::npos) << why;
+  ASSERT_TRUE(session.setPriorGridMap(map));
+  EXPECT_TRUE(session.startsGlobally(&why)) << why;
+  ASSERT_TRUE(session.setMapping(true));
+  EXPECT_FALSE(session.startsGlobally(&why));
+  EXPECT_NE(why.find("mapping is on"), std::string::npos) << why;
 }
 
 TEST(SlamPipeline, ConeReadingsReachTheFilterInTheBaseFrameOfTheUpdate) {
@@ -1489,6 +1503,20 @@ TEST(GridConfig, EachVariantStartsFromItsKindOfMapFile) {
     mapping.filter.grid.match_model = "map_matching";
     EXPECT_TRUE(io::configNotes(mapping).empty());
   }
+  {
+    // global_localization: every run starts spread, the first and one after ~reset; a landmark
+    // variant is told what the key needs.
+    io::SlamConfig global = grid;
+    global.global_localization = true;
+    SlamPipeline spread(global.pipeline());
+    EXPECT_EQ(mapConfigError(global, &spread), "");
+    EXPECT_TRUE(spread.session().startsGlobally());
+    spread.session().reset(SlamSession::ResetCause::kRequested);
+    EXPECT_TRUE(spread.session().startsGlobally()) << "after ~reset";
+    SlamPipeline plain(grid.pipeline());
+    EXPECT_EQ(mapConfigError(grid, &plain), "");
+    EXPECT_FALSE(plain.session().startsGlobally());
+  }
   EXPECT_TRUE(grid_pipeline.session().hasPriorMap());
   EXPECT_FALSE(grid_pipeline.session().mapping());
   GridMapData loaded;
@@ -1506,6 +1534,13 @@ TEST(GridConfig, EachVariantStartsFromItsKindOfMapFile) {
       << mapConfigError(landmarks, &landmark_pipeline);
   landmarks.map_file = landmarks_yaml;
   EXPECT_EQ(mapConfigError(landmarks, &landmark_pipeline), "");
+  landmarks.localization_only = landmarks.global_localization = true;
+  SlamPipeline landmark_global(landmarks.pipeline());
+  const std::string refused = mapConfigError(landmarks, &landmark_global);
+  EXPECT_NE(refused.find("global_localization: true (grid_pf on a map_server map_file"),
+            std::string::npos)
+      << refused;
+  EXPECT_NE(refused.find("no grid map is loaded"), std::string::npos) << refused;
   for (const std::string& f : {grid_yaml, std::string(dir) + "/m.pgm", landmarks_yaml}) {
     std::remove(f.c_str());
   }

@@ -60,7 +60,7 @@ bool SlamSession::setPriorMap(const std::vector<LandmarkEstimate>& landmarks) {
   if (!filter_->loadMap(landmarks)) return false;
   prior_map_ = landmarks;
   prior_grid_.reset();
-  configured_global_ = false;             // no grid to spread over any more
+  start_global_ = given_global_ = configured_global_ = false;  // no grid to spread over
   if (has_previous_) forgetGivenStart();  // a start on the map this one replaces
   return true;
 }
@@ -129,6 +129,19 @@ bool SlamSession::localizeGlobally(std::string* why, GlobalStart kind) {
   // map -> odom stays: the mean of the spread is no place, the next update says where it is.
   breakFrames();
   return true;
+}
+
+bool SlamSession::startsGlobally(std::string* why_not) const {
+  if (why_not) why_not->clear();
+  if (!start_global_) return false;
+  std::string problem;
+  if (mapping_) {
+    problem = "mapping is on: the run starts at the odometry's coordinates, not spread";
+  } else if (!filter_->canSpreadOverMap(&problem) && problem.empty()) {
+    problem = "variant " + filter_->variant() + " cannot spread over this map";
+  }
+  if (why_not) *why_not = problem;
+  return problem.empty();
 }
 
 void SlamSession::breakFrames() {

@@ -120,8 +120,9 @@ class SlamSession {
   enum class ResetCause {
     kClockWentBack,  // a bag played again: the run starts again at the start pose given before
                      // its first frame (setPose), if any
-    kRequested       // ~reset: from scratch, at the odometry's coordinates (a start pose given
-                     // before is forgotten)
+    kRequested       // ~reset: from scratch, at the odometry's coordinates (a start pose or a
+                     // global start given before is forgotten), or spread over the prior grid
+                     // map when the config asks for it (GlobalStart::kConfigured)
   };
   /// Clears the filter and the history; a prior map and the mapping mode are kept. (A reset for
   /// an odometry gap, gap_action "reset", starts the new run where the robot was when a prior
@@ -131,10 +132,13 @@ class SlamSession {
   /// A map to start from (map frame), e.g. a saved one: given to the filter now and again
   /// after every reset. Returns false when the filter variant cannot take a map. Loaded during a
   /// run, it forgets the start pose given before the run's first frame (it was on the old map).
+  /// It ends any global start (there is no grid left to spread over).
   bool setPriorMap(const std::vector<LandmarkEstimate>& landmarks);
   /// The same for an occupancy grid (variants that map cells, grid_pf). Replaces a landmark
   /// prior map and is replaced by one. Throws std::invalid_argument for a grid the filter cannot
-  /// hold (nothing changed then).
+  /// hold (nothing changed then). Loaded during a run, it forgets a start pose given before the
+  /// first frame but keeps a global start: a restarted run then starts spread over this grid
+  /// when one was asked for (the configured one included).
   bool setPriorGridMap(const GridMapData& grid);
   /// Mapping (true) or localization only on the current map (false); false if unsupported.
   bool setMapping(bool enabled);
@@ -162,8 +166,12 @@ class SlamSession {
   /// thousands of particles would map its own copy from a random pose: localization only), for
   /// a variant that cannot spread over one, or on a map without a free cell.
   bool localizeGlobally(std::string* why = nullptr, GlobalStart kind = GlobalStart::kGiven);
-  /// Whether the next first frame (of this run, or of the next one once reset) starts spread.
-  bool startsGlobally() const { return start_global_; }
+  /// Whether this run's first frame, still to come, will spread the particles over the prior
+  /// grid map (false once the run has started: ask after reset()). False, with the reason in
+  /// *why_not, when a global start is asked for but cannot be done (mapping is on, or the
+  /// filter's reason: e.g. a grid loaded since without a free cell); *why_not is left empty
+  /// when none is asked for.
+  bool startsGlobally(std::string* why_not = nullptr) const;
 
   /// map -> odom so that map -> base equals the filter's estimate at the last update.
   Pose2 mapToOdom() const { return map_to_odom_; }
