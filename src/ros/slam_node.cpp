@@ -620,6 +620,26 @@ bool SlamNode::saveMapService(MapFile::Request& request, MapFile::Response& resp
   return true;
 }
 
+std::string SlamNode::loadedMapAdvice() const {
+  const core::SlamSession& session = pipeline_.session();
+  std::string why_not;
+  if (session.startsGlobally(&why_not))
+    return "; the run starts spread over it (global localization)";
+  if (why_not.empty() && session.started() && config_.global_localization) {
+    // The config's global start applies from the next ~reset on.
+    if (!session.filter().canSpreadOverMap(&why_not) && why_not.empty()) {
+      why_not = "variant " + session.filter().variant() + " cannot spread over it";
+    }
+    if (why_not.empty()) {
+      return "; set the robot's pose on it with initialpose, or spread the particles over it "
+             "with ~global_localization (the config's global start: also at the next ~reset)";
+    }
+  }
+  return why_not.empty() ? "; set the robot's pose on it with initialpose"
+                         : "; global localization cannot be done on it (" + why_not +
+                               "): set the robot's pose with initialpose";
+}
+
 bool SlamNode::loadMapService(MapFile::Request& request, MapFile::Response& response) {
   const std::string path = request.path.empty() ? config_.map_file : request.path;
   response.success = false;
@@ -629,14 +649,7 @@ bool SlamNode::loadMapService(MapFile::Request& request, MapFile::Response& resp
     try {
       const std::string loaded = io::loadPriorMap(path, &pipeline_.session());
       response.success = true;
-      std::string why_not;
-      response.message =
-          "loaded " + loaded + " from " + path +
-          (pipeline_.session().startsGlobally(&why_not)
-               ? "; the run starts spread over it (global localization)"
-           : why_not.empty() ? "; set the robot's pose on it with initialpose"
-                             : "; global localization cannot be done on it (" + why_not +
-                                   "): set the robot's pose with initialpose");
+      response.message = "loaded " + loaded + " from " + path + loadedMapAdvice();
       if (pipeline_.session().filter().usesLandmarkFeatures()) {
         publishLandmarks(ros::Time::now());
       }

@@ -101,6 +101,9 @@ class SlamNode {
   bool pauseService(std_srvs::Empty::Request& request, std_srvs::Empty::Response& response);
   bool resumeService(std_srvs::Empty::Request& request, std_srvs::Empty::Response& response);
   bool saveMapService(MapFile::Request& request, MapFile::Response& response);
+  /// What ~load_map's reply advises after a map was loaded: the run starts spread, or set the
+  /// pose (and, with the config's global start, what ~reset and ~global_localization do).
+  std::string loadedMapAdvice() const;
   bool loadMapService(MapFile::Request& request, MapFile::Response& response);
   /// The current map as a grid: the filter's own (grid_pf) or the landmarks rasterised.
   bool currentMap(const ros::Time& stamp, nav_msgs::OccupancyGrid* map);

@@ -60,7 +60,8 @@ bool SlamSession::setPriorMap(const std::vector<LandmarkEstimate>& landmarks) {
   if (!filter_->loadMap(landmarks)) return false;
   prior_map_ = landmarks;
   prior_grid_.reset();
-  start_global_ = given_global_ = configured_global_ = false;  // no grid to spread over
+  // No grid left to spread over (defensive: no shipped variant takes both kinds of map).
+  start_global_ = given_global_ = configured_global_ = false;
   if (has_previous_) forgetGivenStart();  // a start on the map this one replaces
   return true;
 }
@@ -104,7 +105,11 @@ bool SlamSession::setPose(const Pose2& pose, const Eigen::Matrix3d& covariance) 
 bool SlamSession::localizeGlobally(std::string* why, GlobalStart kind) {
   std::string problem;
   if (!prior_grid_) {
-    problem = "no grid map is loaded (map_file or ~load_map naming map_server's map.yaml)";
+    problem = prior_map_ ? "variant " + filter_->variant() +
+                               " localizes on a landmark map; global localization spreads over "
+                               "an occupancy grid (grid_pf with map_server's map.yaml)"
+                         : "no grid map is loaded (map_file or ~load_map naming map_server's "
+                           "map.yaml)";
   } else if (mapping_) {
     problem =
         "mapping is on: global localization needs localization_only (each of thousands of "

@@ -118,8 +118,9 @@ class SlamSession {
   const Pose2& lastOdomPose() const { return last_odom_; }
   /// Why a run starts over (reset()).
   enum class ResetCause {
-    kClockWentBack,  // a bag played again: the run starts again at the start pose given before
-                     // its first frame (setPose), if any
+    kClockWentBack,  // a bag played again: the run starts again at the start given before its
+                     // first frame (setPose, or spread: localizeGlobally), if any, else spread
+                     // when the config asks for it (GlobalStart::kConfigured)
     kRequested       // ~reset: from scratch, at the odometry's coordinates (a start pose or a
                      // global start given before is forgotten), or spread over the prior grid
                      // map when the config asks for it (GlobalStart::kConfigured)
