@@ -41,6 +41,66 @@ TEST(PoseMoments, WeightsPullTheMeanAndMixturesAddTheirComponents) {
   EXPECT_TRUE(none.covariance.isZero());
 }
 
+// Clusters as amcl forms them: cells that touch (also across the heading's wrap) join, a gap of
+// a cell splits.
+TEST(PoseMoments, ClustersJoinTouchingCellsAcrossTheHeadingWrap) {
+  const double deg = M_PI / 180.0;
+  const std::vector<Pose2> poses{Pose2(0.05, 0.05, 179 * deg),
+                                 Pose2(0.15, 0.05, -179 * deg),  // neighbours across +-180
+                                 Pose2(0.25, 0.05, -179 * deg),  // the next cell along x
+                                 Pose2(0.45, 0.05, -179 * deg),  // a cell further: apart
+                                 Pose2(0.05, 0.05, 90 * deg),    // same place, turned: apart
+                                 Pose2(std::nan(""), 0.0, 0.0)};
+  int count = 0;
+  const std::vector<int> c = poseClusters(poses, 0.1, 10 * deg, &count);
+  EXPECT_EQ(count, 3);
+  EXPECT_EQ(c[0], c[1]);
+  EXPECT_EQ(c[1], c[2]);
+  EXPECT_NE(c[3], c[0]);
+  EXPECT_NE(c[4], c[0]);
+  EXPECT_NE(c[4], c[3]);
+  EXPECT_EQ(c[5], -1);
+}
+
+// Two hypotheses (a look-alike place): the heavier one's mean is reported, not the point between
+// them, with the whole cloud's second moment about it; one hypothesis gives poseMoments exactly.
+TEST(PoseMoments, TheHeaviestClusterIsReportedWithTheWholeSpread) {
+  std::vector<Pose2> poses;
+  std::vector<double> weights;
+  for (int i = 0; i < 10; ++i) {
+    poses.push_back(Pose2(1.0 + 0.01 * i, 2.0, 0.1));  // 0.6 of the weight
+    weights.push_back(0.06);
+    poses.push_back(Pose2(-3.0 - 0.01 * i, 2.0, 0.1 + M_PI));  // its mirror image, 0.4
+    weights.push_back(0.04);
+  }
+  const PoseEstimate all = poseMoments(poses, weights);
+  const PoseEstimate e = heaviestClusterMoments(poses, weights, 0.5, 10 * M_PI / 180.0);
+  EXPECT_NEAR(e.mean.x(), 1.045, 1e-9);
+  EXPECT_NEAR(e.mean.y(), 2.0, 1e-9);
+  EXPECT_NEAR(e.mean.z(), 0.1, 1e-9);
+  const double dx = all.mean.x() - e.mean.x();
+  EXPECT_NEAR(e.covariance(0, 0), all.covariance(0, 0) + dx * dx, 1e-9);
+  EXPECT_GT(std::sqrt(e.covariance(0, 0)), 1.9);         // still says the cloud is spread
+  for (double& w : weights) w = w > 0.05 ? 0.04 : 0.06;  // the mirror now the heavier
+  EXPECT_NEAR(heaviestClusterMoments(poses, weights, 0.5, 10 * M_PI / 180.0).mean.x(), -3.045,
+              1e-9);
+  // Three places, none holding half the weight: no place stands out, the whole cloud's mean.
+  std::vector<Pose2> three = poses;
+  std::vector<double> thirds;
+  for (int i = 0; i < 10; ++i) three.push_back(Pose2(1.0 + 0.01 * i, -4.0, 0.1));
+  for (size_t i = 0; i < three.size(); ++i) thirds.push_back(1.0 / three.size());
+  const PoseEstimate none_stands_out =
+      heaviestClusterMoments(three, thirds, 0.5, 10 * M_PI / 180.0);
+  EXPECT_EQ(none_stands_out.mean, poseMoments(three, thirds).mean);
+  std::vector<Pose2> one(poses.begin(), poses.begin() + 1);
+  for (int i = 0; i < 10; ++i) one.push_back(Pose2(1.0 + 0.01 * i, 2.0, 0.1 + 0.001 * i));
+  const std::vector<double> equal(one.size(), 1.0 / one.size());
+  const PoseEstimate single = heaviestClusterMoments(one, equal, 0.5, 10 * M_PI / 180.0);
+  const PoseEstimate plain = poseMoments(one, equal);
+  EXPECT_EQ(single.mean, plain.mean);
+  EXPECT_EQ(single.covariance, plain.covariance);
+}
+
 }  // namespace
 }  // namespace core
 }  // namespace rbpf_slam

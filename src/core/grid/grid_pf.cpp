@@ -18,6 +18,8 @@ namespace rbpf_slam {
 namespace core {
 namespace {
 
+constexpr double kClusterCellRad = 10.0 * M_PI / 180.0;  // estimate()'s heading cells (amcl's)
+
 /// The tile tables of every particle together may take at most this much memory.
 constexpr double kMaxTileTablesBytes = 4.0 * (1ull << 30);
 
@@ -525,8 +527,19 @@ int GridParticleFilter::bestIndex() const {
 }
 
 PoseEstimate GridParticleFilter::estimate() const {
-  PoseEstimate e =
-      poseMomentsOf(weights_, [&](size_t i) -> const Pose2& { return particles_[i].pose; });
+  PoseEstimate e;
+  if (mapping_) {
+    e = poseMomentsOf(weights_, [&](size_t i) -> const Pose2& { return particles_[i].pose; });
+  } else {
+    // Localizing, the cloud may hold several places (a spread over the map, look-alike rooms):
+    // report the mean of a cluster holding most of the weight (amcl reports its heaviest
+    // cluster's), not the point between the places, often in a wall. Cells of ten map cells and
+    // 10 deg; one cluster, or none holding most of the weight, gives the plain moments.
+    std::vector<Pose2> poses;
+    poses.reserve(particles_.size());
+    for (const Particle& p : particles_) poses.push_back(p.pose);
+    e = heaviestClusterMoments(poses, weights_, 10.0 * options_.grid.resolution_m, kClusterCellRad);
+  }
   e.covariance.diagonal().array() += 1e-9;
   return e;
 }
