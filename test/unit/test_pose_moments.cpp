@@ -60,6 +60,12 @@ TEST(PoseMoments, ClustersJoinTouchingCellsAcrossTheHeadingWrap) {
   EXPECT_NE(c[4], c[0]);
   EXPECT_NE(c[4], c[3]);
   EXPECT_EQ(c[5], -1);
+  // Cells by floor, not truncation: -0.15 and 0.05 are two cells apart (truncated: neighbours).
+  poseClusters({Pose2(-0.15, 0.0, 0.0), Pose2(0.05, 0.0, 0.0)}, 0.1, 10 * deg, &count);
+  EXPECT_EQ(count, 2);
+  // A heading cell that does not divide the turn: the last, narrower cell still meets the first.
+  poseClusters({Pose2(0.0, 0.0, 3.1), Pose2(0.0, 0.0, -3.1)}, 0.1, 0.5, &count);
+  EXPECT_EQ(count, 1);
 }
 
 // Two hypotheses (a look-alike place): the heavier one's mean is reported, not the point between
@@ -80,10 +86,26 @@ TEST(PoseMoments, TheHeaviestClusterIsReportedWithTheWholeSpread) {
   EXPECT_NEAR(e.mean.z(), 0.1, 1e-9);
   const double dx = all.mean.x() - e.mean.x();
   EXPECT_NEAR(e.covariance(0, 0), all.covariance(0, 0) + dx * dx, 1e-9);
-  EXPECT_GT(std::sqrt(e.covariance(0, 0)), 1.9);         // still says the cloud is spread
+  EXPECT_GT(std::sqrt(e.covariance(0, 0)), 1.9);  // still says the cloud is spread
+  // The heading's second moment about the reported heading, differences wrapped: the mirror
+  // image is half a turn off.
+  EXPECT_NEAR(e.covariance(2, 2), 0.4 * M_PI * M_PI, 1e-9);
+  // Where the circular mean of all is not the reported heading's mirror: 0.4 of the weight at
+  // 3 rad, 5 m on. The second moment about (0, 0, 0) is 0.4 * 9 and 0.4 * 25, not the cloud's
+  // covariance plus the offset (3.10 in heading).
+  const PoseEstimate turned = heaviestClusterMoments({Pose2(0.0, 0.0, 0.0), Pose2(5.0, 0.0, 3.0)},
+                                                     {0.6, 0.4}, 0.5, 10 * M_PI / 180.0);
+  EXPECT_NEAR(turned.mean.norm(), 0.0, 1e-12);
+  EXPECT_NEAR(turned.covariance(2, 2), 3.6, 1e-9);
+  EXPECT_NEAR(turned.covariance(0, 0), 10.0, 1e-9);
+  EXPECT_NEAR(turned.covariance(0, 2), 6.0, 1e-9);
   for (double& w : weights) w = w > 0.05 ? 0.04 : 0.06;  // the mirror now the heavier
   EXPECT_NEAR(heaviestClusterMoments(poses, weights, 0.5, 10 * M_PI / 180.0).mean.x(), -3.045,
               1e-9);
+  // Half and half: neither holds more than half, the whole cloud's mean.
+  std::vector<double> halves(poses.size(), 1.0 / poses.size());
+  EXPECT_EQ(heaviestClusterMoments(poses, halves, 0.5, 10 * M_PI / 180.0).mean,
+            poseMoments(poses, halves).mean);
   // Three places, none holding half the weight: no place stands out, the whole cloud's mean.
   std::vector<Pose2> three = poses;
   std::vector<double> thirds;

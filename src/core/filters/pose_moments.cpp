@@ -3,7 +3,9 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdint>
 #include <numeric>
+#include <stdexcept>
 #include <unordered_map>
 
 namespace rbpf_slam {
@@ -19,7 +21,9 @@ std::vector<int> poseClusters(const std::vector<Pose2>& poses, double cell_m, do
   using Cell = std::array<long, 3>;
   struct CellHash {
     size_t operator()(const Cell& c) const {
-      return std::hash<long>()(c[0] * 73856093L ^ c[1] * 19349663L ^ c[2] * 83492791L);
+      const auto u = [](long v) { return static_cast<std::uint64_t>(v); };  // wraps, no overflow
+      return static_cast<size_t>(u(c[0]) * 73856093ULL ^ u(c[1]) * 19349663ULL ^
+                                 u(c[2]) * 83492791ULL);
     }
   };
   std::unordered_map<Cell, int, CellHash> cells;  // cell -> its index
@@ -70,25 +74,33 @@ std::vector<int> poseClusters(const std::vector<Pose2>& poses, double cell_m, do
 PoseEstimate heaviestClusterMoments(const std::vector<Pose2>& poses,
                                     const std::vector<double>& weights, double cell_m,
                                     double cell_rad) {
+  if (weights.size() != poses.size()) {
+    throw std::invalid_argument("heaviestClusterMoments: one weight per pose");
+  }
   PoseEstimate all = poseMoments(poses, weights);
   int count = 0;
   const std::vector<int> cluster = poseClusters(poses, cell_m, cell_rad, &count);
   if (count <= 1) return all;
+  const auto counts = [&](size_t i) { return cluster[i] >= 0 && weights[i] > 0.0; };
   std::vector<double> mass(count, 0.0);
   for (size_t i = 0; i < poses.size(); ++i) {
-    if (cluster[i] >= 0 && weights[i] > 0.0) mass[cluster[i]] += weights[i];
+    if (counts(i)) mass[cluster[i]] += weights[i];
   }
   const int best = static_cast<int>(std::max_element(mass.begin(), mass.end()) - mass.begin());
   if (!(mass[best] > 0.5 * std::accumulate(mass.begin(), mass.end(), 0.0))) return all;
   std::vector<double> member_weights(poses.size(), 0.0);
   for (size_t i = 0; i < poses.size(); ++i) {
-    if (cluster[i] == best) member_weights[i] = weights[i] / mass[best];
+    if (counts(i) && cluster[i] == best) member_weights[i] = weights[i] / mass[best];
   }
-  const Pose2 mean = poseMoments(poses, member_weights).mean;
-  Pose2 offset = all.mean - mean;
-  offset.z() = wrapAngle(offset.z());
-  all.mean = mean;
-  all.covariance += offset * offset.transpose();
+  // The whole cloud's second moment about the reported mean, the heading differences wrapped
+  // (the circular mean does not zero their weighted sum, so "covariance + offset^2" would not do).
+  all.mean = poseMoments(poses, member_weights).mean;
+  all.covariance.setZero();
+  for (size_t i = 0; i < poses.size(); ++i) {
+    Pose2 d = poses[i] - all.mean;
+    d.z() = wrapAngle(d.z());
+    all.covariance += weights[i] * d * d.transpose();
+  }
   return all;
 }
 

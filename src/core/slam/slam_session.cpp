@@ -226,7 +226,7 @@ FrameResult SlamSession::process(double stamp, const Pose2& odom_pose,
     last_stats_ = filter_->update(features);
     const Pose2 first = filter_->estimate().mean;
     if (first.allFinite()) map_to_odom_ = compose(first, inverse(odom_pose));
-    trajectory_.push_back({stamp, filter_->estimate().mean});
+    trajectory_.push_back({stamp, first});
     MotionInput none;
     none.stamp = stamp;
     keepFrame(none, features);

@@ -38,18 +38,20 @@ PoseEstimate poseMomentsOf(const std::vector<double>& weights, PoseAt pose_at) {
 /// poseMomentsOf a vector of poses (as many as weights).
 PoseEstimate poseMoments(const std::vector<Pose2>& poses, const std::vector<double>& weights);
 
-/// The clusters of a pose cloud, as amcl forms them to choose the pose it reports: poses binned
-/// into cells of cell_m x cell_m x cell_rad (heading wrapped), cells that touch (the 26
-/// neighbours) in one cluster. Returns each pose's cluster (0, 1, ...; -1 for a non-finite pose)
-/// and the number of clusters in *count.
+/// The clusters of a pose cloud, much as amcl forms them to choose the pose it reports (amcl:
+/// fixed 0.5 m x 10 deg cells, not joined across +-180 deg): poses binned into cells of cell_m x
+/// cell_m x cell_rad (heading wrapped), cells that touch (the 26 neighbours) in one cluster.
+/// Returns each pose's cluster (0, 1, ...; -1 for a non-finite pose) and the number of clusters in
+/// *count.
 std::vector<int> poseClusters(const std::vector<Pose2>& poses, double cell_m, double cell_rad,
                               int* count);
 
 /// The pose to report from a cloud that may hold several hypotheses (global localization): when
 /// one cluster (poseClusters) holds more than half the weight, its weighted mean, with the
-/// cloud's second moment about that mean as the covariance (the whole cloud's covariance plus
-/// the offset of the reported mean), so that a spread cloud still reports its spread; else (one
-/// cluster, or no place standing out) exactly poseMoments: the mean of the whole cloud.
+/// whole cloud's second moment about that mean as the covariance (heading differences
+/// wrapped), so that a spread cloud still reports its spread; else (one cluster, or no place
+/// standing out) exactly poseMoments: the mean of the whole cloud. The weights must sum to 1
+/// (one per pose, else std::invalid_argument); a weight <= 0 counts for no cluster.
 PoseEstimate heaviestClusterMoments(const std::vector<Pose2>& poses,
                                     const std::vector<double>& weights, double cell_m,
                                     double cell_rad);
