@@ -533,7 +533,7 @@ PoseEstimate GridParticleFilter::estimate() const {
   } else {
     // Localizing, the cloud may hold several places (a spread over the map, look-alike rooms):
     // report the mean of a cluster holding most of the weight (amcl reports its heaviest
-    // cluster's), not the point between the places, often in a wall. Cells of ten map cells and
+    // cluster's), not the point between the places, often in a wall. Cells of ten filter cells and
     // 10 deg; one cluster, or none holding most of the weight, gives the plain moments.
     std::vector<Pose2> poses;
     poses.reserve(particles_.size());
