@@ -495,7 +495,7 @@ void OfflineRunner::startGlobally() {
     throw std::runtime_error("--initial-pose and " + asked +
                              " exclude each other (a known start or none)");
   }
-  if (config_.global_localization) return;  // asked by applyMapConfig
+  if (!options_.global_localization) return;  // the config's: taken by applyMapConfig
   std::string why;
   if (!pipeline_.session().localizeGlobally(&why)) {
     throw std::runtime_error(asked +

@@ -110,15 +110,16 @@ SlamNode::SlamNode(ros::NodeHandle nh, ros::NodeHandle private_nh,
   // The map, localization_only and the config's global start (every run, also after ~reset).
   const std::string loaded_map = io::applyMapConfig(config_, &pipeline_.session());  // throws
   if (!config_.map_file.empty()) {
-    ROS_INFO_STREAM("rbpf_slam_node: started from the map "
-                    << config_.map_file << ", " << loaded_map << " ("
-                    << (config_.localization_only ? "localization only" : "mapping on") << ")"
-                    << (config_.global_localization ? "" : "; set the pose with initialpose"));
+    ROS_INFO_STREAM(
+        "rbpf_slam_node: started from the map "
+        << config_.map_file << ", " << loaded_map << " ("
+        << (config_.localization_only ? "localization only" : "mapping on") << ")"
+        << (pipeline_.session().configuredGlobally() ? "" : "; set the pose with initialpose"));
   }
   for (const std::string& note : io::configNotes(config_)) {
     ROS_WARN_STREAM("rbpf_slam_node: note: " << note);
   }
-  if (config_.global_localization) {
+  if (pipeline_.session().configuredGlobally()) {
     ROS_INFO_STREAM(
         "rbpf_slam_node: global_localization: the start is unknown; the particles "
         "will be spread over the map's free cells at the first frame");
@@ -625,15 +626,11 @@ std::string SlamNode::loadedMapAdvice() const {
   std::string why_not;
   if (session.startsGlobally(&why_not))
     return "; the run starts spread over it (global localization)";
-  if (why_not.empty() && session.started() && config_.global_localization) {
-    // The config's global start applies from the next ~reset on.
-    if (!session.filter().canSpreadOverMap(&why_not) && why_not.empty()) {
-      why_not = "variant " + session.filter().variant() + " cannot spread over it";
-    }
-    if (why_not.empty()) {
-      return "; set the robot's pose on it with initialpose, or spread the particles over it "
-             "with ~global_localization (the config's global start: also at the next ~reset)";
-    }
+  // The config's global start applies from the next ~reset on.
+  if (why_not.empty() && session.started() && session.configuredGlobally() &&
+      session.canLocalizeGlobally(&why_not)) {
+    return "; set the robot's pose on it with initialpose, or spread the particles over it "
+           "with ~global_localization (the config's global start: also at the next ~reset)";
   }
   return why_not.empty() ? "; set the robot's pose on it with initialpose"
                          : "; global localization cannot be done on it (" + why_not +

@@ -15,6 +15,7 @@
 #include <random>
 #include <vector>
 
+#include "rbpf_slam/core/filters/pose_moments.h"
 #include "rbpf_slam/core/grid/grid_map_data.h"
 #include "rbpf_slam/core/grid/grid_pf.h"
 #include "rbpf_slam/core/grid/inverse_sensor_model.h"
@@ -1095,6 +1096,42 @@ TEST(GlobalLocalization, CandidatePosesAtTheFirstScanNeedFewerParticles) {
   const int without = foundInTheAsymmetricRoom(o);  // 3
   EXPECT_GE(with, 4) << "of 6 seeds";
   EXPECT_GT(with, without) << "of 6 seeds";
+}
+
+// The same cloud, two answers: while localizing, estimate() reports the mean of a cluster
+// holding most of the weight (heaviestClusterMoments, cells of ten filter cells and 10 deg), not
+// the point between the places the cloud holds; while mapping, the whole cloud's moments.
+TEST(GlobalLocalization, LocalizingReportsTheHeaviestClusterMappingTheWholeCloud) {
+  FilterOptions o = globalOptions(1000);
+  o.grid.match_free_weight = 1.0;
+  o.grid.match_model = "likelihood_field";
+  const Pose2 truth(1.8, -1.2, 2.0);
+  GridParticleFilter filter(o);
+  ASSERT_TRUE(filter.loadGridMap(asymmetricRoomMap(o.grid)));
+  ASSERT_TRUE(filter.setMapping(false));
+  ASSERT_TRUE(filter.spreadOverMap());
+  PoseEstimate clustered, plain;
+  double apart = 0.0;
+  for (int k = 0; k < 40 && apart < 0.2; ++k) {
+    standingStep(&filter, truth);
+    std::vector<Pose2> poses;
+    std::vector<double> weights;
+    for (const WeightedPose& p : filter.particles()) {
+      poses.push_back(p.pose);
+      weights.push_back(p.weight);
+    }
+    clustered = heaviestClusterMoments(poses, weights, 10.0 * o.grid.resolution_m, M_PI / 18.0);
+    plain = poseMoments(poses, weights);
+    apart = (clustered.mean.head<2>() - plain.mean.head<2>()).norm();
+  }
+  ASSERT_GE(apart, 0.2) << "no step left a majority cluster away from the cloud's mean";
+  const auto same = [](const Pose2& a, const Pose2& b) {
+    return (a.head<2>() - b.head<2>()).norm() < 1e-9 && std::fabs(wrapAngle(a.z() - b.z())) < 1e-9;
+  };
+  EXPECT_TRUE(same(filter.estimate().mean, clustered.mean)) << "localizing";
+  EXPECT_TRUE(filter.estimate().covariance.isApprox(clustered.covariance, 1e-6));
+  ASSERT_TRUE(filter.setMapping(true));
+  EXPECT_TRUE(same(filter.estimate().mean, plain.mean)) << "mapping";
 }
 
 // The candidates wait for a scan with a hit (a scan of free cells only scores every pose alike

@@ -127,7 +127,7 @@ class OfflineRunner {
   /// it cannot (no grid map, mapping on, ...), or when either comes with --initial-pose.
   void startGlobally();
   bool startsGlobally() const {
-    return options_.global_localization || config_.global_localization;
+    return options_.global_localization || pipeline_.session().configuredGlobally();
   }
   const io::SlamConfig config_;
   const OfflineOptions options_;

@@ -77,31 +77,29 @@ PoseEstimate heaviestClusterMoments(const std::vector<Pose2>& poses,
   if (weights.size() != poses.size()) {
     throw std::invalid_argument("heaviestClusterMoments: one weight per pose");
   }
-  PoseEstimate all = poseMoments(poses, weights);
+  const auto pose_at = [&](size_t i) -> const Pose2& { return poses[i]; };
   int count = 0;
   const std::vector<int> cluster = poseClusters(poses, cell_m, cell_rad, &count);
-  if (count <= 1) return all;
+  if (count <= 1) return poseMomentsOf(weights, pose_at);
   const auto counts = [&](size_t i) { return cluster[i] >= 0 && weights[i] > 0.0; };
   std::vector<double> mass(count, 0.0);
   for (size_t i = 0; i < poses.size(); ++i) {
     if (counts(i)) mass[cluster[i]] += weights[i];
   }
   const int best = static_cast<int>(std::max_element(mass.begin(), mass.end()) - mass.begin());
-  if (!(mass[best] > 0.5 * std::accumulate(mass.begin(), mass.end(), 0.0))) return all;
+  if (!(mass[best] > 0.5 * std::accumulate(mass.begin(), mass.end(), 0.0))) {
+    return poseMomentsOf(weights, pose_at);
+  }
   std::vector<double> member_weights(poses.size(), 0.0);
   for (size_t i = 0; i < poses.size(); ++i) {
     if (counts(i) && cluster[i] == best) member_weights[i] = weights[i] / mass[best];
   }
   // The whole cloud's second moment about the reported mean, the heading differences wrapped
   // (the circular mean does not zero their weighted sum, so "covariance + offset^2" would not do).
-  all.mean = poseMoments(poses, member_weights).mean;
-  all.covariance.setZero();
-  for (size_t i = 0; i < poses.size(); ++i) {
-    Pose2 d = poses[i] - all.mean;
-    d.z() = wrapAngle(d.z());
-    all.covariance += weights[i] * d * d.transpose();
-  }
-  return all;
+  PoseEstimate e;
+  e.mean = poseMeanOf(member_weights, pose_at);
+  e.covariance = poseSecondMomentOf(weights, pose_at, e.mean);
+  return e;
 }
 
 PoseEstimate mixtureMoments(const std::vector<Pose2>& means,

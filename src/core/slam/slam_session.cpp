@@ -102,7 +102,7 @@ bool SlamSession::setPose(const Pose2& pose, const Eigen::Matrix3d& covariance) 
   return true;
 }
 
-bool SlamSession::localizeGlobally(std::string* why, GlobalStart kind) {
+bool SlamSession::canLocalizeGlobally(std::string* why) const {
   std::string problem;
   if (!prior_grid_) {
     problem = prior_map_ ? "variant " + filter_->variant() +
@@ -117,7 +117,14 @@ bool SlamSession::localizeGlobally(std::string* why, GlobalStart kind) {
   } else if (!filter_->canSpreadOverMap(&problem)) {
     // The filter says why: the variant never spreads, or the map has no free cell.
     if (problem.empty()) problem = "variant " + filter_->variant() + " cannot spread over this map";
-  } else if (has_previous_ && !filter_->spreadOverMap()) {
+  }
+  if (why) *why = problem;
+  return problem.empty();
+}
+
+bool SlamSession::localizeGlobally(std::string* why, GlobalStart kind) {
+  std::string problem;
+  if (canLocalizeGlobally(&problem) && has_previous_ && !filter_->spreadOverMap()) {
     problem = "variant " + filter_->variant() + " could not spread its particles over the map";
   }
   if (!problem.empty()) {
@@ -138,15 +145,7 @@ bool SlamSession::localizeGlobally(std::string* why, GlobalStart kind) {
 
 bool SlamSession::startsGlobally(std::string* why_not) const {
   if (why_not) why_not->clear();
-  if (!start_global_) return false;
-  std::string problem;
-  if (mapping_) {
-    problem = "mapping is on: the run starts at the odometry's coordinates, not spread";
-  } else if (!filter_->canSpreadOverMap(&problem) && problem.empty()) {
-    problem = "variant " + filter_->variant() + " cannot spread over this map";
-  }
-  if (why_not) *why_not = problem;
-  return problem.empty();
+  return start_global_ && canLocalizeGlobally(why_not);
 }
 
 void SlamSession::breakFrames() {

@@ -11,12 +11,11 @@
 namespace rbpf_slam {
 namespace core {
 
-/// Weighted mean (circular mean for the heading) and covariance of the poses pose_at(i),
-/// i < weights.size(), the heading differences wrapped (poses held inside other records need
-/// no copy). The weights must sum to 1; an empty set gives the zero pose and a zero covariance.
+/// Weighted mean of the poses pose_at(i), i < weights.size(): circular mean for the heading
+/// (poses held inside other records need no copy). The weights must sum to 1; an empty set
+/// gives the zero pose.
 template <typename PoseAt>
-PoseEstimate poseMomentsOf(const std::vector<double>& weights, PoseAt pose_at) {
-  PoseEstimate e;
+Pose2 poseMeanOf(const std::vector<double>& weights, PoseAt pose_at) {
   double x = 0.0, y = 0.0, c = 0.0, s = 0.0;
   for (size_t i = 0; i < weights.size(); ++i) {
     const Pose2& p = pose_at(i);
@@ -25,13 +24,30 @@ PoseEstimate poseMomentsOf(const std::vector<double>& weights, PoseAt pose_at) {
     c += weights[i] * std::cos(p.z());
     s += weights[i] * std::sin(p.z());
   }
-  e.mean = Pose2(x, y, std::atan2(s, c));
-  e.covariance.setZero();
+  return Pose2(x, y, std::atan2(s, c));
+}
+
+/// Weighted second moment of the poses pose_at(i) about the pose about, the heading
+/// differences wrapped: their covariance when about is their mean (poseMeanOf).
+template <typename PoseAt>
+Eigen::Matrix3d poseSecondMomentOf(const std::vector<double>& weights, PoseAt pose_at,
+                                   const Pose2& about) {
+  Eigen::Matrix3d m = Eigen::Matrix3d::Zero();
   for (size_t i = 0; i < weights.size(); ++i) {
-    Pose2 d = pose_at(i) - e.mean;
+    Pose2 d = pose_at(i) - about;
     d.z() = wrapAngle(d.z());
-    e.covariance += weights[i] * d * d.transpose();
+    m += weights[i] * d * d.transpose();
   }
+  return m;
+}
+
+/// Weighted mean (poseMeanOf) and covariance (poseSecondMomentOf about it) of the poses
+/// pose_at(i); an empty set gives the zero pose and a zero covariance.
+template <typename PoseAt>
+PoseEstimate poseMomentsOf(const std::vector<double>& weights, PoseAt pose_at) {
+  PoseEstimate e;
+  e.mean = poseMeanOf(weights, pose_at);
+  e.covariance = poseSecondMomentOf(weights, pose_at, e.mean);
   return e;
 }
 

@@ -167,11 +167,17 @@ class SlamSession {
   /// thousands of particles would map its own copy from a random pose: localization only), for
   /// a variant that cannot spread over one, or on a map without a free cell.
   bool localizeGlobally(std::string* why = nullptr, GlobalStart kind = GlobalStart::kGiven);
+  /// Whether localizeGlobally could spread the particles now (all but the spread itself); false
+  /// with its reason in *why.
+  bool canLocalizeGlobally(std::string* why = nullptr) const;
+  /// Whether the config's global start was taken (localizeGlobally with kConfigured): every
+  /// run's first frame spreads unless a start pose is given before it.
+  bool configuredGlobally() const { return configured_global_; }
   /// Whether this run's first frame, still to come, will spread the particles over the prior
   /// grid map (false once the run has started: ask after reset()). False, with the reason in
-  /// *why_not, when a global start is asked for but cannot be done (mapping is on, or the
-  /// filter's reason: e.g. a grid loaded since without a free cell); *why_not is left empty
-  /// when none is asked for.
+  /// *why_not, when a global start is asked for but cannot be done (canLocalizeGlobally's
+  /// reason: mapping is on, a grid loaded since without a free cell, ...); *why_not is left
+  /// empty when none is asked for.
   bool startsGlobally(std::string* why_not = nullptr) const;
 
   /// map -> odom so that map -> base equals the filter's estimate at the last update.
