@@ -581,10 +581,8 @@ std::string applyMapConfig(const SlamConfig& config, core::SlamSession* session)
   std::string why;
   if (config.global_localization &&
       !session->localizeGlobally(&why, core::SlamSession::GlobalStart::kConfigured)) {
-    throw ConfigError(
-        "global_localization: true (grid_pf on a map_server map_file with localization_only: "
-        "true): " +
-        why);
+    throw ConfigError(std::string("global_localization: true (") +
+                      core::SlamSession::kGlobalLocalizationNeeds + "): " + why);
   }
   return loaded;
 }

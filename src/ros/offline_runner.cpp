@@ -495,13 +495,12 @@ void OfflineRunner::startGlobally() {
     throw std::runtime_error("--initial-pose and " + asked +
                              " exclude each other (a known start or none)");
   }
-  if (!options_.global_localization) return;  // the config's: taken by applyMapConfig
+  // The config's was taken by applyMapConfig.
+  if (!options_.global_localization || pipeline_.session().configuredGlobally()) return;
   std::string why;
   if (!pipeline_.session().localizeGlobally(&why)) {
-    throw std::runtime_error(asked +
-                             " (grid_pf on a map_server map_file with localization_only: "
-                             "true): " +
-                             why);
+    throw std::runtime_error(asked + " (" + core::SlamSession::kGlobalLocalizationNeeds +
+                             "): " + why);
   }
 }
 

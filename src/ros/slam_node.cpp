@@ -550,10 +550,9 @@ bool SlamNode::resetService(std_srvs::Empty::Request&, std_srvs::Empty::Response
 bool SlamNode::globalLocalizationService(std_srvs::Empty::Request&, std_srvs::Empty::Response&) {
   std::string why;
   if (!pipeline_.session().localizeGlobally(&why)) {
-    ROS_ERROR_STREAM("rbpf_slam_node: " << global_localization_server_.getService()
-                                        << " refused (grid_pf on a map_server map, "
-                                           "localization_only: true): "
-                                        << why);
+    ROS_ERROR_STREAM("rbpf_slam_node: " << global_localization_server_.getService() << " refused ("
+                                        << core::SlamSession::kGlobalLocalizationNeeds
+                                        << "): " << why);
     return false;
   }
   if (!pipeline_.session().started()) {

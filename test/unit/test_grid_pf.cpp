@@ -1132,6 +1132,7 @@ TEST(GlobalLocalization, LocalizingReportsTheHeaviestClusterMappingTheWholeCloud
   EXPECT_TRUE(filter.estimate().covariance.isApprox(clustered.covariance, 1e-6));
   ASSERT_TRUE(filter.setMapping(true));
   EXPECT_TRUE(same(filter.estimate().mean, plain.mean)) << "mapping";
+  EXPECT_TRUE(filter.estimate().covariance.isApprox(plain.covariance, 1e-6));
 }
 
 // The candidates wait for a scan with a hit (a scan of free cells only scores every pose alike
@@ -1403,6 +1404,42 @@ TEST(GlobalLocalization, TheConfiguredStartOutlivesARequestedReset) {
   EXPECT_NE(why.find("mapping is on"), std::string::npos) << why;
 }
 
+// A gap reset while the particles are still spread over the map (global localization under
+// way) spreads them again: the cloud's mean is no place to restart around (a Gaussian with the
+// cloud's covariance would put particles outside the room). Once the robot is placed, a gap
+// restarts where it is, as on any prior map.
+TEST(GlobalLocalization, AGapResetWhileSpreadSpreadsAgain) {
+  FilterOptions o = globalOptions(500);
+  SessionOptions session_options;
+  session_options.gap_action = "reset";  // a frame more than max_time_gap_s (30) after the last
+  SlamSession session(createFilter(o), session_options);
+  ASSERT_TRUE(session.setPriorGridMap(asymmetricRoomMap(o.grid)));
+  ASSERT_TRUE(session.setMapping(false));
+  ASSERT_TRUE(session.localizeGlobally());
+  const FeatureSet none;  // frames without readings: the spread stays as drawn
+  auto spread = [&]() {   // over the 6 m x 4 m room (variances 3 and 1.3 m^2)
+    for (const WeightedPose& p : session.filter().particles()) {
+      if (!(std::fabs(p.pose.x()) < 3.1 && std::fabs(p.pose.y()) < 2.1)) return false;
+    }
+    return session.filter().estimate().covariance(0, 0) > 1.0;
+  };
+  session.process(1.0, Pose2(5.0, 7.0, 0.3), none);
+  ASSERT_TRUE(spread());
+  EXPECT_TRUE(session.filter().stillSpread());
+  EXPECT_EQ(session.process(41.0, Pose2(5.5, 7.0, 0.3), none), FrameResult::kReset);
+  EXPECT_EQ(session.gaps(), 1);
+  EXPECT_TRUE(spread()) << "after a gap while spread";
+  EXPECT_TRUE(session.filter().stillSpread());
+  // Placed (rviz's 2D Pose Estimate during the run): no longer spread; a gap goes on from there.
+  const Pose2 truth(1.8, -1.2, 0.0);
+  ASSERT_TRUE(session.setPose(truth, Eigen::Vector3d(1e-4, 1e-4, 1e-4).asDiagonal()));
+  EXPECT_FALSE(session.filter().stillSpread());
+  EXPECT_EQ(session.process(81.0, Pose2(5.5, 7.0, 0.3), none), FrameResult::kReset);
+  EXPECT_EQ(session.gaps(), 2);
+  EXPECT_FALSE(spread());
+  EXPECT_LT((session.filter().estimate().mean.head<2>() - truth.head<2>()).norm(), 0.1);
+}
+
 TEST(SlamPipeline, ConeReadingsReachTheFilterInTheBaseFrameOfTheUpdate) {
   PipelineOptions o;
   o.filter = gridOptions(5);
@@ -1576,7 +1613,7 @@ TEST(GridConfig, EachVariantStartsFromItsKindOfMapFile) {
   landmarks.localization_only = landmarks.global_localization = true;
   SlamPipeline landmark_global(landmarks.pipeline());
   const std::string refused = mapConfigError(landmarks, &landmark_global);
-  EXPECT_NE(refused.find("global_localization: true (grid_pf on a map_server map_file"),
+  EXPECT_NE(refused.find("global_localization: true (grid_pf on a map_server map with"),
             std::string::npos)
       << refused;
   EXPECT_NE(refused.find("variant fastslam2 localizes on a landmark map"), std::string::npos)

@@ -96,6 +96,8 @@ class EnsembleFilter : public SlamFilter {
     }
     return true;
   }
+  // The reported member's, as estimate().
+  bool stillSpread() const override { return members_[leader_]->stillSpread(); }
   double gridResolution() const override { return members_[0]->gridResolution(); }
   bool setMapping(bool enabled) override {
     bool ok = true;

@@ -41,6 +41,7 @@ class FaultInjectedFilter : public SlamFilter {
   bool loadGridMap(const GridMapData& map) override { return inner_->loadGridMap(map); }
   bool spreadOverMap() override { return inner_->spreadOverMap(); }
   bool canSpreadOverMap(std::string* why) const override { return inner_->canSpreadOverMap(why); }
+  bool stillSpread() const override { return inner_->stillSpread(); }
   double gridResolution() const override { return inner_->gridResolution(); }
   bool setMapping(bool enabled) override { return inner_->setMapping(enabled); }
   bool occupancyGrid(GridMapData& out) const override { return inner_->occupancyGrid(out); }

@@ -270,9 +270,12 @@ FrameResult SlamSession::process(double stamp, const Pose2& odom_pose,
       // is: after a time gap where the correction puts the odometry (it may have moved), after
       // an odometry jump where it was (the jump is not to be trusted); less sure by the given
       // start's spread, or rviz's. Otherwise it starts at its odometry coordinates (a new map).
+      // Still spread over the map (global localization under way): the robot may be anywhere
+      // on it yet, and the new run spreads again rather than start around the cloud's mean.
+      const bool spread = !mapping_ && filter_->stillSpread();
       std::optional<std::pair<Pose2, Eigen::Matrix3d>> here;
       const PoseEstimate last = filter_->estimate();
-      if (hasPriorMap() || given_start_) {
+      if (!spread && (hasPriorMap() || given_start_)) {
         const Pose2 at = jump ? last.mean : compose(map_to_odom_, odom_pose);
         const Eigen::Matrix3d spread =
             last.covariance + (given_start_ ? given_start_->second : defaultStartCovariance());
@@ -280,6 +283,7 @@ FrameResult SlamSession::process(double stamp, const Pose2& odom_pose,
       }
       restart();  // the odometry stamps stay: they are still this run's
       start_pose_ = here;
+      if (spread) start_global_ = true;
       gaps_ = gaps;
       process(stamp, odom_pose, features);  // the first frame of a new map
       return FrameResult::kReset;

@@ -50,6 +50,7 @@ class AnchoredFilter : public SlamFilter {
   bool loadGridMap(const GridMapData& map) override;
   bool spreadOverMap() override { return mutableInner().spreadOverMap(); }
   bool canSpreadOverMap(std::string* why) const override { return inner_->canSpreadOverMap(why); }
+  bool stillSpread() const override { return inner_->stillSpread(); }
   double gridResolution() const override { return inner_->gridResolution(); }
   bool setMapping(bool enabled) override;
   bool occupancyGrid(GridMapData& out) const override;

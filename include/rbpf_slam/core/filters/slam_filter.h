@@ -125,6 +125,9 @@ class SlamFilter {
     if (why) *why = "variant " + variant() + " cannot spread its particles over a map";
     return false;
   }
+  /// Whether the hypotheses spread by spreadOverMap() have yet to gather on one place: the
+  /// filter does not know where on the map the robot is (its estimate is no place to start from).
+  virtual bool stillSpread() const { return false; }
   /// The cell size of the grids it keeps, m (0: it keeps none).
   virtual double gridResolution() const { return 0.0; }
   /// Mapping off = localization only: landmarks are neither added nor changed.

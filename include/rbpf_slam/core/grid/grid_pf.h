@@ -96,6 +96,10 @@ class GridParticleFilter : public SlamFilter {
   bool spreadOverMap() override;
   /// A map is loaded and it has a free cell at grid.resolution_m (lists them when first asked).
   bool canSpreadOverMap(std::string* why) const override;
+  /// Spread by spreadOverMap, localizing, and not gathered yet (grid.spread_gathered_m).
+  bool stillSpread() const override {
+    return gathering_ && !mapping_ && !(positionSpread() < options_.grid.spread_gathered_m);
+  }
   bool setMapping(bool enabled) override;
   bool occupancyGrid(GridMapData& out) const override;
   bool usesLandmarkFeatures() const override { return false; }

@@ -167,11 +167,15 @@ class SlamSession {
   /// thousands of particles would map its own copy from a random pose: localization only), for
   /// a variant that cannot spread over one, or on a map without a free cell.
   bool localizeGlobally(std::string* why = nullptr, GlobalStart kind = GlobalStart::kGiven);
-  /// Whether localizeGlobally could spread the particles now (all but the spread itself); false
-  /// with its reason in *why.
+  /// What global localization needs, for messages that refuse it.
+  static constexpr const char* kGlobalLocalizationNeeds =
+      "grid_pf on a map_server map with localization_only: true";
+  /// Whether localizeGlobally would succeed now (every check but, during a run, the spread
+  /// itself); false with its reason in *why.
   bool canLocalizeGlobally(std::string* why = nullptr) const;
-  /// Whether the config's global start was taken (localizeGlobally with kConfigured): every
-  /// run's first frame spreads unless a start pose is given before it.
+  /// Whether the config's global start was taken (localizeGlobally with kConfigured; cleared by
+  /// setPriorMap): each run's first frame spreads if mapping is off then, unless a start pose was
+  /// given before it (which holds for restarted runs until ~reset).
   bool configuredGlobally() const { return configured_global_; }
   /// Whether this run's first frame, still to come, will spread the particles over the prior
   /// grid map (false once the run has started: ask after reset()). False, with the reason in
