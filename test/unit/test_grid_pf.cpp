@@ -927,6 +927,36 @@ TEST(GridMapLoading, AGapResetOnAMapKeepsTheRobotWhereItWas) {
   EXPECT_LT(std::fabs(now.z()), 0.05) << now.transpose();
 }
 
+// An odometry jump (an increment over max_odometry_jump_m) with gap_action "inflate": the
+// increment is not taken, the robot stays where it was within the inflated noise, and map ->
+// odom absorbs the jump so that the next increments go on from there. A measured (scan-matched)
+// increment across it is taken as it is.
+TEST(SessionResets, AnOdometryJumpIsNotTakenAsMotion) {
+  FilterOptions o = gridOptions(50);
+  SessionOptions session_options;
+  session_options.max_odometry_jump_m = 2.0;  // gap_action "inflate" (the default)
+  const FeatureSet none;
+  SlamSession session(createFilter(o), session_options);
+  session.process(1.0, Pose2(0.0, 0.0, 0.0), none);
+  session.process(2.0, Pose2(0.5, 0.0, 0.0), none);
+  EXPECT_EQ(session.process(3.0, Pose2(5.5, 1.0, 0.0), none), FrameResult::kUpdated);
+  EXPECT_EQ(session.gaps(), 1);
+  Pose2 at = session.filter().estimate().mean;
+  EXPECT_LT((at.head<2>() - Eigen::Vector2d(0.5, 0.0)).norm(), 0.3) << at.transpose();
+  session.process(4.0, Pose2(6.0, 1.0, 0.0), none);  // 0.5 m on from the jumped odometry
+  at = session.filter().estimate().mean;
+  EXPECT_LT((at.head<2>() - Eigen::Vector2d(1.0, 0.0)).norm(), 0.3) << at.transpose();
+  EXPECT_EQ(session.gaps(), 1);
+  // A measured increment across the jump is kept.
+  SlamSession measured(createFilter(o), session_options);
+  measured.process(1.0, Pose2(0.0, 0.0, 0.0), none);
+  MotionInput matched;
+  matched.delta = Pose2(0.4, 0.0, 0.0);
+  measured.process(2.0, Pose2(5.0, 0.0, 0.0), none, &matched);
+  at = measured.filter().estimate().mean;
+  EXPECT_LT((at.head<2>() - Eigen::Vector2d(0.4, 0.0)).norm(), 0.1) << at.transpose();
+}
+
 // Gap resets without a prior map: with a start given, the new run goes on where the robot is
 // (after a time gap where the odometry puts it, after an odometry jump where it was), not back
 // at the start; with none, it starts at its odometry coordinates as before.

@@ -290,8 +290,11 @@ FrameResult SlamSession::process(double stamp, const Pose2& odom_pose,
     }
   }
   // A measured (scan-matched) increment that was accepted is kept as it is; odometry alone
-  // across a gap gets its noise inflated.
+  // across a gap gets its noise inflated, and an odometry jump is not taken at all: the robot
+  // is where it was (as a gap reset puts it), within the inflated noise, and map -> odom
+  // absorbs the jump.
   if ((silent || jump) && !measured_motion) motion.noise_scale = options_.gap_noise_inflation;
+  if (jump && !measured_motion) motion.delta = Pose2::Zero();
   filter_->predict(motion);
   last_stats_ = filter_->update(features);
   last_stamp_ = stamp;

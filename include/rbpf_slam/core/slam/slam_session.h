@@ -22,7 +22,8 @@ struct SessionOptions {
   double max_time_gap_s = 30.0;     // odometry silent this long (s) between two frames (the
                                     // stamps given to addOdometryStamp; without any, the time
                                     // between the frames) ...
-  double max_odometry_jump_m = 0.0;  // ... or a longer odometry increment (m; 0: unchecked)
+  double max_odometry_jump_m = 0.0;    // ... or a longer odometry increment (m; 0: unchecked;
+                                       // with "inflate" and no measured motion: taken as none)
   std::string gap_action = "inflate";  // ... is a gap: "inflate" the motion noise of that step
                                        // by gap_noise_inflation, or "reset" (a new map)
   double gap_noise_inflation = 5.0;
