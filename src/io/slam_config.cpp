@@ -56,6 +56,7 @@ void readRelocalization(YamlSection section, core::RelocalizationOptions* o) {
   section.read("line_tolerance_m", &o->line_tolerance_m);
   section.read("angle_tolerance_rad", &o->angle_tolerance_rad);
   section.read("point_tolerance_m", &o->point_tolerance_m);
+  section.read("min_information", &o->min_information);
   section.finish();
 }
 

@@ -83,6 +83,36 @@ TEST(Relocalization, LeavesTheShiftAlongACorridorAtZero) {
   EXPECT_NEAR(c.pose.x(), drifted.x(), 1e-9);  // along the corridor: unchanged
 }
 
+// min_information: along a corridor the walls say nothing, so a correction along it rests on
+// the points alone. One point is refused at 2 (a wrong pairing would move the robot along the
+// corridor unopposed), two are accepted; without the condition one does.
+TEST(Relocalization, MinInformationWantsTwoPointsAlongACorridor) {
+  SyntheticWorld corridor;
+  corridor.walls = {{{-20, -1}, {20, -1}}, {{20, 1}, {-20, 1}}};
+  corridor.posts = {{3.0, 0.5}, {-2.0, -0.5}};
+  const LandmarkMap map = mapOf(corridor.walls, corridor.posts);
+  SyntheticWorld seen = corridor;  // 10 m of each wall, one or both posts
+  seen.walls = {{{-5, -1}, {5, -1}}, {{5, 1}, {-5, 1}}};
+  const Pose2 truth(0.0, 0.0, 0.0), drifted(0.8, 0.35, 0.06);
+  RelocalizationOptions options;
+  options.min_matches = 2;
+  const auto search = [&](size_t posts, double min_information) {
+    seen.posts.assign(corridor.posts.begin(), corridor.posts.begin() + posts);
+    options.min_information = min_information;
+    return searchPoseCorrection(map, drifted, observe(seen, truth, 4), options, 1.0);
+  };
+  for (size_t posts : {size_t(1), size_t(2)}) {
+    const PoseCorrection c = search(posts, 0.0);
+    ASSERT_TRUE(c.found) << posts << " post(s), no condition";
+    EXPECT_NEAR(c.pose.x(), truth.x(), 0.1) << posts << " post(s): fixed along the corridor";
+  }
+  EXPECT_FALSE(search(1, 2.0).found) << "one post";
+  const PoseCorrection two = search(2, 2.0);
+  ASSERT_TRUE(two.found) << "two posts";
+  EXPECT_NEAR(two.pose.x(), truth.x(), 0.1);
+  EXPECT_NEAR(two.pose.y(), truth.y(), 0.2);  // a candidate shift, walls within 0.15 m of it
+}
+
 TEST(Relocalization, SearchesOnlyWithinItsWindow) {
   SyntheticWorld world;
   const LandmarkMap map = mapOf(world.walls, world.posts);
@@ -174,6 +204,9 @@ TEST(Relocalization, OptionsAreValidated) {
   EXPECT_THROW(validate(o), std::invalid_argument);
   o = RelocalizationOptions();
   o.min_unmatched_ratio = std::nan("");
+  EXPECT_THROW(validate(o), std::invalid_argument);
+  o = RelocalizationOptions();
+  o.min_information = -1.0;
   EXPECT_THROW(validate(o), std::invalid_argument);
   FilterOptions f;
   f.proposal_sample_scale = 0.0;

@@ -177,15 +177,22 @@ bool explains(const Constraint& c, const Eigen::Vector2d& t, const Relocalizatio
   return gap <= margin;
 }
 
-int support(const std::vector<Constraint>& constraints, const Eigen::Vector2d& t,
-            int observations, const RelocalizationOptions& o, double margin) {
+/// The observations the shift t explains (each once), and in *information how well they fix
+/// t in its least constrained direction: the smallest eigenvalue of the sum of n n^T over the
+/// explained lines (n: the wall's normal) and the identity over the explained points.
+int support(const std::vector<Constraint>& constraints, const Eigen::Vector2d& t, int observations,
+            const RelocalizationOptions& o, double margin, double* information) {
   std::vector<char> explained(observations, 0);
+  Eigen::Matrix2d info = Eigen::Matrix2d::Zero();
   int n = 0;
   for (const Constraint& c : constraints) {
     if (explained[c.observation] || !explains(c, t, o, margin)) continue;
     explained[c.observation] = 1;
+    info +=
+        c.is_line ? Eigen::Matrix2d(c.normal * c.normal.transpose()) : Eigen::Matrix2d::Identity();
     ++n;
   }
+  *information = Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(info).eigenvalues()(0);
   return n;
 }
 
@@ -203,6 +210,7 @@ void validate(const RelocalizationOptions& o) {
   requireRange("relocalization.line_tolerance_m", o.line_tolerance_m, 1e-3, 10.0);
   requireRange("relocalization.angle_tolerance_rad", o.angle_tolerance_rad, 1e-4, 1.0);
   requireRange("relocalization.point_tolerance_m", o.point_tolerance_m, 1e-3, 10.0);
+  requireRange("relocalization.min_information", o.min_information, 0.0, 1000.0);
 }
 
 PoseCorrection searchPoseCorrection(const LandmarkMap& map, const Pose2& pose,
@@ -241,7 +249,9 @@ PoseCorrection searchPoseCorrection(const LandmarkMap& map, const Pose2& pose,
     }
     for (const Eigen::Vector2d& t : shifts) {
       if (!(t.norm() <= o.search_xy_m)) continue;
-      const int s = support(cs, t, n, o, margin);
+      double information = 0.0;
+      const int s = support(cs, t, n, o, margin, &information);
+      if (o.min_information > 0.0 && information < o.min_information) continue;
       const double cost = t.norm() + 10.0 * std::fabs(dtheta);  // 0.1 rad ~ 1 m
       if (s > best.support || (s == best.support && cost < best_cost)) {
         best.support = s;

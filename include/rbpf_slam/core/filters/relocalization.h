@@ -30,6 +30,9 @@ struct RelocalizationOptions {
   int min_matches = 4;             // accept: at least this many features associated after ...
   int min_gain = 2;                // ... and this many more than at the uncorrected pose ...
   double min_matched_ratio = 0.0;  // ... and at least this fraction of the scan's features
+  double min_information = 0.0;    // ... and the features it explains fix it this well in every
+                                   // direction (a wall across it counts 1, a point 1 each way;
+                                   // 2: along a corridor, two points; 0: no condition)
   int min_landmark_age = 0;        // search only landmarks not seen for this many updates
                                    // (loop closure; 0: every landmark, also odometry glitches)
   double line_tolerance_m = 0.15;  // a line constraint counts as explained within this, m
