@@ -73,7 +73,8 @@ void YamlSection::read(const std::string& key, double* value, double min, double
   try {
     parsed = n.as<double>();
   } catch (const YAML::Exception&) {
-    throw ConfigError(where(key) + " = " + describe(n) + " is not a number");
+    throw ConfigError(where(key) + " = " + describe(n) +
+                      " is not a number (or too large for one: beyond 1.8e308)");
   }
   if (!std::isfinite(parsed)) throw ConfigError(where(key) + " = " + describe(n) + " is not finite");
   if (parsed < min || parsed > max) {

@@ -11,6 +11,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <map>
@@ -246,6 +247,10 @@ int run(const Arguments& arguments) {
   const std::string truth_path = rbpf_slam::io::besideBag(arguments.output, ".landmarks.yaml");
   // Nothing is written when one output cannot be (a directory, pipe or device there): close()
   // renames the ground truth onto its path, and the truth file is opened for writing.
+  // The output's directory is made, as offline_slam makes its --output.
+  const std::filesystem::path parent = std::filesystem::path(arguments.output).parent_path();
+  std::error_code ignored;  // a failure shows as the bag's "cannot write" below
+  if (!parent.empty()) std::filesystem::create_directories(parent, ignored);
   for (const std::string& path : {reference_path, reference_path + ".part", truth_path}) {
     rbpf_slam::io::requireReplaceableFile(path);
   }
