@@ -251,7 +251,8 @@ PoseCorrection searchPoseCorrection(const LandmarkMap& map, const Pose2& pose,
       if (!(t.norm() <= o.search_xy_m)) continue;
       double information = 0.0;
       const int s = support(cs, t, n, o, margin, &information);
-      if (o.min_information > 0.0 && information < o.min_information) continue;
+      // (less a rounding margin: two points along a slanted corridor give 2 - 1e-16)
+      if (o.min_information > 0.0 && information < o.min_information - 1e-9) continue;
       const double cost = t.norm() + 10.0 * std::fabs(dtheta);  // 0.1 rad ~ 1 m
       if (s > best.support || (s == best.support && cost < best_cost)) {
         best.support = s;

@@ -77,6 +77,8 @@ FrameResult SlamPipeline::processScan(const RangeScan& scan, const Pose2& odom_p
     }
   }
   const FrameResult result = session_.process(scan.stamp, odom_pose, last_features_, override_motion);
+  // A jump the filter took as no motion is none for the submap's chain either.
+  if (session_.jumpDiscarded()) chain_delta = Pose2::Zero();
   if (usedFrame(result)) {
     if (startedMap(result)) submap_.clear();
     addToSubmap(std::move(points), chain_delta);

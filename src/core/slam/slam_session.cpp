@@ -183,6 +183,7 @@ void SlamSession::restart() {
 
 FrameResult SlamSession::process(double stamp, const Pose2& odom_pose,
                                  const FeatureSet& features, const MotionInput* measured_motion) {
+  jump_discarded_ = false;
   if (!std::isfinite(stamp) || stamp <= 0.0) return FrameResult::kRejectedStamp;
   if (!odom_pose.allFinite()) return FrameResult::kRejectedPose;
   bool restarted = false;
@@ -239,7 +240,8 @@ FrameResult SlamSession::process(double stamp, const Pose2& odom_pose,
   motion.stamp = stamp;
   motion.dt = stamp - last_stamp_;
   motion.delta = delta;
-  if (measured_motion && measured_motion->delta.allFinite()) {
+  const bool measured = measured_motion && measured_motion->delta.allFinite();  // accepted
+  if (measured) {
     motion.delta = measured_motion->delta;
     motion.noise_scale = measured_motion->noise_scale;
   }
@@ -272,10 +274,10 @@ FrameResult SlamSession::process(double stamp, const Pose2& odom_pose,
       // start's spread, or rviz's. Otherwise it starts at its odometry coordinates (a new map).
       // Still spread over the map (global localization under way): the robot may be anywhere
       // on it yet, and the new run spreads again rather than start around the cloud's mean.
-      const bool spread = !mapping_ && filter_->stillSpread();
+      const bool still_spread = !mapping_ && filter_->stillSpread();
       std::optional<std::pair<Pose2, Eigen::Matrix3d>> here;
       const PoseEstimate last = filter_->estimate();
-      if (!spread && (hasPriorMap() || given_start_)) {
+      if (!still_spread && (hasPriorMap() || given_start_)) {
         const Pose2 at = jump ? last.mean : compose(map_to_odom_, odom_pose);
         const Eigen::Matrix3d spread =
             last.covariance + (given_start_ ? given_start_->second : defaultStartCovariance());
@@ -283,7 +285,7 @@ FrameResult SlamSession::process(double stamp, const Pose2& odom_pose,
       }
       restart();  // the odometry stamps stay: they are still this run's
       start_pose_ = here;
-      if (spread) start_global_ = true;
+      if (still_spread) start_global_ = true;
       gaps_ = gaps;
       process(stamp, odom_pose, features);  // the first frame of a new map
       return FrameResult::kReset;
@@ -291,10 +293,12 @@ FrameResult SlamSession::process(double stamp, const Pose2& odom_pose,
   }
   // A measured (scan-matched) increment that was accepted is kept as it is; odometry alone
   // across a gap gets its noise inflated, and an odometry jump is not taken at all: the robot
-  // is where it was (as a gap reset puts it), within the inflated noise, and map -> odom
-  // absorbs the jump.
-  if ((silent || jump) && !measured_motion) motion.noise_scale = options_.gap_noise_inflation;
-  if (jump && !measured_motion) motion.delta = Pose2::Zero();
+  // is where it was (as a gap reset puts it), and map -> odom absorbs the jump. With no motion
+  // only the motion model's floor noise is left (its distance terms vanish), times the
+  // inflation: what the robot really moved must come from the next scans.
+  if ((silent || jump) && !measured) motion.noise_scale = options_.gap_noise_inflation;
+  jump_discarded_ = jump && !measured;
+  if (jump_discarded_) motion.delta = Pose2::Zero();
   filter_->predict(motion);
   last_stats_ = filter_->update(features);
   last_stamp_ = stamp;

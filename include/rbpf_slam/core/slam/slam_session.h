@@ -212,6 +212,9 @@ class SlamSession {
   /// Whether this run has had its first frame (a start pose or spread given now is used at once).
   bool started() const { return has_previous_; }
   long resets() const { return resets_; }
+  /// Whether the last process() call took its odometry increment as no motion (an odometry jump,
+  /// max_odometry_jump_m, with gap_action "inflate" and no accepted measured motion).
+  bool jumpDiscarded() const { return jump_discarded_; }
   const SessionOptions& options() const { return options_; }
   /// Gaps met (max_time_gap_s, max_odometry_jump_m): one odometry silence counts once, however
   /// many frames fall inside it.
@@ -251,6 +254,7 @@ class SlamSession {
   std::optional<std::pair<Pose2, Eigen::Matrix3d>> given_start_;  // given before the first one
   bool start_global_ = false;  // the first frame starts spread over the prior grid map ...
   bool given_global_ = false;  // ... as asked before the first frame (localizeGlobally)
+  bool jump_discarded_ = false;     // the last process() took its increment as none (a jump)
   bool configured_global_ = false;  // ... as configured: kept by ~reset (GlobalStart)
   bool mapping_ = true;
 };
