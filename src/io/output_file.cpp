@@ -27,6 +27,12 @@ bool isDevice(const std::string& path) {
   return std::filesystem::is_character_file(status) || std::filesystem::is_block_file(status);
 }
 
+void makeParentDirectories(const std::string& path) {
+  const std::filesystem::path parent = std::filesystem::path(path).parent_path();
+  std::error_code ignored;  // reported when the writer opens path
+  if (!parent.empty()) std::filesystem::create_directories(parent, ignored);
+}
+
 void requireNotADevice(const std::string& path) {
   if (isDevice(path)) throw std::runtime_error(path + ": is a device, not a file");
 }

@@ -459,9 +459,7 @@ class ResultBag {
   }
 
   static const std::string& makeParents(const std::string& path) {
-    const std::filesystem::path parent = std::filesystem::path(path).parent_path();
-    std::error_code ignored;  // an unwritable place is reported when the bag is opened
-    if (!parent.empty()) std::filesystem::create_directories(parent, ignored);
+    io::makeParentDirectories(path);  // an unwritable place is reported when the bag is opened
     return path;
   }
 

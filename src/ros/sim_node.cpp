@@ -5,12 +5,12 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
-#include <filesystem>
 #include <map>
 #include <stdexcept>
 #include <utility>
 #include <vector>
 
+#include "rbpf_slam/io/output_file.h"
 #include "rbpf_slam/io/world_yaml.h"
 
 namespace rbpf_slam {
@@ -134,9 +134,7 @@ SimNode::SimNode(ros::NodeHandle nh, const SimNodeOptions& options)
   }
   if (!options_.ground_truth_file.empty()) {
     // Written as FILE.part and renamed when the route is done: FILE appears complete.
-    const std::filesystem::path path(options_.ground_truth_file);
-    std::error_code ignored;
-    if (path.has_parent_path()) std::filesystem::create_directories(path.parent_path(), ignored);
+    io::makeParentDirectories(options_.ground_truth_file);
     const std::string partial = options_.ground_truth_file + ".part";
     ground_truth_file_.reset(std::fopen(partial.c_str(), "w"));
     if (!ground_truth_file_) {

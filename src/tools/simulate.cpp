@@ -11,7 +11,6 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <map>
@@ -248,9 +247,7 @@ int run(const Arguments& arguments) {
   // Nothing is written when one output cannot be (a directory, pipe or device there): close()
   // renames the ground truth onto its path, and the truth file is opened for writing.
   // The output's directory is made, as offline_slam makes its --output.
-  const std::filesystem::path parent = std::filesystem::path(arguments.output).parent_path();
-  std::error_code ignored;  // a failure shows as the bag's "cannot write" below
-  if (!parent.empty()) std::filesystem::create_directories(parent, ignored);
+  rbpf_slam::io::makeParentDirectories(arguments.output);
   for (const std::string& path : {reference_path, reference_path + ".part", truth_path}) {
     rbpf_slam::io::requireReplaceableFile(path);
   }

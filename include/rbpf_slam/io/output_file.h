@@ -13,6 +13,10 @@ namespace io {
 /// the device (as root), and opening a pipe blocks until someone reads it.
 void requireReplaceableFile(const std::string& path);
 
+/// Makes the directories above PATH (as mkdir -p), as a writer does before writing a file the
+/// user named; a failure is left to the writer's own "cannot write" when it opens PATH.
+void makeParentDirectories(const std::string& path);
+
 /// True for a character or block device, which a reader taking its whole input (/dev/zero)
 /// would read until the memory is full.
 bool isDevice(const std::string& path);

@@ -177,9 +177,9 @@ bool explains(const Constraint& c, const Eigen::Vector2d& t, const Relocalizatio
   return gap <= margin;
 }
 
-/// The observations the shift t explains (each once), and in *information how well they fix
-/// t in its least constrained direction: the smallest eigenvalue of the sum of n n^T over the
-/// explained lines (n: the wall's normal) and the identity over the explained points.
+/// The observations the shift t explains (each once), and in *information (if given) how well
+/// they fix t in its least constrained direction: the smallest eigenvalue of the sum of n n^T over
+/// the explained lines (n: the wall's normal) and the identity over the explained points.
 int support(const std::vector<Constraint>& constraints, const Eigen::Vector2d& t, int observations,
             const RelocalizationOptions& o, double margin, double* information) {
   std::vector<char> explained(observations, 0);
@@ -188,11 +188,15 @@ int support(const std::vector<Constraint>& constraints, const Eigen::Vector2d& t
   for (const Constraint& c : constraints) {
     if (explained[c.observation] || !explains(c, t, o, margin)) continue;
     explained[c.observation] = 1;
-    info +=
-        c.is_line ? Eigen::Matrix2d(c.normal * c.normal.transpose()) : Eigen::Matrix2d::Identity();
+    if (information) {
+      info += c.is_line ? Eigen::Matrix2d(c.normal * c.normal.transpose())
+                        : Eigen::Matrix2d::Identity();
+    }
     ++n;
   }
-  *information = Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(info).eigenvalues()(0);
+  if (information) {
+    *information = Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(info).eigenvalues()(0);
+  }
   return n;
 }
 
@@ -249,10 +253,11 @@ PoseCorrection searchPoseCorrection(const LandmarkMap& map, const Pose2& pose,
     }
     for (const Eigen::Vector2d& t : shifts) {
       if (!(t.norm() <= o.search_xy_m)) continue;
+      const bool check = o.min_information > 0.0;  // the eigenvalue only when it is asked for
       double information = 0.0;
-      const int s = support(cs, t, n, o, margin, &information);
+      const int s = support(cs, t, n, o, margin, check ? &information : nullptr);
       // (less a rounding margin: two points along a slanted corridor give 2 - 1e-16)
-      if (o.min_information > 0.0 && information < o.min_information - 1e-9) continue;
+      if (check && information < o.min_information - 1e-9) continue;
       const double cost = t.norm() + 10.0 * std::fabs(dtheta);  // 0.1 rad ~ 1 m
       if (s > best.support || (s == best.support && cost < best_cost)) {
         best.support = s;
