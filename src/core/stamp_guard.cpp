@@ -18,6 +18,7 @@ StampGuard::Verdict StampGuard::check(const std::string& pair, double stamp, dou
     return Verdict::kRefuseAhead;
   }
   const auto it = newest_of_pair_.find(pair);
+  if (it != newest_of_pair_.end() && stamp == it->second) return Verdict::kRepeat;
   if (it == newest_of_pair_.end() || !clock_known) return Verdict::kTake;
   const double newest = it->second;
   if (stamp < newest - max_ahead_s_ && newest > now + max_ahead_s_ &&

@@ -187,6 +187,11 @@ void readGrid(YamlSection section, core::GridOptions* o) {
   section.read("spread_candidates", &o->spread_candidates);
   section.read("spread_match_f", &o->spread_match_f);
   section.read("spread_gathered_m", &o->spread_gathered_m);
+  section.read("kld_min_particles", &o->kld_min_particles);
+  section.read("kld_error", &o->kld_error);
+  section.read("kld_z", &o->kld_z);
+  section.read("kld_bin_xy_m", &o->kld_bin_xy_m);
+  section.read("kld_bin_theta_rad", &o->kld_bin_theta_rad);
   section.finish();
 }
 

@@ -22,15 +22,18 @@ CheckedTransformListener::CheckedTransformListener(tf2::BufferCore& buffer,
       warnings_(std::move(node_name)) {
   buffer_.setUsingDedicatedThread(true);  // as tf2_ros's: lookups may wait with a timeout
   nh_.setCallbackQueue(&queue_);
-  // Absolute names, as tf2_ros: a launch file's remap of /tf still applies.
-  tf_subscriber_ = nh_.subscribe<tf2_msgs::TFMessage>(
-      "/tf", 100, [this](const ros::MessageEvent<tf2_msgs::TFMessage const>& event) {
-        handle(*event.getConstMessage(), event.getPublisherName(), false);
-      });
-  static_subscriber_ = nh_.subscribe<tf2_msgs::TFMessage>(
-      "/tf_static", 100, [this](const ros::MessageEvent<tf2_msgs::TFMessage const>& event) {
-        handle(*event.getConstMessage(), event.getPublisherName(), true);
-      });
+  // Absolute names, as tf2_ros: a launch file's remap of /tf still applies. The callback takes
+  // the whole message event, declared as such: given a lambda alone, roscpp builds the event
+  // from the bare message and the publisher's name (the "authority") is lost.
+  using Event = const ros::MessageEvent<tf2_msgs::TFMessage const>&;
+  const boost::function<void(Event)> on_tf = [this](Event event) {
+    handle(*event.getConstMessage(), event.getPublisherName(), false);
+  };
+  const boost::function<void(Event)> on_static = [this](Event event) {
+    handle(*event.getConstMessage(), event.getPublisherName(), true);
+  };
+  tf_subscriber_ = nh_.subscribe<tf2_msgs::TFMessage, Event>("/tf", 100, on_tf);
+  static_subscriber_ = nh_.subscribe<tf2_msgs::TFMessage, Event>("/tf_static", 100, on_static);
   spinner_.start();
 }
 
@@ -64,6 +67,19 @@ void CheckedTransformListener::handle(const tf2_msgs::TFMessage& msg,
       switch (guard_.check(stripSlash(t.child_frame_id), stamp, now.toSec())) {
         case core::StampGuard::Verdict::kTake:
           break;
+        case core::StampGuard::Verdict::kRepeat: {
+          // tf2 keeps the first transform of a stamp and warns of every repeat; a converted log
+          // with coarse stamps or a driver publishing twice per stamp repeats hundreds of times.
+          // Skipped here, and said once in a while with the count.
+          const long repeats = ++repeated_[t.child_frame_id];
+          warnings_.warn("repeat " + t.child_frame_id,
+                         "skipping transforms " + t.header.frame_id + " -> " + t.child_frame_id +
+                             " on /tf from " + authority +
+                             " that repeat the stamp of the one before (tf2 keeps the first of a "
+                             "stamp): " +
+                             std::to_string(repeats) + " so far");
+          continue;
+        }
         case core::StampGuard::Verdict::kRefuseAhead:
           problem =
               "stamp " + std::to_string(stamp) + " s is more than a day after " +

@@ -688,6 +688,7 @@ OfflineSummary OfflineRunner::run() {
   std::set<std::string> tilted_frames;   // warned once each
   std::set<std::string> warned_scan_headers;  // scan frames with an inconsistent header, once
   std::vector<double> update_ms;
+  double particles_held = 0.0;  // summed over the updates (summary.particles_mean)
   if (!loaded_map_.empty())
     std::fprintf(stderr, "offline_slam: map_file: %s\n", loaded_map_.c_str());
   for (const std::string& note : io::configNotes(config_)) {
@@ -884,6 +885,8 @@ OfflineSummary OfflineRunner::run() {
       case core::FrameResult::kUpdated:
       case core::FrameResult::kFirstFrame:
         update_ms.push_back(ms);
+        summary.particles_final = static_cast<int>(pipeline_.session().filter().particles().size());
+        particles_held += summary.particles_final;
         summary.features_rejected += pipeline_.session().lastStats().features_rejected;
         if (result_bag) result_bag->update(stamp, pipeline_.session());
         break;
@@ -955,6 +958,7 @@ OfflineSummary OfflineRunner::run() {
     summary.update_ms_p99 = sorted[std::min(sorted.size() - 1,
                                             static_cast<size_t>(0.99 * sorted.size()))];
     summary.update_ms_max = sorted.back();
+    summary.particles_mean = particles_held / update_ms.size();
   }
   summary.landmarks = static_cast<int>(pipeline_.session().filter().landmarks().size());
   summary.particles = config_.filter.particles;
@@ -1085,6 +1089,8 @@ OfflineSummary OfflineRunner::writeOutputs(const OfflineSummary& in) const {
       .integer("features_rejected", summary.features_rejected)
       .integer("landmarks", summary.landmarks)
       .integer("particles", summary.particles)
+      .number("particles_mean", summary.particles_mean)
+      .integer("particles_final", summary.particles_final)
       .integer("fallbacks", summary.fallbacks)
       .number("hinf_theta", summary.hinf_theta)
       .integer("relocalizations", summary.relocalizations)

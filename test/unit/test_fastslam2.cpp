@@ -98,6 +98,49 @@ TEST(Resampling, LowVarianceKeepsProportionsAndIsDeterministic) {
   EXPECT_EQ(resampleLowVariance({0.3, 0.7}, 10, a), resampleLowVariance({0.3, 0.7}, 10, b));
 }
 
+// KLD-sampling's bound (Fox 2003, eq. 13), against values worked by hand: 1 bin needs one
+// sample; k bins need (k - 1) / (2 error) (1 - b + sqrt(b) z)^3 with b = 2 / (9 (k - 1)).
+TEST(Resampling, KldBoundFollowsFoxsFormula) {
+  EXPECT_EQ(kldSampleBound(0, 0.01, 2.33), 1);
+  EXPECT_EQ(kldSampleBound(1, 0.01, 2.33), 1);
+  EXPECT_EQ(kldSampleBound(2, 0.01, 2.33), 331);     // 330.197
+  EXPECT_EQ(kldSampleBound(3, 0.01, 2.33), 463);     // 462.038
+  EXPECT_EQ(kldSampleBound(10, 0.01, 2.33), 1087);   // 1086.224
+  EXPECT_EQ(kldSampleBound(10, 0.05, 0.99), 131);    // 130.162 (amcl's defaults)
+  EXPECT_EQ(kldSampleBound(100, 0.05, 0.99), 1129);  // 1128.650
+}
+
+// KLD-sampling keeps few samples of a cloud gathered in one bin (min_count) and all of one
+// spread over many bins (max_count), drawn by weight.
+TEST(Resampling, KldKeepsAsManyAsTheCloudsBinsNeed) {
+  KldSampling kld;
+  kld.min_count = 20;
+  kld.max_count = 500;
+  kld.error = 0.01;
+  kld.z = 2.33;
+  std::vector<Pose2> poses;
+  for (int i = 0; i < 500; ++i) poses.emplace_back(0.01 * (i % 10), 0.0, 0.0001 * i);
+  const std::vector<double> even(500, 1.0 / 500);
+  Rng rng(3);
+  std::vector<int> drawn = resampleKld(even, poses, kld, rng);
+  EXPECT_EQ(drawn.size(), 20u) << "one bin: the minimum";
+  // The same count with the cloud spread 1 m apart per particle: every draw a new bin.
+  for (int i = 0; i < 500; ++i) poses[i] = Pose2(1.0 * i, 0.0, 0.0);
+  drawn = resampleKld(even, poses, kld, rng);
+  EXPECT_EQ(drawn.size(), 500u) << "many bins: the maximum";
+  // Two bins, one holding all the weight: only its particles are drawn, one bin is occupied.
+  std::vector<double> one(500, 0.0);
+  one[7] = 1.0;
+  drawn = resampleKld(one, poses, kld, rng);
+  EXPECT_EQ(drawn.size(), 20u);
+  for (int i : drawn) EXPECT_EQ(i, 7);
+  // Between the two: 3 bins need 463.
+  kld.max_count = 1000;
+  for (int i = 0; i < 500; ++i) poses[i] = Pose2(0.6 * (i % 3), 0.0, 0.0);
+  drawn = resampleKld(even, poses, kld, rng);
+  EXPECT_EQ(drawn.size(), 463u);
+}
+
 TEST(Resampling, LogWeightsNormaliseAndRecoverFromNaN) {
   std::vector<double> w;
   EXPECT_TRUE(normalizeLogWeights({-1000.0, -1000.0 + std::log(3.0)}, &w));

@@ -1165,6 +1165,72 @@ TEST(GlobalLocalization, LocalizingReportsTheHeaviestClusterMappingTheWholeCloud
   EXPECT_TRUE(filter.estimate().covariance.isApprox(plain.covariance, 1e-6));
 }
 
+// KLD-sampling (grid.kld_min_particles): spread over the map, the filter holds all its
+// particles; once they gather on the robot a resampling keeps only what the few bins they occupy
+// need, and still finds it. A new spread, and mapping, restore them all; without KLD the count
+// never changes.
+TEST(GlobalLocalization, KldSamplingKeepsFewerParticlesOnceGathered) {
+  FilterOptions o = globalOptions(1000);
+  o.grid.match_free_weight = 1.0;
+  o.grid.match_model = "likelihood_field";
+  o.grid.kld_min_particles = 50;
+  o.grid.kld_error = 0.05;
+  const Pose2 truth(1.8, -1.2, 2.0);
+  const GridMapData map = asymmetricRoomMap(o.grid);
+  const auto count = [](const SlamFilter& f) { return f.particles().size(); };
+  int found = 0;
+  for (int seed = 1; seed <= 3; ++seed) {
+    o.seed = seed;
+    GridParticleFilter filter(o);
+    ASSERT_TRUE(filter.loadGridMap(map));
+    ASSERT_TRUE(filter.setMapping(false));
+    ASSERT_TRUE(filter.spreadOverMap());
+    EXPECT_EQ(count(filter), 1000u);
+    size_t fewest = 1000;
+    for (int k = 0; k < 40; ++k) {
+      standingStep(&filter, truth);
+      fewest = std::min(fewest, count(filter));
+      EXPECT_GE(count(filter), 50u);
+      EXPECT_LE(count(filter), 1000u);
+    }
+    const Pose2 at = filter.estimate().mean;
+    const bool here = (at.head<2>() - truth.head<2>()).norm() < 0.15 &&
+                      std::fabs(wrapAngle(at.z() - truth.z())) < 0.1;
+    found += here;
+    if (here) EXPECT_LT(count(filter), 300u) << "seed " << seed << ": gathered, yet kept";
+    EXPECT_LT(fewest, 1000u) << "seed " << seed;
+    ASSERT_TRUE(filter.spreadOverMap());
+    EXPECT_EQ(count(filter), 1000u) << "a spread takes them all again";
+    standingStep(&filter, truth);
+    for (int k = 0; k < 40; ++k) standingStep(&filter, truth);
+    ASSERT_TRUE(filter.setMapping(true));
+    EXPECT_EQ(count(filter), 1000u) << "mapping takes them all again";
+    standingStep(&filter, truth);
+    EXPECT_EQ(count(filter), 1000u) << "and keeps them while mapping";
+  }
+  EXPECT_GE(found, 2) << "of 3 seeds";
+  o.grid.kld_min_particles = 0;
+  o.seed = 1;
+  GridParticleFilter fixed(o);
+  ASSERT_TRUE(fixed.loadGridMap(map));
+  ASSERT_TRUE(fixed.setMapping(false));
+  ASSERT_TRUE(fixed.spreadOverMap());
+  for (int k = 0; k < 40; ++k) {
+    standingStep(&fixed, truth);
+    ASSERT_EQ(count(fixed), 1000u) << "without KLD-sampling";
+  }
+  // More than `particles` at least is refused, naming both.
+  o.grid.kld_min_particles = 1001;
+  try {
+    GridParticleFilter refused(o);
+    ADD_FAILURE() << "kld_min_particles above particles accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("grid.kld_min_particles = 1001 is above particles = 1000"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
 // The candidates wait for a scan with a hit (a scan of free cells only scores every pose alike
 // under the likelihood field), and mapping ends a spread: with resampling otherwise off, only a
 // draw from the candidates resamples.
@@ -1702,6 +1768,11 @@ TEST(GridConfig, ErrorsNameTheGridKey) {
             std::string::npos);
   EXPECT_EQ(error("variant: grid_pf\ngrid: {size_x_m: 50, max_size_m: 0}"), "");
   EXPECT_NE(error("map_update_period: -1").find("map_update_period"), std::string::npos);
+  EXPECT_NE(error("variant: grid_pf\nparticles: 100\ngrid: {kld_min_particles: 200}")
+                .find("grid.kld_min_particles = 200 is above particles = 100"),
+            std::string::npos);
+  EXPECT_NE(error("variant: grid_pf\ngrid: {kld_error: 0}").find("grid.kld_error"),
+            std::string::npos);
   // global_localization: a start spread over the map is for localization only.
   EXPECT_NE(error("variant: grid_pf\nmap_file: m.yaml\nglobal_localization: true")
                 .find("global_localization = true needs localization_only"),

@@ -21,6 +21,23 @@ TEST(StampGuard, AStampADayAheadOfTheStreamAndTheClockIsRefused) {
   EXPECT_EQ(guard.check("base", kNow + 3 * kDay, kNow + 3 * kDay), StampGuard::Verdict::kTake);
 }
 
+// A transform with its pair's newest stamp again (a converted log with coarse stamps; the shared
+// Intel bag repeats 3346) is a repeat, which tf2 would refuse with a warning each: the listener
+// skips it, whether or not the clock is known. Another pair at that stamp, or the pair at an
+// older or newer one, is not a repeat.
+TEST(StampGuard, ThePairsNewestStampAgainIsARepeat) {
+  StampGuard guard(kDay);
+  ASSERT_EQ(guard.check("base", kNow, kNow), StampGuard::Verdict::kTake);
+  guard.taken("base", kNow);
+  EXPECT_EQ(guard.check("base", kNow, kNow + 1), StampGuard::Verdict::kRepeat);
+  EXPECT_EQ(guard.check("base", kNow, 0.0), StampGuard::Verdict::kRepeat) << "clock unknown";
+  EXPECT_EQ(guard.check("laser", kNow, kNow + 1), StampGuard::Verdict::kTake);
+  EXPECT_EQ(guard.check("base", kNow - 0.5, kNow + 1), StampGuard::Verdict::kTake);
+  EXPECT_EQ(guard.check("base", kNow + 0.5, kNow + 1), StampGuard::Verdict::kTake);
+  guard.clear();  // tf cleared: nothing taken, nothing repeats
+  EXPECT_EQ(guard.check("base", kNow, kNow + 1), StampGuard::Verdict::kTake);
+}
+
 // The first transform has nothing to be compared with. Before, one stamped two days ahead was
 // taken, and tf2 then refused every real transform of that pair as older: nothing moved again.
 TEST(StampGuard, AFirstTransformFarAheadIsUndoneByTheFirstOneThatAgreesWithTheClock) {

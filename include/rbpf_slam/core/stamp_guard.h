@@ -30,6 +30,7 @@ class StampGuard {
     kTake,         // hand it to tf (which may still refuse a repeat or old data)
     kRefuseAhead,  // far ahead of the newest taken (or of a trusted clock) and of the clock
     kRestart,      // the pair's newest was the outlier: clear tf, then take this one
+    kRepeat,       // the pair's newest stamp again: tf2 would refuse it ("TF_REPEATED_DATA")
   };
 
   explicit StampGuard(double max_ahead_s = 86400.0) : max_ahead_s_(max_ahead_s) {}

@@ -93,6 +93,7 @@ class CheckedTransformListener {
   ros::Time last_update_;
   core::StampGuard guard_{kMaxAheadS};  // the non-static stamps taken, against far-off ones
   ThrottledWarnings warnings_;
+  std::map<std::string, long> repeated_;  // per child frame: transforms skipped as repeats
   std::atomic<long> refused_{0};
   std::atomic<long> restarts_{0};
   long taken_ = 0;  // refused_ as of the last takeRefused (the caller's thread)

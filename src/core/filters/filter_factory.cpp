@@ -107,6 +107,7 @@ void validate(const FilterOptions& o) {
   validate(o.multifilter);
   validate(o.ekf);
   validate(o.grid);
+  requireKldCountFits(o.grid, o.particles);
   validate(o.dpf);
 }
 

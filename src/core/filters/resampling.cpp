@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <unordered_set>
 
 namespace rbpf_slam {
 namespace core {
@@ -44,6 +45,49 @@ std::vector<int> resampleLowVariance(const std::vector<double>& weights, int cou
     indices.push_back(static_cast<int>(i));
   }
   return indices;
+}
+
+int kldSampleBound(int bins, double error, double z) {
+  if (bins <= 1) return 1;
+  // Wilson-Hilferty's approximation of the chi-square quantile with k - 1 degrees of freedom.
+  const double k1 = bins - 1;
+  const double b = 2.0 / (9.0 * k1);
+  const double x = 1.0 - b + std::sqrt(b) * z;
+  const double n = std::ceil(k1 / (2.0 * error) * x * x * x);
+  return n >= std::numeric_limits<int>::max() ? std::numeric_limits<int>::max()
+                                              : static_cast<int>(n);
+}
+
+std::vector<int> resampleKld(const std::vector<double>& weights, const std::vector<Pose2>& poses,
+                             const KldSampling& options, Rng& rng) {
+  std::vector<int> drawn = resampleLowVariance(weights, options.max_count, rng);
+  // A random order, so that every prefix is a sample of the whole set (low-variance draws come
+  // sorted by index).
+  std::shuffle(drawn.begin(), drawn.end(), rng);
+  std::unordered_set<long long> bins;
+  const auto bin = [&](const Pose2& p) {
+    // 21 bits per coordinate: +-1e6 bins, far beyond any map at these sizes.
+    const auto index = [](double v, double size) {
+      const double i = std::floor(v / size);
+      return static_cast<long long>(std::clamp(i, -1048575.0, 1048575.0)) & 0x1FFFFF;
+    };
+    return (index(p.x(), options.bin_xy_m) << 42) | (index(p.y(), options.bin_xy_m) << 21) |
+           index(wrapAngle(p.z()), options.bin_theta_rad);
+  };
+  size_t count = 0;
+  while (count < drawn.size()) {
+    const int i = drawn[count++];
+    if (i >= 0 && static_cast<size_t>(i) < poses.size() && poses[i].allFinite()) {
+      bins.insert(bin(poses[i]));
+    }
+    if (static_cast<int>(count) >= options.min_count &&
+        static_cast<int>(count) >=
+            kldSampleBound(static_cast<int>(bins.size()), options.error, options.z)) {
+      break;
+    }
+  }
+  drawn.resize(count);
+  return drawn;
 }
 
 int keptMostProbable(const std::vector<int>& kept, const std::vector<double>& weights) {

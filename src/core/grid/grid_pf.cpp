@@ -137,6 +137,19 @@ void validate(const GridOptions& o) {
   requireRange("grid.spread_candidates", o.spread_candidates, 1, 1000);
   if (o.spread_match_f != 0.0) requireRange("grid.spread_match_f", o.spread_match_f, 1e-6, 1e9);
   requireRange("grid.spread_gathered_m", o.spread_gathered_m, 0.0, 1e6);
+  requireRange("grid.kld_min_particles", o.kld_min_particles, 0, 100000);
+  requireRange("grid.kld_error", o.kld_error, 1e-4, 1.0);
+  requireRange("grid.kld_z", o.kld_z, 0.0, 10.0);
+  requireRange("grid.kld_bin_xy_m", o.kld_bin_xy_m, 1e-3, 100.0);
+  requireRange("grid.kld_bin_theta_rad", o.kld_bin_theta_rad, 1e-3, 6.3);
+}
+
+void requireKldCountFits(const GridOptions& o, int particles) {
+  if (o.kld_min_particles > particles) {
+    throw std::invalid_argument("grid.kld_min_particles = " + std::to_string(o.kld_min_particles) +
+                                " is above particles = " + std::to_string(particles) +
+                                " (KLD-sampling keeps between the two)");
+  }
 }
 
 namespace {
@@ -276,6 +289,7 @@ GridParticleFilter::GridParticleFilter(const FilterOptions& options)
       rng_(options.seed) {
   validate(options_.grid);
   if (options_.particles < 1) throw std::invalid_argument("particles must be >= 1");
+  requireKldCountFits(options_.grid, options_.particles);
   if (static_cast<double>(options_.particles) * options_.grid.spread_candidates > 1e7) {
     throw std::invalid_argument(
         "particles x grid.spread_candidates exceeds 1e7 poses to weigh at once: lower "
@@ -400,6 +414,7 @@ bool GridParticleFilter::canSpreadOverMap(std::string* why) const {
 
 bool GridParticleFilter::spreadOverMap() {
   if (!canSpreadOverMap(nullptr)) return false;
+  particles_.resize(options_.particles, particles_.front());  // KLD-sampling may have kept fewer
   for (Particle& p : particles_) p = Particle{randomFreePose(), loaded_grid_};
   weights_.assign(particles_.size(), 1.0 / particles_.size());
   resampled_best_ = -1;
@@ -506,8 +521,7 @@ UpdateStats GridParticleFilter::update(const FeatureSet& features) {
   result.neff = effectiveSampleSize(weights_);
   stats_.last_neff = result.neff;
   if (result.neff < options_.resample_threshold * particles_.size()) {
-    const std::vector<int> drawn =
-        resampleLowVariance(weights_, static_cast<int>(particles_.size()), rng_);
+    const std::vector<int> drawn = drawResampled();
     std::vector<Particle> next;
     next.reserve(drawn.size());
     for (int i : drawn) next.push_back(particles_[i]);  // grids share their tiles
@@ -520,6 +534,25 @@ UpdateStats GridParticleFilter::update(const FeatureSet& features) {
     resampled_best_ = -1;
   }
   return result;
+}
+
+std::vector<int> GridParticleFilter::drawResampled() {
+  if (mapping_ || options_.grid.kld_min_particles == 0) {
+    return resampleLowVariance(weights_, static_cast<int>(particles_.size()), rng_);
+  }
+  // Localizing with KLD-sampling: as many as the cloud needs, up to `particles` (the count
+  // grows again when the cloud spreads out).
+  KldSampling kld;
+  kld.min_count = options_.grid.kld_min_particles;
+  kld.max_count = options_.particles;
+  kld.error = options_.grid.kld_error;
+  kld.z = options_.grid.kld_z;
+  kld.bin_xy_m = options_.grid.kld_bin_xy_m;
+  kld.bin_theta_rad = options_.grid.kld_bin_theta_rad;
+  std::vector<Pose2> poses;
+  poses.reserve(particles_.size());
+  for (const Particle& p : particles_) poses.push_back(p.pose);
+  return resampleKld(weights_, poses, kld, rng_);
 }
 
 int GridParticleFilter::bestIndex() const {
@@ -553,6 +586,7 @@ std::vector<WeightedPose> GridParticleFilter::particles() const {
 
 bool GridParticleFilter::resetPose(const Pose2& pose, const Eigen::Matrix3d& covariance) {
   if (!pose.allFinite() || !poseCovarianceUsable(covariance)) return false;
+  particles_.resize(options_.particles, particles_.front());  // KLD-sampling may have kept fewer
   for (Particle& p : particles_) {
     p.pose = sampleMultivariate<3>(rng_, pose, covariance);
     p.pose.z() = wrapAngle(p.pose.z());
@@ -593,6 +627,16 @@ bool GridParticleFilter::loadGridMap(const GridMapData& map) {
 
 bool GridParticleFilter::setMapping(bool enabled) {
   mapping_ = enabled;
+  if (mapping_ && particles_.size() < static_cast<size_t>(options_.particles)) {
+    // KLD-sampling kept fewer while localizing: mapping gets them all again, drawn by weight.
+    const std::vector<int> drawn = resampleLowVariance(weights_, options_.particles, rng_);
+    std::vector<Particle> all;
+    all.reserve(drawn.size());
+    for (int i : drawn) all.push_back(particles_[i]);
+    resampled_best_ = keptMostProbable(drawn, weights_);
+    particles_ = std::move(all);
+    weights_.assign(particles_.size(), 1.0 / particles_.size());
+  }
   if (mapping_) spread_pending_ = gathering_ = false;  // a spread is for localization only
   return true;
 }

@@ -63,6 +63,19 @@ struct GridOptions {
   // 0 never gathers. Mapping turned on ends it.
   double spread_match_f = 0.0;
   double spread_gathered_m = 1.0;
+  // KLD-sampling (Fox 2003, as amcl's min_particles / kld_err / kld_z; off when
+  // kld_min_particles is 0): while localizing on a loaded map (mapping off), each resampling
+  // keeps only as many particles as the cloud needs: enough for the KL divergence to the
+  // posterior to stay under kld_error with the probability whose standard normal upper quantile
+  // is kld_z, counted over bins of kld_bin_xy_m x kld_bin_xy_m x kld_bin_theta_rad; at least
+  // kld_min_particles, at most `particles`. A spread over the map, a start pose, a reset or
+  // mapping restores `particles`. The defaults are amcl's, which puts its kld_z 0.99 into the
+  // formula as the quantile itself (a 99 % bound would be 2.33).
+  int kld_min_particles = 0;
+  double kld_error = 0.01;
+  double kld_z = 0.99;
+  double kld_bin_xy_m = 0.5;
+  double kld_bin_theta_rad = 0.1745;
 };
 
 /// What to change when the grid cannot hold the robot or its readings (warnings, summaries).
@@ -93,6 +106,8 @@ constexpr const char* kGridReachAdvice =
 
 /// Throws std::invalid_argument naming the first out-of-range field ("grid.NAME").
 void validate(const GridOptions& options);
+/// Throws std::invalid_argument naming both when grid.kld_min_particles exceeds particles.
+void requireKldCountFits(const GridOptions& options, int particles);
 
 }  // namespace core
 }  // namespace rbpf_slam

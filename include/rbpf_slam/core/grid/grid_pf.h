@@ -97,6 +97,8 @@ class GridParticleFilter : public SlamFilter {
   /// A map is loaded and it has a free cell at grid.resolution_m (lists them when first asked).
   bool canSpreadOverMap(std::string* why) const override;
   /// Spread by spreadOverMap, localizing, and not gathered yet (grid.spread_gathered_m).
+  /// With KLD-sampling, particles().size() varies between grid.kld_min_particles and
+  /// `particles` while localizing; a spread, a start pose, a reset or mapping restores the latter.
   bool stillSpread() const override {
     return gathering_ && !mapping_ && !(positionSpread() < options_.grid.spread_gathered_m);
   }
@@ -117,6 +119,9 @@ class GridParticleFilter : public SlamFilter {
     TiledLogOddsGrid grid;
   };
   int bestIndex() const;
+  /// The indices a resampling keeps: as many as there are particles, or while localizing with
+  /// KLD-sampling (grid.kld_min_particles), as many as the cloud needs (up to `particles`).
+  std::vector<int> drawResampled();
   /// Grows each particle's grid (grid.max_size_m > 0) to hold the local map at its pose.
   void growGrids(const std::vector<LocalMapCell>& local);
   /// A pose drawn uniformly over the loaded map's free cells, with any heading.

@@ -241,8 +241,8 @@ class SlamSession {
   void keepFrame(const MotionInput& motion, const FeatureSet& features);
   UpdateStats last_stats_;
   long resets_ = 0;
-  int frames_back_ = 0;
-  long gaps_ = 0;  // consecutive frames far behind last_stamp_
+  int frames_back_ = 0;             // consecutive frames far behind last_stamp_
+  long gaps_ = 0;                   // gaps met (gaps())
   OdometryStamps odometry_stamps_;  // cleared by reset()
   // Where the last odometry silence counted began (it counts once, whatever frames follow).
   double counted_silence_start_ = -std::numeric_limits<double>::infinity();
@@ -254,9 +254,9 @@ class SlamSession {
   std::optional<std::pair<Pose2, Eigen::Matrix3d>> given_start_;  // given before the first one
   bool start_global_ = false;  // the first frame starts spread over the prior grid map ...
   bool given_global_ = false;  // ... as asked before the first frame (localizeGlobally)
-  bool jump_discarded_ = false;     // the last process() took its increment as none (a jump)
   bool configured_global_ = false;  // ... as configured: kept by ~reset (GlobalStart)
   bool mapping_ = true;
+  bool jump_discarded_ = false;  // the last process() took its increment as none (a jump)
 };
 
 }  // namespace core
