@@ -45,6 +45,12 @@ void CheckedTransformListener::stop() {
   static_subscriber_.shutdown();
 }
 
+void CheckedTransformListener::clear() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  buffer_.clear();
+  guard_.clear();
+}
+
 void CheckedTransformListener::handle(const tf2_msgs::TFMessage& msg,
                                       const std::string& authority, bool is_static) {
   std::lock_guard<std::mutex> lock(mutex_);
@@ -71,12 +77,13 @@ void CheckedTransformListener::handle(const tf2_msgs::TFMessage& msg,
           // tf2 keeps the first transform of a stamp and warns of every repeat; a converted log
           // with coarse stamps or a driver publishing twice per stamp repeats hundreds of times.
           // Skipped here, and said once in a while with the count.
-          const long repeats = ++repeated_[t.child_frame_id];
-          warnings_.warn("repeat " + t.child_frame_id,
+          const std::string child = stripSlash(t.child_frame_id);
+          const long repeats = ++repeated_[child];
+          warnings_.warn("repeat " + child,
                          "skipping transforms " + t.header.frame_id + " -> " + t.child_frame_id +
                              " on /tf from " + authority +
-                             " that repeat the stamp of the one before (tf2 keeps the first of a "
-                             "stamp): " +
+                             " that repeat the newest stamp taken for that frame (tf2 keeps the "
+                             "first of a stamp): " +
                              std::to_string(repeats) + " so far");
           continue;
         }

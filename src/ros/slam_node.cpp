@@ -787,7 +787,7 @@ void SlamNode::publishDiagnostics(const ros::WallTimerEvent&) {
   const ros::Time now = ros::Time::now();
   diagnostics_publisher_.publish(
       diagnostics_.report(now.isZero() ? ros::Time(ros::WallTime::now().toSec()) : now, stats,
-                          config_.filter.particles));
+                          static_cast<int>(pipeline_.session().filter().particles().size())));
   // Input coming faster than it is handled overflows the topic's queue, which roscpp empties
   // without a word: say it when the inputs take most of the time (the report's own figure).
   const double busy = diagnostics_.lastBusyFraction();
@@ -815,7 +815,7 @@ void SlamNode::resetAll(const std::string& why, core::SlamSession::ResetCause ca
   } else if (!why_not.empty()) {
     ROS_WARN_STREAM("rbpf_slam_node: global localization after the reset: " << why_not);
   }
-  tf_buffer_.clear();
+  tf_listener_.clear();  // the buffer and the stamps the listener has taken
   if (scan_input_) scan_input_->clear();
   for (const auto& input : sonar_inputs_) input->clear();
   if (sonar_cloud_input_) sonar_cloud_input_->clear();

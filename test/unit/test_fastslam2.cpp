@@ -134,6 +134,11 @@ TEST(Resampling, KldKeepsAsManyAsTheCloudsBinsNeed) {
   drawn = resampleKld(one, poses, kld, rng);
   EXPECT_EQ(drawn.size(), 20u);
   for (int i : drawn) EXPECT_EQ(i, 7);
+  // The draws are taken in random order: with the first half of the particles (by index) in
+  // one bin and the rest one per bin, draws in index order would stop at min_count in that bin.
+  for (int i = 0; i < 500; ++i) poses[i] = i < 250 ? Pose2(0.0, 0.0, 0.0) : Pose2(1.0 * i, 0, 0);
+  drawn = resampleKld(even, poses, kld, rng);
+  EXPECT_EQ(drawn.size(), 500u) << "taken in index order";
   // Between the two: 3 bins need 463.
   kld.max_count = 1000;
   for (int i = 0; i < 500; ++i) poses[i] = Pose2(0.6 * (i % 3), 0.0, 0.0);

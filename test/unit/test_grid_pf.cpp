@@ -13,6 +13,7 @@
 #include <iterator>
 #include <memory>
 #include <random>
+#include <set>
 #include <vector>
 
 #include "rbpf_slam/core/filters/pose_moments.h"
@@ -1167,8 +1168,8 @@ TEST(GlobalLocalization, LocalizingReportsTheHeaviestClusterMappingTheWholeCloud
 
 // KLD-sampling (grid.kld_min_particles): spread over the map, the filter holds all its
 // particles; once they gather on the robot a resampling keeps only what the few bins they occupy
-// need, and still finds it. A new spread, and mapping, restore them all; without KLD the count
-// never changes.
+// need (93 / 50 / 50 of 1000 at the end when written), and still finds it. A new spread, a start
+// pose, a map loaded and mapping restore them all; without KLD the count never changes.
 TEST(GlobalLocalization, KldSamplingKeepsFewerParticlesOnceGathered) {
   FilterOptions o = globalOptions(1000);
   o.grid.match_free_weight = 1.0;
@@ -1201,10 +1202,22 @@ TEST(GlobalLocalization, KldSamplingKeepsFewerParticlesOnceGathered) {
     EXPECT_LT(fewest, 1000u) << "seed " << seed;
     ASSERT_TRUE(filter.spreadOverMap());
     EXPECT_EQ(count(filter), 1000u) << "a spread takes them all again";
-    standingStep(&filter, truth);
-    for (int k = 0; k < 40; ++k) standingStep(&filter, truth);
+    const auto gather = [&] {
+      for (int k = 0; k < 40; ++k) standingStep(&filter, truth);
+      ASSERT_LT(count(filter), 1000u) << "seed " << seed << ": not gathered again";
+    };
+    gather();
+    ASSERT_TRUE(filter.resetPose(truth, Eigen::Vector3d(0.01, 0.01, 0.001).asDiagonal()));
+    EXPECT_EQ(count(filter), 1000u) << "a start pose takes them all again";
+    gather();
+    ASSERT_TRUE(filter.loadGridMap(map));
+    EXPECT_EQ(count(filter), 1000u) << "a map loaded takes them all again";
+    gather();
     ASSERT_TRUE(filter.setMapping(true));
     EXPECT_EQ(count(filter), 1000u) << "mapping takes them all again";
+    std::set<std::pair<double, double>> distinct;
+    for (const WeightedPose& p : filter.particles()) distinct.insert({p.pose.x(), p.pose.y()});
+    EXPECT_GT(distinct.size(), 1u) << "drawn by weight, not one copied";
     standingStep(&filter, truth);
     EXPECT_EQ(count(filter), 1000u) << "and keeps them while mapping";
   }

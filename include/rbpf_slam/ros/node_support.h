@@ -65,6 +65,9 @@ class CheckedTransformListener {
 
   /// Stops the thread and the subscriptions (a node's destructor, before its tf queues go).
   void stop();
+  /// Clears the buffer and what the listener remembers of the stamps taken (a node's reset):
+  /// a transform repeating a stamp taken before the clear is taken again.
+  void clear();
   /// A /tf stamp further than this after both the newest transform taken and the clock is
   /// refused (s); a newest transform this far ahead of the clock, with later ones agreeing with
   /// the clock, was the outlier (core::StampGuard).
@@ -89,11 +92,11 @@ class CheckedTransformListener {
   ros::Subscriber tf_subscriber_, static_subscriber_;
   ros::AsyncSpinner spinner_;
   const std::string node_name_;
-  std::mutex mutex_;  // last_update_, guard_ and warnings_ (handle's state)
+  std::mutex mutex_;  // last_update_, guard_, warnings_ and repeated_ (handle's state)
   ros::Time last_update_;
   core::StampGuard guard_{kMaxAheadS};  // the non-static stamps taken, against far-off ones
   ThrottledWarnings warnings_;
-  std::map<std::string, long> repeated_;  // per child frame: transforms skipped as repeats
+  std::map<std::string, long> repeated_;  // per child frame (no leading slash): repeats skipped
   std::atomic<long> refused_{0};
   std::atomic<long> restarts_{0};
   long taken_ = 0;  // refused_ as of the last takeRefused (the caller's thread)

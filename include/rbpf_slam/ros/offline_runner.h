@@ -66,9 +66,11 @@ struct OfflineSummary {
   long tf_segments = 0;         // tf runs: 1 + the times the odometry stamps went back
   long dropped_cloud_points = 0;  // sonar_cloud points on no transducer's axis
   int landmarks = 0;
-  int particles = 0;            // as configured (with KLD-sampling: the most)
-  double particles_mean = 0.0;  // particles held after each update, mean over the updates
-  int particles_final = 0;      // ... after the last update (KLD-sampling varies them)
+  int particles = 0;  // as configured (grid_pf with KLD-sampling: the most)
+  // The filter's particles() after each update, mean over the updates and the last: grid_pf's
+  // vary with KLD-sampling; dpf gives every local filter's, ekf_slam 1.
+  double particles_mean = 0.0;
+  int particles_final = 0;
   long fallbacks = 0;  // H-infinity steps that fell back to the EKF (since the last reset)
   double hinf_theta = 0.0;   // the H-infinity attenuation at the end (adaptive: learnt)
   long relocalizations = 0;  // particle proposals started from a searched pose correction

@@ -619,6 +619,7 @@ bool GridParticleFilter::loadGridMap(const GridMapData& map) {
   }
   loaded_grid_.moveTo(map.origin_x_m, map.origin_y_m);
   limits_ = growthLimits(options_.grid, loaded_grid_, 2 * options_.particles + 1);
+  particles_.resize(options_.particles, particles_.front());  // KLD-sampling may have kept fewer
   for (Particle& p : particles_) p.grid = loaded_grid_;  // every particle shares its tiles
   weights_.assign(particles_.size(), 1.0 / particles_.size());
   resampled_best_ = -1;

@@ -21,7 +21,8 @@ double effectiveSampleSize(const std::vector<double>& weights);
 std::vector<int> resampleLowVariance(const std::vector<double>& weights, int count, Rng& rng);
 
 /// KLD-sampling's bound (Fox, "Adapting the sample size in particle filters through
-/// KLD-sampling", IJRR 2003, eq. 13; amcl's pf_resample_limit): how many samples keep the
+/// KLD-sampling", IJRR 2003, eq. 13; amcl's pf_resample_limit computes the same from two
+/// bins on): how many samples keep the
 /// Kullback-Leibler divergence between the sample-based and the true posterior below `error`
 /// with the probability whose standard normal upper quantile is z, when the samples occupy
 /// `bins` bins of the state space. 1 for one bin or none.
@@ -42,6 +43,8 @@ struct KldSampling {
 /// resampleLowVariance draws them, taken in random order until their count reaches
 /// kldSampleBound of the bins their poses occupy (or max_count), and at least min_count. A set
 /// gathered in a few bins keeps few samples; one spread over many keeps up to max_count.
+/// Unlike amcl (independent draws; all max_count for a cloud in one bin; one more than the
+/// bound) this follows Fox: one bin keeps min_count.
 std::vector<int> resampleKld(const std::vector<double>& weights, const std::vector<Pose2>& poses,
                              const KldSampling& options, Rng& rng);
 

@@ -63,7 +63,7 @@ struct GridOptions {
   // 0 never gathers. Mapping turned on ends it.
   double spread_match_f = 0.0;
   double spread_gathered_m = 1.0;
-  // KLD-sampling (Fox 2003, as amcl's min_particles / kld_err / kld_z; off when
+  // KLD-sampling (Fox 2003, with amcl's min_particles / kld_err / kld_z; off when
   // kld_min_particles is 0): while localizing on a loaded map (mapping off), each resampling
   // keeps only as many particles as the cloud needs: enough for the KL divergence to the
   // posterior to stay under kld_error with the probability whose standard normal upper quantile

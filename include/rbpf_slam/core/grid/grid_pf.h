@@ -83,6 +83,8 @@ class GridParticleFilter : public SlamFilter {
   UpdateStats update(const FeatureSet& features) override;
   PoseEstimate estimate() const override;
   std::vector<LandmarkEstimate> landmarks() const override { return {}; }
+  /// With KLD-sampling (grid.kld_min_particles) between that many and `particles` while
+  /// localizing; a spread, a start pose, a reset, a map loaded or mapping restores `particles`.
   std::vector<WeightedPose> particles() const override;
   FilterStats stats() const override { return stats_; }
   bool resetPose(const Pose2& pose, const Eigen::Matrix3d& covariance) override;
@@ -97,8 +99,6 @@ class GridParticleFilter : public SlamFilter {
   /// A map is loaded and it has a free cell at grid.resolution_m (lists them when first asked).
   bool canSpreadOverMap(std::string* why) const override;
   /// Spread by spreadOverMap, localizing, and not gathered yet (grid.spread_gathered_m).
-  /// With KLD-sampling, particles().size() varies between grid.kld_min_particles and
-  /// `particles` while localizing; a spread, a start pose, a reset or mapping restores the latter.
   bool stillSpread() const override {
     return gathering_ && !mapping_ && !(positionSpread() < options_.grid.spread_gathered_m);
   }
