@@ -109,9 +109,8 @@ void CheckedTransformListener::handle(const tf2_msgs::TFMessage& msg,
     }
     if (problem.empty()) {
       try {
-        // false when tf2 refuses it itself (repeated or old data, its stricter quaternion
-        // check): tf2 logs that, and a repeated stamp is common and harmless (converted
-        // CARMEN logs repeat odometry stamps), so it is not counted here
+        // false when tf2 refuses it itself (old data, a repeat of an older stamp, its stricter
+        // quaternion check): tf2 logs that, and it is not counted here
         if (buffer_.setTransform(t, authority, is_static) && !is_static) {
           guard_.taken(stripSlash(t.child_frame_id), t.header.stamp.toSec());
         }

@@ -31,7 +31,7 @@ class StampGuard {
     kRefuseAhead,  // far ahead of the newest taken (or of a trusted clock) and of the clock
     kRestart,      // the pair's newest was the outlier: clear tf, then take this one
     kRepeat,       // the pair's newest stamp again: tf2 would refuse it ("TF_REPEATED_DATA")
-                   // (stamps as double s: two under ~0.25 us apart count as one)
+                   // (stamps as double s: two under ~0.25 us apart may count as one)
   };
 
   explicit StampGuard(double max_ahead_s = 86400.0) : max_ahead_s_(max_ahead_s) {}
