@@ -50,12 +50,13 @@ class ThrottledWarnings {
 /// a thread of its own, clear the buffer when the clock jumps back), with each transform
 /// checked first (transformProblem: empty or equal frames, a stamp near 2^32 s, a non-finite
 /// or unnormalised rotation; and a stamp more than a day after both the newest transform taken
-/// and the clock, which would make tf2 drop every later real transform of that pair as old). A repeat of a pair's
-/// newest stamp is skipped here, with a throttled warning giving the count; what tf2 refuses
-/// itself (old data, a repeat of an older stamp) it logs, uncounted. tf2_ros 0.7's listener catches
-/// only tf2's own exceptions: one /tf message stamped near 2^32 s (a driver's -1) threw
-/// ros::Time's range error from its thread and ended the node. A refused transform is dropped, counted and named in a warning
-/// (at most one per cause every 10 s); the rest of its message is used.
+/// and the clock, which would make tf2 drop every later real transform of that pair as old).
+/// A repeat of a pair's newest stamp is skipped here, with a throttled warning giving the
+/// count; what tf2 refuses itself (old data, a repeat of an older stamp) it logs, uncounted.
+/// tf2_ros 0.7's listener catches only tf2's own exceptions: one /tf message stamped near
+/// 2^32 s (a driver's -1) threw ros::Time's range error from its thread and ended the node. A
+/// refused transform is dropped, counted and named in a warning (at most one per cause every
+/// 10 s); the rest of its message is used.
 class CheckedTransformListener {
  public:
   CheckedTransformListener(tf2::BufferCore& buffer, const ros::NodeHandle& nh,

@@ -22,10 +22,9 @@ std::vector<int> resampleLowVariance(const std::vector<double>& weights, int cou
 
 /// KLD-sampling's bound (Fox, "Adapting the sample size in particle filters through
 /// KLD-sampling", IJRR 2003, eq. 13; amcl's pf_resample_limit computes the same from two
-/// bins on): how many samples keep the
-/// Kullback-Leibler divergence between the sample-based and the true posterior below `error`
-/// with the probability whose standard normal upper quantile is z, when the samples occupy
-/// `bins` bins of the state space. 1 for one bin or none.
+/// bins on): how many samples keep the Kullback-Leibler divergence between the sample-based
+/// and the true posterior below `error` with the probability whose standard normal upper
+/// quantile is z, when the samples occupy `bins` bins of the state space. 1 for one bin or none.
 int kldSampleBound(int bins, double error, double z);
 
 /// KLD-sampling's options: bins of bin_xy_m x bin_xy_m x bin_theta_rad; between min_count and

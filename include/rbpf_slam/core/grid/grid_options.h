@@ -69,8 +69,8 @@ struct GridOptions {
   // posterior to stay under kld_error with the probability whose standard normal upper quantile
   // is kld_z, counted over bins of kld_bin_xy_m x kld_bin_xy_m x kld_bin_theta_rad; at least
   // kld_min_particles, at most `particles`. A spread over the map, a start pose, a map loaded, a
-  // reset or mapping restores `particles`. The defaults are amcl's, which puts its kld_z 0.99 into the
-  // formula as the quantile itself (a 99 % bound would be 2.33).
+  // reset or mapping restores `particles`. The defaults are amcl's, which puts its kld_z 0.99
+  // into the formula as the quantile itself (a 99 % bound would be 2.33).
   int kld_min_particles = 0;
   double kld_error = 0.01;
   double kld_z = 0.99;
