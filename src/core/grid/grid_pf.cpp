@@ -414,7 +414,7 @@ bool GridParticleFilter::canSpreadOverMap(std::string* why) const {
 
 bool GridParticleFilter::spreadOverMap() {
   if (!canSpreadOverMap(nullptr)) return false;
-  particles_.resize(options_.particles, particles_.front());  // KLD-sampling may have kept fewer
+  restoreFullCount();
   for (Particle& p : particles_) p = Particle{randomFreePose(), loaded_grid_};
   weights_.assign(particles_.size(), 1.0 / particles_.size());
   resampled_best_ = -1;
@@ -536,6 +536,11 @@ UpdateStats GridParticleFilter::update(const FeatureSet& features) {
   return result;
 }
 
+void GridParticleFilter::restoreFullCount() {
+  // KLD-sampling may have kept fewer; the caller sets every particle (or its grid) next.
+  particles_.resize(options_.particles, particles_.front());
+}
+
 std::vector<int> GridParticleFilter::drawResampled() {
   if (mapping_ || options_.grid.kld_min_particles == 0) {
     return resampleLowVariance(weights_, static_cast<int>(particles_.size()), rng_);
@@ -586,7 +591,7 @@ std::vector<WeightedPose> GridParticleFilter::particles() const {
 
 bool GridParticleFilter::resetPose(const Pose2& pose, const Eigen::Matrix3d& covariance) {
   if (!pose.allFinite() || !poseCovarianceUsable(covariance)) return false;
-  particles_.resize(options_.particles, particles_.front());  // KLD-sampling may have kept fewer
+  restoreFullCount();
   for (Particle& p : particles_) {
     p.pose = sampleMultivariate<3>(rng_, pose, covariance);
     p.pose.z() = wrapAngle(p.pose.z());
@@ -619,7 +624,7 @@ bool GridParticleFilter::loadGridMap(const GridMapData& map) {
   }
   loaded_grid_.moveTo(map.origin_x_m, map.origin_y_m);
   limits_ = growthLimits(options_.grid, loaded_grid_, 2 * options_.particles + 1);
-  particles_.resize(options_.particles, particles_.front());  // KLD-sampling may have kept fewer
+  restoreFullCount();
   for (Particle& p : particles_) p.grid = loaded_grid_;  // every particle shares its tiles
   weights_.assign(particles_.size(), 1.0 / particles_.size());
   resampled_best_ = -1;

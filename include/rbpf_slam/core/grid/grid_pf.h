@@ -122,6 +122,9 @@ class GridParticleFilter : public SlamFilter {
   /// The indices a resampling keeps: as many as there are particles, or while localizing with
   /// KLD-sampling (grid.kld_min_particles), as many as the cloud needs (up to `particles`).
   std::vector<int> drawResampled();
+  /// Back to `particles` particles (copies of the first) before a spread, a start pose or a map
+  /// load sets them all.
+  void restoreFullCount();
   /// Grows each particle's grid (grid.max_size_m > 0) to hold the local map at its pose.
   void growGrids(const std::vector<LocalMapCell>& local);
   /// A pose drawn uniformly over the loaded map's free cells, with any heading.
