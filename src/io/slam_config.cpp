@@ -263,6 +263,7 @@ void readScanMatching(YamlSection section, core::ScanMatcherOptions* o) {
   section.read("max_correction_m", &o->max_correction_m);
   section.read("max_correction_rad", &o->max_correction_rad);
   section.read("noise_scale", &o->noise_scale);
+  section.read("degenerate_noise_scale", &o->degenerate_noise_scale);
   section.read("submap_scans", &o->submap_scans);
   section.read("prior_weight_xy", &o->prior_weight_xy);
   section.read("prior_weight_theta", &o->prior_weight_theta);

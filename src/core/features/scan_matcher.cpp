@@ -130,6 +130,7 @@ void validate(const ScanMatcherOptions& o) {
   requireRange("scan_matching.max_correction_m", o.max_correction_m, 0.0, 100.0);
   requireRange("scan_matching.max_correction_rad", o.max_correction_rad, 0.0, 3.2);
   requireRange("scan_matching.noise_scale", o.noise_scale, 1e-3, 10.0);
+  requireRange("scan_matching.degenerate_noise_scale", o.degenerate_noise_scale, 1e-3, 10.0);
   requireRange("scan_matching.submap_scans", o.submap_scans, 1, 100);
   requireRange("scan_matching.prior_weight_xy", o.prior_weight_xy, 0.0, 1e6);
   requireRange("scan_matching.prior_weight_theta", o.prior_weight_theta, 0.0, 1e6);
@@ -156,6 +157,10 @@ std::vector<Eigen::Vector2d> scanPointsInBase(const RangeScan& scan, double max_
 
 ScanMatcher::ScanMatcher(const ScanMatcherOptions& options) : options_(options) {
   validate(options_);
+}
+
+double ScanMatcher::noiseScale(const ScanMatchResult& result) const {
+  return result.degenerate ? options_.degenerate_noise_scale : options_.noise_scale;
 }
 
 ScanMatchResult ScanMatcher::match(const std::vector<Eigen::Vector2d>& reference,

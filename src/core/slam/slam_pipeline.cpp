@@ -68,8 +68,8 @@ FrameResult SlamPipeline::processScan(const RangeScan& scan, const Pose2& odom_p
     if (match.ok) {
       const Pose2 reference_to_last = between(reference_odom_pose_, session_.lastOdomPose());
       measured.delta = compose(inverse(reference_to_last), match.delta);
-      // A degenerate match carries odometry's error along one direction: odometry's noise.
-      measured.noise_scale = match.degenerate ? 1.0 : matcher_.options().noise_scale;
+      // A degenerate match carries odometry's value along one direction (degenerate_noise_scale).
+      measured.noise_scale = matcher_.noiseScale(match);
       override_motion = &measured;
       ++scans_matched_;
     } else {

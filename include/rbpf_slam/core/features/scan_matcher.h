@@ -30,7 +30,9 @@ struct ScanMatcherOptions {
   double prior_weight_theta = 2.0;
   double max_correction_m = 1.0;       // reject results this far from the odometry ...
   double max_correction_rad = 0.6;     // ... or turned this much from it
-  double noise_scale = 0.3;            // motion noise multiplier for matched increments
+  double noise_scale = 0.3;            // motion noise multiplier for matched increments ...
+  double degenerate_noise_scale = 1.0;  // ... and for those with a degenerate direction (1:
+                                        // odometry's noise, as odometry gave that direction)
   int submap_scans = 1;                // match against the union of this many recent scans
                                        // (chained by their matches); 1 = the last scan only
 };
@@ -62,6 +64,9 @@ class ScanMatcher {
                         const std::vector<Eigen::Vector2d>& current,
                         const Pose2& initial_delta) const;
   const ScanMatcherOptions& options() const { return options_; }
+  /// Motion noise multiplier for an accepted match's increment: degenerate_noise_scale when a
+  /// direction was taken from the start, noise_scale otherwise.
+  double noiseScale(const ScanMatchResult& result) const;
 
  private:
   /// The best accepted match from starts at guess turned by each of offsets; not ok if it
