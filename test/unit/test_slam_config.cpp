@@ -500,6 +500,21 @@ TEST(SlamConfig, LineSlamConfigsCarryThePapersDefaultsOrSession40s) {
             std::string::npos);
 }
 
+// Session 52: a degenerate matched increment keeps a small noise in the laser FastSLAM 2.0
+// config; every other config keeps odometry's (the code default 1).
+TEST(SlamConfig, DegenerateNoiseScaleIsReadAndChecked) {
+  const std::string dir = std::string(RBPF_SOURCE_DIR) + "/config/";
+  EXPECT_DOUBLE_EQ(
+      loadSlamConfig(dir + "laser_fastslam2.yaml").scan_matching.degenerate_noise_scale, 0.3);
+  EXPECT_DOUBLE_EQ(loadSlamConfig(dir + "laser_robust.yaml").scan_matching.degenerate_noise_scale,
+                   1.0);
+  for (const std::string value : {"nan", "0", "-1", "11"}) {
+    const std::string bad = errorOf("scan_matching: {degenerate_noise_scale: " + value + "}");
+    EXPECT_NE(bad.find("scan_matching.degenerate_noise_scale"), std::string::npos)
+        << value << ": " << bad;
+  }
+}
+
 TEST(SlamConfig, MissingFileIsNamed) {
   try {
     loadSlamConfig("/nonexistent/x.yaml");

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -111,6 +112,60 @@ TEST(SlamPipeline, SubmapMatchingDeadReckonsAccurately) {
   }
   // Measured: 0.138 m (last scan) against 0.087 m (four scans).
   EXPECT_LT(mean_error[1], mean_error[0]);
+}
+
+/// Records the motion the session hands the filter; no filtering.
+class RecordingFilter : public core::SlamFilter {
+ public:
+  std::vector<core::MotionInput> motions;
+  std::string variant() const override { return "recording"; }
+  void reset(const core::Pose2&) override {}
+  void predict(const core::MotionInput& motion) override { motions.push_back(motion); }
+  core::UpdateStats update(const core::FeatureSet&) override { return {}; }
+  core::PoseEstimate estimate() const override { return {}; }
+  std::vector<core::LandmarkEstimate> landmarks() const override { return {}; }
+  std::vector<core::WeightedPose> particles() const override { return {}; }
+  core::FilterStats stats() const override { return {}; }
+};
+
+/// A 181-beam half-circle scan from pose between two endless walls at y = -1 and y = +1.
+core::RangeScan corridorScan(const core::Pose2& pose, double stamp) {
+  core::RangeScan scan;
+  scan.stamp = stamp;
+  scan.angle_min = -M_PI / 2;
+  scan.angle_increment = M_PI / 180;
+  scan.range_min = 0.05;
+  scan.range_max = 30.0;
+  for (int i = 0; i <= 180; ++i) {
+    const double s = std::sin(pose.z() + scan.angle_min + i * scan.angle_increment);
+    const double wall = s > 0.0 ? 1.0 : -1.0;
+    const double r = std::fabs(s) < 1e-9 ? INFINITY : (wall - pose.y()) / s;
+    scan.ranges.push_back(static_cast<float>(r));
+  }
+  return scan;
+}
+
+// A degenerate match (the corridor fixes no position along it) reaches the filter with
+// scan_matching.degenerate_noise_scale, a fully constrained one with noise_scale.
+TEST(SlamPipeline, ADegenerateMatchReachesTheFilterWithItsOwnNoiseScale) {
+  for (const double degenerate_scale : {1.0, 0.7}) {
+    core::PipelineOptions options;
+    options.scan_matching.enabled = true;
+    options.scan_matching.noise_scale = 0.2;
+    options.scan_matching.degenerate_noise_scale = degenerate_scale;
+    auto owned = std::make_unique<RecordingFilter>();
+    RecordingFilter* filter = owned.get();
+    core::SlamPipeline pipeline(options, std::move(owned));
+    pipeline.processScan(corridorScan(core::Pose2::Zero(), 1.0), core::Pose2::Zero());
+    // Odometry 20 cm short along the corridor: that direction stays odometry's.
+    pipeline.processScan(corridorScan(core::Pose2(1.0, 0.05, 0.02), 2.0),
+                         core::Pose2(0.8, 0.0, 0.0));
+    ASSERT_TRUE(pipeline.lastMatch().ok);
+    ASSERT_TRUE(pipeline.lastMatch().degenerate);
+    ASSERT_FALSE(filter->motions.empty());
+    EXPECT_EQ(filter->motions.back().noise_scale, degenerate_scale);
+    EXPECT_NEAR(filter->motions.back().delta.x(), 0.8, 0.05);
+  }
 }
 
 }  // namespace

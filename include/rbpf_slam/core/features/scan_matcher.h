@@ -65,7 +65,7 @@ class ScanMatcher {
                         const Pose2& initial_delta) const;
   const ScanMatcherOptions& options() const { return options_; }
   /// Motion noise multiplier for an accepted match's increment: degenerate_noise_scale when a
-  /// direction was taken from the start, noise_scale otherwise.
+  /// direction was taken from odometry (degenerate), noise_scale otherwise.
   double noiseScale(const ScanMatchResult& result) const;
 
  private:
