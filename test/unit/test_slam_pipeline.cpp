@@ -1,5 +1,5 @@
 // Tests of the per-frame SLAM path (extraction, scan matching, filter) on simulated runs of
-// worlds/test_small.yaml with the shipped laser config.
+// worlds/test_small.yaml with the shipped laser config, and of the motion it hands a filter.
 
 #include <gtest/gtest.h>
 
@@ -146,7 +146,7 @@ core::RangeScan corridorScan(const core::Pose2& pose, double stamp) {
 }
 
 // A degenerate match (the corridor fixes no position along it) reaches the filter with
-// scan_matching.degenerate_noise_scale, a fully constrained one with noise_scale.
+// scan_matching.degenerate_noise_scale (ScanMatcher's tests cover a fully constrained match).
 TEST(SlamPipeline, ADegenerateMatchReachesTheFilterWithItsOwnNoiseScale) {
   for (const double degenerate_scale : {1.0, 0.7}) {
     core::PipelineOptions options;
