@@ -158,7 +158,7 @@ TEST(ScanMatcher, RejectsTooFewPointsAndInvalidOptions) {
 
 // The filter's motion noise for a matched increment: noise_scale for a match that fixes every
 // direction, degenerate_noise_scale for one whose weak direction came from odometry (1, the
-// code default: odometry's noise; laser_fastslam2.yaml 0.3).
+// code default: odometry's noise; laser_fastslam2.yaml 0.5).
 TEST(ScanMatcher, NoiseScaleFollowsWhetherADirectionCameFromOdometry) {
   Rng rng(8);
   const auto room_ref = roomScan(Pose2(-2.0, 0.5, 0.1), 0.01, &rng);

@@ -505,7 +505,7 @@ TEST(SlamConfig, LineSlamConfigsCarryThePapersDefaultsOrSession40s) {
 TEST(SlamConfig, DegenerateNoiseScaleIsReadAndChecked) {
   const std::string dir = std::string(RBPF_SOURCE_DIR) + "/config/";
   EXPECT_DOUBLE_EQ(
-      loadSlamConfig(dir + "laser_fastslam2.yaml").scan_matching.degenerate_noise_scale, 0.3);
+      loadSlamConfig(dir + "laser_fastslam2.yaml").scan_matching.degenerate_noise_scale, 0.5);
   EXPECT_DOUBLE_EQ(loadSlamConfig(dir + "laser_robust.yaml").scan_matching.degenerate_noise_scale,
                    1.0);
   for (const std::string value : {"nan", "0", "-1", "11"}) {
