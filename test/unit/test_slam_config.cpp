@@ -527,33 +527,37 @@ TEST(SlamConfig, MissingFileIsNamed) {
   }
 }
 
-// Session 53: the robust laser config is the laser FastSLAM 2.0 one plus the robust steps. When
-// it kept an older copy of the front end (no heading prior, no relocalization, older scan
-// matching) every Intel and ACES run missed 0.5 m ATE; a change to one file must reach both.
-TEST(SlamConfig, LaserRobustSharesEverySectionOfLaserFastSlam2) {
+// Session 53: the robust laser and sonar configs are their FastSLAM 2.0 ones plus the robust
+// steps. When laser_robust.yaml kept an older copy of the front end (no heading prior, no
+// relocalization, older scan matching) every Intel and ACES run missed 0.5 m ATE; a change to
+// one file of a pair must reach the other.
+TEST(SlamConfig, RobustLaserAndSonarConfigsShareEverySectionOfFastSlam2) {
   const std::string dir = std::string(RBPF_SOURCE_DIR) + "/config/";
-  const YAML::Node plain = YAML::LoadFile(dir + "laser_fastslam2.yaml");
-  const YAML::Node robust = YAML::LoadFile(dir + "laser_robust.yaml");
   const auto own = [](const std::string& key) {
     return key == "variant" || key == "particles" || key == "robust" || key == "tracker";
   };
-  int shared = 0;
-  for (const auto& entry : plain) {
-    const std::string key = entry.first.as<std::string>();
-    if (own(key)) continue;
-    ASSERT_TRUE(robust[key]) << "laser_robust.yaml has no " << key;
-    EXPECT_EQ(YAML::Dump(robust[key]), YAML::Dump(entry.second)) << key;
-    ++shared;
+  for (const std::string sensor : {"laser", "sonar"}) {
+    SCOPED_TRACE(sensor);
+    const YAML::Node plain = YAML::LoadFile(dir + sensor + "_fastslam2.yaml");
+    const YAML::Node robust = YAML::LoadFile(dir + sensor + "_robust.yaml");
+    int shared = 0;
+    for (const auto& entry : plain) {
+      const std::string key = entry.first.as<std::string>();
+      if (own(key)) continue;
+      ASSERT_TRUE(robust[key]) << sensor << "_robust.yaml has no " << key;
+      EXPECT_EQ(YAML::Dump(robust[key]), YAML::Dump(entry.second)) << key;
+      ++shared;
+    }
+    for (const auto& entry : robust) {
+      const std::string key = entry.first.as<std::string>();
+      EXPECT_TRUE(own(key) || plain[key]) << "only " << sensor << "_robust.yaml has " << key;
+    }
+    EXPECT_GT(shared, 20);
+    const SlamConfig config = loadSlamConfig(dir + sensor + "_robust.yaml");
+    EXPECT_EQ(config.filter.variant, "robust_fastslam2");
+    EXPECT_TRUE(config.filter.heading_prior.enabled);
   }
-  for (const auto& entry : robust) {
-    const std::string key = entry.first.as<std::string>();
-    EXPECT_TRUE(own(key) || plain[key]) << "only laser_robust.yaml has " << key;
-  }
-  EXPECT_GT(shared, 20);
-  const SlamConfig config = loadSlamConfig(dir + "laser_robust.yaml");
-  EXPECT_EQ(config.filter.variant, "robust_fastslam2");
-  EXPECT_TRUE(config.filter.heading_prior.enabled);
-  EXPECT_TRUE(config.filter.relocalization.enabled);
+  EXPECT_TRUE(loadSlamConfig(dir + "laser_robust.yaml").filter.relocalization.enabled);
 }
 
 }  // namespace
