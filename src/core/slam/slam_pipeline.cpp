@@ -62,7 +62,13 @@ FrameResult SlamPipeline::processScan(const RangeScan& scan, const Pose2& odom_p
     // have been processed in between, so the filter's increment is the part after the last
     // frame: odometry covers reference -> last frame, the match the whole span.
     const Pose2 odometry_delta = between(reference_odom_pose_, odom_pose);
-    const ScanMatchResult match = matcher_.match(reference_points_, points, odometry_delta);
+    // An odometry jump (max_odometry_jump) is not motion to the session, so it does not seed
+    // the match either: started from it, a wrong alignment metres off can pass the matcher's
+    // checks (a 4 m glitch across an ACES corridor did); the match starts from rest.
+    const double jump = session_.options().max_odometry_jump_m;
+    const bool jumped = jump > 0.0 && odometry_delta.head<2>().norm() > jump;
+    const ScanMatchResult match =
+        matcher_.match(reference_points_, points, jumped ? Pose2::Zero() : odometry_delta);
     last_match_ = match;
     chain_delta = match.ok ? match.delta : odometry_delta;
     if (match.ok) {
