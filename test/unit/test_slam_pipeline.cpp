@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -130,14 +131,20 @@ class RecordingFilter : public core::SlamFilter {
   core::FilterStats stats() const override { return {}; }
 };
 
-/// A 181-beam half-circle scan from pose between two endless walls at y = -1 and y = +1.
-core::RangeScan corridorScan(const core::Pose2& pose, double stamp) {
+/// A 181-beam half-circle scan (1 deg apart, up to 30 m) without its ranges.
+core::RangeScan halfCircleScan(double stamp) {
   core::RangeScan scan;
   scan.stamp = stamp;
   scan.angle_min = -M_PI / 2;
   scan.angle_increment = M_PI / 180;
   scan.range_min = 0.05;
   scan.range_max = 30.0;
+  return scan;
+}
+
+/// A 181-beam half-circle scan from pose between two endless walls at y = -1 and y = +1.
+core::RangeScan corridorScan(const core::Pose2& pose, double stamp) {
+  core::RangeScan scan = halfCircleScan(stamp);
   for (int i = 0; i <= 180; ++i) {
     const double s = std::sin(pose.z() + scan.angle_min + i * scan.angle_increment);
     const double wall = s > 0.0 ? 1.0 : -1.0;
@@ -145,6 +152,24 @@ core::RangeScan corridorScan(const core::Pose2& pose, double stamp) {
     scan.ranges.push_back(static_cast<float>(r));
   }
   return scan;
+}
+
+/// Feeds two scans to a pipeline over a recording filter (the first at the odometry origin, the
+/// second with the odometry at odom_pose) and gives the second scan's match and the motion the
+/// session handed the filter for it (none if it handed none).
+std::optional<core::MotionInput> motionAfterTwoScans(const core::PipelineOptions& options,
+                                                     const core::RangeScan& first,
+                                                     const core::RangeScan& second,
+                                                     const core::Pose2& odom_pose,
+                                                     core::ScanMatchResult* match) {
+  auto owned = std::make_unique<RecordingFilter>();
+  const RecordingFilter* filter = owned.get();
+  core::SlamPipeline pipeline(options, std::move(owned));
+  pipeline.processScan(first, core::Pose2::Zero());
+  pipeline.processScan(second, odom_pose);
+  *match = pipeline.lastMatch();
+  if (filter->motions.empty()) return std::nullopt;
+  return filter->motions.back();
 }
 
 // A degenerate match (the corridor fixes no position along it) reaches the filter with
@@ -155,18 +180,16 @@ TEST(SlamPipeline, ADegenerateMatchReachesTheFilterWithItsOwnNoiseScale) {
     options.scan_matching.enabled = true;
     options.scan_matching.noise_scale = 0.2;
     options.scan_matching.degenerate_noise_scale = degenerate_scale;
-    auto owned = std::make_unique<RecordingFilter>();
-    RecordingFilter* filter = owned.get();
-    core::SlamPipeline pipeline(options, std::move(owned));
-    pipeline.processScan(corridorScan(core::Pose2::Zero(), 1.0), core::Pose2::Zero());
     // Odometry 20 cm short along the corridor: that direction stays odometry's.
-    pipeline.processScan(corridorScan(core::Pose2(1.0, 0.05, 0.02), 2.0),
-                         core::Pose2(0.8, 0.0, 0.0));
-    ASSERT_TRUE(pipeline.lastMatch().ok);
-    ASSERT_TRUE(pipeline.lastMatch().degenerate);
-    ASSERT_FALSE(filter->motions.empty());
-    EXPECT_EQ(filter->motions.back().noise_scale, degenerate_scale);
-    EXPECT_NEAR(filter->motions.back().delta.x(), 0.8, 0.05);
+    core::ScanMatchResult match;
+    const std::optional<core::MotionInput> motion = motionAfterTwoScans(
+        options, corridorScan(core::Pose2::Zero(), 1.0),
+        corridorScan(core::Pose2(1.0, 0.05, 0.02), 2.0), core::Pose2(0.8, 0.0, 0.0), &match);
+    ASSERT_TRUE(match.ok);
+    ASSERT_TRUE(match.degenerate);
+    ASSERT_TRUE(motion.has_value());
+    EXPECT_EQ(motion->noise_scale, degenerate_scale);
+    EXPECT_NEAR(motion->delta.x(), 0.8, 0.05);
   }
 }
 
@@ -176,12 +199,7 @@ core::RangeScan finnedCorridorScan(const core::Pose2& pose, double stamp) {
   std::vector<std::pair<Eigen::Vector2d, Eigen::Vector2d>> walls = {{{-40.0, -1.5}, {40.0, -1.5}},
                                                                     {{-40.0, 1.5}, {40.0, 1.5}}};
   for (int k = -10; k <= 10; ++k) walls.push_back({{4.0 * k, 1.5}, {4.0 * k, 1.0}});
-  core::RangeScan scan;
-  scan.stamp = stamp;
-  scan.angle_min = -M_PI / 2;
-  scan.angle_increment = M_PI / 180;
-  scan.range_min = 0.05;
-  scan.range_max = 30.0;
+  core::RangeScan scan = halfCircleScan(stamp);
   const Eigen::Vector2d origin = pose.head<2>();
   for (int i = 0; i <= 180; ++i) {
     const double a = pose.z() + scan.angle_min + i * scan.angle_increment;
@@ -215,22 +233,20 @@ TEST(SlamPipeline, AnOdometryJumpDoesNotSeedTheScanMatch) {
             .pipeline()
             .scan_matching;
     options.session.max_odometry_jump_m = jump;
-    auto owned = std::make_unique<RecordingFilter>();
-    RecordingFilter* filter = owned.get();
-    core::SlamPipeline pipeline(options, std::move(owned));
-    pipeline.processScan(finnedCorridorScan(core::Pose2::Zero(), 1.0), core::Pose2::Zero());
-    pipeline.processScan(finnedCorridorScan(core::Pose2(0.5, 0.0, 0.0), 2.0),
-                         core::Pose2(4.5, 0.0, 0.0));
-    ASSERT_TRUE(pipeline.lastMatch().ok) << "jump " << jump;
-    ASSERT_FALSE(filter->motions.empty());
+    core::ScanMatchResult match;
+    const std::optional<core::MotionInput> motion = motionAfterTwoScans(
+        options, finnedCorridorScan(core::Pose2::Zero(), 1.0),
+        finnedCorridorScan(core::Pose2(0.5, 0.0, 0.0), 2.0), core::Pose2(4.5, 0.0, 0.0), &match);
+    ASSERT_TRUE(match.ok) << "jump " << jump;
+    ASSERT_TRUE(motion.has_value());
     if (jump > 0.0) {
       // From rest the thin fins leave the direction along the corridor degenerate, so it keeps
       // the start's zero: 0.5 m short, but not the 4 m jump.
-      EXPECT_LT(std::fabs(filter->motions.back().delta.x()), 0.6);
-      EXPECT_NEAR(filter->motions.back().delta.y(), 0.0, 0.05);
+      EXPECT_LT(std::fabs(motion->delta.x()), 0.6);
+      EXPECT_NEAR(motion->delta.y(), 0.0, 0.05);
     } else {
       // Unchecked odometry seeds the match: the aliased answer (what the rule is for).
-      EXPECT_NEAR(filter->motions.back().delta.x(), 4.5, 0.05);
+      EXPECT_NEAR(motion->delta.x(), 4.5, 0.05);
     }
   }
 }
