@@ -131,6 +131,35 @@ TEST(ScanMatcher, RotationSearchRecoversATurnThatOdometryGotWrong) {
   EXPECT_TRUE(!bounded.ok || std::fabs(wrapAngle(bounded.delta.z() - odometry.z())) <= 0.25);
 }
 
+// Session 53: an odometry glitch comes with a wrong turn too (Intel's: 5.4 m and -0.68 rad
+// between two scans), so the match from rest searches the same fan of rotations as the one from
+// odometry; matchFromRest (the start after an odometry jump) is that match alone (its refusal of
+// a degenerate match: SlamPipeline.AnOdometryJumpDoesNotSeedTheScanMatch).
+TEST(ScanMatcher, TheMatchFromRestSearchesRotationsToo) {
+  Rng rng(8);
+  const Pose2 first(-2.5, -1.0, 0.4), motion(0.3, 0.05, 0.55);
+  const auto reference = roomScan(first, 0.01, &rng);
+  const auto current = roomScan(compose(first, motion), 0.01, &rng);
+  const Pose2 glitch(4.5, -2.4, -0.05);
+  ScanMatcherOptions options;
+  options.enabled = true;
+  options.rotation_guess_rad = 0.0;
+  // Without the search the start at rest does not reach the turn (the test's premise).
+  const ScanMatchResult plain = ScanMatcher(options).match(reference, current, glitch);
+  EXPECT_TRUE(!plain.ok || std::fabs(wrapAngle(plain.delta.z() - motion.z())) > 0.05)
+      << plain.delta.transpose();
+  options.search_below_inlier_ratio = 0.6;
+  options.search_step_rad = 0.1;
+  const ScanMatcher matcher(options);
+  for (const ScanMatchResult& r :
+       {matcher.match(reference, current, glitch), matcher.matchFromRest(reference, current)}) {
+    ASSERT_TRUE(r.ok);
+    EXPECT_TRUE(r.from_rest);
+    EXPECT_LT((r.delta.head<2>() - motion.head<2>()).norm(), 0.02) << r.delta.transpose();
+    EXPECT_LT(std::fabs(wrapAngle(r.delta.z() - motion.z())), 0.005);
+  }
+}
+
 TEST(ScanMatcher, RejectsTooFewPointsAndInvalidOptions) {
   ScanMatcherOptions options;
   const ScanMatcher matcher(options);

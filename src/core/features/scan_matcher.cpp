@@ -169,7 +169,22 @@ ScanMatchResult ScanMatcher::match(const std::vector<Eigen::Vector2d>& reference
   ScanMatchResult best;
   if (reference.size() < 10 || current.size() < 10 || !initial_delta.allFinite()) return best;
   const std::vector<Eigen::Vector2d> normals = normalsOf(reference);
-  best = matchAround(reference, normals, current, initial_delta);
+  best = matchSearching(reference, normals, current, initial_delta);
+  // From odometry first; only if that fails, from rest: wheel odometry has glitches (repeated
+  // or out-of-order stamps put the Intel log's odometry 4.5 m off between two scans), and
+  // then a start at the odometry guess cannot converge or is rejected as too far from it.
+  if (!best.ok) {
+    const ScanMatchResult from_rest = matchFromRest(reference, normals, current);
+    if (from_rest.ok) best = from_rest;
+  }
+  return best;
+}
+
+ScanMatchResult ScanMatcher::matchSearching(const std::vector<Eigen::Vector2d>& reference,
+                                            const std::vector<Eigen::Vector2d>& normals,
+                                            const std::vector<Eigen::Vector2d>& current,
+                                            const Pose2& guess) const {
+  ScanMatchResult best = matchAround(reference, normals, current, guess);
   // Wheel odometry can be 15-25 deg off over one in-place turn (Intel, ACES); ICP converges
   // only within a few degrees, so a start 10 deg off ends in a wrong minimum that still pairs
   // a quarter of the points. A poor or failed match is retried from a fan of rotations.
@@ -179,22 +194,27 @@ ScanMatchResult ScanMatcher::match(const std::vector<Eigen::Vector2d>& reference
     const int n =
         static_cast<int>(std::floor(options_.max_correction_rad / options_.search_step_rad));
     for (int k = -n; k <= n; ++k) offsets.push_back(k * options_.search_step_rad);
-    const ScanMatchResult searched =
-        matchFromStarts(reference, normals, current, initial_delta, offsets);
+    const ScanMatchResult searched = matchFromStarts(reference, normals, current, guess, offsets);
     if (searched.ok && (!best.ok || score(searched) > score(best))) best = searched;
   }
-  // From odometry first; only if that fails, from rest: wheel odometry has glitches (repeated
-  // or out-of-order stamps put the Intel log's odometry 4.5 m off between two scans), and
-  // then a start at the odometry guess cannot converge or is rejected as too far from it.
-  if (!best.ok) {
-    const ScanMatchResult from_rest = matchAround(reference, normals, current, Pose2::Zero());
-    // Degenerate (a corridor): the motion along it would be the start's zero, not a measurement.
-    if (from_rest.ok && !from_rest.degenerate) {
-      best = from_rest;
-      best.from_rest = true;
-    }
-  }
   return best;
+}
+
+ScanMatchResult ScanMatcher::matchFromRest(const std::vector<Eigen::Vector2d>& reference,
+                                           const std::vector<Eigen::Vector2d>& current) const {
+  if (reference.size() < 10 || current.size() < 10) return ScanMatchResult();
+  return matchFromRest(reference, normalsOf(reference), current);
+}
+
+ScanMatchResult ScanMatcher::matchFromRest(const std::vector<Eigen::Vector2d>& reference,
+                                           const std::vector<Eigen::Vector2d>& normals,
+                                           const std::vector<Eigen::Vector2d>& current) const {
+  // The same rotation search as from odometry: a glitch comes with a wrong turn too.
+  ScanMatchResult result = matchSearching(reference, normals, current, Pose2::Zero());
+  result.from_rest = true;
+  // Degenerate (a corridor): the motion along it would be the start's zero, not a measurement.
+  if (result.degenerate) result.ok = false;
+  return result;
 }
 
 double ScanMatcher::score(const ScanMatchResult& r) {

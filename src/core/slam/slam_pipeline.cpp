@@ -64,11 +64,14 @@ FrameResult SlamPipeline::processScan(const RangeScan& scan, const Pose2& odom_p
     const Pose2 odometry_delta = between(reference_odom_pose_, odom_pose);
     // An odometry jump (max_odometry_jump) is not motion to the session, so it does not seed
     // the match either: started from it, a wrong alignment metres off can pass the matcher's
-    // checks (a 4 m glitch across an ACES corridor did); the match starts from rest.
+    // checks (a 4 m glitch injected across an ACES corridor did); only a match from rest is
+    // taken, as when the match from odometry fails, and if none is accepted the session takes
+    // the jump as no motion.
     const double jump = session_.options().max_odometry_jump_m;
     const bool jumped = jump > 0.0 && odometry_delta.head<2>().norm() > jump;
-    const ScanMatchResult match =
-        matcher_.match(reference_points_, points, jumped ? Pose2::Zero() : odometry_delta);
+    const ScanMatchResult match = jumped
+                                      ? matcher_.matchFromRest(reference_points_, points)
+                                      : matcher_.match(reference_points_, points, odometry_delta);
     last_match_ = match;
     chain_delta = match.ok ? match.delta : odometry_delta;
     if (match.ok) {

@@ -63,6 +63,11 @@ class ScanMatcher {
   ScanMatchResult match(const std::vector<Eigen::Vector2d>& reference,
                         const std::vector<Eigen::Vector2d>& current,
                         const Pose2& initial_delta) const;
+  /// Aligns current to reference from zero motion, for when odometry is not to be trusted (a
+  /// glitch): not ok if degenerate (the motion along the weak direction would be the start's
+  /// zero, not a measurement); max_correction then bounds the motion itself (from_rest).
+  ScanMatchResult matchFromRest(const std::vector<Eigen::Vector2d>& reference,
+                                const std::vector<Eigen::Vector2d>& current) const;
   const ScanMatcherOptions& options() const { return options_; }
   /// Motion noise multiplier for an accepted match's increment: degenerate_noise_scale when a
   /// direction was taken from odometry (degenerate), noise_scale otherwise.
@@ -81,6 +86,15 @@ class ScanMatcher {
                               const std::vector<Eigen::Vector2d>& normals,
                               const std::vector<Eigen::Vector2d>& current,
                               const Pose2& guess) const;
+  ScanMatchResult matchFromRest(const std::vector<Eigen::Vector2d>& reference,
+                                const std::vector<Eigen::Vector2d>& normals,
+                                const std::vector<Eigen::Vector2d>& current) const;
+  /// matchAround(guess) and, when that is poor or fails and search_below_inlier_ratio is set,
+  /// the fan of rotations within max_correction_rad of guess; the better accepted one.
+  ScanMatchResult matchSearching(const std::vector<Eigen::Vector2d>& reference,
+                                 const std::vector<Eigen::Vector2d>& normals,
+                                 const std::vector<Eigen::Vector2d>& current,
+                                 const Pose2& guess) const;
   /// Ranks results: accepted first, then more paired points and a smaller residual.
   static double score(const ScanMatchResult& r);
   ScanMatchResult matchFrom(const std::vector<Eigen::Vector2d>& reference,
