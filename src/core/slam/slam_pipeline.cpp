@@ -67,9 +67,7 @@ FrameResult SlamPipeline::processScan(const RangeScan& scan, const Pose2& odom_p
     // checks (a 4 m glitch injected across an ACES corridor did); only a match from rest is
     // taken, as when the match from odometry fails, and if none is accepted the session takes
     // the jump as no motion.
-    const double jump = session_.options().max_odometry_jump_m;
-    const bool jumped = jump > 0.0 && odometry_delta.head<2>().norm() > jump;
-    const ScanMatchResult match = jumped
+    const ScanMatchResult match = session_.isOdometryJump(odometry_delta)
                                       ? matcher_.matchFromRest(reference_points_, points)
                                       : matcher_.match(reference_points_, points, odometry_delta);
     last_match_ = match;

@@ -251,8 +251,7 @@ FrameResult SlamSession::process(double stamp, const Pose2& odom_pose,
   const OdometryStamps::Silence silence = odometry_stamps_.longestSilence(last_stamp_, stamp);
   const bool stamps_known = silence.length >= 0.0;
   const bool silent = limit > 0.0 && (stamps_known ? silence.length : motion.dt) > limit;
-  const bool jump = options_.max_odometry_jump_m > 0.0 &&
-                    std::hypot(delta.x(), delta.y()) > options_.max_odometry_jump_m;
+  const bool jump = isOdometryJump(delta);
   // Every frame taken inside one silence of the odometry gets the inflated noise (its
   // increment is interpolated across it), but the silence counts, and resets the map, once.
   bool new_gap = jump || (silent && !stamps_known);

@@ -3,6 +3,7 @@
 // rejects out-of-order input, keeps the trajectory and the map -> odom correction.
 // Shared by rbpf_slam_node and offline_slam so both run the same code path.
 
+#include <cmath>
 #include <limits>
 #include <memory>
 #include <optional>
@@ -216,6 +217,12 @@ class SlamSession {
   /// max_odometry_jump_m, with gap_action "inflate" and no accepted measured motion).
   bool jumpDiscarded() const { return jump_discarded_; }
   const SessionOptions& options() const { return options_; }
+  /// Whether an odometry increment between two frames is a jump (longer than
+  /// max_odometry_jump_m, when that is set): not motion to the session, nor a scan match's start.
+  bool isOdometryJump(const Pose2& increment) const {
+    return options_.max_odometry_jump_m > 0.0 &&
+           std::hypot(increment.x(), increment.y()) > options_.max_odometry_jump_m;
+  }
   /// Gaps met (max_time_gap_s, max_odometry_jump_m): one odometry silence counts once, however
   /// many frames fall inside it.
   long gaps() const { return gaps_; }
